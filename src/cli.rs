@@ -1,0 +1,222 @@
+//! The `energywave` command line: `view` (the default) and `render`.
+//!
+//! Exit status: 0 on success, 2 when the input is at fault (a bad scene, flag value or output path), 1 for
+//! anything else. Every input is checked before any rendering starts.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Instant;
+
+use clap::{Parser, Subcommand, ValueEnum};
+
+use crate::output::{self, Format, OutputError};
+use crate::reference;
+use crate::scene::{DEFAULT_SCENE_NAME, MAX_DIVISIONS, MAX_RESOLUTION, Scene, SceneError};
+
+/// Design and render energy-wave effects (Watanabe, Abe and Konno 2016).
+#[derive(Debug, Parser)]
+#[command(name = "energywave", version, about)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Option<Command>,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Open the interactive viewer on a scene (the embedded default scene without one).
+    View {
+        /// Scene file (TOML).
+        scene: Option<PathBuf>,
+    },
+    /// Render the scene's camera view to an image file.
+    Render(RenderArgs),
+}
+
+#[derive(Debug, clap::Args)]
+pub struct RenderArgs {
+    /// Scene file (TOML); the embedded default scene without one.
+    pub scene: Option<PathBuf>,
+    /// Output image: .png (8-bit) or .exr (32-bit float), by extension.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Frame size in pixels, WIDTHxHEIGHT.
+    #[arg(long, default_value = "512x512", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// Which renderer integrates the field: `cpu` is the f64 reference, on every core.
+    #[arg(long, value_enum, default_value_t = Backend::Cpu)]
+    pub backend: Backend,
+    /// Write the billboard's brightness B itself (W x W, before the blend, unclamped, rows from the top) as a
+    /// float EXR (R = G = B = brightness) instead of the composed frame.
+    #[arg(long)]
+    pub brightness: bool,
+    /// Override the scene's billboard resolution W (texels per side).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_RESOLUTION as i64))]
+    pub resolution: Option<u32>,
+    /// Override the scene's Simpson division count n (even).
+    #[arg(long, value_parser = parse_divisions)]
+    pub divisions: Option<u32>,
+    /// Print what is rendered and how long it took.
+    #[arg(short, long)]
+    pub verbose: bool,
+}
+
+/// The renderer behind `render`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Backend {
+    /// The f64 CPU reference.
+    Cpu,
+}
+
+/// A failure of a command, with its exit status.
+#[derive(Debug, thiserror::Error)]
+pub enum CliError {
+    #[error("{0}")]
+    Scene(#[from] SceneError),
+    #[error("{0}")]
+    Output(#[from] OutputError),
+    #[error("{0}")]
+    Usage(String),
+    #[error("{0}")]
+    Unavailable(String),
+}
+
+impl CliError {
+    /// 2 when the input is at fault, 1 otherwise.
+    pub fn exit_code(&self) -> u8 {
+        match self {
+            CliError::Scene(SceneError::Read { .. }) => 2,
+            CliError::Scene(_) | CliError::Usage(_) => 2,
+            CliError::Output(e) if e.is_input_error() => 2,
+            CliError::Output(_) | CliError::Unavailable(_) => 1,
+        }
+    }
+}
+
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let err = || {
+        format!(
+            "{s:?} is not a frame size: use WIDTHxHEIGHT with each between 1 and {MAX_RESOLUTION}, for example 1280x720"
+        )
+    };
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(err)?;
+    let w: u32 = w.trim().parse().map_err(|_| err())?;
+    let h: u32 = h.trim().parse().map_err(|_| err())?;
+    if !(1..=MAX_RESOLUTION).contains(&w) || !(1..=MAX_RESOLUTION).contains(&h) {
+        return Err(err());
+    }
+    Ok((w, h))
+}
+
+fn parse_divisions(s: &str) -> Result<u32, String> {
+    match s.parse::<u32>() {
+        Ok(n) if n >= 2 && n % 2 == 0 && n <= MAX_DIVISIONS => Ok(n),
+        _ => Err(format!(
+            "{s:?}: Simpson's rule needs an even division count between 2 and {MAX_DIVISIONS}"
+        )),
+    }
+}
+
+/// Parses the arguments, runs the command, prints any error and returns the exit status.
+pub fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match run(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("energywave: {e}");
+            ExitCode::from(e.exit_code())
+        }
+    }
+}
+
+/// Runs a parsed command line.
+pub fn run(cli: Cli) -> Result<(), CliError> {
+    match cli.command {
+        None => view(None),
+        Some(Command::View { scene }) => view(scene.as_deref()),
+        Some(Command::Render(args)) => render(&args),
+    }
+}
+
+/// Loads the scene file, or the embedded default scene.
+pub fn load_scene(path: Option<&Path>) -> Result<Scene, SceneError> {
+    match path {
+        Some(p) => Scene::load(p),
+        None => Ok(Scene::default_scene()),
+    }
+}
+
+fn view(scene_path: Option<&Path>) -> Result<(), CliError> {
+    // The scene is checked first, so a bad file is reported the same way with or without a display.
+    load_scene(scene_path)?;
+    let scene_arg = scene_path.map_or(String::new(), |p| format!(" {}", p.display()));
+    let has_display = std::env::var_os("DISPLAY").is_some_and(|v| !v.is_empty())
+        || std::env::var_os("WAYLAND_DISPLAY").is_some_and(|v| !v.is_empty());
+    let reason = if has_display {
+        "this build has no interactive viewer window yet"
+    } else {
+        "no display found (neither DISPLAY nor WAYLAND_DISPLAY is set), so no window can open"
+    };
+    Err(CliError::Unavailable(format!(
+        "{reason}.\nRender the scene to an image instead:\n  energywave render{scene_arg} --output frame.png"
+    )))
+}
+
+fn render(args: &RenderArgs) -> Result<(), CliError> {
+    let format = output::check_destination(&args.output)?;
+    if args.brightness && format != Format::Exr {
+        return Err(CliError::Usage(format!(
+            "{}: --brightness writes unclamped floating-point values; give an .exr output",
+            args.output.display()
+        )));
+    }
+    let mut scene = load_scene(args.scene.as_deref())?;
+    if let Some(w) = args.resolution {
+        scene.billboard.resolution = w;
+    }
+    if let Some(n) = args.divisions {
+        scene.integration.divisions = n;
+    }
+    let (width, height) = args.size;
+    let billboard = scene.place_billboard(width as f64 / height as f64);
+    let name = args
+        .scene
+        .as_ref()
+        .map_or(DEFAULT_SCENE_NAME.to_owned(), |p| p.display().to_string());
+    if args.verbose {
+        eprintln!(
+            "{name}: {} sources; billboard {}x{} texels, center {:.4}, side {:.4}; n = {}, nu = {}; backend {:?}",
+            scene.sources.len(),
+            scene.billboard.resolution,
+            scene.billboard.resolution,
+            billboard.center,
+            billboard.size,
+            scene.integration.divisions,
+            scene.integration.nu,
+            args.backend,
+        );
+    }
+    let start = Instant::now();
+    let texture = match args.backend {
+        Backend::Cpu => reference::render_brightness(&scene, &billboard),
+    };
+    if args.verbose {
+        eprintln!("brightness: {:.1} ms", start.elapsed().as_secs_f64() * 1e3);
+    }
+    if args.brightness {
+        output::write_brightness_exr(&args.output, texture.resolution, &texture.values)?;
+    } else {
+        let start = Instant::now();
+        let pixels = reference::compose_frame(&scene, &billboard, &texture, width, height);
+        if args.verbose {
+            eprintln!(
+                "compose {width}x{height}: {:.1} ms",
+                start.elapsed().as_secs_f64() * 1e3
+            );
+        }
+        output::write_rgb(&args.output, width, height, &pixels)?;
+    }
+    if args.verbose {
+        eprintln!("wrote {}", args.output.display());
+    }
+    Ok(())
+}

@@ -1,0 +1,62 @@
+//! The final blend and the composed frame (METHOD.md section 4, thesis 4.8).
+//!
+//! Colors are display values in [0, 1] (as an artist picks them), blended as they are, the way the papers
+//! blend: `color = clamp((1 - B) Cb + B Ce)`. B above 1 blows the glow out toward white by design.
+
+/// `clamp((1 - B) Cb + B Ce, 0, 1)` per channel.
+pub fn blend(b: f64, energy: [f64; 3], background: [f64; 3]) -> [f64; 3] {
+    std::array::from_fn(|c| ((1.0 - b) * background[c] + b * energy[c]).clamp(0.0, 1.0))
+}
+
+/// Samples a `w` x `w` row-major texture (rows from the top) bilinearly at texture coordinates `(u, v)` in
+/// [0, 1], texel centers at `(i + 0.5) / w`, clamping at the edges: what a GPU linear sampler with
+/// clamp-to-edge does.
+pub fn sample_bilinear(texture: &[f64], w: u32, u: f64, v: f64) -> f64 {
+    let w_i = w as i64;
+    let x = u * w as f64 - 0.5;
+    let y = v * w as f64 - 0.5;
+    let x0 = x.floor();
+    let y0 = y.floor();
+    let fx = x - x0;
+    let fy = y - y0;
+    let at = |i: i64, j: i64| -> f64 {
+        let i = i.clamp(0, w_i - 1);
+        let j = j.clamp(0, w_i - 1);
+        texture[(j * w_i + i) as usize]
+    };
+    let (x0, y0) = (x0 as i64, y0 as i64);
+    let top = at(x0, y0) * (1.0 - fx) + at(x0 + 1, y0) * fx;
+    let bottom = at(x0, y0 + 1) * (1.0 - fx) + at(x0 + 1, y0 + 1) * fx;
+    top * (1.0 - fy) + bottom * fy
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn blend_limits() {
+        let ce = [0.2, 0.5, 1.0];
+        let cb = [0.1, 0.1, 0.3];
+        assert_eq!(blend(0.0, ce, cb), cb);
+        assert_eq!(blend(1.0, ce, cb), ce);
+        // B well above 1 blows out: every channel with Ce > Cb saturates.
+        assert_eq!(blend(50.0, ce, cb), [1.0, 1.0, 1.0]);
+        // A channel where Cb > Ce goes toward 0, clamped there.
+        assert_eq!(
+            blend(5.0, [0.0, 0.0, 0.0], [0.5, 0.5, 0.5]),
+            [0.0, 0.0, 0.0]
+        );
+    }
+
+    #[test]
+    fn bilinear_hits_texel_centers_and_interpolates() {
+        let tex = [0.0, 1.0, 2.0, 3.0];
+        assert!((sample_bilinear(&tex, 2, 0.25, 0.25) - 0.0).abs() < 1e-12);
+        assert!((sample_bilinear(&tex, 2, 0.75, 0.75) - 3.0).abs() < 1e-12);
+        assert!((sample_bilinear(&tex, 2, 0.5, 0.5) - 1.5).abs() < 1e-12);
+        // Clamped beyond the outer texel centers.
+        assert!((sample_bilinear(&tex, 2, 0.0, 0.0) - 0.0).abs() < 1e-12);
+        assert!((sample_bilinear(&tex, 2, 1.0, 1.0) - 3.0).abs() < 1e-12);
+    }
+}

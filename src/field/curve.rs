@@ -1,0 +1,172 @@
+//! Quadratic Bezier curves and chains of them: the nearest point by Cardano's formula (METHOD.md section 1,
+//! thesis 3.8-3.23).
+//!
+//! A chain of `k` segments has `2k + 1` control points; segment `j` uses points `2j, 2j+1, 2j+2`, so
+//! consecutive segments share their end point. The chain is one source: its distance is the nearest point
+//! over all segments, and its parameter for the W series is `(j + t) / k`.
+
+use glam::DVec3;
+
+use super::cubic;
+
+/// One quadratic segment in power form, `C(t) = c2 t^2 + c1 t + c0`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Segment {
+    pub c2: DVec3,
+    pub c1: DVec3,
+    pub c0: DVec3,
+}
+
+/// The nearest point of a curve to a query point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Nearest {
+    /// Parameter of the nearest point: local `t` for a segment, `(j + t) / k` for a chain.
+    pub t: f64,
+    /// Distance from the query point.
+    pub distance: f64,
+}
+
+impl Segment {
+    /// From Bezier control points: `c2 = b0 - 2 b1 + b2`, `c1 = 2 (b1 - b0)`, `c0 = b0` (thesis 3.9-3.10).
+    pub fn from_bezier(b0: DVec3, b1: DVec3, b2: DVec3) -> Self {
+        Self {
+            c2: b0 - 2.0 * b1 + b2,
+            c1: 2.0 * (b1 - b0),
+            c0: b0,
+        }
+    }
+
+    /// The point at parameter `t`.
+    pub fn at(&self, t: f64) -> DVec3 {
+        (self.c2 * t + self.c1) * t + self.c0
+    }
+
+    /// Coefficients `[k3, k2, k1, k0]` of `C'(t) . (C(t) - P) = 0`, the stationarity condition of the squared
+    /// distance, with the corrected linear term `2 c2.(c0 - P) + |c1|^2` (METHOD.md section 1).
+    pub fn stationary_cubic(&self, p: DVec3) -> [f64; 4] {
+        let d = self.c0 - p;
+        [
+            2.0 * self.c2.length_squared(),
+            3.0 * self.c1.dot(self.c2),
+            2.0 * self.c2.dot(d) + self.c1.length_squared(),
+            self.c1.dot(d),
+        ]
+    }
+
+    /// Nearest point of this segment (t in [0, 1]) to `p`.
+    ///
+    /// Candidates: both end points and the real roots in [0, 1] of the stationary cubic, each polished by
+    /// two Newton steps on the cubic (Cardano loses digits near double roots) and clamped to [0, 1].
+    /// A (nearly) straight segment has a vanishing cubic term; `cubic::solve_cubic` then solves the
+    /// lower-degree equation.
+    pub fn nearest(&self, p: DVec3) -> Nearest {
+        let k = self.stationary_cubic(p);
+        let mut best = Nearest {
+            t: 0.0,
+            distance: (self.c0 - p).length(),
+        };
+        let mut consider = |t: f64| {
+            let distance = (self.at(t) - p).length();
+            if distance < best.distance {
+                best = Nearest { t, distance };
+            }
+        };
+        consider(1.0);
+        for &root in cubic::solve_cubic(k[0], k[1], k[2], k[3], 1e-12).as_slice() {
+            // Roots far outside [0, 1] cannot polish into it; the end points already cover them.
+            if !(-0.5..=1.5).contains(&root) {
+                continue;
+            }
+            consider(root.clamp(0.0, 1.0));
+            consider(polish(k, root).clamp(0.0, 1.0));
+        }
+        // A nearly straight segment makes the cubic ill-conditioned; the projection on the tangent line at
+        // t = 0, polished, is then an accurate extra candidate (any candidate on the curve is safe to add).
+        let c1_sq = self.c1.length_squared();
+        if c1_sq > 0.0 {
+            let t = self.c1.dot(p - self.c0) / c1_sq;
+            consider(polish(k, t.clamp(0.0, 1.0)).clamp(0.0, 1.0));
+        }
+        best
+    }
+}
+
+/// Two Newton steps on the cubic `k`, keeping the start when a step misbehaves.
+fn polish(k: [f64; 4], mut t: f64) -> f64 {
+    for _ in 0..2 {
+        let f = ((k[0] * t + k[1]) * t + k[2]) * t + k[3];
+        let df = (3.0 * k[0] * t + 2.0 * k[1]) * t + k[2];
+        if df == 0.0 {
+            break;
+        }
+        let next = t - f / df;
+        if !next.is_finite() {
+            break;
+        }
+        t = next;
+    }
+    t
+}
+
+/// The segments of a chain of `2k + 1` control points (`k >= 1`).
+pub fn segments(control_points: &[DVec3]) -> impl Iterator<Item = Segment> + '_ {
+    control_points
+        .windows(3)
+        .step_by(2)
+        .map(|w| Segment::from_bezier(w[0], w[1], w[2]))
+}
+
+/// Nearest point of a whole chain to `p`, with the chain parameter `(j + t) / k`.
+/// Panics in debug builds on fewer than 3 or an even number of control points (the scene validator refuses
+/// those before they reach the field).
+pub fn nearest_on_chain(control_points: &[DVec3], p: DVec3) -> Nearest {
+    debug_assert!(control_points.len() >= 3 && control_points.len() % 2 == 1);
+    let k = (control_points.len() - 1) / 2;
+    let mut best = Nearest {
+        t: 0.0,
+        distance: f64::INFINITY,
+    };
+    for (j, segment) in segments(control_points).enumerate() {
+        let n = segment.nearest(p);
+        if n.distance < best.distance {
+            best = Nearest {
+                t: (j as f64 + n.t) / k as f64,
+                distance: n.distance,
+            };
+        }
+    }
+    best
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn power_form_matches_bezier() {
+        let (b0, b1, b2) = (
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(1.0, 2.0, 0.0),
+            DVec3::new(2.0, 0.0, 1.0),
+        );
+        let s = Segment::from_bezier(b0, b1, b2);
+        for i in 0..=10 {
+            let t = i as f64 / 10.0;
+            let bern = (1.0 - t) * (1.0 - t) * b0 + 2.0 * t * (1.0 - t) * b1 + t * t * b2;
+            assert!((s.at(t) - bern).length() < 1e-14);
+        }
+    }
+
+    #[test]
+    fn nearest_on_a_parabola_vertex() {
+        // Symmetric arch: the nearest point to a point straight above the apex is the apex, t = 0.5.
+        let s = Segment::from_bezier(
+            DVec3::new(-1.0, 0.0, 0.0),
+            DVec3::new(0.0, 2.0, 0.0),
+            DVec3::new(1.0, 0.0, 0.0),
+        );
+        let n = s.nearest(DVec3::new(0.0, 3.0, 0.0));
+        assert!((n.t - 0.5).abs() < 1e-12);
+        assert!((n.distance - 2.0).abs() < 1e-12);
+    }
+}

@@ -1,0 +1,160 @@
+//! The energy field psi: sources, their distance functions and the sum (METHOD.md section 1, thesis 3.1-3.28).
+//!
+//! This is the f64 reference the GPU passes are checked against; `shaders/field.wgsl` mirrors it in f32,
+//! function for function.
+
+pub mod cubic;
+pub mod curve;
+pub mod wseries;
+
+use glam::DVec3;
+
+/// A point source (thesis 3.2): `S(P) = 1 / max(eps, |P - M|)`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Point {
+    pub position: DVec3,
+    pub coefficient: f64,
+}
+
+/// An infinite line through `point` with unit `direction` (thesis 3.3).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Line {
+    pub point: DVec3,
+    /// Unit length (the scene loader normalises it).
+    pub direction: DVec3,
+    pub coefficient: f64,
+}
+
+/// A torus-shaped source: the circle of radius `major_radius` around `center` in the plane normal to `axis`
+/// (thesis 3.7, generalised from the origin and the z axis).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Torus {
+    pub center: DVec3,
+    /// Unit length (the scene loader normalises it).
+    pub axis: DVec3,
+    pub major_radius: f64,
+    pub coefficient: f64,
+}
+
+/// A chain of quadratic Bezier segments (`2k + 1` control points) with its W series (thesis 3.8-3.27).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Curve {
+    pub control_points: Vec<DVec3>,
+    pub coefficient: f64,
+    /// The W series; empty means all weights 1.
+    pub weights: Vec<f64>,
+}
+
+/// Every source of a scene, by kind.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Sources {
+    pub points: Vec<Point>,
+    pub lines: Vec<Line>,
+    pub tori: Vec<Torus>,
+    pub curves: Vec<Curve>,
+}
+
+/// `1 / max(eps, distance)`: the falloff shared by every kind of source.
+pub fn falloff(distance: f64, eps: f64) -> f64 {
+    1.0 / distance.max(eps)
+}
+
+/// Distance from `p` to a line (thesis 3.3): `sqrt(|P-M|^2 - ((P-M).D)^2)`, clamped at 0 against rounding.
+pub fn line_distance(p: DVec3, point: DVec3, direction: DVec3) -> f64 {
+    let d = p - point;
+    let along = d.dot(direction);
+    (d.length_squared() - along * along).max(0.0).sqrt()
+}
+
+/// Distance from `p` to the major circle of a torus (thesis 3.7 in the torus's own frame):
+/// `sqrt((rho - R)^2 + z^2)`, `z` along the axis and `rho` the distance from the axis.
+pub fn torus_distance(p: DVec3, center: DVec3, axis: DVec3, major_radius: f64) -> f64 {
+    let q = p - center;
+    let z = q.dot(axis);
+    let rho = (q.length_squared() - z * z).max(0.0).sqrt();
+    let dr = rho - major_radius;
+    (dr * dr + z * z).sqrt()
+}
+
+impl Point {
+    /// This source's term of psi, coefficient included.
+    pub fn field(&self, p: DVec3, eps: f64) -> f64 {
+        self.coefficient * falloff((p - self.position).length(), eps)
+    }
+}
+
+impl Line {
+    /// This source's term of psi, coefficient included.
+    pub fn field(&self, p: DVec3, eps: f64) -> f64 {
+        self.coefficient * falloff(line_distance(p, self.point, self.direction), eps)
+    }
+}
+
+impl Torus {
+    /// This source's term of psi, coefficient included.
+    pub fn field(&self, p: DVec3, eps: f64) -> f64 {
+        self.coefficient
+            * falloff(
+                torus_distance(p, self.center, self.axis, self.major_radius),
+                eps,
+            )
+    }
+}
+
+impl Curve {
+    /// This source's term of psi: `b Sw(t*) / max(eps, L(P))`, t* the chain parameter of the nearest point.
+    pub fn field(&self, p: DVec3, eps: f64) -> f64 {
+        let nearest = curve::nearest_on_chain(&self.control_points, p);
+        self.coefficient
+            * wseries::evaluate(&self.weights, nearest.t)
+            * falloff(nearest.distance, eps)
+    }
+}
+
+impl Sources {
+    /// psi(P), the sum of every source's term (thesis 3.28).
+    pub fn psi(&self, p: DVec3, eps: f64) -> f64 {
+        self.points.iter().map(|s| s.field(p, eps)).sum::<f64>()
+            + self.lines.iter().map(|s| s.field(p, eps)).sum::<f64>()
+            + self.tori.iter().map(|s| s.field(p, eps)).sum::<f64>()
+            + self.curves.iter().map(|s| s.field(p, eps)).sum::<f64>()
+    }
+
+    /// Total number of sources.
+    pub fn len(&self) -> usize {
+        self.points.len() + self.lines.len() + self.tori.len() + self.curves.len()
+    }
+
+    /// True when there is no source at all.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// An axis-aligned box holding every bounded source (points, torus circles, curve control hulls) and the
+    /// anchor point of every line, or `None` without sources.
+    pub fn bounds(&self) -> Option<(DVec3, DVec3)> {
+        let mut lo = DVec3::splat(f64::INFINITY);
+        let mut hi = DVec3::splat(f64::NEG_INFINITY);
+        let mut add = |p: DVec3, half: DVec3| {
+            lo = lo.min(p - half);
+            hi = hi.max(p + half);
+        };
+        self.points
+            .iter()
+            .for_each(|s| add(s.position, DVec3::ZERO));
+        self.lines.iter().for_each(|s| add(s.point, DVec3::ZERO));
+        for t in &self.tori {
+            // The circle's extent along each world axis e is R sqrt(1 - (a.e)^2).
+            add(
+                t.center,
+                t.major_radius * (DVec3::ONE - t.axis * t.axis).max(DVec3::ZERO).powf(0.5),
+            );
+        }
+        // A Bezier curve lies in the convex hull of its control points.
+        self.curves
+            .iter()
+            .flat_map(|c| &c.control_points)
+            .for_each(|&p| add(p, DVec3::ZERO));
+        (!self.is_empty()).then_some((lo, hi))
+    }
+}

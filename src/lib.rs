@@ -1,0 +1,19 @@
+//! energywave: design and render "energy wave" effects by the method of Watanabe, Abe and Konno (2016).
+//!
+//! - [`field`]: the energy field psi and its sources, in f64 (the reference the GPU is checked against);
+//! - [`integrate`]: the decay zeta and Simpson's rule along a texel's ray;
+//! - [`geometry`]: the camera, the billboard and its rays;
+//! - [`compose`]: the blend `clamp((1 - B) Cb + B Ce)` and texture sampling;
+//! - [`reference`]: the multithreaded CPU renderer built from the above;
+//! - [`scene`]: TOML scene files, validated field by field;
+//! - [`output`]: PNG and EXR files, written atomically;
+//! - [`cli`]: the `energywave` command line.
+
+pub mod cli;
+pub mod compose;
+pub mod field;
+pub mod geometry;
+pub mod integrate;
+pub mod output;
+pub mod reference;
+pub mod scene;

@@ -1,0 +1,5 @@
+//! The `energywave` binary: see `energywave --help`.
+
+fn main() -> std::process::ExitCode {
+    energywave::cli::main()
+}

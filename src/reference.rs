@@ -1,0 +1,85 @@
+//! The f64 CPU reference renderer: the brightness texture B of the billboard and the composed frame,
+//! formula for formula as METHOD.md states them, on every core.
+//!
+//! It is the oracle the GPU passes are tested against, and `energywave render --backend cpu`.
+
+use glam::DVec3;
+
+use crate::compose::{blend, sample_bilinear};
+use crate::geometry::{Billboard, ray_end};
+use crate::integrate::brightness;
+use crate::scene::Scene;
+
+/// The billboard's brightness texture: `resolution` x `resolution` values of B, row-major, rows from the top.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BrightnessTexture {
+    pub resolution: u32,
+    pub values: Vec<f64>,
+}
+
+/// Integrates B for every texel of `billboard` (METHOD.md section 3).
+pub fn render_brightness(scene: &Scene, billboard: &Billboard) -> BrightnessTexture {
+    let w = scene.billboard.resolution;
+    let eye = scene.camera.eye;
+    let mut values = vec![0.0; (w as usize) * (w as usize)];
+    for_each_row(&mut values, w as usize, |j, row| {
+        for (i, out) in row.iter_mut().enumerate() {
+            let s = billboard.texel_center(i as u32, j as u32, w);
+            let e = ray_end(s, eye, scene.integration.nu);
+            *out = brightness(&scene.sources, &scene.integration, s, e);
+        }
+    });
+    BrightnessTexture {
+        resolution: w,
+        values,
+    }
+}
+
+/// The frame the camera sees: the background color everywhere, and over the billboard the blend of B
+/// (sampled bilinearly, as the GPU's sampler does) `clamp((1 - B) Cb + B Ce)`. Rows from the top.
+pub fn compose_frame(
+    scene: &Scene,
+    billboard: &Billboard,
+    texture: &BrightnessTexture,
+    width: u32,
+    height: u32,
+) -> Vec<[f64; 3]> {
+    let mut pixels = vec![scene.colors.background; width as usize * height as usize];
+    for_each_row(&mut pixels, width as usize, |y, row| {
+        for (x, out) in row.iter_mut().enumerate() {
+            let dir = scene
+                .camera
+                .pixel_ray(x as f64 + 0.5, y as f64 + 0.5, width, height);
+            if let Some((u, v)) = billboard.hit(scene.camera.eye, dir) {
+                let b = sample_bilinear(&texture.values, texture.resolution, u, v);
+                *out = blend(b, scene.colors.energy, scene.colors.background);
+            }
+        }
+    });
+    pixels
+}
+
+/// B of a single texel, for tests that probe one ray.
+pub fn texel_brightness(scene: &Scene, billboard: &Billboard, i: u32, j: u32) -> f64 {
+    let s: DVec3 = billboard.texel_center(i, j, scene.billboard.resolution);
+    let e = ray_end(s, scene.camera.eye, scene.integration.nu);
+    brightness(&scene.sources, &scene.integration, s, e)
+}
+
+/// Runs `f(row_index, row)` over the rows of `data` (rows of `width` items) on every core.
+fn for_each_row<T: Send>(data: &mut [T], width: usize, f: impl Fn(usize, &mut [T]) + Sync) {
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let rows: Vec<(usize, &mut [T])> = data.chunks_mut(width.max(1)).enumerate().collect();
+    let queue = std::sync::Mutex::new(rows.into_iter());
+    std::thread::scope(|scope| {
+        for _ in 0..threads {
+            scope.spawn(|| {
+                loop {
+                    let next = queue.lock().map(|mut q| q.next()).unwrap_or(None);
+                    let Some((j, row)) = next else { break };
+                    f(j, row);
+                }
+            });
+        }
+    });
+}

@@ -1,0 +1,249 @@
+//! The TOML scene format: its serde mirror, the validation of every field, and where in the text a field is.
+//!
+//! Field names are a contract with users' files (documented in `docs/scene-format.md`): keep them; new
+//! fields must be optional.
+
+use std::ops::Range;
+
+use serde::{Deserialize, Serialize};
+use toml::de::{DeTable, DeValue};
+
+use super::error::Problem;
+
+#[derive(Debug, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct SceneFile {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub camera: Option<CameraFile>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub billboard: Option<BillboardFile>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub integration: Option<IntegrationFile>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub colors: Option<ColorsFile>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub points: Vec<PointFile>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub lines: Vec<LineFile>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub tori: Vec<TorusFile>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub curves: Vec<CurveFile>,
+}
+
+#[derive(Debug, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct CameraFile {
+    pub eye: Option<[f64; 3]>,
+    pub target: Option<[f64; 3]>,
+    pub up: Option<[f64; 3]>,
+    pub fov_y: Option<f64>,
+}
+
+#[derive(Debug, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct BillboardFile {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub center: Option<[f64; 3]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub size: Option<f64>,
+    pub resolution: Option<u32>,
+}
+
+#[derive(Debug, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct IntegrationFile {
+    pub divisions: Option<u32>,
+    pub nu: Option<f64>,
+    pub alpha: Option<f64>,
+    pub beta: Option<f64>,
+    pub epsilon: Option<f64>,
+}
+
+#[derive(Debug, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct ColorsFile {
+    pub energy: Option<[f64; 3]>,
+    pub background: Option<[f64; 3]>,
+}
+
+#[derive(Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct PointFile {
+    pub position: [f64; 3],
+    pub coefficient: f64,
+}
+
+#[derive(Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct LineFile {
+    pub point: [f64; 3],
+    pub direction: [f64; 3],
+    pub coefficient: f64,
+}
+
+#[derive(Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct TorusFile {
+    #[serde(default)]
+    pub center: [f64; 3],
+    #[serde(default = "default_axis")]
+    pub axis: [f64; 3],
+    pub major_radius: f64,
+    pub coefficient: f64,
+}
+
+fn default_axis() -> [f64; 3] {
+    [0.0, 0.0, 1.0]
+}
+
+#[derive(Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct CurveFile {
+    pub control_points: Vec<[f64; 3]>,
+    pub coefficient: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub weights: Option<Vec<f64>>,
+}
+
+/// One step of a field path: a table key or an array index.
+#[derive(Clone, Debug)]
+pub(crate) enum Step {
+    Key(&'static str),
+    Index(usize),
+}
+
+/// A field path such as `curves[1].control_points`, with the means to find it in the text.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct FieldPath(pub Vec<Step>);
+
+impl FieldPath {
+    pub fn key(&self, k: &'static str) -> FieldPath {
+        let mut v = self.0.clone();
+        v.push(Step::Key(k));
+        FieldPath(v)
+    }
+
+    pub fn index(&self, i: usize) -> FieldPath {
+        let mut v = self.0.clone();
+        v.push(Step::Index(i));
+        FieldPath(v)
+    }
+
+    pub fn render(&self) -> String {
+        let mut s = String::new();
+        for step in &self.0 {
+            match step {
+                Step::Key(k) => {
+                    if !s.is_empty() {
+                        s.push('.');
+                    }
+                    s.push_str(k);
+                }
+                Step::Index(i) => s.push_str(&format!("[{i}]")),
+            }
+        }
+        s
+    }
+
+    /// The byte range of this field's value (or of its deepest existing ancestor) in the document.
+    fn span(&self, doc: &toml::Spanned<DeTable<'_>>) -> Option<Range<usize>> {
+        let mut current: Option<(&DeValue<'_>, Range<usize>)> = None;
+        let mut table: Option<&DeTable<'_>> = Some(doc.get_ref());
+        let mut best = None;
+        for step in &self.0 {
+            let next = match (step, table, current.as_ref()) {
+                (Step::Key(k), Some(t), _) => t.get(*k),
+                (Step::Index(i), _, Some((v, _))) => v.get(*i),
+                _ => None,
+            };
+            let Some(next) = next else { break };
+            best = Some(next.span());
+            table = next.get_ref().as_table();
+            current = Some((next.get_ref(), next.span()));
+        }
+        best
+    }
+}
+
+/// Turns byte offsets into 1-based line and column numbers, and field paths into locations.
+pub(crate) struct Locator<'a> {
+    text: &'a str,
+    doc: Option<toml::Spanned<DeTable<'a>>>,
+}
+
+impl<'a> Locator<'a> {
+    pub fn new(text: &'a str) -> Self {
+        Self {
+            text,
+            doc: DeTable::parse(text).ok(),
+        }
+    }
+
+    pub fn line_column(&self, offset: usize) -> (usize, usize) {
+        let offset = offset.min(self.text.len());
+        let before = &self.text[..offset];
+        let line = before.matches('\n').count() + 1;
+        let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+        (line, column)
+    }
+
+    /// A problem at `path`, located in the text where the field (or its nearest ancestor) is.
+    pub fn problem(&self, path: &FieldPath, message: impl Into<String>) -> Problem {
+        let location = self
+            .doc
+            .as_ref()
+            .and_then(|d| path.span(d))
+            .map(|r| self.line_column(r.start));
+        Problem {
+            location,
+            field: path.render(),
+            message: message.into(),
+        }
+    }
+
+    /// The dotted path of the deepest key whose value holds `offset` (for serde's errors, which only give a
+    /// span), or an empty string.
+    pub fn path_at(&self, offset: usize) -> String {
+        fn walk(value: &DeValue<'_>, offset: usize, path: &mut String) {
+            match value {
+                DeValue::Table(t) => {
+                    for (k, v) in t.iter() {
+                        if v.span().contains(&offset) || k.span().contains(&offset) {
+                            if !path.is_empty() {
+                                path.push('.');
+                            }
+                            path.push_str(k.get_ref());
+                            walk(v.get_ref(), offset, path);
+                            return;
+                        }
+                    }
+                }
+                DeValue::Array(a) => {
+                    for (i, v) in a.iter().enumerate() {
+                        if v.span().contains(&offset) {
+                            // Arrays of numbers name their field, not the element.
+                            if v.get_ref().is_table() {
+                                path.push_str(&format!("[{i}]"));
+                                walk(v.get_ref(), offset, path);
+                            }
+                            return;
+                        }
+                    }
+                }
+                _ => {}
+            }
+        }
+        let mut path = String::new();
+        if let Some(doc) = &self.doc {
+            for (k, v) in doc.get_ref().iter() {
+                if v.span().contains(&offset) || k.span().contains(&offset) {
+                    path.push_str(k.get_ref());
+                    walk(v.get_ref(), offset, &mut path);
+                    break;
+                }
+            }
+        }
+        path
+    }
+}

@@ -1,0 +1,529 @@
+//! Scenes: the camera, the billboard, the integration settings, the colors and the sources, loaded from and
+//! saved to TOML files (format in `docs/scene-format.md`).
+//!
+//! Loading validates every field before anything reaches a renderer; an invalid file is refused whole with
+//! every problem found, each named by file, line, column and field.
+
+mod error;
+mod file;
+
+use std::path::{Path, PathBuf};
+
+use glam::DVec3;
+
+pub use error::{Problem, SceneError};
+use file::{FieldPath, Locator, SceneFile};
+
+use crate::field::{Curve, Line, Point, Sources, Torus};
+use crate::geometry::{self, Billboard, Camera};
+use crate::integrate::Integration;
+
+/// The scene used when none is given, embedded in the binary.
+pub const DEFAULT_SCENE_TOML: &str = include_str!("../../assets/scenes/default.toml");
+/// The name under which the embedded default scene reports errors.
+pub const DEFAULT_SCENE_NAME: &str = "<embedded default scene>";
+
+/// Largest billboard resolution a scene may ask for (a GPU may allow less; the renderer checks its limit).
+pub const MAX_RESOLUTION: u32 = 16384;
+/// Largest Simpson division count a scene may ask for.
+pub const MAX_DIVISIONS: u32 = 1 << 20;
+
+/// Where the billboard goes; `None` fields are placed automatically (`geometry::place_billboard`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct BillboardSettings {
+    pub center: Option<DVec3>,
+    pub size: Option<f64>,
+    /// W: texels per side of the brightness texture.
+    pub resolution: u32,
+}
+
+/// The energy color Ce and the background color Cb, display values in [0, 1].
+#[derive(Clone, Debug, PartialEq)]
+pub struct Colors {
+    pub energy: [f64; 3],
+    pub background: [f64; 3],
+}
+
+/// A whole scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scene {
+    pub camera: Camera,
+    pub billboard: BillboardSettings,
+    pub integration: Integration,
+    pub colors: Colors,
+    pub sources: Sources,
+}
+
+impl Default for Camera {
+    fn default() -> Self {
+        Camera {
+            eye: DVec3::new(0.0, 0.0, 8.0),
+            target: DVec3::ZERO,
+            up: DVec3::Y,
+            fov_y_degrees: 40.0,
+        }
+    }
+}
+
+impl Default for BillboardSettings {
+    fn default() -> Self {
+        Self {
+            center: None,
+            size: None,
+            resolution: 256,
+        }
+    }
+}
+
+impl Default for Colors {
+    fn default() -> Self {
+        Self {
+            energy: [0.35, 0.65, 1.0],
+            background: [0.0, 0.0, 0.0],
+        }
+    }
+}
+
+impl Scene {
+    /// Reads and validates a scene file.
+    pub fn load(path: &Path) -> Result<Scene, SceneError> {
+        let meta = std::fs::metadata(path).map_err(|source| SceneError::Read {
+            path: path.to_owned(),
+            source,
+        })?;
+        if meta.is_dir() {
+            return Err(SceneError::Directory {
+                path: path.to_owned(),
+            });
+        }
+        let bytes = std::fs::read(path).map_err(|source| SceneError::Read {
+            path: path.to_owned(),
+            source,
+        })?;
+        let text = String::from_utf8(bytes).map_err(|e| SceneError::NotText {
+            path: path.to_owned(),
+            offset: e.utf8_error().valid_up_to(),
+        })?;
+        Scene::parse(&text, path)
+    }
+
+    /// The embedded default scene.
+    pub fn default_scene() -> Scene {
+        Scene::parse(DEFAULT_SCENE_TOML, Path::new(DEFAULT_SCENE_NAME))
+            .expect("the embedded default scene is valid (held by a test)")
+    }
+
+    /// Parses and validates scene text; `path` only names the origin in errors.
+    pub fn parse(text: &str, path: &Path) -> Result<Scene, SceneError> {
+        if text.contains('\0') {
+            return Err(SceneError::NotText {
+                path: path.to_owned(),
+                offset: text.find('\0').unwrap_or(0),
+            });
+        }
+        let meaningful = text
+            .lines()
+            .map(str::trim)
+            .any(|l| !l.is_empty() && !l.starts_with('#'));
+        if !meaningful {
+            return Err(SceneError::Empty {
+                path: path.to_owned(),
+            });
+        }
+        let locator = Locator::new(text);
+        let file: SceneFile = toml::from_str(text).map_err(|e| {
+            let (location, field) = match e.span() {
+                Some(span) => (
+                    Some(locator.line_column(span.start)),
+                    locator.path_at(span.start),
+                ),
+                None => (None, String::new()),
+            };
+            SceneError::Invalid {
+                path: path.to_owned(),
+                problems: vec![Problem {
+                    location,
+                    field,
+                    message: e.message().trim().to_owned(),
+                }],
+            }
+        })?;
+        let mut problems = Vec::new();
+        let scene = validate(&file, &locator, &mut problems);
+        if problems.is_empty() {
+            Ok(scene)
+        } else {
+            Err(SceneError::Invalid {
+                path: PathBuf::from(path),
+                problems,
+            })
+        }
+    }
+
+    /// The scene as TOML text, every setting written out; `Scene::parse` of it gives this scene back.
+    pub fn to_toml(&self) -> String {
+        let v = |p: DVec3| p.to_array();
+        let file = SceneFile {
+            camera: Some(file::CameraFile {
+                eye: Some(v(self.camera.eye)),
+                target: Some(v(self.camera.target)),
+                up: Some(v(self.camera.up)),
+                fov_y: Some(self.camera.fov_y_degrees),
+            }),
+            billboard: Some(file::BillboardFile {
+                center: self.billboard.center.map(v),
+                size: self.billboard.size,
+                resolution: Some(self.billboard.resolution),
+            }),
+            integration: Some(file::IntegrationFile {
+                divisions: Some(self.integration.divisions),
+                nu: Some(self.integration.nu),
+                alpha: Some(self.integration.alpha),
+                beta: Some(self.integration.beta),
+                epsilon: Some(self.integration.epsilon),
+            }),
+            colors: Some(file::ColorsFile {
+                energy: Some(self.colors.energy),
+                background: Some(self.colors.background),
+            }),
+            points: (self.sources.points.iter())
+                .map(|s| file::PointFile {
+                    position: v(s.position),
+                    coefficient: s.coefficient,
+                })
+                .collect(),
+            lines: (self.sources.lines.iter())
+                .map(|s| file::LineFile {
+                    point: v(s.point),
+                    direction: v(s.direction),
+                    coefficient: s.coefficient,
+                })
+                .collect(),
+            tori: (self.sources.tori.iter())
+                .map(|s| file::TorusFile {
+                    center: v(s.center),
+                    axis: v(s.axis),
+                    major_radius: s.major_radius,
+                    coefficient: s.coefficient,
+                })
+                .collect(),
+            curves: (self.sources.curves.iter())
+                .map(|s| file::CurveFile {
+                    control_points: s.control_points.iter().map(|&p| v(p)).collect(),
+                    coefficient: s.coefficient,
+                    weights: (!s.weights.is_empty()).then(|| s.weights.clone()),
+                })
+                .collect(),
+        };
+        toml::to_string_pretty(&file).expect("a scene always serialises to TOML")
+    }
+
+    /// The billboard for a frame of `aspect` (width / height): the scene's own, or placed automatically.
+    pub fn place_billboard(&self, aspect: f64) -> Billboard {
+        geometry::place_billboard(
+            &self.camera,
+            &self.sources,
+            self.billboard.center,
+            self.billboard.size,
+            aspect,
+        )
+    }
+}
+
+/// Collects problems while converting the file into a scene.
+struct Checker<'a, 'b> {
+    locator: &'a Locator<'b>,
+    problems: &'a mut Vec<Problem>,
+}
+
+impl Checker<'_, '_> {
+    fn fail(&mut self, path: &FieldPath, message: impl Into<String>) {
+        self.problems.push(self.locator.problem(path, message));
+    }
+
+    fn finite(&mut self, path: &FieldPath, x: f64) -> bool {
+        if x.is_finite() {
+            true
+        } else {
+            self.fail(path, format!("{x} is not a finite number"));
+            false
+        }
+    }
+
+    fn vector(&mut self, path: &FieldPath, a: [f64; 3]) -> DVec3 {
+        if a.iter().all(|x| x.is_finite()) {
+            DVec3::from_array(a)
+        } else {
+            self.fail(
+                path,
+                format!("{a:?} has a component that is not a finite number"),
+            );
+            DVec3::ZERO
+        }
+    }
+
+    /// A non-zero vector, normalised.
+    fn direction(&mut self, path: &FieldPath, a: [f64; 3]) -> DVec3 {
+        let d = self.vector(path, a);
+        let len = d.length();
+        if d.is_finite() && len > 1e-12 && (d / len).is_finite() {
+            d / len
+        } else {
+            if d.is_finite() {
+                self.fail(path, "must not be the zero vector (it gives the direction; its length does not matter)");
+            }
+            DVec3::Z
+        }
+    }
+
+    /// A finite number strictly inside `(lo, hi)` (or above `lo` when `hi` is infinite).
+    fn in_open_range(&mut self, path: &FieldPath, x: f64, lo: f64, hi: f64, what: &str) -> f64 {
+        if self.finite(path, x) && !(x > lo && x < hi) {
+            self.fail(path, format!("{x} is out of range: {what}"));
+        }
+        x
+    }
+
+    fn color(&mut self, path: &FieldPath, a: [f64; 3]) -> [f64; 3] {
+        if a.iter().any(|c| !(0.0..=1.0).contains(c)) {
+            self.fail(path, format!("{a:?}: each channel must be in 0..1"));
+        }
+        a
+    }
+}
+
+fn validate(file: &SceneFile, locator: &Locator<'_>, problems: &mut Vec<Problem>) -> Scene {
+    let mut c = Checker { locator, problems };
+    let root = FieldPath::default();
+    let defaults_camera = Camera::default();
+
+    // [camera]
+    let cam_path = root.key("camera");
+    let cam = file.camera.as_ref();
+    let get = |f: fn(&file::CameraFile) -> Option<[f64; 3]>| cam.and_then(f);
+    let eye = get(|c| c.eye).map_or(defaults_camera.eye, |a| c.vector(&cam_path.key("eye"), a));
+    let target = get(|c| c.target).map_or(defaults_camera.target, |a| {
+        c.vector(&cam_path.key("target"), a)
+    });
+    let up = get(|c| c.up).map_or(defaults_camera.up, |a| c.vector(&cam_path.key("up"), a));
+    let fov_y = cam
+        .and_then(|c| c.fov_y)
+        .map_or(defaults_camera.fov_y_degrees, |x| {
+            c.in_open_range(
+                &cam_path.key("fov_y"),
+                x,
+                0.0,
+                180.0,
+                "the vertical field of view is in degrees, between 0 and 180 (exclusive)",
+            )
+        });
+    if (target - eye).length() <= 1e-9 * (1.0 + eye.length()) {
+        c.fail(
+            &cam_path.key("target"),
+            "the target must differ from the eye (the camera looks from eye toward target)",
+        );
+    } else if up.length() <= 1e-12 {
+        c.fail(&cam_path.key("up"), "must not be the zero vector");
+    } else if up.normalize().cross((target - eye).normalize()).length() < 1e-9 {
+        c.fail(
+            &cam_path.key("up"),
+            "must not be parallel to the view direction (target - eye)",
+        );
+    }
+    let camera = Camera {
+        eye,
+        target,
+        up,
+        fov_y_degrees: fov_y,
+    };
+
+    // [billboard]
+    let bb_path = root.key("billboard");
+    let bb = file.billboard.as_ref();
+    let center = bb
+        .and_then(|b| b.center)
+        .map(|a| c.vector(&bb_path.key("center"), a));
+    let size = bb.and_then(|b| b.size).map(|x| {
+        c.in_open_range(
+            &bb_path.key("size"),
+            x,
+            0.0,
+            f64::INFINITY,
+            "the side length l must be positive",
+        )
+    });
+    if let Some(center) = center {
+        if size.is_none() {
+            c.fail(
+                &bb_path.key("center"),
+                "a fixed center needs a size too (or remove center for automatic placement)",
+            );
+        }
+        if (center - eye).length() <= 1e-9 * (1.0 + eye.length()) {
+            c.fail(
+                &bb_path.key("center"),
+                "the billboard's center must not be at the eye",
+            );
+        }
+    }
+    let resolution = bb
+        .and_then(|b| b.resolution)
+        .unwrap_or(BillboardSettings::default().resolution);
+    if !(1..=MAX_RESOLUTION).contains(&resolution) {
+        c.fail(
+            &bb_path.key("resolution"),
+            format!("{resolution} texels: must be between 1 and {MAX_RESOLUTION}"),
+        );
+    }
+
+    // [integration]
+    let int_path = root.key("integration");
+    let defaults = Integration::default();
+    let int = file.integration.as_ref();
+    let divisions = int.and_then(|i| i.divisions).unwrap_or(defaults.divisions);
+    if divisions < 2 || divisions % 2 != 0 || divisions > MAX_DIVISIONS {
+        c.fail(
+            &int_path.key("divisions"),
+            format!("{divisions}: Simpson's rule needs an even division count between 2 and {MAX_DIVISIONS} (the papers use 200)"),
+        );
+    }
+    let nu = int.and_then(|i| i.nu).map_or(defaults.nu, |x| {
+        c.in_open_range(&int_path.key("nu"), x, 1.0, f64::INFINITY, "nu must be greater than 1 (E = V + nu (S - V) lies behind the billboard; the papers use 2)")
+    });
+    let alpha = int.and_then(|i| i.alpha).map_or(defaults.alpha, |x| {
+        c.in_open_range(
+            &int_path.key("alpha"),
+            x,
+            0.0,
+            f64::INFINITY,
+            "alpha must be positive (the papers use 1)",
+        )
+    });
+    let beta = int.and_then(|i| i.beta).map_or(defaults.beta, |x| {
+        c.in_open_range(&int_path.key("beta"), x, 0.0, f64::INFINITY, "beta must be positive, or zeta = alpha / (s + beta)^2 is infinite at s = 0 (the papers use 1)")
+    });
+    let epsilon = int.and_then(|i| i.epsilon).map_or(defaults.epsilon, |x| {
+        c.in_open_range(
+            &int_path.key("epsilon"),
+            x,
+            0.0,
+            f64::INFINITY,
+            "epsilon must be positive (it bounds 1 / distance on the sources)",
+        )
+    });
+
+    // [colors]
+    let col_path = root.key("colors");
+    let default_colors = Colors::default();
+    let col = file.colors.as_ref();
+    let energy = col
+        .and_then(|x| x.energy)
+        .map_or(default_colors.energy, |a| {
+            c.color(&col_path.key("energy"), a)
+        });
+    let background = col
+        .and_then(|x| x.background)
+        .map_or(default_colors.background, |a| {
+            c.color(&col_path.key("background"), a)
+        });
+
+    // Sources.
+    let mut sources = Sources::default();
+    for (i, p) in file.points.iter().enumerate() {
+        let path = root.key("points").index(i);
+        let position = c.vector(&path.key("position"), p.position);
+        c.finite(&path.key("coefficient"), p.coefficient);
+        sources.points.push(Point {
+            position,
+            coefficient: p.coefficient,
+        });
+    }
+    for (i, l) in file.lines.iter().enumerate() {
+        let path = root.key("lines").index(i);
+        let point = c.vector(&path.key("point"), l.point);
+        let direction = c.direction(&path.key("direction"), l.direction);
+        c.finite(&path.key("coefficient"), l.coefficient);
+        sources.lines.push(Line {
+            point,
+            direction,
+            coefficient: l.coefficient,
+        });
+    }
+    for (i, t) in file.tori.iter().enumerate() {
+        let path = root.key("tori").index(i);
+        let center = c.vector(&path.key("center"), t.center);
+        let axis = c.direction(&path.key("axis"), t.axis);
+        c.in_open_range(
+            &path.key("major_radius"),
+            t.major_radius,
+            0.0,
+            f64::INFINITY,
+            "the major radius R must be positive",
+        );
+        c.finite(&path.key("coefficient"), t.coefficient);
+        sources.tori.push(Torus {
+            center,
+            axis,
+            major_radius: t.major_radius,
+            coefficient: t.coefficient,
+        });
+    }
+    for (i, curve) in file.curves.iter().enumerate() {
+        let path = root.key("curves").index(i);
+        let n = curve.control_points.len();
+        if n < 3 || n % 2 == 0 {
+            c.fail(
+                &path.key("control_points"),
+                format!("{n} control points: a curve needs 3 (one quadratic Bezier segment) or 2k+1 (a chain of k segments sharing end points)"),
+            );
+        }
+        let control_points = (curve.control_points.iter().enumerate())
+            .map(|(j, &p)| c.vector(&path.key("control_points").index(j), p))
+            .collect();
+        c.finite(&path.key("coefficient"), curve.coefficient);
+        let weights = match &curve.weights {
+            None => Vec::new(),
+            Some(w) if w.is_empty() => {
+                c.fail(
+                    &path.key("weights"),
+                    "the W series is empty: give at least one weight, or remove the key for all 1",
+                );
+                Vec::new()
+            }
+            Some(w) => {
+                for (j, &x) in w.iter().enumerate() {
+                    if !x.is_finite() || x < 0.0 {
+                        c.fail(
+                            &path.key("weights").index(j),
+                            format!("{x}: weights must be finite and at least 0"),
+                        );
+                    }
+                }
+                w.clone()
+            }
+        };
+        sources.curves.push(Curve {
+            control_points,
+            coefficient: curve.coefficient,
+            weights,
+        });
+    }
+
+    Scene {
+        camera,
+        billboard: BillboardSettings {
+            center,
+            size,
+            resolution,
+        },
+        integration: Integration {
+            divisions,
+            nu,
+            alpha,
+            beta,
+            epsilon,
+        },
+        colors: Colors { energy, background },
+        sources,
+    }
+}
