@@ -37,7 +37,7 @@ pub fn zeta(s: f64, alpha: f64, beta: f64) -> f64 {
 /// Simpson's rule over [0, 1] with `n` (even) divisions, samples `k = 0..=n` (3.33, corrected to end at
 /// s = 1): `(1 / 3n) (f_0 + 4 f_1 + 2 f_2 + ... + 4 f_{n-1} + f_n)`.
 pub fn simpson(f: impl Fn(f64) -> f64, n: u32) -> f64 {
-    debug_assert!(n >= 2 && n % 2 == 0);
+    debug_assert!(n >= 2 && n.is_multiple_of(2));
     let nf = n as f64;
     let mut sum = f(0.0) + f(1.0);
     for k in 1..n {

@@ -80,13 +80,6 @@ impl Segment {
             consider(root.clamp(0.0, 1.0));
             consider(polish(k, root).clamp(0.0, 1.0));
         }
-        // A nearly straight segment makes the cubic ill-conditioned; the projection on the tangent line at
-        // t = 0, polished, is then an accurate extra candidate (any candidate on the curve is safe to add).
-        let c1_sq = self.c1.length_squared();
-        if c1_sq > 0.0 {
-            let t = self.c1.dot(p - self.c0) / c1_sq;
-            consider(polish(k, t.clamp(0.0, 1.0)).clamp(0.0, 1.0));
-        }
         best
     }
 }

@@ -202,48 +202,48 @@ impl<'a> Locator<'a> {
         }
     }
 
-    /// The dotted path of the deepest key whose value holds `offset` (for serde's errors, which only give a
-    /// span), or an empty string.
+    /// The field path an error at byte `offset` belongs to (serde's errors only give a span): the last key,
+    /// table-array element or nested array that starts at or before the offset, or an empty string.
     pub fn path_at(&self, offset: usize) -> String {
-        fn walk(value: &DeValue<'_>, offset: usize, path: &mut String) {
+        fn collect(value: &DeValue<'_>, path: &str, out: &mut Vec<(usize, String)>) {
             match value {
                 DeValue::Table(t) => {
                     for (k, v) in t.iter() {
-                        if v.span().contains(&offset) || k.span().contains(&offset) {
-                            if !path.is_empty() {
-                                path.push('.');
-                            }
-                            path.push_str(k.get_ref());
-                            walk(v.get_ref(), offset, path);
-                            return;
-                        }
+                        let p = if path.is_empty() {
+                            k.get_ref().to_string()
+                        } else {
+                            format!("{path}.{}", k.get_ref())
+                        };
+                        out.push((k.span().start, p.clone()));
+                        collect(v.get_ref(), &p, out);
                     }
                 }
                 DeValue::Array(a) => {
                     for (i, v) in a.iter().enumerate() {
-                        if v.span().contains(&offset) {
-                            // Arrays of numbers name their field, not the element.
-                            if v.get_ref().is_table() {
-                                path.push_str(&format!("[{i}]"));
-                                walk(v.get_ref(), offset, path);
-                            }
-                            return;
+                        // Elements that are numbers are named by their array's field.
+                        if v.get_ref().is_table() || v.get_ref().is_array() {
+                            let p = format!("{path}[{i}]");
+                            out.push((v.span().start, p.clone()));
+                            collect(v.get_ref(), &p, out);
                         }
                     }
                 }
                 _ => {}
             }
         }
-        let mut path = String::new();
-        if let Some(doc) = &self.doc {
-            for (k, v) in doc.get_ref().iter() {
-                if v.span().contains(&offset) || k.span().contains(&offset) {
-                    path.push_str(k.get_ref());
-                    walk(v.get_ref(), offset, &mut path);
-                    break;
-                }
-            }
+        let Some(doc) = &self.doc else {
+            return String::new();
+        };
+        let mut entries = Vec::new();
+        for (k, v) in doc.get_ref().iter() {
+            entries.push((k.span().start, k.get_ref().to_string()));
+            collect(v.get_ref(), k.get_ref(), &mut entries);
         }
-        path
+        entries
+            .into_iter()
+            .filter(|(start, _)| *start <= offset)
+            .max_by_key(|(start, _)| *start)
+            .map(|(_, p)| p)
+            .unwrap_or_default()
     }
 }

@@ -1,0 +1,240 @@
+//! The `energywave` command line: exit statuses, messages, outputs, and pictures checked against the camera
+//! math and the CPU reference.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use energywave::reference;
+use energywave::scene::Scene;
+use glam::DVec3;
+
+fn bin() -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_energywave"));
+    c.env_remove("DISPLAY").env_remove("WAYLAND_DISPLAY");
+    c
+}
+
+fn run(args: &[&str]) -> Output {
+    bin().args(args).output().expect("the binary runs")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn tmpdir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("energywave-cli-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn scene(name: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("assets/scenes")
+        .join(name)
+        .display()
+        .to_string()
+}
+
+#[test]
+fn bad_input_exits_2_with_a_message_naming_it() {
+    let dir = tmpdir("bad");
+    let bad = dir.join("typo.toml");
+    std::fs::write(
+        &bad,
+        "[camera]\nfov_y = 40\n\n[[tori]]\nmajor_radius = 1\ncoefficent = 5\n",
+    )
+    .unwrap();
+    let out = dir.join("out.png");
+    let o = run(&["render", bad.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    let e = stderr(&o);
+    assert!(
+        e.contains("typo.toml:6:") && e.contains("coefficent"),
+        "{e}"
+    );
+    assert!(!out.exists(), "nothing is written for a bad scene");
+
+    for (args, phrase) in [
+        (
+            vec!["render", "-o", "x.png", "--size", "12by3"],
+            "not a frame size",
+        ),
+        (
+            vec!["render", "-o", "x.png", "--size", "0x10"],
+            "not a frame size",
+        ),
+        (
+            vec!["render", "-o", "x.png", "--backend", "quantum"],
+            "invalid value 'quantum'",
+        ),
+        (
+            vec!["render", "-o", "x.png", "--divisions", "7"],
+            "even division count",
+        ),
+        (
+            vec!["render", "-o", "/nonexistent-dir/x.png"],
+            "does not exist",
+        ),
+        (
+            vec!["render", "-o", "x.jpeg2000"],
+            "unknown image extension",
+        ),
+        (
+            vec!["render", "-o", "x.png", "--brightness"],
+            "give an .exr output",
+        ),
+        (
+            vec!["render", "/nonexistent/scene.toml", "-o", "x.png"],
+            "/nonexistent/scene.toml",
+        ),
+    ] {
+        let o = bin().args(&args).current_dir(&dir).output().unwrap();
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
+        assert!(stderr(&o).contains(phrase), "{args:?}: {}", stderr(&o));
+    }
+    assert!(!dir.join("x.png").exists());
+}
+
+#[test]
+fn an_existing_output_survives_a_failed_render() {
+    let dir = tmpdir("keep");
+    let out = dir.join("frame.png");
+    std::fs::write(&out, b"previous image").unwrap();
+    let bad = dir.join("bad.toml");
+    std::fs::write(&bad, "[integration]\ndivisions = 3\n").unwrap();
+    let o = run(&["render", bad.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    assert_eq!(std::fs::read(&out).unwrap(), b"previous image");
+    // No temporary files are left behind either.
+    assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 2);
+}
+
+#[test]
+fn view_without_a_display_points_to_render() {
+    let o = run(&["view"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).contains("no display") && stderr(&o).contains("energywave render"),
+        "{}",
+        stderr(&o)
+    );
+    // A bad scene is still an input error.
+    let o = run(&["view", "/nonexistent.toml"]);
+    assert_eq!(o.status.code(), Some(2));
+}
+
+#[test]
+fn render_writes_the_composed_frame() {
+    let dir = tmpdir("frame");
+    let out = dir.join("torus.png");
+    let path = scene("torus_r0.9_t5.1.toml");
+    let o = run(&[
+        "render",
+        &path,
+        "-o",
+        out.to_str().unwrap(),
+        "--size",
+        "96x64",
+        "--resolution",
+        "48",
+        "--divisions",
+        "64",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let img = image::open(&out).unwrap().to_rgb8();
+    assert_eq!(img.dimensions(), (96, 64));
+    // The same frame from the library's reference, pixel for pixel (the CLI adds nothing of its own).
+    let mut s = Scene::load(Path::new(&path)).unwrap();
+    s.billboard.resolution = 48;
+    s.integration.divisions = 64;
+    let bb = s.place_billboard(96.0 / 64.0);
+    let tex = reference::render_brightness(&s, &bb);
+    let frame = reference::compose_frame(&s, &bb, &tex, 96, 64);
+    for (px, want) in img.pixels().zip(&frame) {
+        for c in 0..3 {
+            assert!((px[c] as f64 - want[c] * 255.0).abs() <= 0.5 + 1e-9);
+        }
+    }
+    // The picture is not flat: the ring blows out to white, the hole is darker than the ring, and the
+    // frame's corners are darker still (a bright core fading into the background).
+    let at = |p: DVec3| {
+        let (x, y) = s.camera.project(p, 96, 64).unwrap();
+        img.get_pixel(x as u32, y as u32).0
+    };
+    let ring = at(DVec3::new(0.9, 0.0, 0.0));
+    let hole = at(DVec3::ZERO);
+    let corner = img.get_pixel(0, 0).0;
+    assert!(ring.iter().all(|&c| c >= 250), "ring {ring:?}");
+    assert!(hole[0] < ring[0] - 40, "hole {hole:?} vs ring {ring:?}");
+    assert!(
+        corner[2] < hole[2] && corner[0] < 60,
+        "corner {corner:?} hole {hole:?}"
+    );
+}
+
+#[test]
+fn brightness_writes_b_itself_as_float_exr() {
+    let dir = tmpdir("exr");
+    let out = dir.join("b.exr");
+    let path = scene("bezier_b5.0.toml");
+    let o = run(&[
+        "render",
+        &path,
+        "-o",
+        out.to_str().unwrap(),
+        "--brightness",
+        "--resolution",
+        "24",
+        "--divisions",
+        "32",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let img = image::open(&out).unwrap().to_rgb32f();
+    assert_eq!(img.dimensions(), (24, 24));
+    let mut s = Scene::load(Path::new(&path)).unwrap();
+    s.billboard.resolution = 24;
+    s.integration.divisions = 32;
+    // --size defaults to a square frame.
+    let bb = s.place_billboard(1.0);
+    let mut above_one = 0;
+    for j in 0..24 {
+        for i in 0..24 {
+            let want = reference::texel_brightness(&s, &bb, i, j);
+            let got = img.get_pixel(i, j).0;
+            assert!(
+                got.iter()
+                    .all(|&g| ((g as f64) - want).abs() <= 1e-6 * want.max(1.0)),
+                "({i},{j}) {got:?} vs {want}"
+            );
+            above_one += (want > 1.0) as usize;
+        }
+    }
+    assert!(above_one > 0, "B is written unclamped");
+}
+
+#[test]
+fn render_defaults_to_the_embedded_scene() {
+    let dir = tmpdir("default");
+    let out = dir.join("d.png");
+    let o = run(&[
+        "render",
+        "-o",
+        out.to_str().unwrap(),
+        "--size",
+        "32x32",
+        "--resolution",
+        "16",
+        "--divisions",
+        "16",
+        "-v",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("<embedded default scene>"),
+        "{}",
+        stderr(&o)
+    );
+    assert_eq!(image::open(&out).unwrap().to_rgb8().dimensions(), (32, 32));
+}
