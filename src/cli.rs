@@ -9,6 +9,7 @@ use std::time::Instant;
 
 use clap::{Parser, Subcommand, ValueEnum};
 
+use crate::gpu::{GpuError, HeadlessRenderer};
 use crate::output::{self, Format, OutputError};
 use crate::reference;
 use crate::scene::{DEFAULT_SCENE_NAME, MAX_DIVISIONS, MAX_RESOLUTION, Scene, SceneError};
@@ -42,9 +43,14 @@ pub struct RenderArgs {
     /// Frame size in pixels, WIDTHxHEIGHT.
     #[arg(long, default_value = "512x512", value_parser = parse_size)]
     pub size: (u32, u32),
-    /// Which renderer integrates the field: `cpu` is the f64 reference, on every core.
-    #[arg(long, value_enum, default_value_t = Backend::Cpu)]
+    /// Which renderer integrates the field: `gpu` (WGSL compute, f32) or `cpu` (the f64 reference, on every
+    /// core).
+    #[arg(long, value_enum, default_value_t = Backend::Gpu)]
     pub backend: Backend,
+    /// Export the glow over a transparent background: straight color with alpha = min(B, 1), for
+    /// compositing (PNG with alpha, or EXR RGBA).
+    #[arg(long, conflicts_with = "brightness")]
+    pub transparent: bool,
     /// Write the billboard's brightness B itself (W x W, before the blend, unclamped, rows from the top) as a
     /// float EXR (R = G = B = brightness) instead of the composed frame.
     #[arg(long)]
@@ -55,7 +61,7 @@ pub struct RenderArgs {
     /// Override the scene's Simpson division count n (even).
     #[arg(long, value_parser = parse_divisions)]
     pub divisions: Option<u32>,
-    /// Print what is rendered and how long it took.
+    /// Print the adapter, what is rendered and how long it took.
     #[arg(short, long)]
     pub verbose: bool,
 }
@@ -63,6 +69,8 @@ pub struct RenderArgs {
 /// The renderer behind `render`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum Backend {
+    /// The GPU: any adapter wgpu finds (a real GPU first, else Mesa's lavapipe, else Mesa's GL).
+    Gpu,
     /// The f64 CPU reference.
     Cpu,
 }
@@ -74,6 +82,8 @@ pub enum CliError {
     Scene(#[from] SceneError),
     #[error("{0}")]
     Output(#[from] OutputError),
+    #[error("{0}")]
+    Gpu(#[from] GpuError),
     #[error("{0}")]
     Usage(String),
     #[error("{0}")]
@@ -87,7 +97,8 @@ impl CliError {
             CliError::Scene(SceneError::Read { .. }) => 2,
             CliError::Scene(_) | CliError::Usage(_) => 2,
             CliError::Output(e) if e.is_input_error() => 2,
-            CliError::Output(_) | CliError::Unavailable(_) => 1,
+            CliError::Gpu(e) if e.is_input_error() => 2,
+            CliError::Output(_) | CliError::Gpu(_) | CliError::Unavailable(_) => 1,
         }
     }
 }
@@ -196,24 +207,51 @@ fn render(args: &RenderArgs) -> Result<(), CliError> {
         );
     }
     let start = Instant::now();
-    let texture = match args.backend {
-        Backend::Cpu => reference::render_brightness(&scene, &billboard),
-    };
-    if args.verbose {
-        eprintln!("brightness: {:.1} ms", start.elapsed().as_secs_f64() * 1e3);
-    }
-    if args.brightness {
-        output::write_brightness_exr(&args.output, texture.resolution, &texture.values)?;
-    } else {
-        let start = Instant::now();
-        let pixels = reference::compose_frame(&scene, &billboard, &texture, width, height);
-        if args.verbose {
-            eprintln!(
-                "compose {width}x{height}: {:.1} ms",
-                start.elapsed().as_secs_f64() * 1e3
-            );
+    match args.backend {
+        Backend::Cpu => {
+            let texture = reference::render_brightness(&scene, &billboard);
+            if args.verbose {
+                eprintln!(
+                    "brightness (cpu): {:.1} ms",
+                    start.elapsed().as_secs_f64() * 1e3
+                );
+            }
+            if args.brightness {
+                output::write_brightness_exr(&args.output, texture.resolution, &texture.values)?;
+            } else {
+                let pixels = reference::compose_frame(
+                    &scene,
+                    &billboard,
+                    &texture,
+                    width,
+                    height,
+                    args.transparent,
+                );
+                output::write_rgba(&args.output, width, height, &pixels, args.transparent)?;
+            }
         }
-        output::write_rgb(&args.output, width, height, &pixels)?;
+        Backend::Gpu => {
+            let mut gpu = HeadlessRenderer::new()?;
+            if args.verbose {
+                eprintln!("adapter: {}", gpu.ctx.adapter_summary());
+            }
+            if args.brightness {
+                let values = gpu.brightness(&scene, &billboard)?;
+                let values: Vec<f64> = values.iter().map(|&b| b as f64).collect();
+                output::write_brightness_exr(&args.output, scene.billboard.resolution, &values)?;
+            } else {
+                let frame = gpu.render(&scene, width, height, args.transparent)?;
+                let pixels: Vec<[f64; 4]> =
+                    frame.pixels.iter().map(|p| p.map(|c| c as f64)).collect();
+                output::write_rgba(&args.output, width, height, &pixels, args.transparent)?;
+            }
+            if args.verbose {
+                eprintln!(
+                    "gpu render and readback: {:.1} ms",
+                    start.elapsed().as_secs_f64() * 1e3
+                );
+            }
+        }
     }
     if args.verbose {
         eprintln!("wrote {}", args.output.display());

@@ -8,6 +8,19 @@ pub fn blend(b: f64, energy: [f64; 3], background: [f64; 3]) -> [f64; 3] {
     std::array::from_fn(|c| ((1.0 - b) * background[c] + b * energy[c]).clamp(0.0, 1.0))
 }
 
+/// The transparent export of one billboard pixel: straight (not premultiplied) color and alpha = min(B, 1).
+/// Composited "over" any background Cb it gives `(1 - B) Cb + B Ce` wherever B <= 1, and over black it
+/// gives `clamp(B Ce)` everywhere, as the opaque blend does.
+pub fn blend_transparent(b: f64, energy: [f64; 3]) -> [f64; 4] {
+    let alpha = b.clamp(0.0, 1.0);
+    let color = if b > 1.0 {
+        energy.map(|c| (b * c).clamp(0.0, 1.0))
+    } else {
+        energy
+    };
+    [color[0], color[1], color[2], alpha]
+}
+
 /// Samples a `w` x `w` row-major texture (rows from the top) bilinearly at texture coordinates `(u, v)` in
 /// [0, 1], texel centers at `(i + 0.5) / w`, clamping at the edges: what a GPU linear sampler with
 /// clamp-to-edge does.
@@ -47,6 +60,26 @@ mod tests {
             blend(5.0, [0.0, 0.0, 0.0], [0.5, 0.5, 0.5]),
             [0.0, 0.0, 0.0]
         );
+    }
+
+    #[test]
+    fn transparent_export_composites_like_the_blend() {
+        let ce = [0.2, 0.5, 1.0];
+        for b in [0.0, 0.3, 1.0] {
+            for cb in [[0.0, 0.0, 0.0], [0.9, 0.4, 0.1]] {
+                let [r, g, bl, a] = blend_transparent(b, ce);
+                let over: [f64; 3] = std::array::from_fn(|c| [r, g, bl][c] * a + cb[c] * (1.0 - a));
+                let want = blend(b, ce, cb);
+                assert!(
+                    over.iter().zip(want).all(|(x, y)| (x - y).abs() < 1e-12),
+                    "{b} {cb:?}"
+                );
+            }
+        }
+        // Over black, blown-out values too.
+        let [r, g, bl, a] = blend_transparent(3.0, ce);
+        assert_eq!(a, 1.0);
+        assert_eq!([r, g, bl], blend(3.0, ce, [0.0; 3]));
     }
 
     #[test]

@@ -5,6 +5,7 @@
 //! - [`geometry`]: the camera, the billboard and its rays;
 //! - [`compose`]: the blend `clamp((1 - B) Cb + B Ce)` and texture sampling;
 //! - [`reference`]: the multithreaded CPU renderer built from the above;
+//! - [`gpu`]: the same on the GPU: WGSL compute and render passes, headless or in the viewer;
 //! - [`scene`]: TOML scene files, validated field by field;
 //! - [`output`]: PNG and EXR files, written atomically;
 //! - [`cli`]: the `energywave` command line.
@@ -13,6 +14,7 @@ pub mod cli;
 pub mod compose;
 pub mod field;
 pub mod geometry;
+pub mod gpu;
 pub mod integrate;
 pub mod output;
 pub mod reference;

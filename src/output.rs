@@ -86,39 +86,59 @@ fn parent_dir(path: &Path) -> &Path {
     }
 }
 
-/// Writes an RGB image (rows from the top, channels in [0, 1]) as PNG or EXR by the path's extension.
-pub fn write_rgb(
+/// Writes an RGBA image (rows from the top, channels in [0, 1]) as PNG (8-bit) or EXR (32-bit float) by the
+/// path's extension; `alpha` keeps the alpha channel, otherwise RGB is written.
+pub fn write_rgba(
     path: &Path,
     width: u32,
     height: u32,
-    pixels: &[[f64; 3]],
+    pixels: &[[f64; 4]],
+    alpha: bool,
 ) -> Result<(), OutputError> {
     let format = check_destination(path)?;
-    let encoded = match format {
+    let channels = if alpha { 4 } else { 3 };
+    let img = match format {
         Format::Png => {
             let bytes: Vec<u8> = pixels
                 .iter()
-                .flat_map(|p| p.map(|c| (c.clamp(0.0, 1.0) * 255.0).round() as u8))
+                .flat_map(|p| {
+                    p[..channels]
+                        .iter()
+                        .map(|c| (c.clamp(0.0, 1.0) * 255.0).round() as u8)
+                        .collect::<Vec<_>>()
+                })
                 .collect();
-            encode(
-                path,
+            if alpha {
+                image::DynamicImage::ImageRgba8(
+                    image::RgbaImage::from_raw(width, height, bytes).expect("size matches"),
+                )
+            } else {
                 image::DynamicImage::ImageRgb8(
                     image::RgbImage::from_raw(width, height, bytes).expect("size matches"),
-                ),
-                image::ImageFormat::Png,
-            )?
+                )
+            }
         }
         Format::Exr => {
-            let floats: Vec<f32> = pixels.iter().flat_map(|p| p.map(|c| c as f32)).collect();
-            encode(
-                path,
+            let floats: Vec<f32> = pixels
+                .iter()
+                .flat_map(|p| p[..channels].iter().map(|&c| c as f32).collect::<Vec<_>>())
+                .collect();
+            if alpha {
+                image::DynamicImage::ImageRgba32F(
+                    image::Rgba32FImage::from_raw(width, height, floats).expect("size matches"),
+                )
+            } else {
                 image::DynamicImage::ImageRgb32F(
                     image::Rgb32FImage::from_raw(width, height, floats).expect("size matches"),
-                ),
-                image::ImageFormat::OpenExr,
-            )?
+                )
+            }
         }
     };
+    let image_format = match format {
+        Format::Png => image::ImageFormat::Png,
+        Format::Exr => image::ImageFormat::OpenExr,
+    };
+    let encoded = encode(path, img, image_format)?;
     write_atomically(path, &encoded)
 }
 

@@ -5,7 +5,7 @@
 
 use glam::DVec3;
 
-use crate::compose::{blend, sample_bilinear};
+use crate::compose::{blend, blend_transparent, sample_bilinear};
 use crate::geometry::{Billboard, ray_end};
 use crate::integrate::brightness;
 use crate::scene::Scene;
@@ -35,16 +35,25 @@ pub fn render_brightness(scene: &Scene, billboard: &Billboard) -> BrightnessText
     }
 }
 
-/// The frame the camera sees: the background color everywhere, and over the billboard the blend of B
-/// (sampled bilinearly, as the GPU's sampler does) `clamp((1 - B) Cb + B Ce)`. Rows from the top.
+/// The frame the camera sees, RGBA, rows from the top: the background color everywhere, and over the
+/// billboard the blend of B (sampled bilinearly, as the GPU's pass does) `clamp((1 - B) Cb + B Ce)`, alpha 1.
+/// With `transparent`, the background is transparent and the billboard carries straight color with
+/// alpha = min(B, 1) (`compose::blend_transparent`).
 pub fn compose_frame(
     scene: &Scene,
     billboard: &Billboard,
     texture: &BrightnessTexture,
     width: u32,
     height: u32,
-) -> Vec<[f64; 3]> {
-    let mut pixels = vec![scene.colors.background; width as usize * height as usize];
+    transparent: bool,
+) -> Vec<[f64; 4]> {
+    let [r, g, b] = scene.colors.background;
+    let clear = if transparent {
+        [0.0; 4]
+    } else {
+        [r, g, b, 1.0]
+    };
+    let mut pixels = vec![clear; width as usize * height as usize];
     for_each_row(&mut pixels, width as usize, |y, row| {
         for (x, out) in row.iter_mut().enumerate() {
             let dir = scene
@@ -52,7 +61,12 @@ pub fn compose_frame(
                 .pixel_ray(x as f64 + 0.5, y as f64 + 0.5, width, height);
             if let Some((u, v)) = billboard.hit(scene.camera.eye, dir) {
                 let b = sample_bilinear(&texture.values, texture.resolution, u, v);
-                *out = blend(b, scene.colors.energy, scene.colors.background);
+                *out = if transparent {
+                    blend_transparent(b, scene.colors.energy)
+                } else {
+                    let [r, g, b] = blend(b, scene.colors.energy, scene.colors.background);
+                    [r, g, b, 1.0]
+                };
             }
         }
     });

@@ -151,7 +151,7 @@ fn render_writes_the_composed_frame() {
     s.integration.divisions = 64;
     let bb = s.place_billboard(96.0 / 64.0);
     let tex = reference::render_brightness(&s, &bb);
-    let frame = reference::compose_frame(&s, &bb, &tex, 96, 64);
+    let frame = reference::compose_frame(&s, &bb, &tex, 96, 64, false);
     for (px, want) in img.pixels().zip(&frame) {
         for c in 0..3 {
             assert!((px[c] as f64 - want[c] * 255.0).abs() <= 0.5 + 1e-9);

@@ -1,0 +1,67 @@
+// The billboard pass: draws the camera-facing billboard as a quad in 3D and blends its brightness B over what
+// lies behind it, color = clamp((1 - B) Cb + B Ce) (METHOD.md section 4). Cb is read from a copy of the
+// background at the fragment's pixel, so the blend is exact for any B (fixed-function blending cannot apply
+// the negative weight 1 - B that blows the glow out when B > 1). Rust side: src/gpu/billboard_pass.rs
+// (gpu_data holds the mirror of BillboardParams; keep in sync). CPU twin: src/reference.rs::compose_frame.
+
+struct BillboardParams {
+    view_proj: mat4x4<f32>,
+    center: vec3<f32>,
+    size: f32,
+    right: vec3<f32>,
+    resolution: u32,   // W of the brightness texture
+    up: vec3<f32>,
+    transparent: u32,  // 1: write straight color and alpha = min(B, 1) instead of blending
+    energy: vec4<f32>, // Ce in rgb
+}
+
+@group(0) @binding(0) var<uniform> params: BillboardParams;
+@group(0) @binding(1) var brightness: texture_2d<f32>;
+@group(0) @binding(2) var background: texture_2d<f32>;
+
+struct VertexOut {
+    @builtin(position) position: vec4<f32>,
+    @location(0) uv: vec2<f32>,
+}
+
+// A triangle strip of four corners: uv (0,0) top-left, (1,0), (0,1), (1,1).
+@vertex
+fn vs_main(@builtin(vertex_index) index: u32) -> VertexOut {
+    let uv = vec2<f32>(f32(index & 1u), f32(index >> 1u));
+    let world = params.center + params.right * (params.size * (uv.x - 0.5)) + params.up * (params.size * (0.5 - uv.y));
+    var out: VertexOut;
+    out.position = params.view_proj * vec4<f32>(world, 1.0);
+    out.uv = uv;
+    return out;
+}
+
+// Bilinear filtering by hand (r32float is not filterable everywhere), texel centers at (i + 0.5) / W,
+// clamped at the edges. Twin of compose::sample_bilinear.
+fn sample_brightness(uv: vec2<f32>) -> f32 {
+    let w = i32(params.resolution);
+    let x = uv * f32(w) - 0.5;
+    let x0 = floor(x);
+    let f = x - x0;
+    let i0 = clamp(vec2<i32>(x0), vec2<i32>(0), vec2<i32>(w - 1));
+    let i1 = clamp(vec2<i32>(x0) + 1, vec2<i32>(0), vec2<i32>(w - 1));
+    let b00 = textureLoad(brightness, vec2<i32>(i0.x, i0.y), 0).r;
+    let b10 = textureLoad(brightness, vec2<i32>(i1.x, i0.y), 0).r;
+    let b01 = textureLoad(brightness, vec2<i32>(i0.x, i1.y), 0).r;
+    let b11 = textureLoad(brightness, vec2<i32>(i1.x, i1.y), 0).r;
+    return mix(mix(b00, b10, f.x), mix(b01, b11, f.x), f.y);
+}
+
+@fragment
+fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
+    let b = sample_brightness(in.uv);
+    let ce = params.energy.rgb;
+    if params.transparent != 0u {
+        // Straight alpha: over any background this gives (1 - B) Cb + B Ce wherever B <= 1, and over black
+        // clamp(B Ce) everywhere, as the opaque blend does.
+        let alpha = clamp(b, 0.0, 1.0);
+        let color = select(ce, clamp(b * ce, vec3<f32>(0.0), vec3<f32>(1.0)), b > 1.0);
+        return vec4<f32>(color, alpha);
+    }
+    let cb = textureLoad(background, vec2<i32>(in.position.xy), 0);
+    return vec4<f32>(clamp((1.0 - b) * cb.rgb + b * ce, vec3<f32>(0.0), vec3<f32>(1.0)), cb.a);
+}

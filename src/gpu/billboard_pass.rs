@@ -1,0 +1,208 @@
+//! The billboard pass: draws the billboard as a quad in 3D with `shaders/billboard.wgsl`, blending B over a
+//! copy of what lies behind it.
+
+use glam::DMat4;
+
+use crate::geometry::{Billboard, Camera};
+
+/// Rust mirror of `BillboardParams` in `shaders/billboard.wgsl` (keep in sync; `tests/gpu_layout.rs` checks
+/// it against naga's layout).
+pub mod gpu_data {
+    use bytemuck::{Pod, Zeroable};
+
+    #[repr(C)]
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+    pub struct BillboardParams {
+        pub view_proj: [[f32; 4]; 4], // 0, column-major
+        pub center: [f32; 3],         // 64
+        pub size: f32,                // 76
+        pub right: [f32; 3],          // 80
+        pub resolution: u32,          // 92
+        pub up: [f32; 3],             // 96
+        pub transparent: u32,         // 108
+        pub energy: [f32; 4],         // 112
+    }
+    const _: () = assert!(size_of::<BillboardParams>() == 128);
+}
+
+use gpu_data::BillboardParams;
+
+/// The camera's view-projection matrix (right-handed, depth in [0, 1]) for a frame of `aspect`, with near and
+/// far planes around the billboard (nothing else is drawn by this pass).
+pub fn view_projection(camera: &Camera, billboard: &Billboard, aspect: f64) -> DMat4 {
+    let distance = (billboard.center - camera.eye).length().max(1e-9);
+    let near = 1e-3 * distance;
+    let far = 1e3 * (distance + billboard.size);
+    let frame = camera.frame();
+    let proj = DMat4::perspective_rh(camera.fov_y_degrees.to_radians(), aspect, near, far);
+    proj * DMat4::look_at_rh(camera.eye, camera.eye + frame.forward, frame.up)
+}
+
+/// The pass's parameters for one frame.
+pub fn billboard_params(
+    camera: &Camera,
+    billboard: &Billboard,
+    resolution: u32,
+    energy: [f64; 3],
+    aspect: f64,
+    transparent: bool,
+) -> BillboardParams {
+    BillboardParams {
+        view_proj: view_projection(camera, billboard, aspect)
+            .as_mat4()
+            .to_cols_array_2d(),
+        center: billboard.center.as_vec3().to_array(),
+        size: billboard.size as f32,
+        right: billboard.right.as_vec3().to_array(),
+        resolution,
+        up: billboard.up.as_vec3().to_array(),
+        transparent: transparent as u32,
+        energy: [energy[0] as f32, energy[1] as f32, energy[2] as f32, 1.0],
+    }
+}
+
+/// The pipeline of the billboard pass for one target format.
+pub struct BillboardRenderer {
+    pipeline: wgpu::RenderPipeline,
+    layout: wgpu::BindGroupLayout,
+    params: wgpu::Buffer,
+}
+
+impl BillboardRenderer {
+    /// Builds the pipeline for render targets of `format`.
+    pub fn new(device: &wgpu::Device, format: wgpu::TextureFormat) -> Self {
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("energywave.billboard.shader"),
+            source: wgpu::ShaderSource::Wgsl(super::shaders::BILLBOARD_PASS.into()),
+        });
+        let texture = |binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ty: wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                view_dimension: wgpu::TextureViewDimension::D2,
+                multisampled: false,
+            },
+            count: None,
+        };
+        let layout =
+            device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("energywave.billboard.bind_group_layout"),
+                entries: &[
+                    wgpu::BindGroupLayoutEntry {
+                        binding: 0,
+                        visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+                        ty: wgpu::BindingType::Buffer {
+                            ty: wgpu::BufferBindingType::Uniform,
+                            has_dynamic_offset: false,
+                            min_binding_size: wgpu::BufferSize::new(
+                                size_of::<BillboardParams>() as u64
+                            ),
+                        },
+                        count: None,
+                    },
+                    texture(1),
+                    texture(2),
+                ],
+            });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("energywave.billboard.pipeline_layout"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("energywave.billboard.pipeline"),
+            layout: Some(&pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: wgpu::PrimitiveState {
+                topology: wgpu::PrimitiveTopology::TriangleStrip,
+                cull_mode: None,
+                ..Default::default()
+            },
+            depth_stencil: None,
+            multisample: wgpu::MultisampleState::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: &[Some(wgpu::ColorTargetState {
+                    format,
+                    blend: None,
+                    write_mask: wgpu::ColorWrites::ALL,
+                })],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        let params = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("energywave.billboard.params"),
+            size: size_of::<BillboardParams>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        Self {
+            pipeline,
+            layout,
+            params,
+        }
+    }
+
+    /// Records the billboard into `target` (loaded, not cleared), reading `background` (a copy of what lies
+    /// behind, same size as the target) and `brightness` (the field pass's texture). The parameters are
+    /// written through the queue, so one draw per submission.
+    #[allow(clippy::too_many_arguments)]
+    pub fn draw(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+        target: &wgpu::TextureView,
+        background: &wgpu::TextureView,
+        brightness: &wgpu::TextureView,
+        params: &BillboardParams,
+    ) {
+        queue.write_buffer(&self.params, 0, bytemuck::bytes_of(params));
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("energywave.billboard.bind_group"),
+            layout: &self.layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: self.params.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(brightness),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: wgpu::BindingResource::TextureView(background),
+                },
+            ],
+        });
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("energywave.billboard.pass"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: target,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Load,
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: None,
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &bind_group, &[]);
+        pass.draw(0..4, 0..1);
+    }
+}

@@ -1,0 +1,254 @@
+//! The GPU context: instance, adapter, device and queue, chosen the same way for the viewer and the command
+//! line, with every wgpu validation error captured and turned into a `GpuError`.
+
+use std::sync::{Arc, Mutex};
+
+/// Why GPU work could not be done.
+#[derive(Debug, thiserror::Error)]
+pub enum GpuError {
+    #[error(
+        "no GPU adapter found (tried {backends}); install Mesa's Vulkan driver (Debian: apt-get install mesa-vulkan-drivers libvulkan1), or render on the CPU with --backend cpu"
+    )]
+    NoAdapter { backends: String },
+    #[error("WGPU_ADAPTER_NAME={wanted:?} matches no adapter; available: {available}")]
+    NoMatchingAdapter { wanted: String, available: String },
+    #[error("the adapter {adapter} refused to create a device: {source}")]
+    RequestDevice {
+        adapter: String,
+        #[source]
+        source: wgpu::RequestDeviceError,
+    },
+    #[error(
+        "billboard resolution {resolution} exceeds this GPU's texture limit of {limit} texels per side"
+    )]
+    ResolutionTooLarge { resolution: u32, limit: u32 },
+    #[error(
+        "frame size {width}x{height} exceeds this GPU's texture limit of {limit} pixels per side"
+    )]
+    FrameTooLarge { width: u32, height: u32, limit: u32 },
+    #[error("wgpu validation error: {0}")]
+    Validation(String),
+    #[error("GPU readback failed: {0}")]
+    Readback(String),
+}
+
+impl GpuError {
+    /// True when the user's request is at fault (a size beyond the device's limits), not the machine.
+    pub fn is_input_error(&self) -> bool {
+        matches!(
+            self,
+            GpuError::ResolutionTooLarge { .. } | GpuError::FrameTooLarge { .. }
+        )
+    }
+}
+
+/// Device, queue and the adapter they came from.
+pub struct GpuContext {
+    pub instance: wgpu::Instance,
+    pub adapter: wgpu::Adapter,
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    uncaptured: Arc<Mutex<Vec<String>>>,
+}
+
+/// Preference order of adapters: a real GPU first, then a virtual one, then a software rasteriser.
+fn device_rank(t: wgpu::DeviceType) -> u8 {
+    match t {
+        wgpu::DeviceType::DiscreteGpu => 0,
+        wgpu::DeviceType::IntegratedGpu => 1,
+        wgpu::DeviceType::VirtualGpu => 2,
+        wgpu::DeviceType::Cpu => 3,
+        wgpu::DeviceType::Other => 4,
+    }
+}
+
+/// Among equal device types, Vulkan (lavapipe for the software case) before the GL fallback.
+fn backend_rank(b: wgpu::Backend) -> u8 {
+    match b {
+        wgpu::Backend::Vulkan | wgpu::Backend::Metal | wgpu::Backend::Dx12 => 0,
+        wgpu::Backend::Gl => 1,
+        _ => 2,
+    }
+}
+
+/// A one-line description of an adapter: name, backend, kind, driver.
+pub fn describe(info: &wgpu::AdapterInfo) -> String {
+    let mut s = format!("{} ({:?}, {:?}", info.name, info.backend, info.device_type);
+    if !info.driver.is_empty() {
+        s.push_str(&format!(", {} {}", info.driver, info.driver_info));
+    }
+    s.push(')');
+    s
+}
+
+impl GpuContext {
+    /// A context on the best adapter found: `WGPU_BACKEND` limits the backends tried, `WGPU_ADAPTER_NAME`
+    /// (a case-insensitive part of the name) picks one, else a real GPU before a software one.
+    pub fn new() -> Result<Self, GpuError> {
+        let instance =
+            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        pollster::block_on(Self::with_instance(instance, None))
+    }
+
+    /// A context on `instance`, with an adapter able to present to `surface` when one is given.
+    pub async fn with_instance(
+        instance: wgpu::Instance,
+        surface: Option<&wgpu::Surface<'_>>,
+    ) -> Result<Self, GpuError> {
+        let backends = wgpu::Backends::from_env().unwrap_or(wgpu::Backends::all());
+        let mut adapters: Vec<wgpu::Adapter> = instance
+            .enumerate_adapters(backends)
+            .await
+            .into_iter()
+            .filter(|a| surface.is_none_or(|s| a.is_surface_supported(s)))
+            .collect();
+        if adapters.is_empty() {
+            return Err(GpuError::NoAdapter {
+                backends: format!("{backends:?}"),
+            });
+        }
+        if let Ok(wanted) = std::env::var("WGPU_ADAPTER_NAME") {
+            let available = adapters
+                .iter()
+                .map(|a| describe(&a.get_info()))
+                .collect::<Vec<_>>()
+                .join("; ");
+            let w = wanted.to_lowercase();
+            adapters.retain(|a| a.get_info().name.to_lowercase().contains(&w));
+            if adapters.is_empty() {
+                return Err(GpuError::NoMatchingAdapter { wanted, available });
+            }
+        }
+        adapters.sort_by_key(|a| {
+            let info = a.get_info();
+            (device_rank(info.device_type), backend_rank(info.backend))
+        });
+        let adapter = adapters.swap_remove(0);
+        let (device, queue) = adapter
+            .request_device(&wgpu::DeviceDescriptor {
+                label: Some("energywave.device"),
+                // The adapter's own limits: the defaults some front ends ask for (WebGL2's) disable compute.
+                required_limits: adapter.limits(),
+                required_features: adapter.features() & wgpu::Features::TIMESTAMP_QUERY,
+                ..Default::default()
+            })
+            .await
+            .map_err(|source| GpuError::RequestDevice {
+                adapter: describe(&adapter.get_info()),
+                source,
+            })?;
+        let uncaptured = Arc::new(Mutex::new(Vec::new()));
+        let sink = uncaptured.clone();
+        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+            if let Ok(mut v) = sink.lock() {
+                v.push(e.to_string());
+            }
+        }));
+        Ok(Self {
+            instance,
+            adapter,
+            device,
+            queue,
+            uncaptured,
+        })
+    }
+
+    /// The chosen adapter, in one line.
+    pub fn adapter_summary(&self) -> String {
+        describe(&self.adapter.get_info())
+    }
+
+    /// Runs `f` inside a validation error scope; any wgpu validation or out-of-memory error it causes, or
+    /// one raised outside a scope since the last check, becomes an error.
+    pub fn checked<T>(&self, f: impl FnOnce() -> T) -> Result<T, GpuError> {
+        let oom = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let value = f();
+        let v = pollster::block_on(validation.pop());
+        let o = pollster::block_on(oom.pop());
+        if let Some(e) = v.or(o) {
+            return Err(GpuError::Validation(e.to_string()));
+        }
+        self.check_uncaptured()?;
+        Ok(value)
+    }
+
+    /// Fails with the first validation error raised outside an error scope since the last call.
+    pub fn check_uncaptured(&self) -> Result<(), GpuError> {
+        let mut errors = self
+            .uncaptured
+            .lock()
+            .map_err(|_| GpuError::Validation("error log poisoned".into()))?;
+        if errors.is_empty() {
+            Ok(())
+        } else {
+            let all = errors.join("\n");
+            errors.clear();
+            Err(GpuError::Validation(all))
+        }
+    }
+
+    /// Waits until the GPU has finished all submitted work.
+    pub fn wait_idle(&self) -> Result<(), GpuError> {
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map(|_| ())
+            .map_err(|e| GpuError::Readback(e.to_string()))
+    }
+
+    /// Copies a whole 2D texture of `bytes_per_texel` back to the CPU, rows from the top, without padding.
+    pub fn read_texture(
+        &self,
+        texture: &wgpu::Texture,
+        bytes_per_texel: u32,
+    ) -> Result<Vec<u8>, GpuError> {
+        let (width, height) = (texture.width(), texture.height());
+        let unpadded = width * bytes_per_texel;
+        let padded = unpadded.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT)
+            * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+        let buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("energywave.readback"),
+            size: padded as u64 * height as u64,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        let mut encoder = self
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("energywave.readback.encoder"),
+            });
+        encoder.copy_texture_to_buffer(
+            texture.as_image_copy(),
+            wgpu::TexelCopyBufferInfo {
+                buffer: &buffer,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(padded),
+                    rows_per_image: Some(height),
+                },
+            },
+            texture.size(),
+        );
+        self.queue.submit([encoder.finish()]);
+        let (tx, rx) = std::sync::mpsc::channel();
+        buffer.slice(..).map_async(wgpu::MapMode::Read, move |r| {
+            let _ = tx.send(r);
+        });
+        self.wait_idle()?;
+        rx.recv()
+            .map_err(|e| GpuError::Readback(e.to_string()))?
+            .map_err(|e| GpuError::Readback(e.to_string()))?;
+        let mut out = Vec::with_capacity((unpadded * height) as usize);
+        {
+            let view = buffer
+                .slice(..)
+                .get_mapped_range()
+                .map_err(|e| GpuError::Readback(e.to_string()))?;
+            for row in view.chunks(padded as usize) {
+                out.extend_from_slice(&row[..unpadded as usize]);
+            }
+        }
+        buffer.unmap();
+        Ok(out)
+    }
+}

@@ -1,0 +1,465 @@
+//! The field pass: uploads the scene's sources and settings and dispatches `shaders/field.wgsl`, which
+//! integrates B for every texel into an r32float storage texture (W x W x 4 bytes: O(W^2), no W x W x n
+//! buffer). The texture is re-rendered only when something it depends on changed.
+
+use wgpu::util::DeviceExt;
+
+use super::context::{GpuContext, GpuError};
+use super::shaders;
+use crate::field::curve::segments;
+use crate::geometry::Billboard;
+use crate::scene::Scene;
+
+/// Rust mirrors of the WGSL structs of `shaders/field.wgsl` and `shaders/field_common.wgsl` (keep in
+/// sync; `tests/gpu_layout.rs` checks them against naga's layout).
+pub mod gpu_data {
+    use bytemuck::{Pod, Zeroable};
+
+    /// `FieldParams` in `shaders/field.wgsl`.
+    #[repr(C)]
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+    pub struct FieldParams {
+        pub center: [f32; 3], // 0
+        pub size: f32,        // 12
+        pub right: [f32; 3],  // 16
+        pub resolution: u32,  // 28
+        pub up: [f32; 3],     // 32
+        pub divisions: u32,   // 44
+        pub eye: [f32; 3],    // 48
+        pub nu: f32,          // 60
+        pub alpha: f32,       // 64
+        pub beta: f32,        // 68
+        pub epsilon: f32,     // 72
+        pub point_count: u32, // 76
+        pub line_count: u32,  // 80
+        pub torus_count: u32, // 84
+        pub curve_count: u32, // 88
+        pub pad0: u32,        // 92
+    }
+    const _: () = assert!(size_of::<FieldParams>() == 96);
+
+    /// `PointSource` in `shaders/field_common.wgsl`.
+    #[repr(C)]
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+    pub struct PointSource {
+        pub position: [f32; 3], // 0
+        pub coefficient: f32,   // 12
+    }
+    const _: () = assert!(size_of::<PointSource>() == 16);
+
+    /// `LineSource` in `shaders/field_common.wgsl`.
+    #[repr(C)]
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+    pub struct LineSource {
+        pub point: [f32; 3],     // 0
+        pub coefficient: f32,    // 12
+        pub direction: [f32; 3], // 16
+        pub pad0: f32,           // 28
+    }
+    const _: () = assert!(size_of::<LineSource>() == 32);
+
+    /// `TorusSource` in `shaders/field_common.wgsl`.
+    #[repr(C)]
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+    pub struct TorusSource {
+        pub center: [f32; 3],  // 0
+        pub major_radius: f32, // 12
+        pub axis: [f32; 3],    // 16
+        pub coefficient: f32,  // 28
+    }
+    const _: () = assert!(size_of::<TorusSource>() == 32);
+
+    /// `CurveSource` in `shaders/field_common.wgsl`.
+    #[repr(C)]
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+    pub struct CurveSource {
+        pub first_segment: u32, // 0
+        pub segment_count: u32, // 4
+        pub first_weight: u32,  // 8
+        pub weight_count: u32,  // 12
+        pub coefficient: f32,   // 16
+        pub pad0: f32,          // 20
+        pub pad1: f32,          // 24
+        pub pad2: f32,          // 28
+    }
+    const _: () = assert!(size_of::<CurveSource>() == 32);
+
+    /// `CurveSegment` in `shaders/field_common.wgsl`.
+    #[repr(C)]
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+    pub struct CurveSegment {
+        pub c2: [f32; 3], // 0
+        pub pad0: f32,    // 12
+        pub c1: [f32; 3], // 16
+        pub pad1: f32,    // 28
+        pub c0: [f32; 3], // 32
+        pub pad2: f32,    // 44
+    }
+    const _: () = assert!(size_of::<CurveSegment>() == 48);
+}
+
+use gpu_data::*;
+
+/// Bytes of GPU memory the field pass's texture takes at resolution `w` (r32float).
+pub fn field_texture_bytes(w: u32) -> u64 {
+    w as u64 * w as u64 * 4
+}
+
+/// Everything the field pass reads, packed for upload; equal packs give equal textures.
+#[derive(Clone, Debug, Default, PartialEq)]
+struct Packed {
+    params: FieldParams,
+    points: Vec<PointSource>,
+    lines: Vec<LineSource>,
+    tori: Vec<TorusSource>,
+    curves: Vec<CurveSource>,
+    segments: Vec<CurveSegment>,
+    weights: Vec<f32>,
+}
+
+fn v3(v: glam::DVec3) -> [f32; 3] {
+    v.as_vec3().to_array()
+}
+
+fn pack(scene: &Scene, billboard: &Billboard) -> Packed {
+    let s = &scene.sources;
+    let i = &scene.integration;
+    let mut packed = Packed {
+        params: FieldParams {
+            center: v3(billboard.center),
+            size: billboard.size as f32,
+            right: v3(billboard.right),
+            resolution: scene.billboard.resolution,
+            up: v3(billboard.up),
+            divisions: i.divisions,
+            eye: v3(scene.camera.eye),
+            nu: i.nu as f32,
+            alpha: i.alpha as f32,
+            beta: i.beta as f32,
+            epsilon: i.epsilon as f32,
+            point_count: s.points.len() as u32,
+            line_count: s.lines.len() as u32,
+            torus_count: s.tori.len() as u32,
+            curve_count: s.curves.len() as u32,
+            pad0: 0,
+        },
+        points: (s.points.iter())
+            .map(|p| PointSource {
+                position: v3(p.position),
+                coefficient: p.coefficient as f32,
+            })
+            .collect(),
+        lines: (s.lines.iter())
+            .map(|l| LineSource {
+                point: v3(l.point),
+                coefficient: l.coefficient as f32,
+                direction: v3(l.direction),
+                pad0: 0.0,
+            })
+            .collect(),
+        tori: (s.tori.iter())
+            .map(|t| TorusSource {
+                center: v3(t.center),
+                major_radius: t.major_radius as f32,
+                axis: v3(t.axis),
+                coefficient: t.coefficient as f32,
+            })
+            .collect(),
+        ..Packed::default()
+    };
+    for c in &s.curves {
+        let first_segment = packed.segments.len() as u32;
+        let first_weight = packed.weights.len() as u32;
+        // Power-form coefficients are computed in f64, then rounded once.
+        packed
+            .segments
+            .extend(segments(&c.control_points).map(|seg| CurveSegment {
+                c2: v3(seg.c2),
+                c1: v3(seg.c1),
+                c0: v3(seg.c0),
+                ..CurveSegment::default()
+            }));
+        packed.weights.extend(c.weights.iter().map(|&w| w as f32));
+        packed.curves.push(CurveSource {
+            first_segment,
+            segment_count: packed.segments.len() as u32 - first_segment,
+            first_weight,
+            weight_count: c.weights.len() as u32,
+            coefficient: c.coefficient as f32,
+            ..CurveSource::default()
+        });
+    }
+    packed
+}
+
+/// A storage buffer that grows as needed (never empty: WebGPU refuses zero-sized bindings).
+struct StorageBuffer {
+    label: &'static str,
+    buffer: wgpu::Buffer,
+}
+
+impl StorageBuffer {
+    fn new(device: &wgpu::Device, label: &'static str, bytes: &[u8]) -> Self {
+        // An empty list still binds one zeroed element of the largest struct (CurveSegment, 48 bytes).
+        let contents: Vec<u8> = if bytes.is_empty() {
+            vec![0; 64]
+        } else {
+            bytes.to_vec()
+        };
+        Self {
+            label,
+            buffer: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: &contents,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            }),
+        }
+    }
+
+    /// Writes `bytes`; returns true when the buffer had to be replaced (the bind group must be rebuilt).
+    fn write(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, bytes: &[u8]) -> bool {
+        if bytes.len() as u64 > self.buffer.size() {
+            *self = Self::new(device, self.label, bytes);
+            true
+        } else {
+            if !bytes.is_empty() {
+                queue.write_buffer(&self.buffer, 0, bytes);
+            }
+            false
+        }
+    }
+}
+
+/// The field pass: its pipeline and the GPU copies of one scene's data.
+pub struct FieldRenderer {
+    pipeline: wgpu::ComputePipeline,
+    layout: wgpu::BindGroupLayout,
+    params: wgpu::Buffer,
+    buffers: [StorageBuffer; 6],
+    texture: Option<(wgpu::Texture, wgpu::TextureView)>,
+    bind_group: Option<wgpu::BindGroup>,
+    uploaded: Option<Packed>,
+    pending: bool,
+    dispatches: u64,
+}
+
+impl FieldRenderer {
+    /// Builds the pipeline.
+    pub fn new(device: &wgpu::Device) -> Self {
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("energywave.field.shader"),
+            source: wgpu::ShaderSource::Wgsl(shaders::field_module_source().into()),
+        });
+        let storage = |binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only: true },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        };
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("energywave.field.bind_group_layout"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::COMPUTE,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: wgpu::BufferSize::new(size_of::<FieldParams>() as u64),
+                    },
+                    count: None,
+                },
+                storage(1),
+                storage(2),
+                storage(3),
+                storage(4),
+                storage(5),
+                storage(6),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 7,
+                    visibility: wgpu::ShaderStages::COMPUTE,
+                    ty: wgpu::BindingType::StorageTexture {
+                        access: wgpu::StorageTextureAccess::WriteOnly,
+                        format: wgpu::TextureFormat::R32Float,
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                    },
+                    count: None,
+                },
+            ],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("energywave.field.pipeline_layout"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("energywave.field.pipeline"),
+            layout: Some(&pipeline_layout),
+            module: &module,
+            entry_point: Some("integrate"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        let params = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("energywave.field.params"),
+            size: size_of::<FieldParams>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let buffers = [
+            "energywave.field.points",
+            "energywave.field.lines",
+            "energywave.field.tori",
+            "energywave.field.curves",
+            "energywave.field.segments",
+            "energywave.field.weights",
+        ]
+        .map(|label| StorageBuffer::new(device, label, &[]));
+        Self {
+            pipeline,
+            layout,
+            params,
+            buffers,
+            texture: None,
+            bind_group: None,
+            uploaded: None,
+            pending: false,
+            dispatches: 0,
+        }
+    }
+
+    /// Uploads what the texture depends on. Returns true when it changed (the next `encode` re-renders).
+    pub fn prepare(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &Scene,
+        billboard: &Billboard,
+    ) -> Result<bool, GpuError> {
+        let w = scene.billboard.resolution;
+        let limit = ctx.device.limits().max_texture_dimension_2d;
+        if w > limit {
+            return Err(GpuError::ResolutionTooLarge {
+                resolution: w,
+                limit,
+            });
+        }
+        let packed = pack(scene, billboard);
+        if self.uploaded.as_ref() == Some(&packed) {
+            return Ok(false);
+        }
+        let (device, queue) = (&ctx.device, &ctx.queue);
+        ctx.checked(|| {
+            let mut rebind = self.bind_group.is_none();
+            let data: [&[u8]; 6] = [
+                bytemuck::cast_slice(&packed.points),
+                bytemuck::cast_slice(&packed.lines),
+                bytemuck::cast_slice(&packed.tori),
+                bytemuck::cast_slice(&packed.curves),
+                bytemuck::cast_slice(&packed.segments),
+                bytemuck::cast_slice(&packed.weights),
+            ];
+            for (buffer, bytes) in self.buffers.iter_mut().zip(data) {
+                rebind |= buffer.write(device, queue, bytes);
+            }
+            queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&packed.params));
+            if self.texture.as_ref().is_none_or(|(t, _)| t.width() != w) {
+                let texture = device.create_texture(&wgpu::TextureDescriptor {
+                    label: Some("energywave.field.storage"),
+                    size: wgpu::Extent3d {
+                        width: w,
+                        height: w,
+                        depth_or_array_layers: 1,
+                    },
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format: wgpu::TextureFormat::R32Float,
+                    usage: wgpu::TextureUsages::STORAGE_BINDING
+                        | wgpu::TextureUsages::TEXTURE_BINDING
+                        | wgpu::TextureUsages::COPY_SRC,
+                    view_formats: &[],
+                });
+                let view = texture.create_view(&wgpu::TextureViewDescriptor::default());
+                self.texture = Some((texture, view));
+                rebind = true;
+            }
+            if rebind {
+                self.bind_group = Some(self.make_bind_group(device));
+            }
+        })?;
+        self.uploaded = Some(packed);
+        self.pending = true;
+        Ok(true)
+    }
+
+    fn make_bind_group(&self, device: &wgpu::Device) -> wgpu::BindGroup {
+        let view = &self
+            .texture
+            .as_ref()
+            .expect("texture created before binding")
+            .1;
+        let mut entries = vec![wgpu::BindGroupEntry {
+            binding: 0,
+            resource: self.params.as_entire_binding(),
+        }];
+        for (i, b) in self.buffers.iter().enumerate() {
+            entries.push(wgpu::BindGroupEntry {
+                binding: i as u32 + 1,
+                resource: b.buffer.as_entire_binding(),
+            });
+        }
+        entries.push(wgpu::BindGroupEntry {
+            binding: 7,
+            resource: wgpu::BindingResource::TextureView(view),
+        });
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("energywave.field.bind_group"),
+            layout: &self.layout,
+            entries: &entries,
+        })
+    }
+
+    /// Records the dispatch if the last `prepare` changed something; does nothing otherwise.
+    pub fn encode(&mut self, encoder: &mut wgpu::CommandEncoder) {
+        let (Some(bind_group), Some(packed)) = (&self.bind_group, &self.uploaded) else {
+            return;
+        };
+        if !self.pending {
+            return;
+        }
+        let w = packed.params.resolution;
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("energywave.field.pass"),
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, bind_group, &[]);
+        pass.dispatch_workgroups(w.div_ceil(8), w.div_ceil(8), 1);
+        self.pending = false;
+        self.dispatches += 1;
+    }
+
+    /// The brightness texture (after the first `prepare`).
+    pub fn texture(&self) -> Option<&wgpu::Texture> {
+        self.texture.as_ref().map(|(t, _)| t)
+    }
+
+    /// A view of the brightness texture (after the first `prepare`).
+    pub fn view(&self) -> Option<&wgpu::TextureView> {
+        self.texture.as_ref().map(|(_, v)| v)
+    }
+
+    /// How many times the texture has been rendered.
+    pub fn dispatch_count(&self) -> u64 {
+        self.dispatches
+    }
+
+    /// Forgets the uploaded scene, so the next `prepare` re-renders.
+    pub fn invalidate(&mut self) {
+        self.uploaded = None;
+    }
+}

@@ -1,0 +1,22 @@
+//! The GPU renderer: the field pass (a WGSL compute shader integrating B into a storage texture), the
+//! billboard pass (drawing the billboard in 3D with the blend), and the headless renderer that runs both
+//! for the command line and the tests. The viewer draws through the same passes.
+
+mod billboard_pass;
+mod context;
+mod field_pass;
+mod headless;
+pub mod shaders;
+
+pub use billboard_pass::{BillboardRenderer, billboard_params};
+pub use context::{GpuContext, GpuError, describe};
+pub use field_pass::{FieldRenderer, field_texture_bytes};
+pub use headless::{Frame, HeadlessRenderer};
+
+/// The Rust mirrors of the WGSL structs, for the layout tests.
+pub mod layout {
+    pub use super::billboard_pass::gpu_data::BillboardParams;
+    pub use super::field_pass::gpu_data::{
+        CurveSegment, CurveSource, FieldParams, LineSource, PointSource, TorusSource,
+    };
+}
