@@ -132,6 +132,8 @@ fn render_writes_the_composed_frame() {
     let path = scene("torus_r0.9_t5.1.toml");
     let o = run(&[
         "render",
+        "--backend",
+        "cpu",
         &path,
         "-o",
         out.to_str().unwrap(),
@@ -181,6 +183,8 @@ fn brightness_writes_b_itself_as_float_exr() {
     let path = scene("bezier_b5.0.toml");
     let o = run(&[
         "render",
+        "--backend",
+        "cpu",
         &path,
         "-o",
         out.to_str().unwrap(),
@@ -237,4 +241,63 @@ fn render_defaults_to_the_embedded_scene() {
         stderr(&o)
     );
     assert_eq!(image::open(&out).unwrap().to_rgb8().dimensions(), (32, 32));
+}
+
+#[test]
+fn the_gpu_is_the_default_backend_and_names_its_adapter() {
+    let dir = tmpdir("gpu");
+    let out = dir.join("g.png");
+    let o = run(&[
+        "render",
+        &scene("torus_r0.9_t5.1.toml"),
+        "-o",
+        out.to_str().unwrap(),
+        "--size",
+        "40x30",
+        "--resolution",
+        "24",
+        "-v",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("adapter: ") && stderr(&o).contains("backend Gpu"),
+        "{}",
+        stderr(&o)
+    );
+    assert_eq!(image::open(&out).unwrap().to_rgb8().dimensions(), (40, 30));
+    // Transparent export carries alpha.
+    let out = dir.join("t.png");
+    let o = run(&[
+        "render",
+        &scene("torus_r0.9_t5.1.toml"),
+        "-o",
+        out.to_str().unwrap(),
+        "--size",
+        "40x30",
+        "--resolution",
+        "24",
+        "--transparent",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let img = image::open(&out).unwrap();
+    assert!(img.color().has_alpha());
+    let alphas: Vec<u8> = img.to_rgba8().pixels().map(|p| p.0[3]).collect();
+    assert!(
+        alphas.contains(&255) && alphas.iter().any(|&a| a < 200),
+        "alpha is graded"
+    );
+}
+
+#[test]
+fn no_adapter_is_a_clear_error_with_status_1() {
+    let dir = tmpdir("noadapter");
+    let out = dir.join("x.png");
+    let o = bin()
+        .args(["render", "-o", out.to_str().unwrap(), "--size", "8x8"])
+        .env("WGPU_ADAPTER_NAME", "no such adapter anywhere")
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("matches no adapter"), "{}", stderr(&o));
+    assert!(!out.exists());
 }

@@ -1,0 +1,130 @@
+//! Every WGSL module parses and validates with naga, and every Rust mirror of a WGSL struct has the size and
+//! field offsets naga's layouter gives the WGSL struct. No GPU needed.
+
+use std::mem::{offset_of, size_of};
+
+use energywave::gpu::layout::*;
+use energywave::gpu::shaders;
+
+fn parse_and_validate(name: &str, source: &str) -> naga::Module {
+    let module = naga::front::wgsl::parse_str(source)
+        .unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(source)));
+    naga::valid::Validator::new(
+        naga::valid::ValidationFlags::all(),
+        naga::valid::Capabilities::default(),
+    )
+    .validate(&module)
+    .unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(source)));
+    module
+}
+
+#[test]
+fn every_wgsl_module_validates() {
+    let modules = shaders::all_modules();
+    assert!(modules.len() >= 2);
+    for (name, source) in modules {
+        parse_and_validate(name, &source);
+    }
+    // Every .wgsl file in shaders/ is part of some module (no file escapes validation).
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders");
+    let all: String = shaders::all_modules().into_iter().map(|(_, s)| s).collect();
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "wgsl") {
+            let text = std::fs::read_to_string(&path).unwrap();
+            assert!(
+                all.contains(&text),
+                "{} is not in any validated module",
+                path.display()
+            );
+        }
+    }
+}
+
+/// (field name, byte offset in Rust) of a mirror, checked against the WGSL struct of the same name.
+fn check_struct(
+    module: &naga::Module,
+    wgsl_name: &str,
+    rust_size: usize,
+    fields: &[(&str, usize)],
+) {
+    let mut layouter = naga::proc::Layouter::default();
+    layouter.update(module.to_ctx()).unwrap();
+    let (handle, ty) = module
+        .types
+        .iter()
+        .find(|(_, t)| t.name.as_deref() == Some(wgsl_name))
+        .unwrap_or_else(|| panic!("no WGSL struct {wgsl_name}"));
+    let naga::TypeInner::Struct { members, span } = &ty.inner else {
+        panic!("{wgsl_name} is not a struct");
+    };
+    assert_eq!(*span as usize, rust_size, "{wgsl_name}: size");
+    assert_eq!(
+        layouter[handle].size as usize, rust_size,
+        "{wgsl_name}: layout size"
+    );
+    assert_eq!(members.len(), fields.len(), "{wgsl_name}: member count");
+    for (member, &(name, offset)) in members.iter().zip(fields) {
+        assert_eq!(
+            member.name.as_deref(),
+            Some(name),
+            "{wgsl_name}: member order"
+        );
+        assert_eq!(member.offset as usize, offset, "{wgsl_name}.{name}: offset");
+    }
+}
+
+macro_rules! fields {
+    ($t:ty: $($f:ident),* $(,)?) => {
+        &[$((stringify!($f), offset_of!($t, $f))),*]
+    };
+}
+
+#[test]
+fn rust_mirrors_match_the_wgsl_layouts() {
+    let field = parse_and_validate("field", &shaders::field_module_source());
+    check_struct(
+        &field,
+        "FieldParams",
+        size_of::<FieldParams>(),
+        fields!(FieldParams: center, size, right, resolution, up, divisions, eye, nu, alpha, beta, epsilon,
+            point_count, line_count, torus_count, curve_count, pad0),
+    );
+    check_struct(
+        &field,
+        "PointSource",
+        size_of::<PointSource>(),
+        fields!(PointSource: position, coefficient),
+    );
+    check_struct(
+        &field,
+        "LineSource",
+        size_of::<LineSource>(),
+        fields!(LineSource: point, coefficient, direction, pad0),
+    );
+    check_struct(
+        &field,
+        "TorusSource",
+        size_of::<TorusSource>(),
+        fields!(TorusSource: center, major_radius, axis, coefficient),
+    );
+    check_struct(
+        &field,
+        "CurveSource",
+        size_of::<CurveSource>(),
+        fields!(CurveSource: first_segment, segment_count, first_weight, weight_count, coefficient, pad0, pad1, pad2),
+    );
+    check_struct(
+        &field,
+        "CurveSegment",
+        size_of::<CurveSegment>(),
+        fields!(CurveSegment: c2, pad0, c1, pad1, c0, pad2),
+    );
+    let billboard = parse_and_validate("billboard", shaders::BILLBOARD_PASS);
+    check_struct(
+        &billboard,
+        "BillboardParams",
+        size_of::<BillboardParams>(),
+        fields!(BillboardParams: view_proj, center, size, right, resolution, up, transparent, energy),
+    );
+}

@@ -1,0 +1,493 @@
+//! The GPU renderer against the f64 CPU reference, on every shipped scene and on rays that graze sources;
+//! the composed frame against golden images and against checks that need no stored picture.
+//!
+//! Runs on whatever adapter `GpuContext::new` picks: lavapipe in CI (`WGPU_BACKEND=vulkan`), Mesa's GL
+//! elsewhere. Without any adapter these tests fail: they never pass vacuously.
+//!
+//! Tolerance of B (f32 on the GPU against f64): |B_gpu - B_cpu| <= 1e-3 max(|B_cpu|, 0.01) for every
+//! texel, grazing ones included. Measured on lavapipe: at most 1.3e-4 relative on the shipped scenes.
+
+use std::path::{Path, PathBuf};
+use std::sync::{Mutex, MutexGuard, OnceLock};
+
+use energywave::field::{Curve, Line, Point, Sources, Torus};
+use energywave::geometry::{Camera, ray_end};
+use energywave::gpu::{GpuError, HeadlessRenderer, field_texture_bytes};
+use energywave::reference;
+use energywave::scene::Scene;
+use glam::DVec3;
+
+const RELATIVE_TOLERANCE: f64 = 1e-3;
+
+/// One renderer shared by the tests of this file (devices are costly on a software rasteriser).
+fn gpu() -> MutexGuard<'static, HeadlessRenderer> {
+    static GPU: OnceLock<Mutex<HeadlessRenderer>> = OnceLock::new();
+    GPU.get_or_init(|| Mutex::new(HeadlessRenderer::new().expect("a GPU adapter (lavapipe in CI)")))
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+}
+
+fn scenes_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes")
+}
+
+fn shipped() -> Vec<(String, Scene)> {
+    let mut v: Vec<_> = std::fs::read_dir(scenes_dir())
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .map(|p| {
+            (
+                p.file_stem().unwrap().to_string_lossy().into_owned(),
+                Scene::load(&p).unwrap(),
+            )
+        })
+        .collect();
+    v.sort_by(|a, b| a.0.cmp(&b.0));
+    v
+}
+
+/// Worst relative error of the GPU's B against the CPU's, over every texel.
+fn compare_brightness(name: &str, scene: &Scene, aspect: f64) -> f64 {
+    let bb = scene.place_billboard(aspect);
+    let g = gpu()
+        .brightness(scene, &bb)
+        .unwrap_or_else(|e| panic!("{name}: {e}"));
+    let c = reference::render_brightness(scene, &bb);
+    assert_eq!(g.len(), c.values.len());
+    let mut worst: f64 = 0.0;
+    for (k, (&gv, &cv)) in g.iter().zip(&c.values).enumerate() {
+        assert!(gv.is_finite(), "{name}: texel {k} is not finite");
+        let rel = (gv as f64 - cv).abs() / cv.abs().max(0.01);
+        assert!(
+            rel <= RELATIVE_TOLERANCE,
+            "{name}: texel ({}, {}) B = {gv} on the GPU, {cv} on the CPU (relative error {rel:.2e})",
+            k as u32 % scene.billboard.resolution,
+            k as u32 / scene.billboard.resolution
+        );
+        worst = worst.max(rel);
+    }
+    worst
+}
+
+#[test]
+fn gpu_matches_the_cpu_reference_on_every_shipped_scene() {
+    for (name, mut scene) in shipped() {
+        scene.billboard.resolution = 40;
+        let worst = compare_brightness(&name, &scene, 1.3);
+        eprintln!("{name}: worst relative error {worst:.2e}");
+    }
+}
+
+/// A scene whose texel rays pass through sources: points on a sample and between samples, a line crossing
+/// a ray, a torus whose circle the ray pierces, a straight and a nearly straight curve through a ray.
+#[test]
+fn gpu_matches_the_cpu_reference_on_grazing_rays() {
+    let camera = Camera {
+        eye: DVec3::new(0.3, 0.2, 9.0),
+        target: DVec3::ZERO,
+        up: DVec3::Y,
+        fov_y_degrees: 30.0,
+    };
+    let w = 24;
+    let mut scene = Scene::default_scene();
+    scene.camera = camera;
+    scene.billboard.resolution = w;
+    scene.integration.divisions = 64;
+    scene.sources = Sources {
+        points: vec![Point {
+            position: DVec3::ZERO,
+            coefficient: 1.0,
+        }],
+        ..Sources::default()
+    };
+    // The billboard depends only on the bounds; fix it so rays can be aimed at sources placed afterwards.
+    let bb = scene.place_billboard(1.0);
+    scene.billboard.center = Some(bb.center);
+    scene.billboard.size = Some(bb.size);
+    let n = scene.integration.divisions as f64;
+    let ray = |i: u32, j: u32, s: f64| {
+        let start = bb.texel_center(i, j, w);
+        let end = ray_end(start, scene.camera.eye, scene.integration.nu);
+        start + (end - start) * s
+    };
+    let on_sample = ray(5, 7, 20.0 / n);
+    let between = ray(11, 3, 30.5 / n);
+    let crossing = ray(17, 17, 24.0 / n);
+    let pierced = ray(8, 16, 17.0 / n);
+    let dir = (ray(3, 12, 1.0) - ray(3, 12, 0.0)).normalize();
+    let through = ray(3, 12, 0.4);
+    scene.sources = Sources {
+        points: vec![
+            Point {
+                position: on_sample,
+                coefficient: 0.5,
+            },
+            Point {
+                position: between,
+                coefficient: 0.5,
+            },
+        ],
+        lines: vec![Line {
+            point: crossing,
+            direction: DVec3::new(1.0, 0.3, -0.2).normalize(),
+            coefficient: 0.3,
+        }],
+        tori: vec![Torus {
+            center: pierced + DVec3::new(0.0, -0.8, 0.0),
+            axis: DVec3::new(0.0, 0.0, 1.0),
+            major_radius: 0.8,
+            coefficient: 1.0,
+        }],
+        curves: vec![
+            // Straight, along the axis of texel (3, 12)'s ray for a stretch.
+            Curve {
+                control_points: vec![through - dir, through, through + dir],
+                coefficient: 0.4,
+                weights: vec![],
+            },
+            // Nearly straight, across the ray of texel (20, 5).
+            Curve {
+                control_points: vec![
+                    ray(20, 5, 0.5) - DVec3::X,
+                    ray(20, 5, 0.5) + DVec3::new(0.0, 1e-4, 0.0),
+                    ray(20, 5, 0.5) + DVec3::X,
+                ],
+                coefficient: 0.4,
+                weights: vec![0.2, 1.0, 0.5, 0.8],
+            },
+        ],
+    };
+    scene.integration.epsilon = 1e-3;
+    // The aimed texels really graze: their B towers over the typical texel's. (The point between two samples,
+    // texel (11, 3), is compared but does not tower: uniform Simpson steps over it, the papers' unevenness.)
+    let bb = scene.place_billboard(1.0);
+    let cpu = reference::render_brightness(&scene, &bb);
+    let mut sorted = cpu.values.clone();
+    sorted.sort_by(f64::total_cmp);
+    let median = sorted[sorted.len() / 2];
+    for (i, j) in [(5, 7), (17, 17), (8, 16), (3, 12), (20, 5)] {
+        let b = cpu.values[(j * w + i) as usize];
+        assert!(
+            b > 2.0 * median,
+            "texel ({i}, {j}) does not graze: B = {b}, median {median}"
+        );
+    }
+    let worst = compare_brightness("grazing", &scene, 1.0);
+    eprintln!("grazing: worst relative error {worst:.2e}");
+}
+
+/// sRGB (display values) to CIE L*a*b* (D65).
+fn lab(c: [f64; 3]) -> [f64; 3] {
+    let lin = c.map(|v| {
+        if v <= 0.04045 {
+            v / 12.92
+        } else {
+            ((v + 0.055) / 1.055).powf(2.4)
+        }
+    });
+    let x = (0.4124 * lin[0] + 0.3576 * lin[1] + 0.1805 * lin[2]) / 0.95047;
+    let y = 0.2126 * lin[0] + 0.7152 * lin[1] + 0.0722 * lin[2];
+    let z = (0.0193 * lin[0] + 0.1192 * lin[1] + 0.9505 * lin[2]) / 1.08883;
+    let f = |t: f64| {
+        if t > 216.0 / 24389.0 {
+            t.cbrt()
+        } else {
+            (24389.0 / 27.0 * t + 16.0) / 116.0
+        }
+    };
+    [
+        116.0 * f(y) - 16.0,
+        500.0 * (f(x) - f(y)),
+        200.0 * (f(y) - f(z)),
+    ]
+}
+
+/// Perceptual difference of two frames: (mean, max) CIE76 delta E over the pixels.
+fn delta_e(a: &image::RgbImage, b: &image::RgbImage) -> (f64, f64) {
+    assert_eq!(a.dimensions(), b.dimensions());
+    let (mut sum, mut max) = (0.0, 0.0f64);
+    for (p, q) in a.pixels().zip(b.pixels()) {
+        let (lp, lq) = (
+            lab(p.0.map(|c| c as f64 / 255.0)),
+            lab(q.0.map(|c| c as f64 / 255.0)),
+        );
+        let d =
+            ((lp[0] - lq[0]).powi(2) + (lp[1] - lq[1]).powi(2) + (lp[2] - lq[2]).powi(2)).sqrt();
+        sum += d;
+        max = max.max(d);
+    }
+    (sum / (a.width() * a.height()) as f64, max)
+}
+
+fn to_rgb8(pixels: impl Iterator<Item = [f64; 3]>, w: u32, h: u32) -> image::RgbImage {
+    let bytes = pixels
+        .flat_map(|p| p.map(|c| (c.clamp(0.0, 1.0) * 255.0).round() as u8))
+        .collect();
+    image::RgbImage::from_raw(w, h, bytes).unwrap()
+}
+
+const GOLDEN_SIZE: (u32, u32) = (128, 96);
+const GOLDEN_RESOLUTION: u32 = 64;
+
+fn golden_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/golden")
+}
+
+/// The composed frame of a shipped scene against its golden image (made by the f64 CPU reference; write
+/// them anew with `ENERGYWAVE_BLESS=1 cargo test --release --test gpu_render golden`): the GPU within a
+/// perceptual tolerance (mean delta E <= 0.5, max <= 3), the CPU reference within 8-bit rounding.
+#[test]
+fn composed_frames_match_the_golden_images() {
+    let (w, h) = GOLDEN_SIZE;
+    let bless = std::env::var_os("ENERGYWAVE_BLESS").is_some();
+    for (name, mut scene) in shipped() {
+        scene.billboard.resolution = GOLDEN_RESOLUTION;
+        let bb = scene.place_billboard(w as f64 / h as f64);
+        let tex = reference::render_brightness(&scene, &bb);
+        let cpu = reference::compose_frame(&scene, &bb, &tex, w, h, false);
+        let cpu = to_rgb8(cpu.iter().map(|p| [p[0], p[1], p[2]]), w, h);
+        let path = golden_dir().join(format!("{name}.png"));
+        if bless {
+            std::fs::create_dir_all(golden_dir()).unwrap();
+            cpu.save(&path).unwrap();
+        }
+        let golden = image::open(&path)
+            .unwrap_or_else(|e| panic!("{}: {e} (ENERGYWAVE_BLESS=1 writes it)", path.display()))
+            .to_rgb8();
+        let gpu_frame = gpu().render(&scene, w, h, false).unwrap();
+        let gpu_img = to_rgb8(
+            gpu_frame
+                .pixels
+                .iter()
+                .map(|p| [p[0] as f64, p[1] as f64, p[2] as f64]),
+            w,
+            h,
+        );
+        let (mean, max) = delta_e(&gpu_img, &golden);
+        eprintln!("{name}: GPU vs golden: mean delta E {mean:.3}, max {max:.3}");
+        assert!(
+            mean <= 0.5 && max <= 3.0,
+            "{name}: GPU frame differs from golden: mean {mean}, max {max}"
+        );
+        let (mean, max) = delta_e(&cpu, &golden);
+        assert!(
+            mean <= 0.05 && max <= 1.0,
+            "{name}: CPU frame differs from golden: mean {mean}, max {max}"
+        );
+        // Not a flat picture: the golden spans a real range of brightness.
+        let luma: Vec<u8> = golden.pixels().map(|p| p.0[1]).collect();
+        let (lo, hi) = (luma.iter().min().unwrap(), luma.iter().max().unwrap());
+        assert!(hi - lo > 100, "{name}: golden is nearly flat ({lo}..{hi})");
+    }
+}
+
+fn single_point(coefficient: f64, background: [f64; 3], energy: [f64; 3]) -> Scene {
+    let mut s = Scene::default_scene();
+    s.billboard.resolution = 32;
+    s.integration.divisions = 32;
+    s.colors.background = background;
+    s.colors.energy = energy;
+    s.sources = Sources {
+        points: vec![Point {
+            position: DVec3::ZERO,
+            coefficient,
+        }],
+        ..Sources::default()
+    };
+    s
+}
+
+#[test]
+fn b_above_one_blows_out_to_white_and_b_zero_shows_the_background() {
+    let cb = [0.2, 0.1, 0.3];
+    let ce = [0.4, 0.7, 1.0];
+    let scene = single_point(500.0, cb, ce);
+    let (w, h) = (64, 48);
+    let frame = gpu().render(&scene, w, h, false).unwrap();
+    let (x, y) = scene.camera.project(DVec3::ZERO, w, h).unwrap();
+    let p = frame.pixels[(y as u32 * w + x as u32) as usize];
+    assert!(p[..3].iter().all(|&c| c == 1.0), "blown-out pixel {p:?}");
+    let scene = single_point(0.0, cb, ce);
+    let frame = gpu().render(&scene, w, h, false).unwrap();
+    for p in &frame.pixels {
+        for c in 0..3 {
+            // Half-float rounding of the background color.
+            assert!((p[c] as f64 - cb[c]).abs() < 1e-3, "{p:?} vs {cb:?}");
+        }
+        assert_eq!(p[3], 1.0);
+    }
+}
+
+#[test]
+fn the_billboard_is_where_the_camera_math_says() {
+    // A fixed, off-center billboard and a glow far above 1 everywhere on it: the white region of the frame
+    // must be the projection of its four corners.
+    let mut scene = single_point(1e4, [0.0, 0.0, 0.0], [1.0, 1.0, 1.0]);
+    scene.camera.eye = DVec3::new(2.0, 1.0, 8.0);
+    let center = DVec3::new(0.6, -0.3, 2.0);
+    scene.billboard.center = Some(center);
+    scene.billboard.size = Some(1.5);
+    let (w, h) = (120, 90);
+    let bb = scene.place_billboard(w as f64 / h as f64);
+    let frame = gpu().render(&scene, w, h, false).unwrap();
+    let corners: Vec<(f64, f64)> = [(-0.5, -0.5), (0.5, -0.5), (0.5, 0.5), (-0.5, 0.5)]
+        .iter()
+        .map(|&(a, b)| {
+            scene
+                .camera
+                .project(center + bb.right * (a * 1.5) + bb.up * (b * 1.5), w, h)
+                .unwrap()
+        })
+        .collect();
+    // Point-in-convex-quad by the sign of cross products, with a margin of `m` pixels.
+    let inside = |x: f64, y: f64, m: f64| {
+        (0..4).all(|k| {
+            let (ax, ay) = corners[k];
+            let (bx, by) = corners[(k + 1) % 4];
+            let (ex, ey) = (bx - ax, by - ay);
+            let cross = ex * (y - ay) - ey * (x - ax);
+            let len = (ex * ex + ey * ey).sqrt();
+            cross / len * corners_orientation(&corners) > m
+        })
+    };
+    let mut lit = 0;
+    for y in 0..h {
+        for x in 0..w {
+            let p = frame.pixels[(y * w + x) as usize];
+            let (cx, cy) = (x as f64 + 0.5, y as f64 + 0.5);
+            if inside(cx, cy, 1.0) {
+                assert!(p[0] > 0.99, "({x}, {y}) inside the billboard is {p:?}");
+                lit += 1;
+            } else if !inside(cx, cy, -1.0) {
+                assert!(p[0] < 0.01, "({x}, {y}) outside the billboard is {p:?}");
+            }
+        }
+    }
+    assert!(lit > 200, "the billboard covers only {lit} pixels");
+}
+
+fn corners_orientation(c: &[(f64, f64)]) -> f64 {
+    let area: f64 = (0..c.len())
+        .map(|k| c[k].0 * c[(k + 1) % c.len()].1 - c[(k + 1) % c.len()].0 * c[k].1)
+        .sum();
+    area.signum()
+}
+
+#[test]
+fn transparent_frames_match_the_cpu_reference() {
+    let (_, mut scene) = shipped()
+        .into_iter()
+        .find(|(n, _)| n == "bezier_b5.0")
+        .unwrap();
+    scene.billboard.resolution = 32;
+    let (w, h) = (48, 40);
+    let bb = scene.place_billboard(w as f64 / h as f64);
+    let cpu = reference::compose_frame(
+        &scene,
+        &bb,
+        &reference::render_brightness(&scene, &bb),
+        w,
+        h,
+        true,
+    );
+    let gpu_frame = gpu().render(&scene, w, h, true).unwrap();
+    let mut translucent = 0;
+    for (g, c) in gpu_frame.pixels.iter().zip(&cpu) {
+        for k in 0..4 {
+            assert!((g[k] as f64 - c[k]).abs() < 2e-3, "{g:?} vs {c:?}");
+        }
+        translucent += (c[3] > 0.05 && c[3] < 0.95) as usize;
+    }
+    assert!(
+        translucent > 100,
+        "alpha is not graded: {translucent} translucent pixels"
+    );
+}
+
+#[test]
+fn the_texture_is_rendered_again_only_when_something_changed() {
+    let mut g = gpu();
+    let mut scene = single_point(2.0, [0.0; 3], [1.0; 3]);
+    let bb = scene.place_billboard(1.0);
+    g.brightness(&scene, &bb).unwrap();
+    let before = g.field().dispatch_count();
+    g.brightness(&scene, &bb).unwrap();
+    g.render(&scene, 32, 32, false).unwrap();
+    assert_eq!(
+        g.field().dispatch_count(),
+        before,
+        "nothing changed, nothing re-rendered"
+    );
+    scene.colors.energy = [0.5; 3];
+    g.render(&scene, 32, 32, false).unwrap();
+    assert_eq!(
+        g.field().dispatch_count(),
+        before,
+        "a color does not touch the texture"
+    );
+    scene.sources.points[0].coefficient = 3.0;
+    g.render(&scene, 32, 32, false).unwrap();
+    assert_eq!(g.field().dispatch_count(), before + 1, "a source changed");
+    scene.camera.eye.x += 0.1;
+    g.render(&scene, 32, 32, false).unwrap();
+    assert_eq!(g.field().dispatch_count(), before + 2, "the camera moved");
+    scene.integration.divisions = 40;
+    g.render(&scene, 32, 32, false).unwrap();
+    assert_eq!(g.field().dispatch_count(), before + 3, "a setting changed");
+}
+
+#[test]
+fn validation_errors_are_errors() {
+    let g = gpu();
+    let result = g.ctx.checked(|| {
+        g.ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("energywave.test.invalid"),
+            size: 16,
+            // MAP_READ may only be combined with COPY_DST: a validation error.
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        })
+    });
+    assert!(
+        matches!(result, Err(GpuError::Validation(_))),
+        "{:?}",
+        result.err()
+    );
+}
+
+#[test]
+fn sizes_beyond_the_device_limits_are_refused() {
+    let mut g = gpu();
+    let limit = g.ctx.device.limits().max_texture_dimension_2d;
+    let mut scene = single_point(1.0, [0.0; 3], [1.0; 3]);
+    scene.billboard.resolution = limit + 1;
+    let err = g.render(&scene, 16, 16, false).unwrap_err();
+    assert!(
+        matches!(err, GpuError::ResolutionTooLarge { .. }) && err.is_input_error(),
+        "{err}"
+    );
+    scene.billboard.resolution = 8;
+    let err = g.render(&scene, limit + 1, 16, false).unwrap_err();
+    assert!(
+        matches!(err, GpuError::FrameTooLarge { .. }) && err.is_input_error(),
+        "{err}"
+    );
+}
+
+#[test]
+fn field_memory_is_w_squared() {
+    // One f32 per texel, independent of n: 1 MiB at W = 512.
+    assert_eq!(field_texture_bytes(512), 1 << 20);
+    let mut g = gpu();
+    let mut scene = single_point(1.0, [0.0; 3], [1.0; 3]);
+    scene.billboard.resolution = 48;
+    scene.integration.divisions = 400;
+    let bb = scene.place_billboard(1.0);
+    g.brightness(&scene, &bb).unwrap();
+    let t = g.field().texture().unwrap();
+    assert_eq!(
+        (t.width(), t.height(), t.format()),
+        (48, 48, wgpu::TextureFormat::R32Float)
+    );
+}
