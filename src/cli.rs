@@ -13,6 +13,7 @@ use crate::gpu::{GpuError, HeadlessRenderer};
 use crate::output::{self, Format, OutputError};
 use crate::reference;
 use crate::scene::{DEFAULT_SCENE_NAME, MAX_DIVISIONS, MAX_RESOLUTION, Scene, SceneError};
+use crate::viewer::{Document, ViewOptions, ViewerError};
 
 /// Design and render energy-wave effects (Watanabe, Abe and Konno 2016).
 #[derive(Debug, Parser)]
@@ -25,12 +26,21 @@ pub struct Cli {
 #[derive(Debug, Subcommand)]
 pub enum Command {
     /// Open the interactive viewer on a scene (the embedded default scene without one).
-    View {
-        /// Scene file (TOML).
-        scene: Option<PathBuf>,
-    },
+    View(ViewArgs),
     /// Render the scene's camera view to an image file.
     Render(RenderArgs),
+}
+
+#[derive(Debug, Default, clap::Args)]
+pub struct ViewArgs {
+    /// Scene file (TOML).
+    pub scene: Option<PathBuf>,
+    /// Draw `--frames` frames, save the whole window (panel included) to this PNG, and exit.
+    #[arg(long)]
+    pub screenshot: Option<PathBuf>,
+    /// How many frames to draw before `--screenshot`.
+    #[arg(long, default_value_t = 3, requires = "screenshot")]
+    pub frames: u32,
 }
 
 #[derive(Debug, clap::Args)]
@@ -85,6 +95,8 @@ pub enum CliError {
     #[error("{0}")]
     Gpu(#[from] GpuError),
     #[error("{0}")]
+    Viewer(#[from] ViewerError),
+    #[error("{0}")]
     Usage(String),
     #[error("{0}")]
     Unavailable(String),
@@ -98,7 +110,11 @@ impl CliError {
             CliError::Scene(_) | CliError::Usage(_) => 2,
             CliError::Output(e) if e.is_input_error() => 2,
             CliError::Gpu(e) if e.is_input_error() => 2,
-            CliError::Output(_) | CliError::Gpu(_) | CliError::Unavailable(_) => 1,
+            CliError::Viewer(ViewerError::Output(e)) if e.is_input_error() => 2,
+            CliError::Output(_)
+            | CliError::Gpu(_)
+            | CliError::Viewer(_)
+            | CliError::Unavailable(_) => 1,
         }
     }
 }
@@ -142,8 +158,8 @@ pub fn main() -> ExitCode {
 /// Runs a parsed command line.
 pub fn run(cli: Cli) -> Result<(), CliError> {
     match cli.command {
-        None => view(None),
-        Some(Command::View { scene }) => view(scene.as_deref()),
+        None => view(&ViewArgs::default()),
+        Some(Command::View(args)) => view(&args),
         Some(Command::Render(args)) => render(&args),
     }
 }
@@ -156,20 +172,32 @@ pub fn load_scene(path: Option<&Path>) -> Result<Scene, SceneError> {
     }
 }
 
-fn view(scene_path: Option<&Path>) -> Result<(), CliError> {
-    // The scene is checked first, so a bad file is reported the same way with or without a display.
-    load_scene(scene_path)?;
-    let scene_arg = scene_path.map_or(String::new(), |p| format!(" {}", p.display()));
+fn view(args: &ViewArgs) -> Result<(), CliError> {
+    // The scene and the screenshot path are checked first, so bad input is reported the same way with or
+    // without a display.
+    let scene = load_scene(args.scene.as_deref())?;
+    if let Some(path) = &args.screenshot {
+        output::check_destination(path)?;
+    }
     let has_display = std::env::var_os("DISPLAY").is_some_and(|v| !v.is_empty())
         || std::env::var_os("WAYLAND_DISPLAY").is_some_and(|v| !v.is_empty());
-    let reason = if has_display {
-        "this build has no interactive viewer window yet"
-    } else {
-        "no display found (neither DISPLAY nor WAYLAND_DISPLAY is set), so no window can open"
+    if !has_display {
+        let scene_arg = args
+            .scene
+            .as_ref()
+            .map_or(String::new(), |p| format!(" {}", p.display()));
+        return Err(CliError::Unavailable(format!(
+            "no display found (neither DISPLAY nor WAYLAND_DISPLAY is set), so the viewer cannot open a window.\n\
+             Render the scene to an image instead:\n  energywave render{scene_arg} --output frame.png"
+        )));
+    }
+    let doc = Document::new(scene, args.scene.clone());
+    let options = ViewOptions {
+        screenshot: args.screenshot.clone(),
+        frames: args.frames,
     };
-    Err(CliError::Unavailable(format!(
-        "{reason}.\nRender the scene to an image instead:\n  energywave render{scene_arg} --output frame.png"
-    )))
+    crate::viewer::run(doc, options)?;
+    Ok(())
 }
 
 fn render(args: &RenderArgs) -> Result<(), CliError> {

@@ -7,6 +7,7 @@
 //! - [`reference`]: the multithreaded CPU renderer built from the above;
 //! - [`gpu`]: the same on the GPU: WGSL compute and render passes, headless or in the viewer;
 //! - [`scene`]: TOML scene files, validated field by field;
+//! - [`viewer`]: the interactive viewer (winit, egui, the same GPU passes);
 //! - [`output`]: PNG and EXR files, written atomically;
 //! - [`cli`]: the `energywave` command line.
 
@@ -19,3 +20,4 @@ pub mod integrate;
 pub mod output;
 pub mod reference;
 pub mod scene;
+pub mod viewer;

@@ -120,6 +120,13 @@ fn rust_mirrors_match_the_wgsl_layouts() {
         size_of::<CurveSegment>(),
         fields!(CurveSegment: c2, pad0, c1, pad1, c0, pad2),
     );
+    let grid = parse_and_validate("grid", shaders::GRID_PASS);
+    check_struct(
+        &grid,
+        "GridParams",
+        size_of::<energywave::viewer::viewport::gpu_data::GridParams>(),
+        fields!(energywave::viewer::viewport::gpu_data::GridParams: view_proj),
+    );
     let billboard = parse_and_validate("billboard", shaders::BILLBOARD_PASS);
     check_struct(
         &billboard,

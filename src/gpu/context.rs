@@ -42,6 +42,20 @@ impl GpuError {
     }
 }
 
+/// Runs `f` inside validation and out-of-memory error scopes of `device`; an error it causes becomes a
+/// `GpuError::Validation`.
+pub fn checked<T>(device: &wgpu::Device, f: impl FnOnce() -> T) -> Result<T, GpuError> {
+    let oom = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+    let validation = device.push_error_scope(wgpu::ErrorFilter::Validation);
+    let value = f();
+    let v = pollster::block_on(validation.pop());
+    let o = pollster::block_on(oom.pop());
+    match v.or(o) {
+        Some(e) => Err(GpuError::Validation(e.to_string())),
+        None => Ok(value),
+    }
+}
+
 /// Device, queue and the adapter they came from.
 pub struct GpuContext {
     pub instance: wgpu::Instance,
@@ -161,14 +175,7 @@ impl GpuContext {
     /// Runs `f` inside a validation error scope; any wgpu validation or out-of-memory error it causes, or
     /// one raised outside a scope since the last check, becomes an error.
     pub fn checked<T>(&self, f: impl FnOnce() -> T) -> Result<T, GpuError> {
-        let oom = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
-        let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let value = f();
-        let v = pollster::block_on(validation.pop());
-        let o = pollster::block_on(oom.pop());
-        if let Some(e) = v.or(o) {
-            return Err(GpuError::Validation(e.to_string()));
-        }
+        let value = checked(&self.device, f)?;
         self.check_uncaptured()?;
         Ok(value)
     }
@@ -202,53 +209,64 @@ impl GpuContext {
         texture: &wgpu::Texture,
         bytes_per_texel: u32,
     ) -> Result<Vec<u8>, GpuError> {
-        let (width, height) = (texture.width(), texture.height());
-        let unpadded = width * bytes_per_texel;
-        let padded = unpadded.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT)
-            * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
-        let buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("energywave.readback"),
-            size: padded as u64 * height as u64,
-            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-            mapped_at_creation: false,
-        });
-        let mut encoder = self
-            .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("energywave.readback.encoder"),
-            });
-        encoder.copy_texture_to_buffer(
-            texture.as_image_copy(),
-            wgpu::TexelCopyBufferInfo {
-                buffer: &buffer,
-                layout: wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(padded),
-                    rows_per_image: Some(height),
-                },
-            },
-            texture.size(),
-        );
-        self.queue.submit([encoder.finish()]);
-        let (tx, rx) = std::sync::mpsc::channel();
-        buffer.slice(..).map_async(wgpu::MapMode::Read, move |r| {
-            let _ = tx.send(r);
-        });
-        self.wait_idle()?;
-        rx.recv()
-            .map_err(|e| GpuError::Readback(e.to_string()))?
-            .map_err(|e| GpuError::Readback(e.to_string()))?;
-        let mut out = Vec::with_capacity((unpadded * height) as usize);
-        {
-            let view = buffer
-                .slice(..)
-                .get_mapped_range()
-                .map_err(|e| GpuError::Readback(e.to_string()))?;
-            for row in view.chunks(padded as usize) {
-                out.extend_from_slice(&row[..unpadded as usize]);
-            }
-        }
-        buffer.unmap();
-        Ok(out)
+        read_texture(&self.device, &self.queue, texture, bytes_per_texel)
     }
+}
+
+/// Copies a whole 2D texture of `bytes_per_texel` back to the CPU, rows from the top, without padding
+/// (waits for the GPU).
+pub fn read_texture(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    texture: &wgpu::Texture,
+    bytes_per_texel: u32,
+) -> Result<Vec<u8>, GpuError> {
+    let (width, height) = (texture.width(), texture.height());
+    let unpadded = width * bytes_per_texel;
+    let padded =
+        unpadded.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+    let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("energywave.readback"),
+        size: padded as u64 * height as u64,
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    });
+    let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+        label: Some("energywave.readback.encoder"),
+    });
+    encoder.copy_texture_to_buffer(
+        texture.as_image_copy(),
+        wgpu::TexelCopyBufferInfo {
+            buffer: &buffer,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(padded),
+                rows_per_image: Some(height),
+            },
+        },
+        texture.size(),
+    );
+    queue.submit([encoder.finish()]);
+    let (tx, rx) = std::sync::mpsc::channel();
+    buffer.slice(..).map_async(wgpu::MapMode::Read, move |r| {
+        let _ = tx.send(r);
+    });
+    device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .map_err(|e| GpuError::Readback(e.to_string()))?;
+    rx.recv()
+        .map_err(|e| GpuError::Readback(e.to_string()))?
+        .map_err(|e| GpuError::Readback(e.to_string()))?;
+    let mut out = Vec::with_capacity((unpadded * height) as usize);
+    {
+        let view = buffer
+            .slice(..)
+            .get_mapped_range()
+            .map_err(|e| GpuError::Readback(e.to_string()))?;
+        for row in view.chunks(padded as usize) {
+            out.extend_from_slice(&row[..unpadded as usize]);
+        }
+    }
+    buffer.unmap();
+    Ok(out)
 }

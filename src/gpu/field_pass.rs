@@ -4,7 +4,7 @@
 
 use wgpu::util::DeviceExt;
 
-use super::context::{GpuContext, GpuError};
+use super::context::{GpuError, checked};
 use super::shaders;
 use crate::field::curve::segments;
 use crate::geometry::Billboard;
@@ -335,12 +335,13 @@ impl FieldRenderer {
     /// Uploads what the texture depends on. Returns true when it changed (the next `encode` re-renders).
     pub fn prepare(
         &mut self,
-        ctx: &GpuContext,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
         scene: &Scene,
         billboard: &Billboard,
     ) -> Result<bool, GpuError> {
         let w = scene.billboard.resolution;
-        let limit = ctx.device.limits().max_texture_dimension_2d;
+        let limit = device.limits().max_texture_dimension_2d;
         if w > limit {
             return Err(GpuError::ResolutionTooLarge {
                 resolution: w,
@@ -351,8 +352,7 @@ impl FieldRenderer {
         if self.uploaded.as_ref() == Some(&packed) {
             return Ok(false);
         }
-        let (device, queue) = (&ctx.device, &ctx.queue);
-        ctx.checked(|| {
+        checked(device, || {
             let mut rebind = self.bind_group.is_none();
             let data: [&[u8]; 6] = [
                 bytemuck::cast_slice(&packed.points),

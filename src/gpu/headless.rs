@@ -69,7 +69,9 @@ impl HeadlessRenderer {
 
     /// Renders the brightness texture if the scene or billboard changed since the last call.
     fn update_field(&mut self, scene: &Scene, billboard: &Billboard) -> Result<(), GpuError> {
-        self.field.prepare(&self.ctx, scene, billboard)?;
+        self.field
+            .prepare(&self.ctx.device, &self.ctx.queue, scene, billboard)?;
+        self.ctx.check_uncaptured()?;
         let mut encoder = self
             .ctx
             .device

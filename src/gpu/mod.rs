@@ -8,10 +8,10 @@ mod field_pass;
 mod headless;
 pub mod shaders;
 
-pub use billboard_pass::{BillboardRenderer, billboard_params};
-pub use context::{GpuContext, GpuError, describe};
+pub use billboard_pass::{BillboardRenderer, billboard_params, view_projection};
+pub use context::{GpuContext, GpuError, checked, describe, read_texture};
 pub use field_pass::{FieldRenderer, field_texture_bytes};
-pub use headless::{Frame, HeadlessRenderer};
+pub use headless::{Frame, HeadlessRenderer, f16_to_f32};
 
 /// The Rust mirrors of the WGSL structs, for the layout tests.
 pub mod layout {

@@ -8,6 +8,11 @@ pub const FIELD_PASS: &str = include_str!("../../shaders/field.wgsl");
 /// The billboard pass.
 pub const BILLBOARD_PASS: &str = include_str!("../../shaders/billboard.wgsl");
 
+/// The viewer's ground grid.
+pub const GRID_PASS: &str = include_str!("../../shaders/grid.wgsl");
+/// The viewer's copy of its offscreen viewport into egui's frame.
+pub const BLIT_PASS: &str = include_str!("../../shaders/blit.wgsl");
+
 /// The complete source of the field pass's module.
 pub fn field_module_source() -> String {
     format!("{FIELD_COMMON}\n{FIELD_PASS}")
@@ -18,5 +23,7 @@ pub fn all_modules() -> Vec<(&'static str, String)> {
     vec![
         ("field.wgsl (with field_common.wgsl)", field_module_source()),
         ("billboard.wgsl", BILLBOARD_PASS.to_string()),
+        ("grid.wgsl", GRID_PASS.to_string()),
+        ("blit.wgsl", BLIT_PASS.to_string()),
     ]
 }

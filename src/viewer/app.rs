@@ -1,0 +1,486 @@
+//! The viewer's state and its whole user interface, independent of the window: the window loop and the UI tests
+//! both call `ViewerApp::ui`. State here is plain parameters; GPU resources live in `viewport::ViewportGpu`.
+
+use std::collections::VecDeque;
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
+use std::time::{Instant, SystemTime};
+
+use egui::{Color32, Key, KeyboardShortcut, Modifiers, PointerButton, Sense};
+
+use super::document::{DiskChange, Document};
+use super::handles::{self, HandleId};
+use super::history::History;
+use super::navigation;
+use super::panel;
+use super::viewport::{ViewportCallback, ViewportReport, ViewportView};
+use crate::geometry::Camera;
+use crate::scene::Scene;
+
+/// What the UI asks of the window around it.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Request {
+    /// Save the viewport alone, at `scale` times its size, to `path`.
+    Screenshot { path: PathBuf, scale: u32 },
+    /// Close the window (unsaved changes have been dealt with).
+    Quit,
+}
+
+/// An action waiting for the user to decide about unsaved changes.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Pending {
+    Open(PathBuf),
+    Quit,
+}
+
+/// The viewer's state.
+pub struct ViewerApp {
+    pub doc: Document,
+    pub history: History,
+    pub show_grid: bool,
+    pub show_handles: bool,
+    /// Screenshot size relative to the viewport: 1, 2 or 4.
+    pub screenshot_scale: u32,
+    /// The path typed in the file section.
+    pub path_input: String,
+    /// Name of the GPU adapter, for the status line.
+    pub adapter: String,
+    /// Largest billboard resolution the device allows.
+    pub max_resolution: u32,
+    /// The viewport's size in physical pixels at the last frame.
+    pub viewport_px: [u32; 2],
+    /// The viewport's rectangle (egui points) at the last frame.
+    pub viewport_rect: egui::Rect,
+    /// The camera as loaded, for "Reset view".
+    pub home_camera: Camera,
+    pub pending: Option<Pending>,
+    /// The last message for the user (and whether it is an error).
+    pub notice: Option<(String, bool)>,
+    report: Arc<Mutex<ViewportReport>>,
+    dragging: Option<HandleId>,
+    hovered: Option<HandleId>,
+    frame_times: VecDeque<f64>,
+    last_frame: Option<Instant>,
+    requests: Vec<Request>,
+}
+
+const SAVE: KeyboardShortcut = KeyboardShortcut::new(Modifiers::COMMAND, Key::S);
+const UNDO: KeyboardShortcut = KeyboardShortcut::new(Modifiers::COMMAND, Key::Z);
+const REDO: KeyboardShortcut =
+    KeyboardShortcut::new(Modifiers::COMMAND.plus(Modifiers::SHIFT), Key::Z);
+const REDO_Y: KeyboardShortcut = KeyboardShortcut::new(Modifiers::COMMAND, Key::Y);
+
+impl ViewerApp {
+    /// The viewer on `doc`; `report` is shared with the viewport's GPU side.
+    pub fn new(
+        doc: Document,
+        adapter: String,
+        max_resolution: u32,
+        report: Arc<Mutex<ViewportReport>>,
+    ) -> Self {
+        Self {
+            history: History::new(&doc.scene),
+            home_camera: doc.scene.camera.clone(),
+            path_input: doc
+                .path()
+                .map_or(String::new(), |p| p.display().to_string()),
+            doc,
+            show_grid: true,
+            show_handles: true,
+            screenshot_scale: 1,
+            adapter,
+            max_resolution,
+            viewport_px: [0, 0],
+            viewport_rect: egui::Rect::NOTHING,
+            pending: None,
+            notice: None,
+            report,
+            dragging: None,
+            hovered: None,
+            frame_times: VecDeque::new(),
+            last_frame: None,
+            requests: Vec::new(),
+        }
+    }
+
+    /// Takes a new GPU (after the device was lost and recreated).
+    pub fn set_gpu(
+        &mut self,
+        adapter: String,
+        max_resolution: u32,
+        report: Arc<Mutex<ViewportReport>>,
+    ) {
+        self.adapter = adapter;
+        self.max_resolution = max_resolution;
+        self.report = report;
+    }
+
+    /// The scene being edited.
+    pub fn scene(&self) -> &Scene {
+        &self.doc.scene
+    }
+
+    /// Takes what the UI asked of the window since the last call.
+    pub fn take_requests(&mut self) -> Vec<Request> {
+        std::mem::take(&mut self.requests)
+    }
+
+    /// What the GPU side reported.
+    pub fn report(&self) -> ViewportReport {
+        self.report.lock().map(|r| r.clone()).unwrap_or_default()
+    }
+
+    pub fn notify(&mut self, text: impl Into<String>, is_error: bool) {
+        self.notice = Some((text.into(), is_error));
+    }
+
+    /// Median frame time in seconds over the last frames.
+    pub fn frame_time(&self) -> Option<f64> {
+        if self.frame_times.is_empty() {
+            return None;
+        }
+        let mut v: Vec<f64> = self.frame_times.iter().copied().collect();
+        v.sort_by(f64::total_cmp);
+        Some(v[v.len() / 2])
+    }
+
+    pub fn undo(&mut self) {
+        if self.history.undo(&mut self.doc.scene) {
+            self.notify("Undone", false);
+        }
+    }
+
+    pub fn redo(&mut self) {
+        if self.history.redo(&mut self.doc.scene) {
+            self.notify("Redone", false);
+        }
+    }
+
+    /// Saves to the document's file, or to the typed path when it has none.
+    pub fn save(&mut self) {
+        let result = match self.doc.save() {
+            Ok(true) => Ok(()),
+            Ok(false) => {
+                let path = PathBuf::from(self.path_input.trim());
+                if self.path_input.trim().is_empty() {
+                    self.notify("Type a file name to save to, then Save As", true);
+                    return;
+                }
+                self.doc.save_as(&path)
+            }
+            Err(e) => Err(e),
+        };
+        match result {
+            Ok(()) => self.notify(
+                format!(
+                    "Saved {}",
+                    self.doc
+                        .path()
+                        .map_or(String::new(), |p| p.display().to_string())
+                ),
+                false,
+            ),
+            Err(e) => self.notify(e.to_string(), true),
+        }
+    }
+
+    /// Saves to the typed path.
+    pub fn save_as(&mut self) {
+        let path = PathBuf::from(self.path_input.trim());
+        if self.path_input.trim().is_empty() {
+            self.notify("Type a file name to save to", true);
+            return;
+        }
+        match self.doc.save_as(&path) {
+            Ok(()) => self.notify(format!("Saved {}", path.display()), false),
+            Err(e) => self.notify(e.to_string(), true),
+        }
+    }
+
+    /// Opens the typed path, asking first if there are unsaved changes.
+    pub fn open(&mut self) {
+        let path = PathBuf::from(self.path_input.trim());
+        if self.doc.is_dirty() {
+            self.pending = Some(Pending::Open(path));
+        } else {
+            self.open_now(path);
+        }
+    }
+
+    fn open_now(&mut self, path: PathBuf) {
+        match Document::open(&path) {
+            Ok(doc) => {
+                self.history.reset(&doc.scene);
+                self.home_camera = doc.scene.camera.clone();
+                self.doc = doc;
+                self.notify(format!("Opened {}", path.display()), false);
+            }
+            Err(e) => self.notify(e.to_string(), true),
+        }
+    }
+
+    /// The window was asked to close: quit now, or ask about unsaved changes first.
+    pub fn request_quit(&mut self) {
+        if self.doc.is_dirty() {
+            self.pending = Some(Pending::Quit);
+        } else {
+            self.requests.push(Request::Quit);
+        }
+    }
+
+    /// Asks the window for a screenshot of the viewport beside the scene file.
+    pub fn screenshot(&mut self) {
+        let path = self.doc.screenshot_path(SystemTime::now());
+        self.requests.push(Request::Screenshot {
+            path,
+            scale: self.screenshot_scale,
+        });
+    }
+
+    pub fn frame_effect(&mut self) {
+        let aspect = self.viewport_px[0].max(1) as f64 / self.viewport_px[1].max(1) as f64;
+        let scene = &mut self.doc.scene;
+        navigation::frame_sources(&mut scene.camera, &scene.sources, aspect);
+    }
+
+    pub fn reset_view(&mut self) {
+        self.doc.scene.camera = self.home_camera.clone();
+    }
+
+    /// The whole interface for one frame.
+    pub fn ui(&mut self, ui: &mut egui::Ui) {
+        let now = Instant::now();
+        if let Some(last) = self.last_frame.replace(now) {
+            self.frame_times
+                .push_back(now.duration_since(last).as_secs_f64());
+            if self.frame_times.len() > 60 {
+                self.frame_times.pop_front();
+            }
+        }
+        match self.doc.poll_disk(now) {
+            Some(DiskChange::Reloaded) => self.notify("Reloaded: the file changed on disk", false),
+            Some(DiskChange::Invalid(e)) => self.notify(
+                format!(
+                    "The file changed on disk but does not load; keeping the last good scene.\n{e}"
+                ),
+                true,
+            ),
+            Some(DiskChange::Conflict) => {
+                self.notify("The file changed on disk; you have unsaved changes", true)
+            }
+            None => {}
+        }
+        self.shortcuts(ui.ctx());
+
+        egui::Panel::bottom("energywave.status").show(ui, |ui| self.status_bar(ui));
+        egui::Panel::left("energywave.panel")
+            .resizable(true)
+            .default_size(340.0)
+            .show(ui, |ui| {
+                egui::ScrollArea::vertical().show(ui, |ui| panel::show(ui, self));
+            });
+        egui::CentralPanel::default()
+            .frame(egui::Frame::NONE)
+            .show(ui, |ui| self.viewport(ui));
+        self.modals(ui.ctx());
+
+        // An edit is committed when it settles: no button held (a drag is one step).
+        if !ui.ctx().input(|i| i.pointer.any_down()) {
+            self.history.commit(&self.doc.scene);
+        }
+    }
+
+    fn shortcuts(&mut self, ctx: &egui::Context) {
+        if ctx.input_mut(|i| i.consume_shortcut(&SAVE)) {
+            self.save();
+        }
+        if ctx.input_mut(|i| i.consume_shortcut(&REDO) || i.consume_shortcut(&REDO_Y)) {
+            self.redo();
+        }
+        if ctx.input_mut(|i| i.consume_shortcut(&UNDO)) {
+            self.undo();
+        }
+        if ctx.input_mut(|i| i.consume_key(Modifiers::NONE, Key::F12)) {
+            self.screenshot();
+        }
+        if !ctx.egui_wants_keyboard_input()
+            && ctx.input_mut(|i| i.consume_key(Modifiers::NONE, Key::F))
+        {
+            self.frame_effect();
+        }
+    }
+
+    fn status_bar(&mut self, ui: &mut egui::Ui) {
+        ui.horizontal(|ui| {
+            match self.frame_time() {
+                Some(t) if t > 0.0 => {
+                    ui.monospace(format!("{:6.1} ms  {:5.1} FPS", t * 1e3, 1.0 / t))
+                }
+                _ => ui.monospace("   -- ms     -- FPS"),
+            };
+            ui.separator();
+            ui.label(&self.adapter);
+            ui.separator();
+            let w = self.doc.scene.billboard.resolution;
+            ui.label(format!(
+                "billboard {w}\u{d7}{w}, n = {}",
+                self.doc.scene.integration.divisions
+            ));
+            ui.separator();
+            ui.label(self.doc.title());
+            if let Some((text, is_error)) = &self.notice {
+                ui.separator();
+                let first_line = text.lines().next().unwrap_or_default();
+                let color = if *is_error {
+                    Color32::from_rgb(255, 110, 90)
+                } else {
+                    ui.visuals().weak_text_color()
+                };
+                ui.colored_label(color, first_line)
+                    .on_hover_text(text.as_str());
+            }
+        });
+    }
+
+    fn viewport(&mut self, ui: &mut egui::Ui) {
+        let rect = ui.available_rect_before_wrap();
+        let response = ui.allocate_rect(rect, Sense::click_and_drag());
+        let ppp = ui.ctx().pixels_per_point();
+        self.viewport_rect = rect;
+        self.viewport_px = [
+            (rect.width() * ppp).round() as u32,
+            (rect.height() * ppp).round() as u32,
+        ];
+        if self.viewport_px[0] == 0 || self.viewport_px[1] == 0 {
+            return;
+        }
+        ui.painter().add(egui_wgpu::Callback::new_paint_callback(
+            rect,
+            ViewportCallback(ViewportView {
+                scene: self.doc.scene.clone(),
+                size: self.viewport_px,
+                show_grid: self.show_grid,
+            }),
+        ));
+
+        // Handles first: a press on a handle drags it, anywhere else navigates.
+        let pointer = response.hover_pos().or(response.interact_pointer_pos());
+        self.hovered = match (self.show_handles, pointer) {
+            (true, Some(p)) if self.dragging.is_none() => handles::pick(&self.doc.scene, rect, p),
+            _ => self.hovered,
+        };
+        if response.drag_started_by(PointerButton::Primary) && self.show_handles {
+            // Grab what was under the pointer when the button went down: a drag is only recognised once the
+            // pointer has moved, by then possibly past the handle.
+            let origin = ui
+                .input(|i| i.pointer.press_origin())
+                .or(response.interact_pointer_pos());
+            self.dragging = origin.and_then(|p| handles::pick(&self.doc.scene, rect, p));
+        }
+        let delta = response.drag_delta();
+        if let Some(id) = self.dragging {
+            if let Some(p) = handles::get(&self.doc.scene, id) {
+                let q =
+                    handles::drag_in_view_plane(&self.doc.scene.camera, rect.height(), p, delta);
+                handles::set(&mut self.doc.scene, id, q);
+            }
+        } else if response.dragged_by(PointerButton::Primary) {
+            navigation::orbit(
+                &mut self.doc.scene.camera,
+                delta.x as f64 * 0.008,
+                delta.y as f64 * 0.008,
+            );
+        } else if response.dragged_by(PointerButton::Secondary)
+            || response.dragged_by(PointerButton::Middle)
+        {
+            navigation::pan(
+                &mut self.doc.scene.camera,
+                delta.x as f64,
+                delta.y as f64,
+                rect.height() as f64,
+            );
+        }
+        if response.drag_stopped() {
+            self.dragging = None;
+        }
+        if response.hovered() {
+            let scroll = ui.input(|i| i.smooth_scroll_delta.y);
+            if scroll != 0.0 {
+                let toward = pointer.map(|p| handles::screen_ray(&self.doc.scene.camera, rect, p));
+                navigation::zoom(
+                    &mut self.doc.scene.camera,
+                    (-scroll as f64 * 0.003).exp(),
+                    toward,
+                );
+            }
+        }
+
+        let painter = ui.painter_at(rect);
+        if self.show_handles {
+            handles::draw(
+                &painter,
+                rect,
+                &self.doc.scene,
+                self.dragging.or(self.hovered),
+            );
+        }
+        if let Some(error) = self.report().error {
+            painter.text(
+                rect.left_top() + egui::vec2(8.0, 8.0),
+                egui::Align2::LEFT_TOP,
+                format!("GPU error: {error}"),
+                egui::FontId::proportional(13.0),
+                Color32::from_rgb(255, 110, 90),
+            );
+        }
+    }
+
+    fn modals(&mut self, ctx: &egui::Context) {
+        let Some(pending) = self.pending.clone() else {
+            return;
+        };
+        let what = match &pending {
+            Pending::Open(p) => format!("Open {} and lose your unsaved changes?", p.display()),
+            Pending::Quit => "Quit and lose your unsaved changes?".to_owned(),
+        };
+        let mut choice = None;
+        egui::Modal::new(egui::Id::unique("energywave.unsaved")).show(ctx, |ui| {
+            ui.heading("Unsaved changes");
+            ui.label(format!(
+                "{} has unsaved changes.",
+                self.doc.title().trim_end_matches(" *")
+            ));
+            ui.label(what);
+            ui.horizontal(|ui| {
+                if ui.button("Save").clicked() {
+                    choice = Some("save");
+                }
+                if ui.button("Discard").clicked() {
+                    choice = Some("discard");
+                }
+                if ui.button("Cancel").clicked() {
+                    choice = Some("cancel");
+                }
+            });
+        });
+        let proceed = match choice {
+            Some("save") => {
+                self.save();
+                !self.doc.is_dirty()
+            }
+            Some("discard") => true,
+            Some(_) => {
+                self.pending = None;
+                false
+            }
+            None => false,
+        };
+        if proceed {
+            self.pending = None;
+            match pending {
+                Pending::Open(path) => self.open_now(path),
+                Pending::Quit => self.requests.push(Request::Quit),
+            }
+        }
+    }
+}

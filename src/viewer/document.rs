@@ -1,0 +1,323 @@
+//! The open scene as a document: where it lives, whether it has unsaved changes, saving atomically, reloading
+//! when the file changes on disk, and where screenshots go.
+
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
+
+use crate::output::{self, OutputError};
+use crate::scene::{Scene, SceneError};
+
+/// How often the file's modification time is checked for hot reload.
+const POLL_INTERVAL: Duration = Duration::from_millis(400);
+
+/// What a look at the file on disk found.
+#[derive(Debug)]
+pub enum DiskChange {
+    /// The file changed and was loaded (the document had no unsaved changes).
+    Reloaded,
+    /// The file changed but does not load: the current scene is kept.
+    Invalid(String),
+    /// The file changed while the document has unsaved edits: nothing replaced, the user decides.
+    Conflict,
+}
+
+/// The scene being edited and its file.
+#[derive(Debug)]
+pub struct Document {
+    pub scene: Scene,
+    path: Option<PathBuf>,
+    /// The scene as it is in the file (or the embedded default): the reference for "unsaved changes".
+    saved: Scene,
+    disk_mtime: Option<SystemTime>,
+    last_poll: Option<Instant>,
+    /// A valid version from disk waiting while the document has unsaved edits.
+    pub pending_reload: Option<Scene>,
+    /// Why the last change on disk could not be loaded.
+    pub disk_error: Option<String>,
+}
+
+fn mtime(path: &Path) -> Option<SystemTime> {
+    std::fs::metadata(path).and_then(|m| m.modified()).ok()
+}
+
+impl Document {
+    /// A document for `scene` read from `path` (or the embedded default scene without one).
+    pub fn new(scene: Scene, path: Option<PathBuf>) -> Self {
+        let disk_mtime = path.as_deref().and_then(mtime);
+        Self {
+            saved: scene.clone(),
+            scene,
+            path,
+            disk_mtime,
+            last_poll: None,
+            pending_reload: None,
+            disk_error: None,
+        }
+    }
+
+    /// Opens a scene file.
+    pub fn open(path: &Path) -> Result<Self, SceneError> {
+        Ok(Self::new(Scene::load(path)?, Some(path.to_owned())))
+    }
+
+    /// The file, if the scene has one.
+    pub fn path(&self) -> Option<&Path> {
+        self.path.as_deref()
+    }
+
+    /// The scene as last loaded or saved.
+    pub fn saved(&self) -> &Scene {
+        &self.saved
+    }
+
+    /// True when the scene differs from its file.
+    pub fn is_dirty(&self) -> bool {
+        self.scene != self.saved
+    }
+
+    /// The name to show: the file name (or "default scene") with `*` when there are unsaved changes.
+    pub fn title(&self) -> String {
+        let name = self
+            .path
+            .as_ref()
+            .and_then(|p| p.file_name())
+            .map_or("default scene".to_owned(), |n| {
+                n.to_string_lossy().into_owned()
+            });
+        if self.is_dirty() {
+            format!("{name} *")
+        } else {
+            name
+        }
+    }
+
+    /// Saves to the document's file; `Ok(false)` when it has none yet (use `save_as`).
+    pub fn save(&mut self) -> Result<bool, OutputError> {
+        let Some(path) = self.path.clone() else {
+            return Ok(false);
+        };
+        self.save_as(&path)?;
+        Ok(true)
+    }
+
+    /// Saves to `path` (atomically: a temporary file beside it, then a rename) and makes it the document's file.
+    pub fn save_as(&mut self, path: &Path) -> Result<(), OutputError> {
+        output::write_atomically(path, self.scene.to_toml().as_bytes())?;
+        self.path = Some(path.to_owned());
+        self.saved = self.scene.clone();
+        self.disk_mtime = mtime(path);
+        self.pending_reload = None;
+        self.disk_error = None;
+        Ok(())
+    }
+
+    /// Checks the file for changes made outside the viewer (at most every `POLL_INTERVAL`).
+    pub fn poll_disk(&mut self, now: Instant) -> Option<DiskChange> {
+        if self
+            .last_poll
+            .is_some_and(|t| now.duration_since(t) < POLL_INTERVAL)
+        {
+            return None;
+        }
+        self.last_poll = Some(now);
+        self.check_disk()
+    }
+
+    /// Checks the file for changes now.
+    pub fn check_disk(&mut self) -> Option<DiskChange> {
+        let path = self.path.clone()?;
+        let current = mtime(&path);
+        if current.is_none() || current == self.disk_mtime {
+            return None;
+        }
+        self.disk_mtime = current;
+        match Scene::load(&path) {
+            Err(e) => {
+                self.disk_error = Some(e.to_string());
+                Some(DiskChange::Invalid(e.to_string()))
+            }
+            Ok(scene) if scene == self.saved => {
+                self.disk_error = None;
+                None
+            }
+            Ok(scene) => {
+                self.disk_error = None;
+                if self.is_dirty() {
+                    self.pending_reload = Some(scene);
+                    Some(DiskChange::Conflict)
+                } else {
+                    self.saved = scene.clone();
+                    self.scene = scene;
+                    Some(DiskChange::Reloaded)
+                }
+            }
+        }
+    }
+
+    /// Takes the version waiting on disk, dropping unsaved edits.
+    pub fn accept_reload(&mut self) {
+        if let Some(scene) = self.pending_reload.take() {
+            self.saved = scene.clone();
+            self.scene = scene;
+        }
+    }
+
+    /// Where a screenshot taken now goes: beside the scene file (or in the working directory for the default
+    /// scene), named after the scene and the UTC time, never an existing file.
+    pub fn screenshot_path(&self, now: SystemTime) -> PathBuf {
+        let (dir, stem) = match &self.path {
+            Some(p) => (
+                p.parent()
+                    .filter(|d| !d.as_os_str().is_empty())
+                    .unwrap_or(Path::new("."))
+                    .to_owned(),
+                p.file_stem()
+                    .map_or("scene".into(), |s| s.to_string_lossy().into_owned()),
+            ),
+            None => (PathBuf::from("."), "energywave".to_owned()),
+        };
+        unused_path(&dir, &format!("{stem}-{}", timestamp(now)), "png")
+    }
+}
+
+/// `dir/base.ext`, or `dir/base-2.ext`, `dir/base-3.ext`, ... the first that does not exist.
+pub fn unused_path(dir: &Path, base: &str, ext: &str) -> PathBuf {
+    let first = dir.join(format!("{base}.{ext}"));
+    if !first.exists() {
+        return first;
+    }
+    (2..)
+        .map(|k| dir.join(format!("{base}-{k}.{ext}")))
+        .find(|p| !p.exists())
+        .expect("some suffix is free")
+}
+
+/// `YYYYMMDD-HHMMSS` in UTC.
+pub fn timestamp(t: SystemTime) -> String {
+    let secs = t.duration_since(UNIX_EPOCH).map_or(0, |d| d.as_secs()) as i64;
+    let (days, rem) = (secs.div_euclid(86_400), secs.rem_euclid(86_400));
+    // Civil date from days since 1970-01-01 (H. Hinnant's algorithm).
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z.rem_euclid(146_097);
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let day = doy - (153 * mp + 2) / 5 + 1;
+    let month = if mp < 10 { mp + 3 } else { mp - 9 };
+    let year = yoe + era * 400 + (month <= 2) as i64;
+    format!(
+        "{year:04}{month:02}{day:02}-{:02}{:02}{:02}",
+        rem / 3600,
+        rem % 3600 / 60,
+        rem % 60
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tmp(name: &str) -> PathBuf {
+        let d = std::env::temp_dir().join(format!("energywave-doc-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    #[test]
+    fn timestamps_are_utc_calendar_times() {
+        assert_eq!(timestamp(UNIX_EPOCH), "19700101-000000");
+        // 2026-11-22 02:11:55 UTC.
+        assert_eq!(
+            timestamp(UNIX_EPOCH + Duration::from_secs(1_795_313_515)),
+            "20261122-021155"
+        );
+        // A leap day.
+        assert_eq!(
+            timestamp(UNIX_EPOCH + Duration::from_secs(951_782_400)),
+            "20000229-000000"
+        );
+    }
+
+    #[test]
+    fn screenshots_never_overwrite() {
+        let dir = tmp("shots");
+        let scene_path = dir.join("ring.toml");
+        std::fs::write(&scene_path, Scene::default_scene().to_toml()).unwrap();
+        let doc = Document::open(&scene_path).unwrap();
+        let now = UNIX_EPOCH + Duration::from_secs(1_795_313_515);
+        let first = doc.screenshot_path(now);
+        assert_eq!(first, dir.join("ring-20261122-021155.png"));
+        std::fs::write(&first, b"x").unwrap();
+        assert_eq!(
+            doc.screenshot_path(now),
+            dir.join("ring-20261122-021155-2.png")
+        );
+    }
+
+    #[test]
+    fn save_then_open_is_lossless_and_clears_the_dirty_mark() {
+        let dir = tmp("save");
+        let mut doc = Document::new(Scene::default_scene(), None);
+        doc.scene.sources.curves[0].control_points[1].y = 0.123456789012345;
+        doc.scene.colors.background = [0.1, 0.2, 0.3];
+        assert!(doc.is_dirty() && doc.title().ends_with('*'));
+        assert!(!doc.save().unwrap(), "no file yet");
+        let path = dir.join("edited.toml");
+        doc.save_as(&path).unwrap();
+        assert!(!doc.is_dirty());
+        assert_eq!(doc.title(), "edited.toml");
+        let again = Document::open(&path).unwrap();
+        assert_eq!(again.scene, doc.scene);
+        // Nothing but the file itself is left in the directory (the temporary file was renamed).
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1);
+    }
+
+    #[test]
+    fn hot_reload_takes_valid_files_and_keeps_the_last_good_scene() {
+        let dir = tmp("reload");
+        let path = dir.join("live.toml");
+        let mut scene = Scene::default_scene();
+        std::fs::write(&path, scene.to_toml()).unwrap();
+        let mut doc = Document::open(&path).unwrap();
+        assert!(doc.check_disk().is_none(), "unchanged file");
+        // A valid change is loaded.
+        scene.integration.divisions = 64;
+        write_later(&path, &scene.to_toml());
+        assert!(matches!(doc.check_disk(), Some(DiskChange::Reloaded)));
+        assert_eq!(doc.scene.integration.divisions, 64);
+        assert!(!doc.is_dirty());
+        // A broken (half-written) file keeps the last good scene and reports why.
+        write_later(
+            &path,
+            "[integration]\ndivisions = 6\n[[curves]]\ncontrol_points = [[0, 0, 0], [1,",
+        );
+        assert!(matches!(doc.check_disk(), Some(DiskChange::Invalid(_))));
+        assert_eq!(doc.scene.integration.divisions, 64);
+        assert!(doc.disk_error.as_deref().unwrap().contains("live.toml"));
+        // With unsaved edits, a change on disk waits for the user.
+        doc.scene.integration.nu = 3.0;
+        scene.integration.divisions = 32;
+        write_later(&path, &scene.to_toml());
+        assert!(matches!(doc.check_disk(), Some(DiskChange::Conflict)));
+        assert_eq!(doc.scene.integration.nu, 3.0);
+        doc.accept_reload();
+        assert_eq!(
+            (doc.scene.integration.divisions, doc.scene.integration.nu),
+            (32, 2.0)
+        );
+    }
+
+    /// Writes so that the modification time differs from the previous write's.
+    fn write_later(path: &Path, text: &str) {
+        let before = mtime(path);
+        loop {
+            std::fs::write(path, text).unwrap();
+            if mtime(path) != before {
+                return;
+            }
+            std::thread::sleep(Duration::from_millis(5));
+        }
+    }
+}

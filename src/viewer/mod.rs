@@ -1,0 +1,24 @@
+//! The interactive viewer: an orbit camera around the effect, a panel that edits every parameter live,
+//! handles to drag in the viewport, undo and redo, scene files with hot reload, and screenshots.
+//!
+//! - [`app`]: the state and the whole UI (`ViewerApp::ui`), shared by the window and the UI tests;
+//! - [`panel`]: the side panel's editors;
+//! - [`handles`]: the sources' handles, drawn and dragged with egui's painter;
+//! - [`navigation`]: orbit, pan, zoom and framing;
+//! - [`history`]: undo and redo;
+//! - [`document`]: the scene file, saving, hot reload, screenshot names;
+//! - [`viewport`]: the 3D viewport on the GPU (grid, field, billboard) as an egui-wgpu paint callback;
+//! - [`window`]: the winit window and event loop.
+
+pub mod app;
+pub mod document;
+pub mod handles;
+pub mod history;
+pub mod navigation;
+pub mod panel;
+pub mod viewport;
+pub mod window;
+
+pub use app::{Request, ViewerApp};
+pub use document::Document;
+pub use window::{ViewOptions, ViewerError, run};

@@ -1,0 +1,549 @@
+//! The 3D viewport on the GPU: the background color and the ground grid, then the energy wave on its billboard
+//! (the same field and billboard passes as headless rendering), into an offscreen texture that an egui paint
+//! callback copies into the frame. Because it is an egui-wgpu callback, the window and the UI tests draw it
+//! through the same code.
+
+use std::sync::{Arc, Mutex};
+
+use wgpu::util::DeviceExt;
+
+use crate::gpu::{
+    BillboardRenderer, FieldRenderer, GpuError, billboard_params, checked, f16_to_f32,
+};
+use crate::scene::Scene;
+
+/// Format of the offscreen viewport: half floats, so the blend and the grid keep more than 8 bits.
+pub const VIEWPORT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+
+/// Rust mirrors of `shaders/grid.wgsl` (keep in sync; `tests/gpu_layout.rs` checks them).
+pub mod gpu_data {
+    use bytemuck::{Pod, Zeroable};
+
+    /// `GridParams` in `shaders/grid.wgsl`.
+    #[repr(C)]
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+    pub struct GridParams {
+        pub view_proj: [[f32; 4]; 4], // 0
+    }
+    const _: () = assert!(size_of::<GridParams>() == 64);
+
+    /// One vertex of the grid's line list (vertex attributes 0 and 1 of `vs_main`).
+    #[repr(C)]
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+    pub struct GridVertex {
+        pub position: [f32; 3], // 0
+        pub color: [f32; 4],    // 12
+    }
+    const _: () = assert!(size_of::<GridVertex>() == 28);
+}
+
+use gpu_data::{GridParams, GridVertex};
+
+use crate::gpu::shaders::{BLIT_PASS as BLIT_SHADER, GRID_PASS as GRID_SHADER};
+
+/// What one viewport frame shows.
+#[derive(Clone, Debug)]
+pub struct ViewportView {
+    pub scene: Scene,
+    /// Size in physical pixels.
+    pub size: [u32; 2],
+    pub show_grid: bool,
+}
+
+/// What the GPU side reports back to the UI.
+#[derive(Clone, Debug, Default)]
+pub struct ViewportReport {
+    /// The last GPU error, cleared by the next good frame.
+    pub error: Option<String>,
+    /// How many times the field texture has been rendered.
+    pub field_renders: u64,
+}
+
+/// The viewport's offscreen textures for one size.
+struct Targets {
+    size: [u32; 2],
+    background: wgpu::Texture,
+    background_view: wgpu::TextureView,
+    color: wgpu::Texture,
+    color_view: wgpu::TextureView,
+}
+
+impl Targets {
+    fn new(device: &wgpu::Device, size: [u32; 2]) -> Self {
+        let make = |label, usage| {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size: wgpu::Extent3d {
+                    width: size[0],
+                    height: size[1],
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: VIEWPORT_FORMAT,
+                usage,
+                view_formats: &[],
+            })
+        };
+        use wgpu::TextureUsages as U;
+        let background = make(
+            "energywave.viewport.background",
+            U::RENDER_ATTACHMENT | U::TEXTURE_BINDING | U::COPY_SRC,
+        );
+        let color = make(
+            "energywave.viewport.color",
+            U::RENDER_ATTACHMENT | U::TEXTURE_BINDING | U::COPY_DST | U::COPY_SRC,
+        );
+        Self {
+            size,
+            background_view: background.create_view(&Default::default()),
+            color_view: color.create_view(&Default::default()),
+            background,
+            color,
+        }
+    }
+}
+
+/// The viewport's pipelines and GPU state, kept in egui-wgpu's callback resources.
+pub struct ViewportGpu {
+    field: FieldRenderer,
+    billboard: BillboardRenderer,
+    grid_pipeline: wgpu::RenderPipeline,
+    grid_params: wgpu::Buffer,
+    grid_bind_group: wgpu::BindGroup,
+    grid_vertices: wgpu::Buffer,
+    grid_count: u32,
+    blit_pipeline: wgpu::RenderPipeline,
+    blit_layout: wgpu::BindGroupLayout,
+    sampler: wgpu::Sampler,
+    targets: Option<(Targets, wgpu::BindGroup)>,
+    report: Arc<Mutex<ViewportReport>>,
+}
+
+impl ViewportGpu {
+    /// Pipelines for a frame of `target_format` (egui's); `report` is shared with the UI.
+    pub fn new(
+        device: &wgpu::Device,
+        target_format: wgpu::TextureFormat,
+        report: Arc<Mutex<ViewportReport>>,
+    ) -> Self {
+        let grid_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("energywave.grid.shader"),
+            source: wgpu::ShaderSource::Wgsl(GRID_SHADER.into()),
+        });
+        let grid_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("energywave.grid.bind_group_layout"),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::VERTEX,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: false,
+                    min_binding_size: wgpu::BufferSize::new(size_of::<GridParams>() as u64),
+                },
+                count: None,
+            }],
+        });
+        let grid_params = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("energywave.grid.params"),
+            size: size_of::<GridParams>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let grid_bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("energywave.grid.bind_group"),
+            layout: &grid_layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: grid_params.as_entire_binding(),
+            }],
+        });
+        let grid_pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("energywave.grid.pipeline_layout"),
+            bind_group_layouts: &[Some(&grid_layout)],
+            immediate_size: 0,
+        });
+        let grid_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("energywave.grid.pipeline"),
+            layout: Some(&grid_pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &grid_module,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[Some(wgpu::VertexBufferLayout {
+                    array_stride: size_of::<GridVertex>() as u64,
+                    step_mode: wgpu::VertexStepMode::Vertex,
+                    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x4],
+                })],
+            },
+            primitive: wgpu::PrimitiveState {
+                topology: wgpu::PrimitiveTopology::LineList,
+                ..Default::default()
+            },
+            depth_stencil: None,
+            multisample: wgpu::MultisampleState::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &grid_module,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: &[Some(wgpu::ColorTargetState {
+                    format: VIEWPORT_FORMAT,
+                    // Lines over the background; alpha stays 1 (the billboard copies it).
+                    blend: Some(wgpu::BlendState {
+                        color: wgpu::BlendComponent {
+                            src_factor: wgpu::BlendFactor::SrcAlpha,
+                            dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha,
+                            operation: wgpu::BlendOperation::Add,
+                        },
+                        alpha: wgpu::BlendComponent {
+                            src_factor: wgpu::BlendFactor::Zero,
+                            dst_factor: wgpu::BlendFactor::One,
+                            operation: wgpu::BlendOperation::Add,
+                        },
+                    }),
+                    write_mask: wgpu::ColorWrites::ALL,
+                })],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        let grid_vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("energywave.grid.vertices"),
+            contents: &[0; size_of::<GridVertex>() * 2],
+            usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+        });
+
+        let blit_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("energywave.blit.shader"),
+            source: wgpu::ShaderSource::Wgsl(BLIT_SHADER.into()),
+        });
+        let blit_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("energywave.blit.bind_group_layout"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 1,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                    count: None,
+                },
+            ],
+        });
+        let blit_pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("energywave.blit.pipeline_layout"),
+            bind_group_layouts: &[Some(&blit_layout)],
+            immediate_size: 0,
+        });
+        let blit_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("energywave.blit.pipeline"),
+            layout: Some(&blit_pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &blit_module,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: None,
+            multisample: wgpu::MultisampleState::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &blit_module,
+                entry_point: Some(if target_format.is_srgb() {
+                    "fs_srgb"
+                } else {
+                    "fs_display"
+                }),
+                compilation_options: Default::default(),
+                targets: &[Some(wgpu::ColorTargetState {
+                    format: target_format,
+                    blend: None,
+                    write_mask: wgpu::ColorWrites::ALL,
+                })],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("energywave.blit.sampler"),
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            ..Default::default()
+        });
+        Self {
+            field: FieldRenderer::new(device),
+            billboard: BillboardRenderer::new(device, VIEWPORT_FORMAT),
+            grid_pipeline,
+            grid_params,
+            grid_bind_group,
+            grid_vertices,
+            grid_count: 0,
+            blit_pipeline,
+            blit_layout,
+            sampler,
+            targets: None,
+            report,
+        }
+    }
+
+    /// Records one viewport frame into `encoder`: the field pass when the scene changed, the background and
+    /// grid, the billboard over them. Keeps its targets for `paint`.
+    pub fn record(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+        view: &ViewportView,
+    ) -> Result<(), GpuError> {
+        let size = [view.size[0].max(1), view.size[1].max(1)];
+        if self.targets.as_ref().is_none_or(|(t, _)| t.size != size) {
+            let targets = Targets::new(device, size);
+            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("energywave.blit.bind_group"),
+                layout: &self.blit_layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: wgpu::BindingResource::TextureView(&targets.color_view),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: wgpu::BindingResource::Sampler(&self.sampler),
+                    },
+                ],
+            });
+            self.targets = Some((targets, bind_group));
+        }
+        let (targets, bind_group) = self.targets.take().expect("created above");
+        let result = self.record_into(device, queue, encoder, view, &targets);
+        self.targets = Some((targets, bind_group));
+        result
+    }
+
+    fn record_into(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+        view: &ViewportView,
+        targets: &Targets,
+    ) -> Result<(), GpuError> {
+        let scene = &view.scene;
+        let [w, h] = targets.size;
+        let aspect = w as f64 / h as f64;
+        let billboard = scene.place_billboard(aspect);
+        let result = self
+            .field
+            .prepare(device, queue, scene, &billboard)
+            .and_then(|_| {
+                checked(device, || {
+                    self.field.encode(encoder);
+                    let view_proj = crate::gpu::view_projection(&scene.camera, &billboard, aspect)
+                        .as_mat4()
+                        .to_cols_array_2d();
+                    let vertices = if view.show_grid {
+                        grid_vertices(scene)
+                    } else {
+                        Vec::new()
+                    };
+                    self.upload_grid(device, queue, &vertices, view_proj);
+                    let [r, g, b] = scene.colors.background;
+                    {
+                        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                            label: Some("energywave.viewport.background"),
+                            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                                view: &targets.background_view,
+                                depth_slice: None,
+                                resolve_target: None,
+                                ops: wgpu::Operations {
+                                    load: wgpu::LoadOp::Clear(wgpu::Color { r, g, b, a: 1.0 }),
+                                    store: wgpu::StoreOp::Store,
+                                },
+                            })],
+                            depth_stencil_attachment: None,
+                            timestamp_writes: None,
+                            occlusion_query_set: None,
+                            multiview_mask: None,
+                        });
+                        if self.grid_count > 0 {
+                            pass.set_pipeline(&self.grid_pipeline);
+                            pass.set_bind_group(0, &self.grid_bind_group, &[]);
+                            pass.set_vertex_buffer(0, self.grid_vertices.slice(..));
+                            pass.draw(0..self.grid_count, 0..1);
+                        }
+                    }
+                    // The billboard blends over a copy of what lies behind it.
+                    encoder.copy_texture_to_texture(
+                        targets.background.as_image_copy(),
+                        targets.color.as_image_copy(),
+                        targets.background.size(),
+                    );
+                    let params = billboard_params(
+                        &scene.camera,
+                        &billboard,
+                        scene.billboard.resolution,
+                        scene.colors.energy,
+                        aspect,
+                        false,
+                    );
+                    let brightness = self.field.view().expect("prepared above");
+                    self.billboard.draw(
+                        device,
+                        queue,
+                        encoder,
+                        &targets.color_view,
+                        &targets.background_view,
+                        brightness,
+                        &params,
+                    );
+                })
+            });
+        if let Ok(mut r) = self.report.lock() {
+            r.error = result.as_ref().err().map(|e| e.to_string());
+            r.field_renders = self.field.dispatch_count();
+        }
+        result
+    }
+
+    fn upload_grid(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        vertices: &[GridVertex],
+        view_proj: [[f32; 4]; 4],
+    ) {
+        queue.write_buffer(
+            &self.grid_params,
+            0,
+            bytemuck::bytes_of(&GridParams { view_proj }),
+        );
+        let bytes: &[u8] = bytemuck::cast_slice(vertices);
+        if bytes.len() as u64 > self.grid_vertices.size() {
+            self.grid_vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("energywave.grid.vertices"),
+                contents: bytes,
+                usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+            });
+        } else if !bytes.is_empty() {
+            queue.write_buffer(&self.grid_vertices, 0, bytes);
+        }
+        self.grid_count = vertices.len() as u32;
+    }
+
+    /// Copies the last recorded frame into egui's render pass (whose viewport egui has set to the callback's
+    /// rectangle).
+    pub fn paint(&self, pass: &mut wgpu::RenderPass<'static>) {
+        if let Some((_, bind_group)) = &self.targets {
+            pass.set_pipeline(&self.blit_pipeline);
+            pass.set_bind_group(0, bind_group, &[]);
+            pass.draw(0..3, 0..1);
+        }
+    }
+
+    /// Renders the viewport alone at `size` pixels and reads it back (RGBA display values, rows from the top):
+    /// screenshots, at any scale, through the same passes as the screen.
+    pub fn render_image(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        view: &ViewportView,
+    ) -> Result<Vec<[f32; 4]>, GpuError> {
+        let limit = device.limits().max_texture_dimension_2d;
+        if view.size[0] > limit || view.size[1] > limit {
+            return Err(GpuError::FrameTooLarge {
+                width: view.size[0],
+                height: view.size[1],
+                limit,
+            });
+        }
+        let targets = Targets::new(device, view.size);
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("energywave.viewport.screenshot"),
+        });
+        self.record_into(device, queue, &mut encoder, view, &targets)?;
+        queue.submit([encoder.finish()]);
+        let bytes = crate::gpu::read_texture(device, queue, &targets.color, 8)?;
+        let halves: Vec<f32> = bytes
+            .chunks_exact(2)
+            .map(|c| f16_to_f32(u16::from_le_bytes([c[0], c[1]])))
+            .collect();
+        Ok(halves
+            .chunks_exact(4)
+            .map(|c| [c[0], c[1], c[2], c[3]])
+            .collect())
+    }
+}
+
+/// The ground grid (the plane y = 0) and the axes, scaled to the scene: ten steps each way, the step a power
+/// of ten near a fifth of the effect's size; the x axis red, y green, z blue.
+pub fn grid_vertices(scene: &Scene) -> Vec<GridVertex> {
+    let extent = scene
+        .sources
+        .bounds()
+        .map_or(1.0, |(lo, hi)| (hi - lo).max_element())
+        .max(1e-3);
+    let step = 10f64.powf((extent / 5.0).log10().round()) as f32;
+    let n = 10;
+    let half = step * n as f32;
+    let grid = [0.55, 0.55, 0.6, 0.22];
+    let mut v = Vec::with_capacity(4 * (2 * n as usize + 1) + 6);
+    let mut line = |a: [f32; 3], b: [f32; 3], color: [f32; 4]| {
+        v.push(GridVertex { position: a, color });
+        v.push(GridVertex { position: b, color });
+    };
+    for k in -n..=n {
+        let t = k as f32 * step;
+        if k != 0 {
+            line([t, 0.0, -half], [t, 0.0, half], grid);
+            line([-half, 0.0, t], [half, 0.0, t], grid);
+        }
+    }
+    line([-half, 0.0, 0.0], [half, 0.0, 0.0], [0.9, 0.25, 0.25, 0.8]);
+    line([0.0, 0.0, -half], [0.0, 0.0, half], [0.25, 0.45, 0.95, 0.8]);
+    line(
+        [0.0, 0.0, 0.0],
+        [0.0, step * 2.0, 0.0],
+        [0.3, 0.85, 0.3, 0.8],
+    );
+    v
+}
+
+/// The egui paint callback that draws the viewport.
+pub struct ViewportCallback(pub ViewportView);
+
+impl egui_wgpu::CallbackTrait for ViewportCallback {
+    fn prepare(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        _screen: &egui_wgpu::ScreenDescriptor,
+        encoder: &mut wgpu::CommandEncoder,
+        resources: &mut egui_wgpu::CallbackResources,
+    ) -> Vec<wgpu::CommandBuffer> {
+        if let Some(gpu) = resources.get_mut::<ViewportGpu>() {
+            // Errors are reported through the shared report; the frame shows the last good texture.
+            let _ = gpu.record(device, queue, encoder, &self.0);
+        }
+        Vec::new()
+    }
+
+    fn paint(
+        &self,
+        _info: egui::PaintCallbackInfo,
+        pass: &mut wgpu::RenderPass<'static>,
+        resources: &egui_wgpu::CallbackResources,
+    ) {
+        if let Some(gpu) = resources.get::<ViewportGpu>() {
+            gpu.paint(pass);
+        }
+    }
+}

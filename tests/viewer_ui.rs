@@ -1,0 +1,337 @@
+//! The viewer's interface, driven through egui_kittest like a user: the real `ViewerApp::ui`, rendered by
+//! egui-wgpu on the same GPU passes as the window (lavapipe in CI).
+
+use std::sync::{Arc, Mutex};
+
+use egui::accesskit::Role;
+use egui::{Key, Modifiers, Pos2, Vec2};
+use egui_kittest::kittest::Queryable;
+use egui_kittest::{Harness, wgpu::WgpuTestRenderer};
+use energywave::gpu::GpuContext;
+use energywave::scene::Scene;
+use energywave::viewer::handles::{self, HandleId};
+use energywave::viewer::viewport::{ViewportGpu, ViewportReport};
+use energywave::viewer::{Document, ViewerApp};
+
+const SIZE: Vec2 = Vec2::new(1000.0, 700.0);
+const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
+
+/// The default scene at a resolution and division count that render quickly on a software rasteriser.
+fn light_scene() -> Scene {
+    let mut s = Scene::default_scene();
+    s.billboard.resolution = 96;
+    s.integration.divisions = 64;
+    s
+}
+
+/// A harness around a viewer on `scene`, its renderer on our own device with the viewport installed.
+fn harness(scene: Scene) -> Harness<'static, ViewerApp> {
+    let ctx = GpuContext::new().expect("a GPU adapter (lavapipe in CI)");
+    let report = Arc::new(Mutex::new(ViewportReport::default()));
+    let mut renderer =
+        egui_wgpu::Renderer::new(&ctx.device, FORMAT, egui_wgpu::RendererOptions::PREDICTABLE);
+    renderer
+        .callback_resources
+        .insert(ViewportGpu::new(&ctx.device, FORMAT, report.clone()));
+    let app = ViewerApp::new(
+        Document::new(scene, None),
+        ctx.adapter_summary(),
+        ctx.device.limits().max_texture_dimension_2d,
+        report,
+    );
+    let render_state = egui_wgpu::RenderState {
+        available_adapters: vec![ctx.adapter.clone()],
+        adapter: ctx.adapter,
+        instance: ctx.instance,
+        device: ctx.device,
+        queue: ctx.queue,
+        target_format: FORMAT,
+        renderer: Arc::new(egui::mutex::RwLock::new(renderer)),
+    };
+    let mut h = Harness::builder()
+        .with_size(SIZE)
+        .renderer(WgpuTestRenderer::from_render_state(render_state))
+        .build_ui_state(|ui, app: &mut ViewerApp| app.ui(ui), app);
+    h.run();
+    h
+}
+
+/// The viewport's pixels of a rendered frame, as an average color and the image.
+fn viewport_pixels(h: &mut Harness<'static, ViewerApp>) -> Vec<[u8; 4]> {
+    let rect = h.state().viewport_rect;
+    let image = h.render().expect("the frame renders");
+    let ppp = image.width() as f32 / SIZE.x;
+    let mut v = Vec::new();
+    for y in (rect.top() * ppp) as u32..(rect.bottom() * ppp) as u32 {
+        for x in (rect.left() * ppp) as u32..(rect.right() * ppp) as u32 {
+            v.push(image.get_pixel(x, y).0);
+        }
+    }
+    v
+}
+
+fn mean_abs_difference(a: &[[u8; 4]], b: &[[u8; 4]]) -> f64 {
+    assert_eq!(a.len(), b.len());
+    let sum: f64 = a
+        .iter()
+        .zip(b)
+        .map(|(p, q)| {
+            (0..3)
+                .map(|c| (p[c] as f64 - q[c] as f64).abs())
+                .sum::<f64>()
+        })
+        .sum();
+    sum / (a.len() * 3) as f64
+}
+
+#[test]
+fn the_viewport_shows_the_glow_not_a_flat_image() {
+    let mut h = harness(light_scene());
+    let pixels = viewport_pixels(&mut h);
+    let luma: Vec<u32> = pixels
+        .iter()
+        .map(|p| (p[0] as u32 + p[1] as u32 + p[2] as u32) / 3)
+        .collect();
+    let bright = luma.iter().filter(|&&l| l > 230).count();
+    let dark = luma.iter().filter(|&&l| l < 120).count();
+    assert!(
+        bright > 200,
+        "the blown-out core is visible ({bright} bright pixels)"
+    );
+    assert!(
+        dark > pixels.len() / 20,
+        "the glow fades into the background ({dark} dark pixels)"
+    );
+    assert!(
+        h.state().report().error.is_none(),
+        "{:?}",
+        h.state().report().error
+    );
+}
+
+#[test]
+fn editing_a_value_changes_the_scene_and_the_image() {
+    let mut h = harness(light_scene());
+    let before = viewport_pixels(&mut h);
+    let renders = h.state().report().field_renders;
+    h.get_by_role_and_label(Role::SpinButton, "radius R")
+        .set_value_accesskit(2.4);
+    h.run();
+    assert_eq!(h.state().scene().sources.tori[0].major_radius, 2.4);
+    let after = viewport_pixels(&mut h);
+    assert!(
+        h.state().report().field_renders > renders,
+        "the field was rendered again"
+    );
+    let diff = mean_abs_difference(&before, &after);
+    assert!(diff > 2.0, "the image changed (mean difference {diff})");
+    // Colors change the image without touching the field.
+    let renders = h.state().report().field_renders;
+    h.state_mut().doc.scene.colors.energy = [1.0, 0.3, 0.1];
+    h.run();
+    let warm = viewport_pixels(&mut h);
+    assert!(mean_abs_difference(&after, &warm) > 2.0);
+    assert_eq!(h.state().report().field_renders, renders);
+}
+
+#[test]
+fn sources_can_be_added_duplicated_and_deleted() {
+    let mut h = harness(light_scene());
+    let count = |h: &Harness<'static, ViewerApp>| {
+        let s = &h.state().scene().sources;
+        (s.points.len(), s.lines.len(), s.tori.len(), s.curves.len())
+    };
+    assert_eq!(count(&h), (0, 0, 1, 1));
+    h.get_by_label("+ point").click();
+    h.run();
+    h.get_by_label("+ line").click();
+    h.run();
+    assert_eq!(count(&h), (1, 1, 1, 1));
+    // The first Duplicate button belongs to the first source listed, the point.
+    h.get_all_by_label("Duplicate").next().unwrap().click();
+    h.run();
+    assert_eq!(count(&h), (2, 1, 1, 1));
+    h.get_all_by_label("Delete").next().unwrap().click();
+    h.run();
+    h.get_all_by_label("Delete").next().unwrap().click();
+    h.run();
+    assert_eq!(count(&h), (0, 1, 1, 1));
+    h.get_by_label("+ curve").click();
+    h.run();
+    assert_eq!(count(&h), (0, 1, 1, 2));
+    assert!(h.state().doc.is_dirty() && h.state().doc.title().ends_with('*'));
+}
+
+#[test]
+fn undo_and_redo_restore_the_state() {
+    let mut h = harness(light_scene());
+    let original = h.state().scene().clone();
+    h.get_by_role_and_label(Role::SpinButton, "divisions n")
+        .set_value_accesskit(64.0);
+    h.run();
+    h.get_by_label("+ point").click();
+    h.run();
+    let edited = h.state().scene().clone();
+    assert_eq!(
+        (edited.integration.divisions, edited.sources.points.len()),
+        (64, 1)
+    );
+    h.key_press_modifiers(Modifiers::COMMAND, Key::Z);
+    h.run();
+    assert_eq!(h.state().scene().sources.points.len(), 0);
+    assert_eq!(h.state().scene().integration.divisions, 64);
+    h.key_press_modifiers(Modifiers::COMMAND, Key::Z);
+    h.run();
+    assert_eq!(*h.state().scene(), original);
+    h.key_press_modifiers(Modifiers::COMMAND | Modifiers::SHIFT, Key::Z);
+    h.run();
+    h.key_press_modifiers(Modifiers::COMMAND | Modifiers::SHIFT, Key::Z);
+    h.run();
+    assert_eq!(*h.state().scene(), edited);
+}
+
+#[test]
+fn invalid_entries_are_refused() {
+    let mut h = harness(light_scene());
+    let limit = h.state().max_resolution;
+    h.get_by_role_and_label(Role::SpinButton, "divisions n")
+        .set_value_accesskit(201.0);
+    h.run();
+    let n = h.state().scene().integration.divisions;
+    assert!(
+        n % 2 == 0 && (200..=202).contains(&n),
+        "odd division counts are refused: {n}"
+    );
+    h.get_by_role_and_label(Role::SpinButton, "radius R")
+        .set_value_accesskit(-3.0);
+    h.run();
+    assert!(h.state().scene().sources.tori[0].major_radius > 0.0);
+    h.get_by_role_and_label(Role::SpinButton, "\u{3bd} (ray reach)")
+        .set_value_accesskit(0.5);
+    h.run();
+    assert!(h.state().scene().integration.nu > 1.0);
+    h.get_by_role_and_label(Role::SpinButton, "\u{3b5} (clamp)")
+        .set_value_accesskit(0.0);
+    h.run();
+    assert!(h.state().scene().integration.epsilon > 0.0);
+    h.get_by_role_and_label(Role::SpinButton, "resolution W")
+        .set_value_accesskit(1e9);
+    h.run();
+    let w = h.state().scene().billboard.resolution;
+    assert!(
+        w <= limit && w <= energywave::viewer::panel::PANEL_MAX_RESOLUTION,
+        "{w}"
+    );
+    // Back to a resolution that renders quickly here.
+    h.get_by_role_and_label(Role::SpinButton, "resolution W")
+        .set_value_accesskit(64.0);
+    h.run();
+    // Whatever was typed, the scene still validates as a file would, and renders without a GPU error.
+    let text = h.state().scene().to_toml();
+    Scene::parse(&text, std::path::Path::new("after-edits.toml")).unwrap();
+    viewport_pixels(&mut h);
+    assert!(
+        h.state().report().error.is_none(),
+        "{:?}",
+        h.state().report().error
+    );
+}
+
+#[test]
+fn dragging_a_control_point_bends_the_curve() {
+    let mut h = harness(light_scene());
+    let id = HandleId::Control { curve: 0, index: 3 };
+    let before_point = handles::get(h.state().scene(), id).unwrap();
+    let rect = h.state().viewport_rect;
+    let start = handles::to_screen(&h.state().scene().camera, rect, before_point).unwrap();
+    let end = start + Vec2::new(60.0, -80.0);
+    let before = viewport_pixels(&mut h);
+    h.hover_at(start);
+    h.run();
+    h.drag_at(start);
+    h.run();
+    for k in 1..=6 {
+        h.hover_at(start + (end - start) * (k as f32 / 6.0));
+        h.run();
+    }
+    h.drop_at(end);
+    h.run();
+    let moved = handles::get(h.state().scene(), id).unwrap();
+    let landed = handles::to_screen(&h.state().scene().camera, rect, moved).unwrap();
+    assert!(
+        landed.distance(end) < 3.0,
+        "the handle follows the pointer: {landed:?} vs {end:?}"
+    );
+    assert_eq!(
+        h.state().scene().camera,
+        light_scene().camera,
+        "dragging a handle does not orbit"
+    );
+    let after = viewport_pixels(&mut h);
+    assert!(
+        mean_abs_difference(&before, &after) > 1.0,
+        "the glow moved with the curve"
+    );
+    // One drag, one undo step.
+    h.key_press_modifiers(Modifiers::COMMAND, Key::Z);
+    h.run();
+    assert_eq!(handles::get(h.state().scene(), id), Some(before_point));
+}
+
+#[test]
+fn dragging_empty_space_orbits_and_the_wheel_zooms() {
+    let mut h = harness(light_scene());
+    let rect = h.state().viewport_rect;
+    let camera = h.state().scene().camera.clone();
+    let start = Pos2::new(rect.right() - 40.0, rect.bottom() - 40.0);
+    h.hover_at(start);
+    h.run();
+    h.drag_at(start);
+    h.run();
+    h.hover_at(start - Vec2::new(120.0, 30.0));
+    h.run();
+    h.drop_at(start - Vec2::new(120.0, 30.0));
+    h.run();
+    let orbited = h.state().scene().camera.clone();
+    assert_ne!(orbited.eye, camera.eye);
+    assert_eq!(orbited.target, camera.target);
+    assert!(
+        ((orbited.eye - orbited.target).length() - (camera.eye - camera.target).length()).abs()
+            < 1e-9
+    );
+    assert!(
+        !h.state().history.can_undo(),
+        "navigation is not an undo step"
+    );
+    h.hover_at(rect.center());
+    h.event(egui::Event::MouseWheel {
+        unit: egui::MouseWheelUnit::Point,
+        delta: Vec2::new(0.0, 120.0),
+        phase: egui::TouchPhase::Move,
+        source: egui::MouseWheelSource::Wheel,
+        modifiers: Modifiers::NONE,
+    });
+    h.run();
+    let zoomed = &h.state().scene().camera;
+    assert!((zoomed.eye - zoomed.target).length() < (orbited.eye - orbited.target).length());
+}
+
+#[test]
+fn the_w_series_editor_shapes_the_glow() {
+    let mut h = harness(light_scene());
+    let before = viewport_pixels(&mut h);
+    h.get_by_role_and_label(Role::Slider, "w1")
+        .set_value_accesskit(0.0);
+    h.run();
+    assert_eq!(h.state().scene().sources.curves[0].weights[1], 0.0);
+    // Below the panel's fold: pressed through accessibility, as a screen reader would.
+    h.get_by_label("+ weight").click_accesskit();
+    h.run();
+    assert_eq!(h.state().scene().sources.curves[0].weights.len(), 6);
+    let after = viewport_pixels(&mut h);
+    let diff = mean_abs_difference(&before, &after);
+    assert!(diff > 0.3, "the glow changed: mean difference {diff}");
+    h.get_by_label("uniform").click_accesskit();
+    h.run();
+    assert!(h.state().scene().sources.curves[0].weights.is_empty());
+}
