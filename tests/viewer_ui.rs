@@ -276,6 +276,24 @@ fn dragging_a_control_point_bends_the_curve() {
     h.key_press_modifiers(Modifiers::COMMAND, Key::Z);
     h.run();
     assert_eq!(handles::get(h.state().scene(), id), Some(before_point));
+
+    // The rest of the movement and the release arriving in one frame (as when a frame is slow) are applied.
+    h.hover_at(start);
+    h.run();
+    h.drag_at(start);
+    h.run();
+    h.hover_at(start + Vec2::new(10.0, 0.0));
+    h.run();
+    h.hover_at(start + (end - start) * 0.5);
+    h.hover_at(end);
+    h.drop_at(end);
+    h.run();
+    let moved = handles::get(h.state().scene(), id).unwrap();
+    let landed = handles::to_screen(&h.state().scene().camera, rect, moved).unwrap();
+    assert!(
+        landed.distance(end) < 3.0,
+        "batched movement is applied: {landed:?} vs {end:?}"
+    );
 }
 
 #[test]
@@ -334,4 +352,60 @@ fn the_w_series_editor_shapes_the_glow() {
     h.get_by_label("uniform").click_accesskit();
     h.run();
     assert!(h.state().scene().sources.curves[0].weights.is_empty());
+}
+
+#[test]
+fn unsaved_changes_are_not_lost_without_asking() {
+    use energywave::viewer::Request;
+    let mut h = harness(light_scene());
+    // Clean: quitting needs no question.
+    h.state_mut().request_quit();
+    h.run();
+    assert_eq!(h.state_mut().take_requests(), vec![Request::Quit]);
+    // Dirty: a prompt; Cancel keeps everything.
+    h.get_by_label("+ point").click();
+    h.run();
+    h.state_mut().request_quit();
+    h.run();
+    h.get_by_label("Cancel").click();
+    h.run();
+    assert!(h.state_mut().take_requests().is_empty());
+    assert_eq!(h.state().scene().sources.points.len(), 1);
+    // Opening another file asks too; Discard goes ahead.
+    let dir = std::env::temp_dir().join(format!("energywave-ui-open-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let other = dir.join("other.toml");
+    let mut other_scene = light_scene();
+    other_scene.sources.curves.clear();
+    std::fs::write(&other, other_scene.to_toml()).unwrap();
+    h.state_mut().path_input = other.display().to_string();
+    h.get_by_label("Open").click();
+    h.run();
+    assert!(
+        h.query_by_label("Unsaved changes").is_some(),
+        "the prompt is shown"
+    );
+    h.get_by_label("Discard").click();
+    h.run();
+    assert_eq!(*h.state().scene(), other_scene);
+    assert!(!h.state().doc.is_dirty());
+    assert!(
+        !h.state().history.can_undo(),
+        "a new document starts a new history"
+    );
+    // Saving clears the mark; the file holds the edits.
+    h.get_by_label("+ torus").click();
+    h.run();
+    h.key_press_modifiers(Modifiers::COMMAND, Key::S);
+    h.run();
+    assert!(!h.state().doc.is_dirty());
+    assert_eq!(
+        energywave::scene::Scene::load(&other)
+            .unwrap()
+            .sources
+            .tori
+            .len(),
+        other_scene.sources.tori.len() + 1
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -33,6 +33,25 @@ pub enum Pending {
     Quit,
 }
 
+/// A drag in the viewport, from where it started: applied from the pointer's total offset each frame, so that
+/// slow frames (a software GPU re-integrating the field) lose no movement.
+#[derive(Clone, Debug)]
+enum Gesture {
+    Handle {
+        id: HandleId,
+        start: glam::DVec3,
+        press: egui::Pos2,
+    },
+    Orbit {
+        start: Camera,
+        press: egui::Pos2,
+    },
+    Pan {
+        start: Camera,
+        press: egui::Pos2,
+    },
+}
+
 /// The viewer's state.
 pub struct ViewerApp {
     pub doc: Document,
@@ -57,7 +76,7 @@ pub struct ViewerApp {
     /// The last message for the user (and whether it is an error).
     pub notice: Option<(String, bool)>,
     report: Arc<Mutex<ViewportReport>>,
-    dragging: Option<HandleId>,
+    gesture: Option<Gesture>,
     hovered: Option<HandleId>,
     frame_times: VecDeque<f64>,
     last_frame: Option<Instant>,
@@ -95,7 +114,7 @@ impl ViewerApp {
             pending: None,
             notice: None,
             report,
-            dragging: None,
+            gesture: None,
             hovered: None,
             frame_times: VecDeque::new(),
             last_frame: None,
@@ -365,43 +384,71 @@ impl ViewerApp {
 
         // Handles first: a press on a handle drags it, anywhere else navigates.
         let pointer = response.hover_pos().or(response.interact_pointer_pos());
+        let dragged_handle = match &self.gesture {
+            Some(Gesture::Handle { id, .. }) => Some(*id),
+            _ => None,
+        };
         self.hovered = match (self.show_handles, pointer) {
-            (true, Some(p)) if self.dragging.is_none() => handles::pick(&self.doc.scene, rect, p),
+            (true, Some(p)) if dragged_handle.is_none() => handles::pick(&self.doc.scene, rect, p),
             _ => self.hovered,
         };
-        if response.drag_started_by(PointerButton::Primary) && self.show_handles {
-            // Grab what was under the pointer when the button went down: a drag is only recognised once the
-            // pointer has moved, by then possibly past the handle.
-            let origin = ui
+        if response.drag_started() {
+            // A drag is only recognised once the pointer has moved: start from where the button went down.
+            let press = ui
                 .input(|i| i.pointer.press_origin())
-                .or(response.interact_pointer_pos());
-            self.dragging = origin.and_then(|p| handles::pick(&self.doc.scene, rect, p));
+                .or(response.interact_pointer_pos())
+                .unwrap_or(rect.center());
+            let camera = self.doc.scene.camera.clone();
+            let handle = self
+                .show_handles
+                .then(|| handles::pick(&self.doc.scene, rect, press))
+                .flatten();
+            self.gesture = if response.dragged_by(PointerButton::Primary) {
+                Some(
+                    match handle.and_then(|id| handles::get(&self.doc.scene, id).map(|p| (id, p))) {
+                        Some((id, start)) => Gesture::Handle { id, start, press },
+                        None => Gesture::Orbit {
+                            start: camera,
+                            press,
+                        },
+                    },
+                )
+            } else {
+                Some(Gesture::Pan {
+                    start: camera,
+                    press,
+                })
+            };
         }
-        let delta = response.drag_delta();
-        if let Some(id) = self.dragging {
-            if let Some(p) = handles::get(&self.doc.scene, id) {
-                let q =
-                    handles::drag_in_view_plane(&self.doc.scene.camera, rect.height(), p, delta);
-                handles::set(&mut self.doc.scene, id, q);
+        let latest = ui.input(|i| i.pointer.latest_pos());
+        if let (Some(gesture), Some(now)) = (&self.gesture, latest) {
+            match gesture {
+                Gesture::Handle { id, start, press } => {
+                    let q = handles::drag_in_view_plane(
+                        &self.doc.scene.camera,
+                        rect.height(),
+                        *start,
+                        now - *press,
+                    );
+                    handles::set(&mut self.doc.scene, *id, q);
+                }
+                Gesture::Orbit { start, press } => {
+                    let d = now - *press;
+                    let mut camera = start.clone();
+                    // About a full turn across a typical viewport's width.
+                    navigation::orbit(&mut camera, d.x as f64 * 0.0065, d.y as f64 * 0.0065);
+                    self.doc.scene.camera = camera;
+                }
+                Gesture::Pan { start, press } => {
+                    let d = now - *press;
+                    let mut camera = start.clone();
+                    navigation::pan(&mut camera, d.x as f64, d.y as f64, rect.height() as f64);
+                    self.doc.scene.camera = camera;
+                }
             }
-        } else if response.dragged_by(PointerButton::Primary) {
-            navigation::orbit(
-                &mut self.doc.scene.camera,
-                delta.x as f64 * 0.008,
-                delta.y as f64 * 0.008,
-            );
-        } else if response.dragged_by(PointerButton::Secondary)
-            || response.dragged_by(PointerButton::Middle)
-        {
-            navigation::pan(
-                &mut self.doc.scene.camera,
-                delta.x as f64,
-                delta.y as f64,
-                rect.height() as f64,
-            );
         }
-        if response.drag_stopped() {
-            self.dragging = None;
+        if self.gesture.is_some() && !ui.input(|i| i.pointer.any_down()) {
+            self.gesture = None;
         }
         if response.hovered() {
             let scroll = ui.input(|i| i.smooth_scroll_delta.y);
@@ -421,7 +468,7 @@ impl ViewerApp {
                 &painter,
                 rect,
                 &self.doc.scene,
-                self.dragging.or(self.hovered),
+                dragged_handle.or(self.hovered),
             );
         }
         if let Some(error) = self.report().error {
