@@ -56,6 +56,30 @@ pub fn checked<T>(device: &wgpu::Device, f: impl FnOnce() -> T) -> Result<T, Gpu
     }
 }
 
+/// A 2D texture of one mip level and one sample.
+pub fn texture_2d(
+    device: &wgpu::Device,
+    label: &str,
+    size: [u32; 2],
+    format: wgpu::TextureFormat,
+    usage: wgpu::TextureUsages,
+) -> wgpu::Texture {
+    device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width: size[0],
+            height: size[1],
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage,
+        view_formats: &[],
+    })
+}
+
 /// Device, queue and the adapter they came from.
 pub struct GpuContext {
     pub instance: wgpu::Instance,
@@ -193,14 +217,6 @@ impl GpuContext {
             errors.clear();
             Err(GpuError::Validation(all))
         }
-    }
-
-    /// Waits until the GPU has finished all submitted work.
-    pub fn wait_idle(&self) -> Result<(), GpuError> {
-        self.device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map(|_| ())
-            .map_err(|e| GpuError::Readback(e.to_string()))
     }
 
     /// Copies a whole 2D texture of `bytes_per_texel` back to the CPU, rows from the top, without padding.

@@ -4,7 +4,7 @@
 
 use wgpu::util::DeviceExt;
 
-use super::context::{GpuError, checked};
+use super::context::{GpuError, checked, texture_2d};
 use super::shaders;
 use crate::field::curve::segments;
 use crate::geometry::Billboard;
@@ -367,22 +367,15 @@ impl FieldRenderer {
             }
             queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&packed.params));
             if self.texture.as_ref().is_none_or(|(t, _)| t.width() != w) {
-                let texture = device.create_texture(&wgpu::TextureDescriptor {
-                    label: Some("energywave.field.storage"),
-                    size: wgpu::Extent3d {
-                        width: w,
-                        height: w,
-                        depth_or_array_layers: 1,
-                    },
-                    mip_level_count: 1,
-                    sample_count: 1,
-                    dimension: wgpu::TextureDimension::D2,
-                    format: wgpu::TextureFormat::R32Float,
-                    usage: wgpu::TextureUsages::STORAGE_BINDING
+                let texture = texture_2d(
+                    device,
+                    "energywave.field.storage",
+                    [w, w],
+                    wgpu::TextureFormat::R32Float,
+                    wgpu::TextureUsages::STORAGE_BINDING
                         | wgpu::TextureUsages::TEXTURE_BINDING
                         | wgpu::TextureUsages::COPY_SRC,
-                    view_formats: &[],
-                });
+                );
                 let view = texture.create_view(&wgpu::TextureViewDescriptor::default());
                 self.texture = Some((texture, view));
                 rebind = true;

@@ -5,13 +5,15 @@
 mod billboard_pass;
 mod context;
 mod field_pass;
+mod frame;
 mod headless;
 pub mod shaders;
 
 pub use billboard_pass::{BillboardRenderer, billboard_params, view_projection};
-pub use context::{GpuContext, GpuError, checked, describe, read_texture};
+pub use context::{GpuContext, GpuError, checked, describe, read_texture, texture_2d};
 pub use field_pass::{FieldRenderer, field_texture_bytes};
-pub use headless::{Frame, HeadlessRenderer, f16_to_f32};
+pub use frame::{FRAME_FORMAT, FrameTargets, SceneRenderer, f16_to_f32, read_frame};
+pub use headless::{Frame, HeadlessRenderer};
 
 /// The Rust mirrors of the WGSL structs, for the layout tests.
 pub mod layout {

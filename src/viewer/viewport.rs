@@ -1,15 +1,12 @@
-//! The 3D viewport on the GPU: the background color and the ground grid, then the energy wave on its billboard
-//! (the same field and billboard passes as headless rendering), into an offscreen texture that an egui paint
-//! callback copies into the frame. Because it is an egui-wgpu callback, the window and the UI tests draw it
+//! The 3D viewport on the GPU: the ground grid behind the energy wave, drawn by the same `SceneRenderer` as
+//! headless rendering into an offscreen frame that an egui paint callback copies into the window. Because it is an egui-wgpu callback, the window and the UI tests draw it
 //! through the same code.
 
 use std::sync::{Arc, Mutex};
 
 use wgpu::util::DeviceExt;
 
-use crate::gpu::{
-    BillboardRenderer, FieldRenderer, GpuError, billboard_params, checked, f16_to_f32,
-};
+use crate::gpu::{FRAME_FORMAT, FrameTargets, GpuError, SceneRenderer, read_frame};
 use crate::scene::Scene;
 
 /// Format of the offscreen viewport: half floats, so the blend and the grid keep more than 8 bits.
@@ -59,56 +56,9 @@ pub struct ViewportReport {
     pub field_renders: u64,
 }
 
-/// The viewport's offscreen textures for one size.
-struct Targets {
-    size: [u32; 2],
-    background: wgpu::Texture,
-    background_view: wgpu::TextureView,
-    color: wgpu::Texture,
-    color_view: wgpu::TextureView,
-}
-
-impl Targets {
-    fn new(device: &wgpu::Device, size: [u32; 2]) -> Self {
-        let make = |label, usage| {
-            device.create_texture(&wgpu::TextureDescriptor {
-                label: Some(label),
-                size: wgpu::Extent3d {
-                    width: size[0],
-                    height: size[1],
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: VIEWPORT_FORMAT,
-                usage,
-                view_formats: &[],
-            })
-        };
-        use wgpu::TextureUsages as U;
-        let background = make(
-            "energywave.viewport.background",
-            U::RENDER_ATTACHMENT | U::TEXTURE_BINDING | U::COPY_SRC,
-        );
-        let color = make(
-            "energywave.viewport.color",
-            U::RENDER_ATTACHMENT | U::TEXTURE_BINDING | U::COPY_DST | U::COPY_SRC,
-        );
-        Self {
-            size,
-            background_view: background.create_view(&Default::default()),
-            color_view: color.create_view(&Default::default()),
-            background,
-            color,
-        }
-    }
-}
-
 /// The viewport's pipelines and GPU state, kept in egui-wgpu's callback resources.
 pub struct ViewportGpu {
-    field: FieldRenderer,
-    billboard: BillboardRenderer,
+    scene_renderer: SceneRenderer,
     grid_pipeline: wgpu::RenderPipeline,
     grid_params: wgpu::Buffer,
     grid_bind_group: wgpu::BindGroup,
@@ -117,7 +67,7 @@ pub struct ViewportGpu {
     blit_pipeline: wgpu::RenderPipeline,
     blit_layout: wgpu::BindGroupLayout,
     sampler: wgpu::Sampler,
-    targets: Option<(Targets, wgpu::BindGroup)>,
+    targets: Option<(FrameTargets, wgpu::BindGroup)>,
     report: Arc<Mutex<ViewportReport>>,
 }
 
@@ -188,7 +138,7 @@ impl ViewportGpu {
                 entry_point: Some("fs_main"),
                 compilation_options: Default::default(),
                 targets: &[Some(wgpu::ColorTargetState {
-                    format: VIEWPORT_FORMAT,
+                    format: FRAME_FORMAT,
                     // Lines over the background; alpha stays 1 (the billboard copies it).
                     blend: Some(wgpu::BlendState {
                         color: wgpu::BlendComponent {
@@ -280,8 +230,7 @@ impl ViewportGpu {
             ..Default::default()
         });
         Self {
-            field: FieldRenderer::new(device),
-            billboard: BillboardRenderer::new(device, VIEWPORT_FORMAT),
+            scene_renderer: SceneRenderer::new(device),
             grid_pipeline,
             grid_params,
             grid_bind_group,
@@ -306,7 +255,7 @@ impl ViewportGpu {
     ) -> Result<(), GpuError> {
         let size = [view.size[0].max(1), view.size[1].max(1)];
         if self.targets.as_ref().is_none_or(|(t, _)| t.size != size) {
-            let targets = Targets::new(device, size);
+            let targets = FrameTargets::new(device, size);
             let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("energywave.blit.bind_group"),
                 layout: &self.blit_layout,
@@ -335,81 +284,45 @@ impl ViewportGpu {
         queue: &wgpu::Queue,
         encoder: &mut wgpu::CommandEncoder,
         view: &ViewportView,
-        targets: &Targets,
+        targets: &FrameTargets,
     ) -> Result<(), GpuError> {
-        let scene = &view.scene;
-        let [w, h] = targets.size;
-        let aspect = w as f64 / h as f64;
-        let billboard = scene.place_billboard(aspect);
-        let result = self
-            .field
-            .prepare(device, queue, scene, &billboard)
-            .and_then(|_| {
-                checked(device, || {
-                    self.field.encode(encoder);
-                    let view_proj = crate::gpu::view_projection(&scene.camera, &billboard, aspect)
-                        .as_mat4()
-                        .to_cols_array_2d();
-                    let vertices = if view.show_grid {
-                        grid_vertices(scene)
-                    } else {
-                        Vec::new()
-                    };
-                    self.upload_grid(device, queue, &vertices, view_proj);
-                    let [r, g, b] = scene.colors.background;
-                    {
-                        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                            label: Some("energywave.viewport.background"),
-                            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                                view: &targets.background_view,
-                                depth_slice: None,
-                                resolve_target: None,
-                                ops: wgpu::Operations {
-                                    load: wgpu::LoadOp::Clear(wgpu::Color { r, g, b, a: 1.0 }),
-                                    store: wgpu::StoreOp::Store,
-                                },
-                            })],
-                            depth_stencil_attachment: None,
-                            timestamp_writes: None,
-                            occlusion_query_set: None,
-                            multiview_mask: None,
-                        });
-                        if self.grid_count > 0 {
-                            pass.set_pipeline(&self.grid_pipeline);
-                            pass.set_bind_group(0, &self.grid_bind_group, &[]);
-                            pass.set_vertex_buffer(0, self.grid_vertices.slice(..));
-                            pass.draw(0..self.grid_count, 0..1);
-                        }
-                    }
-                    // The billboard blends over a copy of what lies behind it.
-                    encoder.copy_texture_to_texture(
-                        targets.background.as_image_copy(),
-                        targets.color.as_image_copy(),
-                        targets.background.size(),
-                    );
-                    let params = billboard_params(
-                        &scene.camera,
-                        &billboard,
-                        scene.billboard.resolution,
-                        scene.colors.energy,
-                        aspect,
-                        false,
-                    );
-                    let brightness = self.field.view().expect("prepared above");
-                    self.billboard.draw(
-                        device,
-                        queue,
-                        encoder,
-                        &targets.color_view,
-                        &targets.background_view,
-                        brightness,
-                        &params,
-                    );
-                })
-            });
+        let vertices = if view.show_grid {
+            grid_vertices(&view.scene)
+        } else {
+            Vec::new()
+        };
+        let aspect = targets.size[0] as f64 / targets.size[1] as f64;
+        let billboard = view.scene.place_billboard(aspect);
+        let view_proj = crate::gpu::view_projection(&view.scene.camera, &billboard, aspect)
+            .as_mat4()
+            .to_cols_array_2d();
+        self.upload_grid(device, queue, &vertices, view_proj);
+        let grid = (self.grid_count > 0).then_some((
+            &self.grid_pipeline,
+            &self.grid_bind_group,
+            &self.grid_vertices,
+            self.grid_count,
+        ));
+        let result = self.scene_renderer.record(
+            device,
+            queue,
+            encoder,
+            &view.scene,
+            targets,
+            false,
+            |pass, _| {
+                // The grid lies behind the glow, which blends over it.
+                if let Some((pipeline, bind_group, vertices, count)) = grid {
+                    pass.set_pipeline(pipeline);
+                    pass.set_bind_group(0, bind_group, &[]);
+                    pass.set_vertex_buffer(0, vertices.slice(..));
+                    pass.draw(0..count, 0..1);
+                }
+            },
+        );
         if let Ok(mut r) = self.report.lock() {
             r.error = result.as_ref().err().map(|e| e.to_string());
-            r.field_renders = self.field.dispatch_count();
+            r.field_renders = self.scene_renderer.field().dispatch_count();
         }
         result
     }
@@ -465,21 +378,13 @@ impl ViewportGpu {
                 limit,
             });
         }
-        let targets = Targets::new(device, view.size);
+        let targets = FrameTargets::new(device, view.size);
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("energywave.viewport.screenshot"),
         });
         self.record_into(device, queue, &mut encoder, view, &targets)?;
         queue.submit([encoder.finish()]);
-        let bytes = crate::gpu::read_texture(device, queue, &targets.color, 8)?;
-        let halves: Vec<f32> = bytes
-            .chunks_exact(2)
-            .map(|c| f16_to_f32(u16::from_le_bytes([c[0], c[1]])))
-            .collect();
-        Ok(halves
-            .chunks_exact(4)
-            .map(|c| [c[0], c[1], c[2], c[3]])
-            .collect())
+        read_frame(device, queue, &targets)
     }
 }
 

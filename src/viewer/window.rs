@@ -17,7 +17,7 @@ use winit::window::{Window, WindowId};
 use super::app::{Request, ViewerApp};
 use super::document::Document;
 use super::viewport::{ViewportGpu, ViewportReport, ViewportView};
-use crate::gpu::{GpuContext, GpuError, read_texture};
+use crate::gpu::{GpuContext, GpuError, read_texture, texture_2d};
 use crate::output::{self, OutputError};
 
 /// How `energywave view` runs.
@@ -374,20 +374,13 @@ fn capture_window(
 ) -> Result<(), ViewerError> {
     let (device, queue) = (&gfx.ctx.device, &gfx.ctx.queue);
     let [width, height] = screen.size_in_pixels;
-    let texture = device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("energywave.window.capture"),
-        size: wgpu::Extent3d {
-            width,
-            height,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: gfx.config.format,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-        view_formats: &[],
-    });
+    let texture = texture_2d(
+        device,
+        "energywave.window.capture",
+        [width, height],
+        gfx.config.format,
+        wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+    );
     let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
         label: Some("energywave.window.capture.encoder"),
     });

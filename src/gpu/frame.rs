@@ -1,0 +1,209 @@
+//! One frame of a scene on the GPU: the field pass, what lies behind the billboard, and the billboard blended
+//! over it. Headless rendering and the viewer's viewport both draw through `SceneRenderer::record`; the viewer
+//! adds its grid behind the glow through the `behind` hook.
+
+use super::billboard_pass::{BillboardRenderer, billboard_params, view_projection};
+use super::context::{GpuError, checked, read_texture, texture_2d};
+use super::field_pass::FieldRenderer;
+use crate::scene::Scene;
+
+/// Format of composed frames: half floats (renderable on every backend, unlike Rgba32Float on GL), 11 bits of
+/// mantissa, ample for colors in [0, 1] headed for 8-bit PNG or a float EXR.
+pub const FRAME_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+
+/// The two textures of a composed frame: what lies behind the billboard, and the result.
+pub struct FrameTargets {
+    pub size: [u32; 2],
+    pub background: wgpu::Texture,
+    pub background_view: wgpu::TextureView,
+    pub color: wgpu::Texture,
+    pub color_view: wgpu::TextureView,
+}
+
+impl FrameTargets {
+    pub fn new(device: &wgpu::Device, size: [u32; 2]) -> Self {
+        use wgpu::TextureUsages as U;
+        let background = texture_2d(
+            device,
+            "energywave.frame.background",
+            size,
+            FRAME_FORMAT,
+            U::RENDER_ATTACHMENT | U::TEXTURE_BINDING | U::COPY_SRC,
+        );
+        let color = texture_2d(
+            device,
+            "energywave.frame.color",
+            size,
+            FRAME_FORMAT,
+            U::RENDER_ATTACHMENT | U::TEXTURE_BINDING | U::COPY_DST | U::COPY_SRC,
+        );
+        Self {
+            size,
+            background_view: background.create_view(&Default::default()),
+            color_view: color.create_view(&Default::default()),
+            background,
+            color,
+        }
+    }
+}
+
+/// The field and billboard passes, long-lived; the scene is passed in per frame.
+pub struct SceneRenderer {
+    field: FieldRenderer,
+    billboard: BillboardRenderer,
+}
+
+impl SceneRenderer {
+    pub fn new(device: &wgpu::Device) -> Self {
+        Self {
+            field: FieldRenderer::new(device),
+            billboard: BillboardRenderer::new(device, FRAME_FORMAT),
+        }
+    }
+
+    /// The field pass, for inspection (dispatch count, texture) and for the brightness alone.
+    pub fn field(&self) -> &FieldRenderer {
+        &self.field
+    }
+
+    pub fn field_mut(&mut self) -> &mut FieldRenderer {
+        &mut self.field
+    }
+
+    /// Records one frame of `scene` into `targets.color`: the field pass when something it depends on changed,
+    /// the background (the scene's color, or transparent) with whatever `behind` draws over it (given the
+    /// view-projection matrix), then the billboard blended over a copy of that.
+    // The GPU handles, the frame's inputs and its hook are all distinct; a struct would only rename them.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &Scene,
+        targets: &FrameTargets,
+        transparent: bool,
+        behind: impl FnOnce(&mut wgpu::RenderPass<'_>, [[f32; 4]; 4]),
+    ) -> Result<(), GpuError> {
+        let [w, h] = targets.size;
+        let aspect = w as f64 / h as f64;
+        let billboard = scene.place_billboard(aspect);
+        self.field.prepare(device, queue, scene, &billboard)?;
+        checked(device, || {
+            self.field.encode(encoder);
+            let view_proj = view_projection(&scene.camera, &billboard, aspect)
+                .as_mat4()
+                .to_cols_array_2d();
+            let [r, g, b] = scene.colors.background;
+            let clear = if transparent {
+                wgpu::Color::TRANSPARENT
+            } else {
+                wgpu::Color { r, g, b, a: 1.0 }
+            };
+            {
+                let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("energywave.frame.background"),
+                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                        view: &targets.background_view,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(clear),
+                            store: wgpu::StoreOp::Store,
+                        },
+                    })],
+                    depth_stencil_attachment: None,
+                    timestamp_writes: None,
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                });
+                behind(&mut pass, view_proj);
+            }
+            // The billboard blends over a copy of what lies behind it.
+            encoder.copy_texture_to_texture(
+                targets.background.as_image_copy(),
+                targets.color.as_image_copy(),
+                targets.background.size(),
+            );
+            let params = billboard_params(
+                &scene.camera,
+                &billboard,
+                scene.billboard.resolution,
+                scene.colors.energy,
+                aspect,
+                transparent,
+            );
+            let brightness = self.field.view().expect("prepared above");
+            self.billboard.draw(
+                device,
+                queue,
+                encoder,
+                &targets.color_view,
+                &targets.background_view,
+                brightness,
+                &params,
+            );
+        })
+    }
+}
+
+/// Reads a frame's color back: RGBA, rows from the top (waits for the GPU).
+pub fn read_frame(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    targets: &FrameTargets,
+) -> Result<Vec<[f32; 4]>, GpuError> {
+    let bytes = read_texture(device, queue, &targets.color, 8)?;
+    let halves: Vec<f32> = bytes
+        .chunks_exact(2)
+        .map(|c| f16_to_f32(u16::from_le_bytes([c[0], c[1]])))
+        .collect();
+    Ok(halves
+        .chunks_exact(4)
+        .map(|c| [c[0], c[1], c[2], c[3]])
+        .collect())
+}
+
+/// IEEE 754 half to single precision.
+pub fn f16_to_f32(h: u16) -> f32 {
+    let sign = ((h >> 15) as u32) << 31;
+    let exponent = ((h >> 10) & 0x1f) as u32;
+    let mantissa = (h & 0x3ff) as u32;
+    let bits = match (exponent, mantissa) {
+        (0, 0) => sign,
+        // Subnormal: value = mantissa * 2^-24.
+        (0, m) => {
+            let v = m as f32 * 2f32.powi(-24);
+            return if sign != 0 { -v } else { v };
+        }
+        (0x1f, 0) => sign | 0x7f80_0000,
+        (0x1f, m) => sign | 0x7f80_0000 | (m << 13),
+        (e, m) => sign | ((e + 127 - 15) << 23) | (m << 13),
+    };
+    f32::from_bits(bits)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::f16_to_f32;
+
+    #[test]
+    fn half_floats_decode() {
+        assert_eq!(f16_to_f32(0x0000), 0.0);
+        assert_eq!(f16_to_f32(0x3c00), 1.0);
+        assert_eq!(f16_to_f32(0xc000), -2.0);
+        assert_eq!(f16_to_f32(0x3555), 0.333_251_95);
+        assert_eq!(f16_to_f32(0x7bff), 65504.0);
+        assert_eq!(f16_to_f32(0x0001), 2f32.powi(-24));
+        assert_eq!(f16_to_f32(0x8001), -(2f32.powi(-24)));
+        assert_eq!(f16_to_f32(0x7c00), f32::INFINITY);
+        assert!(f16_to_f32(0x7e00).is_nan());
+        // Every half in [0, 1] decodes into [0, 1], in increasing order.
+        let mut last = -1.0;
+        for h in 0u16..=0x3c00 {
+            let f = f16_to_f32(h);
+            assert!((0.0..=1.0).contains(&f) && f > last);
+            last = f;
+        }
+    }
+}
