@@ -9,8 +9,10 @@
 //! - [`scene`]: TOML scene files, validated field by field;
 //! - [`viewer`]: the interactive viewer (winit, egui, the same GPU passes);
 //! - [`output`]: PNG and EXR files, written atomically;
+//! - [`bench`]: the papers' speed grid and other benchmarks;
 //! - [`cli`]: the `energywave` command line.
 
+pub mod bench;
 pub mod cli;
 pub mod compose;
 pub mod field;

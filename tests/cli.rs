@@ -301,3 +301,14 @@ fn no_adapter_is_a_clear_error_with_status_1() {
     assert!(stderr(&o).contains("matches no adapter"), "{}", stderr(&o));
     assert!(!out.exists());
 }
+
+#[test]
+fn bench_checks_its_json_path_before_running() {
+    let o = run(&["bench", "--quick", "--json", "/nonexistent-dir/report.json"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("/nonexistent-dir/report.json"),
+        "{}",
+        stderr(&o)
+    );
+}

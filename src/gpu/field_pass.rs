@@ -418,22 +418,42 @@ impl FieldRenderer {
 
     /// Records the dispatch if the last `prepare` changed something; does nothing otherwise.
     pub fn encode(&mut self, encoder: &mut wgpu::CommandEncoder) {
+        self.encode_timed(encoder, None);
+    }
+
+    /// `encode`, writing GPU timestamps at the beginning and end of the pass when `timestamps` is given
+    /// (benchmarks). Returns whether a dispatch was recorded.
+    pub fn encode_timed(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        timestamps: Option<wgpu::ComputePassTimestampWrites<'_>>,
+    ) -> bool {
         let (Some(bind_group), Some(packed)) = (&self.bind_group, &self.uploaded) else {
-            return;
+            return false;
         };
         if !self.pending {
-            return;
+            return false;
         }
         let w = packed.params.resolution;
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("energywave.field.pass"),
-            timestamp_writes: None,
+            timestamp_writes: timestamps,
         });
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, bind_group, &[]);
         pass.dispatch_workgroups(w.div_ceil(8), w.div_ceil(8), 1);
         self.pending = false;
         self.dispatches += 1;
+        true
+    }
+
+    /// GPU memory the field pass holds now: the texture, the uniform and the storage buffers, in bytes.
+    pub fn gpu_bytes(&self) -> u64 {
+        let texture = self
+            .texture
+            .as_ref()
+            .map_or(0, |(t, _)| field_texture_bytes(t.width()));
+        texture + self.params.size() + self.buffers.iter().map(|b| b.buffer.size()).sum::<u64>()
     }
 
     /// The brightness texture (after the first `prepare`).

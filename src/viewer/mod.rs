@@ -8,13 +8,15 @@
 //! - [`history`]: undo and redo;
 //! - [`document`]: the scene file, saving, hot reload, screenshot names;
 //! - [`viewport`]: the 3D viewport on the GPU (grid, field, billboard) as an egui-wgpu paint callback;
-//! - [`window`]: the winit window and event loop.
+//! - [`window`]: the winit window and event loop;
+//! - [`offscreen`]: the same viewer drawn into a texture (benchmarks).
 
 pub mod app;
 pub mod document;
 pub mod handles;
 pub mod history;
 pub mod navigation;
+pub mod offscreen;
 pub mod panel;
 pub mod viewport;
 pub mod window;

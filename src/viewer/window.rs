@@ -16,6 +16,7 @@ use winit::window::{Window, WindowId};
 
 use super::app::{Request, ViewerApp};
 use super::document::Document;
+use super::offscreen::draw_egui;
 use super::viewport::{ViewportGpu, ViewportReport, ViewportView};
 use crate::gpu::{GpuContext, GpuError, read_texture, texture_2d};
 use crate::output::{self, OutputError};
@@ -337,32 +338,6 @@ impl Handler {
             gfx.window.request_redraw();
         }
     }
-}
-
-fn draw_egui(
-    renderer: &egui_wgpu::Renderer,
-    encoder: &mut wgpu::CommandEncoder,
-    view: &wgpu::TextureView,
-    paint_jobs: &[egui::ClippedPrimitive],
-    screen: &egui_wgpu::ScreenDescriptor,
-) {
-    let pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-        label: Some("energywave.window.egui"),
-        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-            view,
-            depth_slice: None,
-            resolve_target: None,
-            ops: wgpu::Operations {
-                load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
-                store: wgpu::StoreOp::Store,
-            },
-        })],
-        depth_stencil_attachment: None,
-        timestamp_writes: None,
-        occlusion_query_set: None,
-        multiview_mask: None,
-    });
-    renderer.render(&mut pass.forget_lifetime(), paint_jobs, screen);
 }
 
 /// Draws the same frame into an offscreen texture and saves it: the whole window, panel included.

@@ -1,0 +1,15 @@
+//! `cargo bench --bench field`: the same benchmarks as `energywave bench` (add `-- --quick` for the short run).
+//! The table of a full run on the reference machine is recorded in `benches/README.md`.
+
+use energywave::bench::{BenchOptions, run};
+
+fn main() {
+    let quick = std::env::args().any(|a| a == "--quick");
+    match run(BenchOptions { quick }, |p| eprintln!("{p}")) {
+        Ok(report) => print!("{}", report.table()),
+        Err(e) => {
+            eprintln!("benchmark failed: {e}");
+            std::process::exit(1);
+        }
+    }
+}

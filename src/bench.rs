@@ -1,0 +1,651 @@
+//! Benchmarks: the papers' speed grid (METHOD.md section 7) reproduced side by side, deformation against a
+//! static scene, and whole viewer frames. Shared by `energywave bench` and `cargo bench`.
+//!
+//! The field pass (the work the papers timed) is timed with GPU timestamp queries where the adapter has them,
+//! and always with wall time around submit and wait. Each figure is the median of several frames after
+//! warm-up, with the spread (min, max). Figures that are compared with each other are measured in the same
+//! process, interleaved frame by frame. Nothing here asserts a duration.
+
+use std::path::Path;
+use std::time::Instant;
+
+use glam::DVec3;
+use serde::Serialize;
+
+use crate::gpu::{FieldRenderer, GpuContext, GpuError};
+use crate::scene::Scene;
+use crate::viewer::Document;
+use crate::viewer::offscreen::OffscreenViewer;
+
+/// The torus of paper figure 7 (R = 0.9, t = 5.1).
+const TORUS_SCENE: &str = include_str!("../assets/scenes/torus_r0.9_t5.1.toml");
+/// The two smoothly connected Bezier curves of paper figure 9 (b = 5.0).
+const BEZIER_SCENE: &str = include_str!("../assets/scenes/bezier_b5.0.toml");
+
+const RESOLUTIONS: [u32; 3] = [128, 256, 512];
+const DIVISIONS: [u32; 3] = [64, 128, 256];
+
+/// The texts' frames per second (AMD FirePro D500, OpenCL, 2016), by scene, resolution, divisions.
+pub fn paper_fps(scene: &str, resolution: u32, divisions: u32) -> Option<f64> {
+    let table: [[f64; 3]; 3] = match scene {
+        "torus" => [
+            [384.61, 168.63, 62.35],
+            [116.69, 46.49, 16.85],
+            [31.23, 13.49, 5.21],
+        ],
+        "bezier" => [
+            [116.69, 60.17, 28.94],
+            [34.64, 17.16, 8.31],
+            [9.00, 4.40, 2.15],
+        ],
+        _ => return None,
+    };
+    let r = RESOLUTIONS.iter().position(|&x| x == resolution)?;
+    let d = DIVISIONS.iter().position(|&x| x == divisions)?;
+    Some(table[r][d])
+}
+
+/// How much to measure.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct BenchOptions {
+    /// Fewer frames, and the largest resolution left out: under two minutes on a 2-core software GPU.
+    pub quick: bool,
+}
+
+impl BenchOptions {
+    fn warmup(&self) -> usize {
+        if self.quick { 1 } else { 2 }
+    }
+    fn frames(&self) -> usize {
+        if self.quick { 3 } else { 7 }
+    }
+    fn resolutions(&self) -> &'static [u32] {
+        if self.quick {
+            &RESOLUTIONS[..2]
+        } else {
+            &RESOLUTIONS
+        }
+    }
+}
+
+/// Median and spread of a set of durations, in milliseconds.
+#[derive(Clone, Debug, Serialize)]
+pub struct Timing {
+    pub median_ms: f64,
+    pub min_ms: f64,
+    pub max_ms: f64,
+    pub samples: usize,
+}
+
+impl Timing {
+    fn of(mut ms: Vec<f64>) -> Self {
+        ms.sort_by(f64::total_cmp);
+        let n = ms.len();
+        let median = if n % 2 == 1 {
+            ms[n / 2]
+        } else {
+            0.5 * (ms[n / 2 - 1] + ms[n / 2])
+        };
+        Self {
+            median_ms: median,
+            min_ms: ms[0],
+            max_ms: ms[n - 1],
+            samples: n,
+        }
+    }
+
+    pub fn fps(&self) -> f64 {
+        1e3 / self.median_ms
+    }
+}
+
+/// The field pass of one frame, timed both ways.
+#[derive(Clone, Debug, Serialize)]
+pub struct PassTiming {
+    /// GPU time of the compute pass from timestamp queries, when the adapter has them.
+    pub gpu: Option<Timing>,
+    /// Wall time from upload to the end of the GPU's work (submit and wait).
+    pub wall: Timing,
+}
+
+impl PassTiming {
+    /// The figure to report: GPU time where there is one, else wall time.
+    pub fn best(&self) -> &Timing {
+        self.gpu.as_ref().unwrap_or(&self.wall)
+    }
+}
+
+/// One cell of the papers' grid.
+#[derive(Clone, Debug, Serialize)]
+pub struct GridRow {
+    pub scene: String,
+    pub resolution: u32,
+    pub divisions: u32,
+    pub ours: PassTiming,
+    pub paper_fps: Option<f64>,
+    /// GPU memory held by the field pass (texture, uniform and storage buffers), bytes.
+    pub field_bytes: u64,
+}
+
+/// A static scene against the same scene deforming every frame, interleaved.
+#[derive(Clone, Debug, Serialize)]
+pub struct DeformationRow {
+    pub scene: String,
+    pub resolution: u32,
+    pub divisions: u32,
+    pub static_scene: PassTiming,
+    /// A control point (the torus's center for the torus) moves every frame.
+    pub deforming: PassTiming,
+}
+
+/// Whole viewer frames (UI, viewport, field when it changes), wall time, no display.
+#[derive(Clone, Debug, Serialize)]
+pub struct ViewerFrameRow {
+    pub width: u32,
+    pub height: u32,
+    pub scene: String,
+    /// Nothing changes: the field is not integrated again.
+    pub idle: Timing,
+    /// The camera orbits a little every frame: the field is integrated every frame.
+    pub orbiting: Timing,
+}
+
+/// Everything one run measured.
+#[derive(Clone, Debug, Serialize)]
+pub struct Report {
+    pub adapter: String,
+    pub timestamp_queries: bool,
+    pub machine: String,
+    pub options: BenchOptions,
+    pub warmup_frames: usize,
+    pub grid: Vec<GridRow>,
+    pub deformation: Vec<DeformationRow>,
+    pub viewer: Option<ViewerFrameRow>,
+    pub total_seconds: f64,
+}
+
+/// Times the field pass on one context: timestamp queries if available, else wall time only.
+struct FieldBench {
+    ctx: GpuContext,
+    field: FieldRenderer,
+    queries: Option<(wgpu::QuerySet, wgpu::Buffer, wgpu::Buffer)>,
+}
+
+impl FieldBench {
+    fn new() -> Result<Self, GpuError> {
+        let ctx = GpuContext::new()?;
+        let field = FieldRenderer::new(&ctx.device);
+        let queries = ctx
+            .device
+            .features()
+            .contains(wgpu::Features::TIMESTAMP_QUERY)
+            .then(|| {
+                let set = ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
+                    label: Some("energywave.bench.timestamps"),
+                    ty: wgpu::QueryType::Timestamp,
+                    count: 2,
+                });
+                let resolve = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("energywave.bench.resolve"),
+                    size: 16,
+                    usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                    mapped_at_creation: false,
+                });
+                let read = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("energywave.bench.read"),
+                    size: 16,
+                    usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+                    mapped_at_creation: false,
+                });
+                (set, resolve, read)
+            });
+        Ok(Self {
+            ctx,
+            field,
+            queries,
+        })
+    }
+
+    /// Integrates the field of `scene` once (forced, even if unchanged): (GPU ms, wall ms).
+    fn frame(&mut self, scene: &Scene) -> Result<(Option<f64>, f64), GpuError> {
+        let (device, queue) = (&self.ctx.device, &self.ctx.queue);
+        let start = Instant::now();
+        self.field.invalidate();
+        let billboard = scene.place_billboard(1.0);
+        self.field.prepare(device, queue, scene, &billboard)?;
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("energywave.bench.encoder"),
+        });
+        let writes = self
+            .queries
+            .as_ref()
+            .map(|(set, _, _)| wgpu::ComputePassTimestampWrites {
+                query_set: set,
+                beginning_of_pass_write_index: Some(0),
+                end_of_pass_write_index: Some(1),
+            });
+        self.field.encode_timed(&mut encoder, writes);
+        if let Some((set, resolve, read)) = &self.queries {
+            encoder.resolve_query_set(set, 0..2, resolve, 0);
+            encoder.copy_buffer_to_buffer(resolve, 0, read, 0, 16);
+        }
+        self.ctx.checked(|| queue.submit([encoder.finish()]))?;
+        device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| GpuError::Readback(e.to_string()))?;
+        let wall = start.elapsed().as_secs_f64() * 1e3;
+        let gpu = match &self.queries {
+            Some((_, _, read)) => {
+                let (tx, rx) = std::sync::mpsc::channel();
+                read.slice(..).map_async(wgpu::MapMode::Read, move |r| {
+                    let _ = tx.send(r);
+                });
+                device
+                    .poll(wgpu::PollType::wait_indefinitely())
+                    .map_err(|e| GpuError::Readback(e.to_string()))?;
+                rx.recv()
+                    .map_err(|e| GpuError::Readback(e.to_string()))?
+                    .map_err(|e| GpuError::Readback(e.to_string()))?;
+                let ticks: [u64; 2] = {
+                    let view = read
+                        .slice(..)
+                        .get_mapped_range()
+                        .map_err(|e| GpuError::Readback(e.to_string()))?;
+                    bytemuck::pod_read_unaligned(&view[..16])
+                };
+                read.unmap();
+                let period = queue.get_timestamp_period() as f64;
+                Some(ticks[1].saturating_sub(ticks[0]) as f64 * period * 1e-6)
+            }
+            None => None,
+        };
+        Ok((gpu, wall))
+    }
+
+    /// Times `scenes` interleaved frame by frame (so that drift of a shared, noisy machine hits them alike):
+    /// `warmup` untimed rounds, then `frames` timed ones. `next(k, i)` gives scene `k` for round `i`.
+    fn interleaved(
+        &mut self,
+        count: usize,
+        warmup: usize,
+        frames: usize,
+        mut next: impl FnMut(usize, usize) -> Scene,
+    ) -> Result<Vec<PassTiming>, GpuError> {
+        let mut gpu = vec![Vec::new(); count];
+        let mut wall = vec![Vec::new(); count];
+        for round in 0..warmup + frames {
+            for k in 0..count {
+                let (g, w) = self.frame(&next(k, round))?;
+                if round >= warmup {
+                    wall[k].push(w);
+                    if let Some(g) = g {
+                        gpu[k].push(g);
+                    }
+                }
+            }
+        }
+        Ok((0..count)
+            .map(|k| PassTiming {
+                gpu: (!gpu[k].is_empty()).then(|| Timing::of(gpu[k].clone())),
+                wall: Timing::of(wall[k].clone()),
+            })
+            .collect())
+    }
+}
+
+fn load(text: &str, name: &str) -> Scene {
+    Scene::parse(text, Path::new(name)).expect("the benchmark scenes are valid (held by tests)")
+}
+
+fn machine() -> String {
+    let cpu = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .map(|l| l.split(':').nth(1).unwrap_or("").trim().to_owned())
+        })
+        .unwrap_or_else(|| std::env::consts::ARCH.to_owned());
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    format!("{cpu}, {cores} cores, {}", std::env::consts::OS)
+}
+
+/// A scene moved a little for round `round`: the deforming variant.
+fn deformed(base: &Scene, round: usize) -> Scene {
+    let mut s = base.clone();
+    let wobble = DVec3::new(
+        0.0,
+        0.05 * (round as f64 * 0.7).sin(),
+        0.05 * (round as f64 * 0.7).cos(),
+    );
+    if let Some(c) = s.sources.curves.first_mut() {
+        c.control_points[1] += wobble;
+    } else if let Some(t) = s.sources.tori.first_mut() {
+        t.center += wobble;
+    }
+    s
+}
+
+/// Runs the benchmarks, reporting progress through `progress`.
+pub fn run(options: BenchOptions, mut progress: impl FnMut(&str)) -> Result<Report, GpuError> {
+    let start = Instant::now();
+    let mut bench = FieldBench::new()?;
+    let adapter = bench.ctx.adapter_summary();
+    progress(&format!("adapter: {adapter}"));
+    let scenes = [
+        ("torus", load(TORUS_SCENE, "torus_r0.9_t5.1.toml")),
+        ("bezier", load(BEZIER_SCENE, "bezier_b5.0.toml")),
+    ];
+
+    // The papers' grid: every cell of a resolution interleaved, frame by frame.
+    let mut grid = Vec::new();
+    for &resolution in options.resolutions() {
+        let cells: Vec<(&str, Scene)> = scenes
+            .iter()
+            .flat_map(|(name, base)| {
+                DIVISIONS.iter().map(move |&n| {
+                    let mut s = base.clone();
+                    s.billboard.resolution = resolution;
+                    s.integration.divisions = n;
+                    (*name, s)
+                })
+            })
+            .collect();
+        progress(&format!(
+            "grid: {resolution} x {resolution}, {} cells",
+            cells.len()
+        ));
+        let timings =
+            bench.interleaved(cells.len(), options.warmup(), options.frames(), |k, _| {
+                cells[k].1.clone()
+            })?;
+        let field_bytes = bench.field.gpu_bytes();
+        for ((name, s), t) in cells.iter().zip(timings) {
+            grid.push(GridRow {
+                scene: name.to_string(),
+                resolution,
+                divisions: s.integration.divisions,
+                ours: t,
+                paper_fps: paper_fps(name, resolution, s.integration.divisions),
+                field_bytes,
+            });
+        }
+    }
+
+    // Deformation costs nothing extra: the same scene static and moving, interleaved.
+    let mut deformation = Vec::new();
+    for (name, base) in &scenes {
+        let mut base = base.clone();
+        base.billboard.resolution = 256;
+        base.integration.divisions = 128;
+        progress(&format!("deformation: {name}, 256 x 256, n = 128"));
+        let t = bench.interleaved(2, options.warmup(), options.frames(), |k, round| {
+            if k == 0 {
+                base.clone()
+            } else {
+                deformed(&base, round)
+            }
+        })?;
+        let mut t = t.into_iter();
+        deformation.push(DeformationRow {
+            scene: name.to_string(),
+            resolution: 256,
+            divisions: 128,
+            static_scene: t.next().expect("two variants"),
+            deforming: t.next().expect("two variants"),
+        });
+    }
+    drop(bench);
+
+    // Whole viewer frames at 1280 x 720 on the default scene.
+    progress("viewer: 1280 x 720, default scene");
+    let mut viewer = OffscreenViewer::new(Document::new(Scene::default_scene(), None), 1280, 720)?;
+    for _ in 0..options.warmup() {
+        viewer.frame()?;
+    }
+    let (mut idle, mut orbiting) = (Vec::new(), Vec::new());
+    for _ in 0..options.frames() {
+        let t = Instant::now();
+        viewer.frame()?;
+        idle.push(t.elapsed().as_secs_f64() * 1e3);
+        crate::viewer::navigation::orbit(&mut viewer.app.doc.scene.camera, 0.01, 0.0);
+        let renders = viewer.field_renders();
+        let t = Instant::now();
+        viewer.frame()?;
+        orbiting.push(t.elapsed().as_secs_f64() * 1e3);
+        debug_assert_eq!(viewer.field_renders(), renders + 1);
+    }
+    let viewer_row = ViewerFrameRow {
+        width: 1280,
+        height: 720,
+        scene: "default".into(),
+        idle: Timing::of(idle),
+        orbiting: Timing::of(orbiting),
+    };
+
+    Ok(Report {
+        adapter,
+        timestamp_queries: grid.first().is_some_and(|r| r.ours.gpu.is_some()),
+        machine: machine(),
+        options,
+        warmup_frames: options.warmup(),
+        grid,
+        deformation,
+        viewer: Some(viewer_row),
+        total_seconds: start.elapsed().as_secs_f64(),
+    })
+}
+
+impl Report {
+    /// The report as a human-readable table.
+    pub fn table(&self) -> String {
+        use std::fmt::Write;
+        let mut s = String::new();
+        let source = if self.timestamp_queries {
+            "GPU timestamps"
+        } else {
+            "wall time (no timestamp queries)"
+        };
+        let _ = writeln!(s, "adapter: {}", self.adapter);
+        let _ = writeln!(s, "machine: {}", self.machine);
+        let _ = writeln!(
+            s,
+            "field pass only, {source}; median of {} frames after {} warm-up (min..max)\n",
+            self.grid.first().map_or(0, |r| r.ours.best().samples),
+            self.warmup_frames
+        );
+        let _ = writeln!(
+            s,
+            "{:<7} {:>5} {:>4} {:>11} {:>19} {:>9} {:>10} {:>8} {:>10}",
+            "scene",
+            "W",
+            "n",
+            "ours ms",
+            "(min..max)",
+            "ours FPS",
+            "paper FPS",
+            "ratio",
+            "field MiB"
+        );
+        for r in &self.grid {
+            let t = r.ours.best();
+            let paper = r.paper_fps.map_or("-".to_owned(), |p| format!("{p:.2}"));
+            let ratio = r
+                .paper_fps
+                .map_or("-".to_owned(), |p| format!("{:.3}", t.fps() / p));
+            let _ = writeln!(
+                s,
+                "{:<7} {:>5} {:>4} {:>11.2} {:>19} {:>9.2} {:>10} {:>8} {:>10.2}",
+                r.scene,
+                r.resolution,
+                r.divisions,
+                t.median_ms,
+                format!("({:.2}..{:.2})", t.min_ms, t.max_ms),
+                t.fps(),
+                paper,
+                ratio,
+                r.field_bytes as f64 / (1024.0 * 1024.0)
+            );
+        }
+        if self.options.quick {
+            let _ = writeln!(
+                s,
+                "(--quick: 512 x 512 left out; run without --quick for the whole grid)"
+            );
+        }
+        let _ = writeln!(
+            s,
+            "\ndeformation (interleaved with the static scene; GPU ms where available, wall ms):"
+        );
+        for d in &self.deformation {
+            let (a, b) = (d.static_scene.best(), d.deforming.best());
+            let _ = writeln!(
+                s,
+                "{:<7} {}x{} n={}: static {:.2} ms, deforming {:.2} ms (ratio {:.3}); wall {:.2} vs {:.2} ms",
+                d.scene,
+                d.resolution,
+                d.resolution,
+                d.divisions,
+                a.median_ms,
+                b.median_ms,
+                b.median_ms / a.median_ms,
+                d.static_scene.wall.median_ms,
+                d.deforming.wall.median_ms
+            );
+        }
+        if let Some(v) = &self.viewer {
+            let _ = writeln!(
+                s,
+                "\nviewer frame {}x{} ({} scene, UI + viewport, wall): idle {:.1} ms ({:.1} FPS), orbiting (field integrated every frame) {:.1} ms ({:.1} FPS)",
+                v.width,
+                v.height,
+                v.scene,
+                v.idle.median_ms,
+                v.idle.fps(),
+                v.orbiting.median_ms,
+                v.orbiting.fps()
+            );
+        }
+        let _ = writeln!(s, "\ntotal: {:.0} s", self.total_seconds);
+        s
+    }
+
+    /// The report as JSON: every figure with its unit in its name, the adapter and the settings.
+    pub fn to_json(&self) -> String {
+        serde_json::to_string_pretty(self).expect("a report always serialises")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_papers_table_is_complete_and_read_by_row_and_column() {
+        assert_eq!(paper_fps("torus", 128, 64), Some(384.61));
+        assert_eq!(paper_fps("torus", 512, 256), Some(5.21));
+        assert_eq!(paper_fps("bezier", 256, 128), Some(17.16));
+        assert_eq!(paper_fps("bezier", 512, 64), Some(9.00));
+        assert_eq!(paper_fps("torus", 1024, 64), None);
+        // Both benchmark scenes are the papers' settings.
+        let t = load(TORUS_SCENE, "t");
+        assert_eq!(
+            (
+                t.sources.tori[0].major_radius,
+                t.sources.tori[0].coefficient
+            ),
+            (0.9, 5.1)
+        );
+        let b = load(BEZIER_SCENE, "b");
+        assert_eq!(b.sources.curves[0].coefficient, 5.0);
+    }
+
+    #[test]
+    fn timings_take_the_median_and_the_spread() {
+        let t = Timing::of(vec![5.0, 1.0, 3.0]);
+        assert_eq!(
+            (t.median_ms, t.min_ms, t.max_ms, t.samples),
+            (3.0, 1.0, 5.0, 3)
+        );
+        let t = Timing::of(vec![4.0, 1.0, 3.0, 2.0]);
+        assert_eq!(t.median_ms, 2.5);
+        assert_eq!(t.fps(), 400.0);
+    }
+
+    fn pass(ms: f64) -> PassTiming {
+        PassTiming {
+            gpu: Some(Timing::of(vec![ms, ms * 0.9, ms * 1.1])),
+            wall: Timing::of(vec![ms * 1.2]),
+        }
+    }
+
+    #[test]
+    fn the_report_puts_our_figures_beside_the_papers() {
+        let report = Report {
+            adapter: "test adapter".into(),
+            timestamp_queries: true,
+            machine: "test machine".into(),
+            options: BenchOptions { quick: true },
+            warmup_frames: 1,
+            grid: vec![GridRow {
+                scene: "torus".into(),
+                resolution: 256,
+                divisions: 128,
+                ours: pass(20.0),
+                paper_fps: paper_fps("torus", 256, 128),
+                field_bytes: 262_144 + 1024,
+            }],
+            deformation: vec![DeformationRow {
+                scene: "bezier".into(),
+                resolution: 256,
+                divisions: 128,
+                static_scene: pass(10.0),
+                deforming: pass(11.0),
+            }],
+            viewer: Some(ViewerFrameRow {
+                width: 1280,
+                height: 720,
+                scene: "default".into(),
+                idle: Timing::of(vec![16.0]),
+                orbiting: Timing::of(vec![40.0]),
+            }),
+            total_seconds: 3.0,
+        };
+        let table = report.table();
+        // 20 ms is 50 FPS against the papers' 46.49: ratio 1.076; GPU time is preferred to wall time.
+        assert!(
+            table.contains("20.00")
+                && table.contains("50.00")
+                && table.contains("46.49")
+                && table.contains("1.076"),
+            "{table}"
+        );
+        assert!(table.contains("ratio 1.100"), "{table}");
+        assert!(table.contains("test adapter") && table.contains("GPU timestamps"));
+        let json: serde_json::Value = serde_json::from_str(&report.to_json()).unwrap();
+        assert_eq!(json["adapter"], "test adapter");
+        assert_eq!(json["grid"][0]["ours"]["gpu"]["median_ms"], 20.0);
+        assert_eq!(json["grid"][0]["paper_fps"], 46.49);
+        assert_eq!(json["grid"][0]["field_bytes"], 263_168);
+        assert_eq!(
+            json["deformation"][0]["deforming"]["wall"]["median_ms"],
+            13.2
+        );
+        assert_eq!(json["viewer"]["orbiting"]["median_ms"], 40.0);
+        assert_eq!(json["options"]["quick"], true);
+    }
+
+    #[test]
+    fn the_deforming_variant_moves_a_source_every_frame() {
+        let b = load(BEZIER_SCENE, "b");
+        assert_ne!(
+            deformed(&b, 1).sources.curves[0].control_points[1],
+            deformed(&b, 2).sources.curves[0].control_points[1]
+        );
+        let t = load(TORUS_SCENE, "t");
+        assert_ne!(
+            deformed(&t, 1).sources.tori[0].center,
+            deformed(&t, 2).sources.tori[0].center
+        );
+    }
+}
