@@ -134,6 +134,23 @@ impl OffscreenViewer {
         }
     }
 
+    /// The viewport alone at its last size, rendered again and read back (RGBA).
+    pub fn viewport_image(&mut self) -> Result<Vec<[f32; 4]>, GpuError> {
+        let view = super::viewport::ViewportView {
+            scene: self.app.scene().clone(),
+            size: [
+                self.app.viewport_px[0].max(1),
+                self.app.viewport_px[1].max(1),
+            ],
+            show_grid: self.app.show_grid,
+        };
+        let (device, queue) = (&self.ctx.device, &self.ctx.queue);
+        match self.renderer.callback_resources.get_mut::<ViewportGpu>() {
+            Some(vp) => vp.render_image(device, queue, &view),
+            None => Err(GpuError::Validation("the viewport is not installed".into())),
+        }
+    }
+
     /// How many times the field has been integrated.
     pub fn field_renders(&self) -> u64 {
         self.app.report().field_renders

@@ -1,0 +1,406 @@
+//! Degenerate but valid geometry gives defined, finite results on the CPU reference and on the GPU, and random
+//! valid scenes never produce a non-finite brightness.
+
+use std::sync::{Mutex, MutexGuard, OnceLock};
+
+use energywave::field::{Curve, Line, Point, Sources, Torus};
+use energywave::geometry::Camera;
+use energywave::gpu::HeadlessRenderer;
+use energywave::reference;
+use energywave::scene::Scene;
+use glam::DVec3;
+use proptest::prelude::*;
+
+fn gpu() -> MutexGuard<'static, HeadlessRenderer> {
+    static GPU: OnceLock<Mutex<HeadlessRenderer>> = OnceLock::new();
+    GPU.get_or_init(|| Mutex::new(HeadlessRenderer::new().expect("a GPU adapter (lavapipe in CI)")))
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+}
+
+fn scene(camera: Camera, sources: Sources) -> Scene {
+    let mut s = Scene::default_scene();
+    s.camera = camera;
+    s.sources = sources;
+    // Odd: the central texel's ray is the view axis, exactly through the target (and along the line seen
+    // end-on, the torus's axis, through the point).
+    s.billboard.resolution = 21;
+    s.integration.divisions = 32;
+    s
+}
+
+fn camera(eye: DVec3, target: DVec3) -> Camera {
+    Camera {
+        eye,
+        target,
+        up: DVec3::Y,
+        fov_y_degrees: 40.0,
+    }
+}
+
+fn curve(points: &[DVec3]) -> Curve {
+    Curve {
+        control_points: points.to_vec(),
+        coefficient: 2.0,
+        weights: vec![],
+    }
+}
+
+/// Renders on both and checks every texel is finite; returns the worst relative difference.
+fn finite_on_both(name: &str, scene: &Scene) -> f64 {
+    let bb = scene.place_billboard(1.0);
+    assert!(
+        bb.center.is_finite() && bb.size.is_finite() && bb.size > 0.0,
+        "{name}: billboard {bb:?}"
+    );
+    let cpu = reference::render_brightness(scene, &bb);
+    let g = gpu()
+        .brightness(scene, &bb)
+        .unwrap_or_else(|e| panic!("{name}: {e}"));
+    let mut worst: f64 = 0.0;
+    for (k, (&c, &g)) in cpu.values.iter().zip(&g).enumerate() {
+        assert!(c.is_finite(), "{name}: CPU texel {k} is {c}");
+        assert!(g.is_finite(), "{name}: GPU texel {k} is {g}");
+        worst = worst.max((g as f64 - c).abs() / c.abs().max(0.01));
+    }
+    // The composed frame too.
+    let frame = gpu()
+        .render(scene, 24, 18, false)
+        .unwrap_or_else(|e| panic!("{name}: {e}"));
+    assert!(
+        frame
+            .pixels
+            .iter()
+            .flatten()
+            .all(|c| c.is_finite() && (0.0..=1.0).contains(c)),
+        "{name}: frame"
+    );
+    worst
+}
+
+#[test]
+fn degenerate_geometry_is_finite_on_cpu_and_gpu() {
+    let origin = DVec3::ZERO;
+    let far = camera(DVec3::new(0.0, 0.0, 12.0), origin);
+    let (a, b) = (DVec3::new(-2.0, 0.0, 0.0), DVec3::new(2.0, 0.0, 0.0));
+    let cases: Vec<(&str, Scene, f64)> = vec![
+        // A point source on the view axis: the central rays pass through it (the epsilon clamp).
+        (
+            "point on the rays",
+            scene(
+                far.clone(),
+                Sources {
+                    points: vec![Point {
+                        position: origin,
+                        coefficient: 3.0,
+                    }],
+                    ..Default::default()
+                },
+            ),
+            1e-3,
+        ),
+        // The camera on a torus's axis: the central ray goes through the center, along the axis.
+        (
+            "ray along the torus axis",
+            scene(
+                far.clone(),
+                Sources {
+                    tori: vec![Torus {
+                        center: origin,
+                        axis: DVec3::Z,
+                        major_radius: 1.0,
+                        coefficient: 3.0,
+                    }],
+                    ..Default::default()
+                },
+            ),
+            1e-3,
+        ),
+        // A torus seen edge-on: rays run along the circle's plane.
+        (
+            "torus edge-on",
+            scene(
+                far.clone(),
+                Sources {
+                    tori: vec![Torus {
+                        center: origin,
+                        axis: DVec3::Y,
+                        major_radius: 1.0,
+                        coefficient: 3.0,
+                    }],
+                    ..Default::default()
+                },
+            ),
+            1e-3,
+        ),
+        (
+            "straight curve",
+            scene(
+                far.clone(),
+                Sources {
+                    curves: vec![curve(&[a, origin, b])],
+                    ..Default::default()
+                },
+            ),
+            1e-3,
+        ),
+        (
+            "straight curve, uneven",
+            scene(
+                far.clone(),
+                Sources {
+                    curves: vec![curve(&[a, a * 0.9, b])],
+                    ..Default::default()
+                },
+            ),
+            1e-3,
+        ),
+        (
+            "coincident control points",
+            scene(
+                far.clone(),
+                Sources {
+                    curves: vec![curve(&[origin, origin, origin])],
+                    ..Default::default()
+                },
+            ),
+            1e-3,
+        ),
+        (
+            "two coincident control points",
+            scene(
+                far.clone(),
+                Sources {
+                    curves: vec![curve(&[a, a, b])],
+                    ..Default::default()
+                },
+            ),
+            1e-3,
+        ),
+        // A line seen end-on: every ray is parallel to it, the central one along it.
+        (
+            "line end-on",
+            scene(
+                far.clone(),
+                Sources {
+                    lines: vec![Line {
+                        point: origin,
+                        direction: DVec3::Z,
+                        coefficient: 0.5,
+                    }],
+                    ..Default::default()
+                },
+            ),
+            1e-3,
+        ),
+        // The camera inside the effect.
+        (
+            "camera inside the effect",
+            scene(
+                camera(DVec3::new(0.1, 0.2, 0.3), DVec3::new(0.0, 0.0, -1.0)),
+                Sources {
+                    tori: vec![Torus {
+                        center: origin,
+                        axis: DVec3::Z,
+                        major_radius: 2.0,
+                        coefficient: 3.0,
+                    }],
+                    curves: vec![curve(&[a, origin + DVec3::Y, b])],
+                    ..Default::default()
+                },
+            ),
+            1e-3,
+        ),
+        // Sources far outside a fixed billboard.
+        (
+            "sources far away",
+            {
+                let mut s = scene(
+                    far.clone(),
+                    Sources {
+                        points: vec![Point {
+                            position: DVec3::new(500.0, 300.0, -200.0),
+                            coefficient: 5.0,
+                        }],
+                        curves: vec![curve(&[
+                            DVec3::splat(-800.0),
+                            DVec3::splat(-790.0),
+                            DVec3::new(-780.0, -800.0, -800.0),
+                        ])],
+                        ..Default::default()
+                    },
+                );
+                s.billboard.center = Some(DVec3::new(0.0, 0.0, 8.0));
+                s.billboard.size = Some(1.0);
+                s
+            },
+            1e-3,
+        ),
+    ];
+    for (name, s, tolerance) in &cases {
+        let worst = finite_on_both(name, s);
+        eprintln!("{name}: worst relative GPU/CPU difference {worst:.2e}");
+        assert!(
+            worst <= *tolerance,
+            "{name}: GPU and CPU differ by {worst:.2e}"
+        );
+    }
+}
+
+/// The default scene scaled by `k` (camera, sources and epsilon together).
+fn scaled(k: f64) -> Scene {
+    let mut s = Scene::default_scene();
+    s.billboard.resolution = 20;
+    s.integration.divisions = 32;
+    s.camera.eye *= k;
+    s.camera.target *= k;
+    s.integration.epsilon *= k;
+    for c in &mut s.sources.curves {
+        c.control_points.iter_mut().for_each(|p| *p *= k);
+        c.coefficient *= k;
+    }
+    for t in &mut s.sources.tori {
+        t.center *= k;
+        t.major_radius *= k;
+        t.coefficient *= k;
+    }
+    s
+}
+
+#[test]
+fn huge_and_tiny_scales_give_the_same_picture() {
+    // The method is scale invariant when the coefficients and epsilon scale with the scene (B ~ coefficient /
+    // distance): 1e-3 and 1e3 world units must give the picture of scale 1, on the CPU and on the GPU.
+    let reference_b = {
+        let s = scaled(1.0);
+        reference::render_brightness(&s, &s.place_billboard(1.0)).values
+    };
+    for k in [1e-3, 1e3] {
+        let s = scaled(k);
+        let worst = finite_on_both(&format!("scale {k}"), &s);
+        eprintln!("scale {k}: worst relative GPU/CPU difference {worst:.2e}");
+        assert!(
+            worst <= 1e-3,
+            "scale {k}: GPU and CPU differ by {worst:.2e}"
+        );
+        let cpu = reference::render_brightness(&s, &s.place_billboard(1.0)).values;
+        for (x, y) in cpu.iter().zip(&reference_b) {
+            assert!(
+                (x - y).abs() <= 1e-9 * y.abs().max(1.0),
+                "scale {k}: {x} vs {y}"
+            );
+        }
+    }
+}
+
+#[test]
+fn thousands_of_sources() {
+    let mut sources = Sources::default();
+    for i in 0..2000 {
+        let a = i as f64 * 0.1;
+        sources.points.push(Point {
+            position: DVec3::new(a.cos() * 3.0, (a * 0.37).sin() * 2.0, a.sin() * 3.0),
+            coefficient: 0.01,
+        });
+    }
+    for i in 0..200 {
+        let x = i as f64 * 0.03 - 3.0;
+        sources.curves.push(curve(&[
+            DVec3::new(x, -1.0, 0.0),
+            DVec3::new(x, 0.0, 0.5),
+            DVec3::new(x, 1.0, 0.0),
+        ]));
+    }
+    sources.curves.iter_mut().for_each(|c| c.coefficient = 0.01);
+    let mut s = scene(camera(DVec3::new(0.0, 2.0, 14.0), DVec3::ZERO), sources);
+    s.billboard.resolution = 8;
+    s.integration.divisions = 8;
+    let worst = finite_on_both("2200 sources", &s);
+    assert!(worst <= 1e-3, "{worst:.2e}");
+}
+
+fn vec3(r: f64) -> impl Strategy<Value = DVec3> {
+    (-r..r, -r..r, -r..r).prop_map(|(x, y, z)| DVec3::new(x, y, z))
+}
+
+fn unit() -> impl Strategy<Value = DVec3> {
+    vec3(1.0)
+        .prop_filter("non-zero", |v| v.length() > 1e-3)
+        .prop_map(|v| v.normalize())
+}
+
+fn sources() -> impl Strategy<Value = Sources> {
+    let point = (vec3(10.0), -10.0..10.0f64).prop_map(|(position, coefficient)| Point {
+        position,
+        coefficient,
+    });
+    let line =
+        (vec3(10.0), unit(), -3.0..3.0f64).prop_map(|(point, direction, coefficient)| Line {
+            point,
+            direction,
+            coefficient,
+        });
+    let torus = (vec3(10.0), unit(), 0.001..5.0f64, -10.0..10.0f64).prop_map(
+        |(center, axis, major_radius, coefficient)| Torus {
+            center,
+            axis,
+            major_radius,
+            coefficient,
+        },
+    );
+    let curve = (
+        1usize..4,
+        prop::collection::vec(vec3(10.0), 7),
+        -10.0..10.0f64,
+        prop::collection::vec(0.0..2.0f64, 0..8),
+    )
+        .prop_map(|(k, points, coefficient, weights)| Curve {
+            control_points: points[..2 * k + 1].to_vec(),
+            coefficient,
+            weights,
+        });
+    (
+        prop::collection::vec(point, 0..3),
+        prop::collection::vec(line, 0..2),
+        prop::collection::vec(torus, 0..3),
+        prop::collection::vec(curve, 0..3),
+    )
+        .prop_map(|(points, lines, tori, curves)| Sources {
+            points,
+            lines,
+            tori,
+            curves,
+        })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 200, failure_persistence: None, ..ProptestConfig::default() })]
+
+    /// Random valid scenes (any sources, any camera, any valid settings) never give a non-finite B on the CPU
+    /// reference, and the scene survives a save and load.
+    #[test]
+    fn random_valid_scenes_give_finite_brightness(
+        sources in sources(),
+        eye in vec3(30.0),
+        target in vec3(5.0),
+        fov in 1.0..170.0f64,
+        nu in 1.01..6.0f64,
+        alpha in 0.01..10.0f64,
+        beta in 0.01..10.0f64,
+        epsilon in 1e-6..1.0f64,
+        half_n in 1u32..12,
+    ) {
+        prop_assume!((eye - target).length() > 1e-3);
+        prop_assume!(DVec3::Y.cross((target - eye).normalize()).length() > 1e-3);
+        let mut s = scene(camera(eye, target), sources);
+        s.camera.fov_y_degrees = fov;
+        s.billboard.resolution = 6;
+        s.integration = energywave::integrate::Integration { divisions: 2 * half_n, nu, alpha, beta, epsilon };
+        let text = s.to_toml();
+        let loaded = Scene::parse(&text, std::path::Path::new("random.toml")).map_err(|e| TestCaseError::fail(e.to_string()))?;
+        let bb = loaded.place_billboard(1.3);
+        prop_assert!(bb.center.is_finite() && bb.size.is_finite() && bb.size > 0.0);
+        let b = reference::render_brightness(&loaded, &bb);
+        prop_assert!(b.values.iter().all(|x| x.is_finite()), "{:?}", b.values);
+    }
+}
