@@ -12,7 +12,7 @@ use std::time::Instant;
 use glam::DVec3;
 use serde::Serialize;
 
-use crate::gpu::{FieldRenderer, GpuContext, GpuError};
+use crate::gpu::{FieldRenderer, GpuContext, GpuError, map_read};
 use crate::scene::Scene;
 use crate::viewer::Document;
 use crate::viewer::offscreen::OffscreenViewer;
@@ -236,24 +236,7 @@ impl FieldBench {
         let wall = start.elapsed().as_secs_f64() * 1e3;
         let gpu = match &self.queries {
             Some((_, _, read)) => {
-                let (tx, rx) = std::sync::mpsc::channel();
-                read.slice(..).map_async(wgpu::MapMode::Read, move |r| {
-                    let _ = tx.send(r);
-                });
-                device
-                    .poll(wgpu::PollType::wait_indefinitely())
-                    .map_err(|e| GpuError::Readback(e.to_string()))?;
-                rx.recv()
-                    .map_err(|e| GpuError::Readback(e.to_string()))?
-                    .map_err(|e| GpuError::Readback(e.to_string()))?;
-                let ticks: [u64; 2] = {
-                    let view = read
-                        .slice(..)
-                        .get_mapped_range()
-                        .map_err(|e| GpuError::Readback(e.to_string()))?;
-                    bytemuck::pod_read_unaligned(&view[..16])
-                };
-                read.unmap();
+                let ticks: [u64; 2] = bytemuck::pod_read_unaligned(&map_read(device, read)?[..16]);
                 let period = queue.get_timestamp_period() as f64;
                 Some(ticks[1].saturating_sub(ticks[0]) as f64 * period * 1e-6)
             }

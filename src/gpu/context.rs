@@ -263,26 +263,30 @@ pub fn read_texture(
         texture.size(),
     );
     queue.submit([encoder.finish()]);
+    let bytes = map_read(device, &buffer)?;
+    let mut out = Vec::with_capacity((unpadded * height) as usize);
+    for row in bytes.chunks(padded as usize) {
+        out.extend_from_slice(&row[..unpadded as usize]);
+    }
+    Ok(out)
+}
+
+/// Waits for the GPU, then copies a whole `MAP_READ` buffer to the CPU and unmaps it.
+pub fn map_read(device: &wgpu::Device, buffer: &wgpu::Buffer) -> Result<Vec<u8>, GpuError> {
+    let error = |e: &dyn std::fmt::Display| GpuError::Readback(e.to_string());
     let (tx, rx) = std::sync::mpsc::channel();
     buffer.slice(..).map_async(wgpu::MapMode::Read, move |r| {
         let _ = tx.send(r);
     });
     device
         .poll(wgpu::PollType::wait_indefinitely())
-        .map_err(|e| GpuError::Readback(e.to_string()))?;
-    rx.recv()
-        .map_err(|e| GpuError::Readback(e.to_string()))?
-        .map_err(|e| GpuError::Readback(e.to_string()))?;
-    let mut out = Vec::with_capacity((unpadded * height) as usize);
-    {
-        let view = buffer
-            .slice(..)
-            .get_mapped_range()
-            .map_err(|e| GpuError::Readback(e.to_string()))?;
-        for row in view.chunks(padded as usize) {
-            out.extend_from_slice(&row[..unpadded as usize]);
-        }
-    }
+        .map_err(|e| error(&e))?;
+    rx.recv().map_err(|e| error(&e))?.map_err(|e| error(&e))?;
+    let bytes = buffer
+        .slice(..)
+        .get_mapped_range()
+        .map_err(|e| error(&e))?
+        .to_vec();
     buffer.unmap();
-    Ok(out)
+    Ok(bytes)
 }
