@@ -87,8 +87,11 @@ fn solve_monic_cubic(a: f32, b: f32, c: f32) -> Roots {
     let q = a * a * a / 27.0 - a * b / 6.0 + c / 2.0;
     let r = p * p * p + q * q;
     if r >= 0.0 {
-        let sr = sqrt(r);
-        return Roots(vec3<f32>(real_cbrt(-q + sr) + real_cbrt(-q - sr) - shift, F32_MAX, F32_MAX), 1u);
+        // u on the side of -q -/+ sqrt(r) without cancellation, v = -p / u (u v = -p).
+        let t = -q - select(-1.0, 1.0, q >= 0.0) * sqrt(r);
+        let u = real_cbrt(t);
+        let v = select(-p / u, 0.0, u == 0.0);
+        return Roots(vec3<f32>(u + v - shift, F32_MAX, F32_MAX), 1u);
     }
     let m = 2.0 * sqrt(-p);
     let theta = atan2(sqrt(-r), -q);

@@ -39,7 +39,7 @@ impl Roots {
 /// Real roots of the monic cubic `x^3 + a x^2 + b x + c = 0` by Cardano's formula.
 ///
 /// `p = -a^2/9 + b/3`, `q = a^3/27 - a b/6 + c/2`, `r = p^3 + q^2`; for `r >= 0` one real root
-/// `cbrt(-q + sqrt r) + cbrt(-q - sqrt r) - a/3`, else three real roots
+/// `cbrt(-q + sqrt r) + cbrt(-q - sqrt r) - a/3` (evaluated without cancellation), else three real roots
 /// `2 sqrt(-p) cos((theta + 2 pi k)/3) - a/3` with `theta = atan2(sqrt(-r), -q)`.
 pub fn solve_monic_cubic(a: f64, b: f64, c: f64) -> Roots {
     let mut roots = Roots::default();
@@ -48,8 +48,13 @@ pub fn solve_monic_cubic(a: f64, b: f64, c: f64) -> Roots {
     let q = a * a * a / 27.0 - a * b / 6.0 + c / 2.0;
     let r = p * p * p + q * q;
     if r >= 0.0 {
-        let sr = r.sqrt();
-        roots.push((-q + sr).cbrt() + (-q - sr).cbrt() - shift);
+        // y = u + v with u^3 = -q -/+ sqrt(r) and u v = -p. The textbook sum cbrt(-q + sqrt r) + cbrt(-q - sqrt r)
+        // cancels catastrophically in one of its terms when |q| ~ sqrt(r); take u on the side without
+        // cancellation and v = -p / u instead.
+        let t = -q - q.signum() * r.sqrt();
+        let u = t.cbrt();
+        let v = if u != 0.0 { -p / u } else { 0.0 };
+        roots.push(u + v - shift);
     } else {
         // r < 0 implies p < 0.
         let m = 2.0 * (-p).sqrt();
@@ -120,6 +125,16 @@ mod tests {
         // (x - 5)^3 has its triple root at 5, which only comes out with the -a/3 shift.
         let r = solve_monic_cubic(-15.0, 75.0, -125.0);
         assert!(r.as_slice().iter().all(|x| (x - 5.0).abs() < 1e-9), "{r:?}");
+    }
+
+    #[test]
+    fn a_root_at_zero_is_found_without_cancellation() {
+        // x (x^2 + a x + b) with complex roots of the quadratic: the real root is exactly 0. The textbook sum of
+        // cube roots gave -3.5e-11 here.
+        let (a, b) = (6.0460503642365815, 12.199098019634668);
+        let r = solve_monic_cubic(a, b, 0.0);
+        assert_eq!(r.len(), 1);
+        assert!(r.as_slice()[0].abs() < 1e-15, "{r:?}");
     }
 
     #[test]
