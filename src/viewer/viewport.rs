@@ -64,6 +64,8 @@ pub struct ViewportGpu {
     grid_bind_group: wgpu::BindGroup,
     grid_vertices: wgpu::Buffer,
     grid_count: u32,
+    /// What `grid_vertices` holds now.
+    grid_uploaded: Vec<GridVertex>,
     blit_pipeline: wgpu::RenderPipeline,
     blit_layout: wgpu::BindGroupLayout,
     sampler: wgpu::Sampler,
@@ -236,6 +238,7 @@ impl ViewportGpu {
             grid_bind_group,
             grid_vertices,
             grid_count: 0,
+            grid_uploaded: Vec::new(),
             blit_pipeline,
             blit_layout,
             sampler,
@@ -291,15 +294,11 @@ impl ViewportGpu {
         } else {
             Vec::new()
         };
-        let aspect = targets.size[0] as f64 / targets.size[1] as f64;
-        let billboard = view.scene.place_billboard(aspect);
-        let view_proj = crate::gpu::view_projection(&view.scene.camera, &billboard, aspect)
-            .as_mat4()
-            .to_cols_array_2d();
-        self.upload_grid(device, queue, &vertices, view_proj);
+        self.upload_grid_vertices(device, queue, vertices);
         let grid = (self.grid_count > 0).then_some((
             &self.grid_pipeline,
             &self.grid_bind_group,
+            &self.grid_params,
             &self.grid_vertices,
             self.grid_count,
         ));
@@ -310,9 +309,11 @@ impl ViewportGpu {
             &view.scene,
             targets,
             false,
-            |pass, _| {
+            |pass, view_proj| {
                 // The grid lies behind the glow, which blends over it.
-                if let Some((pipeline, bind_group, vertices, count)) = grid {
+                if let Some((pipeline, bind_group, params, vertices, count)) = grid {
+                    // Written before the submit that runs this pass, with the renderer's own projection.
+                    queue.write_buffer(params, 0, bytemuck::bytes_of(&GridParams { view_proj }));
                     pass.set_pipeline(pipeline);
                     pass.set_bind_group(0, bind_group, &[]);
                     pass.set_vertex_buffer(0, vertices.slice(..));
@@ -327,19 +328,18 @@ impl ViewportGpu {
         result
     }
 
-    fn upload_grid(
+    /// Uploads the grid's vertices when they changed (they depend only on the scene's extent).
+    fn upload_grid_vertices(
         &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
-        vertices: &[GridVertex],
-        view_proj: [[f32; 4]; 4],
+        vertices: Vec<GridVertex>,
     ) {
-        queue.write_buffer(
-            &self.grid_params,
-            0,
-            bytemuck::bytes_of(&GridParams { view_proj }),
-        );
-        let bytes: &[u8] = bytemuck::cast_slice(vertices);
+        self.grid_count = vertices.len() as u32;
+        if vertices == self.grid_uploaded {
+            return;
+        }
+        let bytes: &[u8] = bytemuck::cast_slice(&vertices);
         if bytes.len() as u64 > self.grid_vertices.size() {
             self.grid_vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("energywave.grid.vertices"),
@@ -349,7 +349,7 @@ impl ViewportGpu {
         } else if !bytes.is_empty() {
             queue.write_buffer(&self.grid_vertices, 0, bytes);
         }
-        self.grid_count = vertices.len() as u32;
+        self.grid_uploaded = vertices;
     }
 
     /// Copies the last recorded frame into egui's render pass (whose viewport egui has set to the callback's
