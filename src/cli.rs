@@ -237,6 +237,35 @@ fn bench(args: &BenchArgs) -> Result<(), CliError> {
     Ok(())
 }
 
+/// Refuses, before any rendering, a billboard resolution or a frame size this device cannot hold, naming
+/// where the value came from.
+fn check_device_limits(
+    gpu: &HeadlessRenderer,
+    args: &RenderArgs,
+    scene: &Scene,
+    name: &str,
+) -> Result<(), CliError> {
+    let limit = gpu.ctx.device.limits().max_texture_dimension_2d;
+    let adapter = gpu.ctx.adapter_summary();
+    let w = scene.billboard.resolution;
+    if w > limit {
+        let origin = match args.resolution {
+            Some(_) => format!("--resolution {w}"),
+            None => format!("{name}: [billboard] resolution = {w}"),
+        };
+        return Err(CliError::Usage(format!(
+            "{origin} exceeds the texture limit of this GPU ({adapter}): at most {limit} texels per side"
+        )));
+    }
+    let (width, height) = args.size;
+    if (!args.brightness) && (width > limit || height > limit) {
+        return Err(CliError::Usage(format!(
+            "--size {width}x{height} exceeds the texture limit of this GPU ({adapter}): at most {limit} pixels per side"
+        )));
+    }
+    Ok(())
+}
+
 fn render(args: &RenderArgs) -> Result<(), CliError> {
     let format = output::check_destination(&args.output)?;
     if args.brightness && format != Format::Exr {
@@ -300,6 +329,7 @@ fn render(args: &RenderArgs) -> Result<(), CliError> {
             if args.verbose {
                 eprintln!("adapter: {}", gpu.ctx.adapter_summary());
             }
+            check_device_limits(&gpu, args, &scene, &name)?;
             if args.brightness {
                 let values = gpu.brightness(&scene, &billboard)?;
                 let values: Vec<f64> = values.iter().map(|&b| b as f64).collect();

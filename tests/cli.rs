@@ -312,3 +312,93 @@ fn bench_checks_its_json_path_before_running() {
         stderr(&o)
     );
 }
+
+#[test]
+fn sizes_beyond_the_gpu_limit_are_refused_before_rendering_naming_their_origin() {
+    let dir = tmpdir("limit");
+    let big = dir.join("big.toml");
+    let text = std::fs::read_to_string(scene("torus_r0.9_t5.1.toml")).unwrap();
+    let text = text.replace("resolution = 256", "resolution = 128");
+    assert!(
+        text.contains("resolution = 128"),
+        "the preset sets a resolution"
+    );
+    std::fs::write(&big, text).unwrap();
+    let out = dir.join("out.png");
+    // A GPU whose textures hold at most 64 texels per side.
+    let capped = |args: &[&str]| {
+        bin()
+            .env("ENERGYWAVE_MAX_TEXTURE_SIZE", "64")
+            .args(args)
+            .output()
+            .unwrap()
+    };
+    let (b, o) = (big.to_str().unwrap(), out.to_str().unwrap());
+    for (args, phrases) in [
+        (
+            vec!["render", b, "-o", o, "--size", "48x48"],
+            vec![
+                "big.toml: [billboard] resolution = 128",
+                "at most 64 texels",
+            ],
+        ),
+        (
+            vec![
+                "render",
+                b,
+                "-o",
+                o,
+                "--size",
+                "48x48",
+                "--resolution",
+                "100",
+            ],
+            vec!["--resolution 100", "at most 64 texels"],
+        ),
+        (
+            vec![
+                "render",
+                b,
+                "-o",
+                o,
+                "--size",
+                "96x48",
+                "--resolution",
+                "32",
+            ],
+            vec!["--size 96x48", "at most 64 pixels"],
+        ),
+    ] {
+        let r = capped(&args);
+        let e = stderr(&r);
+        assert_eq!(r.status.code(), Some(2), "{args:?}: {e}");
+        for p in phrases {
+            assert!(e.contains(p), "{args:?}: {e:?} lacks {p:?}");
+        }
+        assert!(!out.exists(), "{args:?}: nothing is written");
+    }
+    // Within the limit, the same GPU renders.
+    let r = capped(&[
+        "render",
+        b,
+        "-o",
+        o,
+        "--size",
+        "48x48",
+        "--resolution",
+        "32",
+        "--divisions",
+        "16",
+    ]);
+    assert!(r.status.success(), "{}", stderr(&r));
+    assert_eq!(image::open(&out).unwrap().width(), 48);
+
+    let r = bin()
+        .env("ENERGYWAVE_MAX_TEXTURE_SIZE", "lots")
+        .args(["render", "-o", dir.join("x.png").to_str().unwrap()])
+        .output()
+        .unwrap();
+    let e = stderr(&r);
+    assert_eq!(r.status.code(), Some(2), "{e}");
+    assert!(e.contains("ENERGYWAVE_MAX_TEXTURE_SIZE=\"lots\""), "{e}");
+}

@@ -26,6 +26,12 @@ pub enum GpuError {
         "frame size {width}x{height} exceeds this GPU's texture limit of {limit} pixels per side"
     )]
     FrameTooLarge { width: u32, height: u32, limit: u32 },
+    #[error("{name}={value:?} is not valid: {reason}")]
+    BadEnvironment {
+        name: &'static str,
+        value: String,
+        reason: String,
+    },
     #[error("wgpu validation error: {0}")]
     Validation(String),
     #[error("GPU readback failed: {0}")]
@@ -37,7 +43,9 @@ impl GpuError {
     pub fn is_input_error(&self) -> bool {
         matches!(
             self,
-            GpuError::ResolutionTooLarge { .. } | GpuError::FrameTooLarge { .. }
+            GpuError::ResolutionTooLarge { .. }
+                | GpuError::FrameTooLarge { .. }
+                | GpuError::BadEnvironment { .. }
         )
     }
 }
@@ -109,6 +117,24 @@ fn backend_rank(b: wgpu::Backend) -> u8 {
     }
 }
 
+/// `ENERGYWAVE_MAX_TEXTURE_SIZE`: a smaller texture limit than the adapter's, to check that a scene fits a
+/// GPU with smaller limits than the one at hand.
+pub const TEXTURE_SIZE_CAP_VAR: &str = "ENERGYWAVE_MAX_TEXTURE_SIZE";
+
+fn texture_size_cap() -> Result<Option<u32>, GpuError> {
+    let Ok(value) = std::env::var(TEXTURE_SIZE_CAP_VAR) else {
+        return Ok(None);
+    };
+    match value.trim().parse::<u32>() {
+        Ok(cap) if cap >= 64 => Ok(Some(cap)),
+        _ => Err(GpuError::BadEnvironment {
+            name: TEXTURE_SIZE_CAP_VAR,
+            value,
+            reason: "give a whole number of texels per side, at least 64 (for example 8192)".into(),
+        }),
+    }
+}
+
 /// A one-line description of an adapter: name, backend, kind, driver.
 pub fn describe(info: &wgpu::AdapterInfo) -> String {
     let mut s = format!("{} ({:?}, {:?}", info.name, info.backend, info.device_type);
@@ -162,11 +188,16 @@ impl GpuContext {
             (device_rank(info.device_type), backend_rank(info.backend))
         });
         let adapter = adapters.swap_remove(0);
+        // The adapter's own limits: the defaults some front ends ask for (WebGL2's) disable compute.
+        let mut required_limits = adapter.limits();
+        if let Some(cap) = texture_size_cap()? {
+            required_limits.max_texture_dimension_2d =
+                required_limits.max_texture_dimension_2d.min(cap);
+        }
         let (device, queue) = adapter
             .request_device(&wgpu::DeviceDescriptor {
                 label: Some("energywave.device"),
-                // The adapter's own limits: the defaults some front ends ask for (WebGL2's) disable compute.
-                required_limits: adapter.limits(),
+                required_limits,
                 required_features: adapter.features() & wgpu::Features::TIMESTAMP_QUERY,
                 ..Default::default()
             })

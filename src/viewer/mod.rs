@@ -9,7 +9,8 @@
 //! - [`document`]: the scene file, saving, hot reload, screenshot names;
 //! - [`viewport`]: the 3D viewport on the GPU (grid, field, billboard) as an egui-wgpu paint callback;
 //! - [`window`]: the winit window and event loop;
-//! - [`offscreen`]: the same viewer drawn into a texture (benchmarks).
+//! - [`presenter`]: one frame of the viewer into a surface, and recovery from surface and device faults;
+//! - [`offscreen`]: the same viewer drawn into a texture (benchmarks, stress tests).
 
 pub mod app;
 pub mod document;
@@ -18,6 +19,7 @@ pub mod history;
 pub mod navigation;
 pub mod offscreen;
 pub mod panel;
+pub mod presenter;
 pub mod viewport;
 pub mod window;
 

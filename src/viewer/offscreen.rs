@@ -1,89 +1,132 @@
-//! The viewer drawn into a texture instead of a window: the same `ViewerApp::ui`, egui tessellation and
-//! egui-wgpu drawing as `window.rs`, for timing whole viewer frames without a display.
+//! The viewer drawn into a texture instead of a window: the same `ViewerApp::ui` and the same frame code
+//! (`presenter`) as `window.rs`, for timing whole viewer frames and for stress tests without a display. The
+//! texture stands in for a window's surface, so tests can make it minimised, lost or outdated, and lose the
+//! device, exactly where a window would.
 
-use std::sync::{Arc, Mutex};
+use std::collections::VecDeque;
 
 use super::app::ViewerApp;
 use super::document::Document;
-use super::viewport::{ViewportGpu, ViewportReport};
+use super::presenter::{Acquired, FrameSurface, Outcome, ViewerGpu};
+use super::viewport::{ViewportGpu, ViewportView};
 use crate::gpu::{GpuContext, GpuError, texture_2d};
 
 /// Format of the offscreen frame (what a window's surface would typically be).
 const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 
-/// Draws `paint_jobs` with egui-wgpu into `view`, cleared first: the window's last step.
-pub fn draw_egui(
-    renderer: &egui_wgpu::Renderer,
-    encoder: &mut wgpu::CommandEncoder,
-    view: &wgpu::TextureView,
-    paint_jobs: &[egui::ClippedPrimitive],
-    screen: &egui_wgpu::ScreenDescriptor,
-) {
-    let pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-        label: Some("energywave.egui.pass"),
-        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-            view,
-            depth_slice: None,
-            resolve_target: None,
-            ops: wgpu::Operations {
-                load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
-                store: wgpu::StoreOp::Store,
+/// What the texture surface answers instead of a frame, once, in order (set by tests).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SurfaceFault {
+    Outdated,
+    Lost,
+    Timeout,
+    Occluded,
+    Validation,
+}
+
+/// A texture standing in for a window's surface.
+pub struct TextureSurface {
+    texture: Option<wgpu::Texture>,
+    configured: [u32; 2],
+    wanted: [u32; 2],
+    /// Answers for the next acquisitions, before frames are handed out again.
+    pub faults: VecDeque<SurfaceFault>,
+    /// How many times the surface has been configured.
+    pub configures: u32,
+    /// How many frames have been presented.
+    pub presented: u64,
+}
+
+impl FrameSurface for TextureSurface {
+    type Frame = wgpu::Texture;
+
+    fn configured_size(&self) -> [u32; 2] {
+        self.configured
+    }
+
+    fn wanted_size(&self) -> [u32; 2] {
+        self.wanted
+    }
+
+    fn configure(&mut self, device: &wgpu::Device, size: [u32; 2]) {
+        self.texture = Some(texture_2d(
+            device,
+            "energywave.offscreen.frame",
+            size,
+            FORMAT,
+            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        ));
+        self.configured = size;
+        self.configures += 1;
+    }
+
+    fn acquire(&mut self) -> Acquired<wgpu::Texture> {
+        match self.faults.pop_front() {
+            Some(SurfaceFault::Outdated | SurfaceFault::Lost) => Acquired::Outdated,
+            Some(SurfaceFault::Timeout | SurfaceFault::Occluded) => Acquired::Skip,
+            Some(SurfaceFault::Validation) => Acquired::Invalid,
+            None => match &self.texture {
+                Some(t) => Acquired::Frame(t.clone()),
+                None => Acquired::Outdated,
             },
-        })],
-        depth_stencil_attachment: None,
-        timestamp_writes: None,
-        occlusion_query_set: None,
-        multiview_mask: None,
-    });
-    renderer.render(&mut pass.forget_lifetime(), paint_jobs, screen);
+        }
+    }
+
+    fn view(&self, frame: &wgpu::Texture) -> wgpu::TextureView {
+        frame.create_view(&Default::default())
+    }
+
+    fn present(&mut self, _queue: &wgpu::Queue, _frame: wgpu::Texture) {
+        self.presented += 1;
+    }
 }
 
 /// A viewer without a window.
 pub struct OffscreenViewer {
     pub app: ViewerApp,
-    ctx: GpuContext,
-    egui_ctx: egui::Context,
-    renderer: egui_wgpu::Renderer,
-    target: wgpu::Texture,
-    size: [u32; 2],
+    pub gpu: ViewerGpu,
+    pub surface: TextureSurface,
+    /// How many times the GPU side has been recreated after a device loss.
+    pub recoveries: u32,
 }
 
 impl OffscreenViewer {
     /// A viewer on `doc`, `width` x `height` pixels, on its own GPU context.
     pub fn new(doc: Document, width: u32, height: u32) -> Result<Self, GpuError> {
-        let ctx = GpuContext::new()?;
-        let report = Arc::new(Mutex::new(ViewportReport::default()));
-        let mut renderer =
-            egui_wgpu::Renderer::new(&ctx.device, FORMAT, egui_wgpu::RendererOptions::default());
-        renderer
-            .callback_resources
-            .insert(ViewportGpu::new(&ctx.device, FORMAT, report.clone()));
-        let app = ViewerApp::new(
-            doc,
-            ctx.adapter_summary(),
-            ctx.device.limits().max_texture_dimension_2d,
-            report,
-        );
-        let target = texture_2d(
-            &ctx.device,
-            "energywave.offscreen.frame",
-            [width, height],
-            FORMAT,
-            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-        );
+        let gpu = ViewerGpu::new(GpuContext::new()?, FORMAT);
+        let app = gpu.app(doc);
+        let mut surface = TextureSurface {
+            texture: None,
+            configured: [0, 0],
+            wanted: [width, height],
+            faults: VecDeque::new(),
+            configures: 0,
+            presented: 0,
+        };
+        surface.configure(&gpu.ctx.device, [width, height]);
         Ok(Self {
             app,
-            ctx,
-            egui_ctx: egui::Context::default(),
-            renderer,
-            target,
-            size: [width, height],
+            gpu,
+            surface,
+            recoveries: 0,
         })
     }
 
-    /// Runs the UI once and draws it, waiting until the GPU has finished.
-    pub fn frame(&mut self) -> Result<(), GpuError> {
-        let [w, h] = self.size;
+    /// Resizes the "window" (0 x 0 is a minimised one), as a window's resize event does.
+    pub fn resize(&mut self, width: u32, height: u32) {
+        self.surface.wanted = [width, height];
+        self.gpu.resize(&mut self.surface);
+    }
+
+    /// Destroys the device under the viewer, as a driver reset or an unplugged GPU would.
+    pub fn lose_device(&self) {
+        self.gpu.ctx.device.destroy();
+    }
+
+    /// Runs the UI once and draws it, waiting until the GPU has finished. A lost device is recreated here, as
+    /// the window does, and the frame reported as `DeviceLost`.
+    pub fn frame(&mut self) -> Result<Outcome, GpuError> {
+        let [w, h] = self.surface.configured_size();
         let input = egui::RawInput {
             screen_rect: Some(egui::Rect::from_min_size(
                 egui::Pos2::ZERO,
@@ -91,52 +134,36 @@ impl OffscreenViewer {
             )),
             ..Default::default()
         };
-        let app = &mut self.app;
-        let output = self.egui_ctx.run_ui(input, |ui| app.ui(ui));
-        let jobs = self
-            .egui_ctx
-            .tessellate(output.shapes, output.pixels_per_point);
-        let screen = egui_wgpu::ScreenDescriptor {
-            size_in_pixels: self.size,
-            pixels_per_point: output.pixels_per_point,
-        };
-        let (device, queue) = (&self.ctx.device, &self.ctx.queue);
-        for (id, deltas) in &output.textures_delta.set {
-            for delta in deltas {
-                self.renderer.update_texture(device, queue, *id, delta);
-            }
+        let presented = self
+            .gpu
+            .frame(&mut self.app, input, &mut self.surface, |_, _, _| {});
+        let outcome = presented.outcome;
+        if let Some(e) = presented.gpu_error {
+            return Err(e);
         }
-        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("energywave.offscreen.encoder"),
-        });
-        let mut buffers = self
-            .renderer
-            .update_buffers(device, queue, &mut encoder, &jobs, &screen);
-        draw_egui(
-            &self.renderer,
-            &mut encoder,
-            &self.target.create_view(&Default::default()),
-            &jobs,
-            &screen,
-        );
-        buffers.push(encoder.finish());
-        self.ctx.checked(|| queue.submit(buffers))?;
-        for id in &output.textures_delta.free {
-            self.renderer.free_texture(id);
+        if outcome == Outcome::DeviceLost {
+            self.gpu = ViewerGpu::new(GpuContext::new()?, FORMAT);
+            self.gpu.adopt(&mut self.app);
+            let size = self.surface.configured_size();
+            self.surface.configure(&self.gpu.ctx.device, size);
+            self.recoveries += 1;
+            return Ok(outcome);
         }
-        device
+        self.gpu
+            .ctx
+            .device
             .poll(wgpu::PollType::wait_indefinitely())
-            .map(|_| ())
             .map_err(|e| GpuError::Readback(e.to_string()))?;
+        self.gpu.ctx.check_uncaptured()?;
         match self.app.report().error {
             Some(e) => Err(GpuError::Validation(e)),
-            None => Ok(()),
+            None => Ok(outcome),
         }
     }
 
     /// The viewport alone at its last size, rendered again and read back (RGBA).
     pub fn viewport_image(&mut self) -> Result<Vec<[f32; 4]>, GpuError> {
-        let view = super::viewport::ViewportView {
+        let view = ViewportView {
             scene: self.app.scene().clone(),
             size: [
                 self.app.viewport_px[0].max(1),
@@ -144,10 +171,23 @@ impl OffscreenViewer {
             ],
             show_grid: self.app.show_grid,
         };
-        let (device, queue) = (&self.ctx.device, &self.ctx.queue);
-        match self.renderer.callback_resources.get_mut::<ViewportGpu>() {
+        let (device, queue) = (&self.gpu.ctx.device, &self.gpu.ctx.queue);
+        match self
+            .gpu
+            .renderer
+            .callback_resources
+            .get_mut::<ViewportGpu>()
+        {
             Some(vp) => vp.render_image(device, queue, &view),
             None => Err(GpuError::Validation("the viewport is not installed".into())),
+        }
+    }
+
+    /// The last presented frame, read back (RGBA8).
+    pub fn frame_image(&self) -> Result<Vec<u8>, GpuError> {
+        match &self.surface.texture {
+            Some(t) => self.gpu.ctx.read_texture(t, 4),
+            None => Err(GpuError::Readback("the surface is not configured".into())),
         }
     }
 

@@ -4,8 +4,7 @@
 //! scene.
 
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use winit::application::ApplicationHandler;
@@ -16,8 +15,8 @@ use winit::window::{Window, WindowId};
 
 use super::app::{Request, ViewerApp};
 use super::document::Document;
-use super::offscreen::draw_egui;
-use super::viewport::{ViewportGpu, ViewportReport, ViewportView};
+use super::presenter::{Acquired, FrameSurface, Outcome, ViewerGpu, draw_egui};
+use super::viewport::{ViewportGpu, ViewportView};
 use crate::gpu::{GpuContext, GpuError, read_texture, texture_2d};
 use crate::output::{self, OutputError};
 
@@ -61,15 +60,57 @@ pub fn run(doc: Document, options: ViewOptions) -> Result<(), ViewerError> {
     handler.error.map_or(Ok(()), Err)
 }
 
-struct Gfx {
+/// A window's surface, as the presenter sees it.
+struct WindowSurface {
     window: Arc<Window>,
     surface: wgpu::Surface<'static>,
     config: wgpu::SurfaceConfiguration,
-    ctx: GpuContext,
-    egui_ctx: egui::Context,
+}
+
+impl FrameSurface for WindowSurface {
+    type Frame = wgpu::SurfaceTexture;
+
+    fn configured_size(&self) -> [u32; 2] {
+        [self.config.width, self.config.height]
+    }
+
+    fn wanted_size(&self) -> [u32; 2] {
+        let size = self.window.inner_size();
+        [size.width, size.height]
+    }
+
+    fn configure(&mut self, device: &wgpu::Device, size: [u32; 2]) {
+        [self.config.width, self.config.height] = size;
+        self.surface.configure(device, &self.config);
+    }
+
+    fn acquire(&mut self) -> Acquired<wgpu::SurfaceTexture> {
+        match self.surface.get_current_texture() {
+            wgpu::CurrentSurfaceTexture::Success(t)
+            | wgpu::CurrentSurfaceTexture::Suboptimal(t) => Acquired::Frame(t),
+            wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
+                Acquired::Outdated
+            }
+            wgpu::CurrentSurfaceTexture::Timeout | wgpu::CurrentSurfaceTexture::Occluded => {
+                Acquired::Skip
+            }
+            wgpu::CurrentSurfaceTexture::Validation => Acquired::Invalid,
+        }
+    }
+
+    fn view(&self, frame: &wgpu::SurfaceTexture) -> wgpu::TextureView {
+        frame.texture.create_view(&Default::default())
+    }
+
+    fn present(&mut self, queue: &wgpu::Queue, frame: wgpu::SurfaceTexture) {
+        queue.present(frame);
+    }
+}
+
+struct Gfx {
+    surface: WindowSurface,
+    gpu: ViewerGpu,
     egui_state: egui_winit::State,
-    renderer: egui_wgpu::Renderer,
-    device_lost: Arc<AtomicBool>,
 }
 
 struct Handler {
@@ -84,10 +125,7 @@ struct Handler {
 }
 
 impl Gfx {
-    fn new(
-        event_loop: &ActiveEventLoop,
-        window: Arc<Window>,
-    ) -> Result<(Self, Arc<Mutex<ViewportReport>>), ViewerError> {
+    fn new(event_loop: &ActiveEventLoop, window: Arc<Window>) -> Result<Self, ViewerError> {
         let instance =
             wgpu::Instance::new(wgpu::InstanceDescriptor::new_with_display_handle_from_env(
                 Box::new(event_loop.owned_display_handle()),
@@ -109,61 +147,36 @@ impl Gfx {
         }
         config.present_mode = wgpu::PresentMode::AutoVsync;
         surface.configure(&ctx.device, &config);
-        let device_lost = Arc::new(AtomicBool::new(false));
-        let flag = device_lost.clone();
-        ctx.device
-            .set_device_lost_callback(move |_, _| flag.store(true, Ordering::SeqCst));
-
-        let egui_ctx = egui::Context::default();
+        let max_texture = ctx.device.limits().max_texture_dimension_2d as usize;
+        let gpu = ViewerGpu::new(ctx, config.format);
         let egui_state = egui_winit::State::new(
-            egui_ctx.clone(),
+            gpu.egui_ctx.clone(),
             egui::ViewportId::ROOT,
             &window,
             Some(window.scale_factor() as f32),
             window.theme(),
-            Some(ctx.device.limits().max_texture_dimension_2d as usize),
+            Some(max_texture),
         );
-        let mut renderer = egui_wgpu::Renderer::new(
-            &ctx.device,
-            config.format,
-            egui_wgpu::RendererOptions::default(),
-        );
-        let report = Arc::new(Mutex::new(ViewportReport::default()));
-        renderer.callback_resources.insert(ViewportGpu::new(
-            &ctx.device,
-            config.format,
-            report.clone(),
-        ));
-        Ok((
-            Self {
+        Ok(Self {
+            surface: WindowSurface {
                 window,
                 surface,
                 config,
-                ctx,
-                egui_ctx,
-                egui_state,
-                renderer,
-                device_lost,
             },
-            report,
-        ))
+            gpu,
+            egui_state,
+        })
     }
 
-    fn resize(&mut self, width: u32, height: u32) {
-        // A minimised window is 0 x 0: keep the old configuration and draw nothing until it comes back.
-        if width == 0 || height == 0 {
-            return;
-        }
-        self.config.width = width;
-        self.config.height = height;
-        self.surface.configure(&self.ctx.device, &self.config);
+    fn window(&self) -> &Window {
+        &self.surface.window
     }
 }
 
 impl Handler {
     fn create(&mut self, event_loop: &ActiveEventLoop) -> Result<(), ViewerError> {
         let window = match &self.gfx {
-            Some(gfx) => gfx.window.clone(),
+            Some(gfx) => gfx.surface.window.clone(),
             None => {
                 let attributes = Window::default_attributes()
                     .with_title("energywave")
@@ -176,20 +189,13 @@ impl Handler {
             }
         };
         self.gfx = None;
-        let (gfx, report) = Gfx::new(event_loop, window)?;
-        let adapter = gfx.ctx.adapter_summary();
-        let max_resolution = gfx.ctx.device.limits().max_texture_dimension_2d;
+        let gfx = Gfx::new(event_loop, window)?;
         match (&mut self.app, self.doc.take()) {
-            (Some(app), _) => {
-                app.set_gpu(adapter, max_resolution, report);
-                app.notify("The GPU device was lost and has been recreated", true);
-            }
-            (None, Some(doc)) => {
-                self.app = Some(ViewerApp::new(doc, adapter, max_resolution, report))
-            }
+            (Some(app), _) => gfx.gpu.adopt(app),
+            (None, Some(doc)) => self.app = Some(gfx.gpu.app(doc)),
             (None, None) => unreachable!("the document is kept until the app exists"),
         }
-        gfx.window.request_redraw();
+        gfx.window().request_redraw();
         self.gfx = Some(gfx);
         Ok(())
     }
@@ -200,83 +206,43 @@ impl Handler {
     }
 
     fn redraw(&mut self, event_loop: &ActiveEventLoop) {
-        if self
-            .gfx
-            .as_ref()
-            .is_some_and(|g| g.device_lost.load(Ordering::SeqCst))
-        {
-            if let Err(e) = self.create(event_loop) {
-                self.fail(event_loop, e);
-            }
-            return;
-        }
         let (Some(gfx), Some(app)) = (&mut self.gfx, &mut self.app) else {
             return;
         };
-        let size = gfx.window.inner_size();
-        if size.width == 0 || size.height == 0 {
-            return;
-        }
-        let raw_input = gfx.egui_state.take_egui_input(&gfx.window);
-        let output = gfx.egui_ctx.run_ui(raw_input, |ui| app.ui(ui));
-        gfx.egui_state
-            .handle_platform_output(&gfx.window, output.platform_output.clone());
-        let repaint_now = output
-            .viewport_output
-            .get(&egui::ViewportId::ROOT)
-            .is_some_and(|v| v.repaint_delay.is_zero());
-        let paint_jobs = gfx
-            .egui_ctx
-            .tessellate(output.shapes, output.pixels_per_point);
-        let screen = egui_wgpu::ScreenDescriptor {
-            size_in_pixels: [gfx.config.width, gfx.config.height],
-            pixels_per_point: output.pixels_per_point,
-        };
-        let (device, queue) = (&gfx.ctx.device, &gfx.ctx.queue);
-        for (id, deltas) in &output.textures_delta.set {
-            for delta in deltas {
-                gfx.renderer.update_texture(device, queue, *id, delta);
-            }
-        }
-        let frame = match gfx.surface.get_current_texture() {
-            wgpu::CurrentSurfaceTexture::Success(t)
-            | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
-            wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
-                gfx.surface.configure(device, &gfx.config);
-                gfx.window.request_redraw();
-                return;
-            }
-            wgpu::CurrentSurfaceTexture::Timeout | wgpu::CurrentSurfaceTexture::Occluded => return,
-            wgpu::CurrentSurfaceTexture::Validation => {
-                app.notify(
-                    "The window surface reported a validation error; reconfiguring",
-                    true,
-                );
-                gfx.surface.configure(device, &gfx.config);
-                return;
-            }
-        };
-        let view = frame.texture.create_view(&Default::default());
-        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("energywave.window.encoder"),
-        });
-        let mut buffers =
-            gfx.renderer
-                .update_buffers(device, queue, &mut encoder, &paint_jobs, &screen);
-        draw_egui(&gfx.renderer, &mut encoder, &view, &paint_jobs, &screen);
-        buffers.push(encoder.finish());
-        queue.submit(buffers);
-
-        self.frames += 1;
+        let raw_input = gfx.egui_state.take_egui_input(&gfx.surface.window);
+        // The screenshot is of the Nth frame drawn.
         let capture = self
             .options
             .screenshot
             .clone()
-            .filter(|_| self.frames >= self.options.frames.max(1));
-        let captured = capture.map(|path| capture_window(gfx, &paint_jobs, &screen, &path));
-        queue.present(frame);
-        for id in &output.textures_delta.free {
-            gfx.renderer.free_texture(id);
+            .filter(|_| self.frames + 1 >= self.options.frames.max(1));
+        let mut captured = None;
+        let format = gfx.surface.config.format;
+        let presented = gfx
+            .gpu
+            .frame(app, raw_input, &mut gfx.surface, |gpu, jobs, screen| {
+                if let Some(path) = &capture {
+                    captured = Some(capture_window(gpu, format, jobs, screen, path));
+                }
+            });
+        let repaint_now = match presented.outcome {
+            Outcome::Drawn { repaint_now } => {
+                self.frames += 1;
+                repaint_now
+            }
+            Outcome::DeviceLost => {
+                if let Err(e) = self.create(event_loop) {
+                    self.fail(event_loop, e);
+                }
+                return;
+            }
+            Outcome::Reconfigured => true,
+            Outcome::Minimised | Outcome::Skipped => false,
+        };
+        gfx.egui_state
+            .handle_platform_output(&gfx.surface.window, presented.platform_output);
+        if let Some(e) = presented.gpu_error {
+            app.notify(format!("GPU error: {e}"), true);
         }
         match captured {
             Some(Ok(())) => {
@@ -293,32 +259,7 @@ impl Handler {
             match request {
                 Request::Quit => event_loop.exit(),
                 Request::Screenshot { path, scale } => {
-                    let [w, h] = app.viewport_px;
-                    let view = ViewportView {
-                        scene: app.scene().clone(),
-                        size: [w.max(1) * scale, h.max(1) * scale],
-                        show_grid: app.show_grid,
-                    };
-                    let result = match gfx.renderer.callback_resources.get_mut::<ViewportGpu>() {
-                        Some(vp) => vp
-                            .render_image(device, queue, &view)
-                            .map_err(ViewerError::from)
-                            .and_then(|pixels| {
-                                let pixels: Vec<[f64; 4]> =
-                                    pixels.iter().map(|p| p.map(|c| c as f64)).collect();
-                                output::write_rgba(
-                                    &path,
-                                    view.size[0],
-                                    view.size[1],
-                                    &pixels,
-                                    false,
-                                )
-                                .map_err(ViewerError::from)
-                            }),
-                        None => Err(ViewerError::Window(
-                            "the viewport is not initialised".into(),
-                        )),
-                    };
+                    let result = save_viewport(&mut gfx.gpu, app, &path, scale);
                     match result {
                         Ok(()) => {
                             app.notify(format!("Screenshot saved: {}", path.display()), false)
@@ -328,39 +269,61 @@ impl Handler {
                 }
             }
         }
-        self.next_frame = Instant::now()
-            + if repaint_now || self.options.screenshot.is_some() {
-                Duration::ZERO
-            } else {
-                IDLE_FRAME
-            };
-        if repaint_now || self.options.screenshot.is_some() {
-            gfx.window.request_redraw();
+        let now = repaint_now || self.options.screenshot.is_some();
+        self.next_frame = Instant::now() + if now { Duration::ZERO } else { IDLE_FRAME };
+        if now {
+            gfx.window().request_redraw();
         }
     }
 }
 
+/// Renders the viewport alone at `scale` times its size and saves it to `path`.
+fn save_viewport(
+    gpu: &mut ViewerGpu,
+    app: &ViewerApp,
+    path: &std::path::Path,
+    scale: u32,
+) -> Result<(), ViewerError> {
+    let [w, h] = app.viewport_px;
+    let view = ViewportView {
+        scene: app.scene().clone(),
+        size: [w.max(1) * scale, h.max(1) * scale],
+        show_grid: app.show_grid,
+    };
+    let (device, queue) = (&gpu.ctx.device, &gpu.ctx.queue);
+    let vp = gpu
+        .renderer
+        .callback_resources
+        .get_mut::<ViewportGpu>()
+        .ok_or_else(|| ViewerError::Window("the viewport is not initialised".into()))?;
+    let pixels = vp.render_image(device, queue, &view)?;
+    let pixels: Vec<[f64; 4]> = pixels.iter().map(|p| p.map(|c| c as f64)).collect();
+    output::write_rgba(path, view.size[0], view.size[1], &pixels, false)?;
+    Ok(())
+}
+
 /// Draws the same frame into an offscreen texture and saves it: the whole window, panel included.
 fn capture_window(
-    gfx: &Gfx,
+    gpu: &ViewerGpu,
+    format: wgpu::TextureFormat,
     paint_jobs: &[egui::ClippedPrimitive],
     screen: &egui_wgpu::ScreenDescriptor,
     path: &std::path::Path,
 ) -> Result<(), ViewerError> {
-    let (device, queue) = (&gfx.ctx.device, &gfx.ctx.queue);
+    let (device, queue) = (&gpu.ctx.device, &gpu.ctx.queue);
     let [width, height] = screen.size_in_pixels;
     let texture = texture_2d(
         device,
         "energywave.window.capture",
         [width, height],
-        gfx.config.format,
+        format,
         wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
     );
     let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
         label: Some("energywave.window.capture.encoder"),
     });
     draw_egui(
-        &gfx.renderer,
+        &gpu.renderer,
         &mut encoder,
         &texture.create_view(&Default::default()),
         paint_jobs,
@@ -369,7 +332,7 @@ fn capture_window(
     queue.submit([encoder.finish()]);
     let bytes = read_texture(device, queue, &texture, 4)?;
     let bgra = matches!(
-        gfx.config.format,
+        format,
         wgpu::TextureFormat::Bgra8Unorm | wgpu::TextureFormat::Bgra8UnormSrgb
     );
     let pixels: Vec<[f64; 4]> = bytes
@@ -394,17 +357,17 @@ impl ApplicationHandler for Handler {
 
     fn window_event(&mut self, event_loop: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
         let Some(gfx) = &mut self.gfx else { return };
-        let response = gfx.egui_state.on_window_event(&gfx.window, &event);
+        let response = gfx.egui_state.on_window_event(&gfx.surface.window, &event);
         match event {
             WindowEvent::CloseRequested => {
                 if let Some(app) = &mut self.app {
                     app.request_quit();
                 }
-                gfx.window.request_redraw();
+                gfx.window().request_redraw();
             }
-            WindowEvent::Resized(size) => {
-                gfx.resize(size.width, size.height);
-                gfx.window.request_redraw();
+            WindowEvent::Resized(_) => {
+                gfx.gpu.resize(&mut gfx.surface);
+                gfx.window().request_redraw();
             }
             WindowEvent::RedrawRequested => self.redraw(event_loop),
             _ => {}
@@ -412,14 +375,14 @@ impl ApplicationHandler for Handler {
         if response.repaint
             && let Some(gfx) = &self.gfx
         {
-            gfx.window.request_redraw();
+            gfx.window().request_redraw();
         }
     }
 
     fn about_to_wait(&mut self, event_loop: &ActiveEventLoop) {
         let Some(gfx) = &self.gfx else { return };
         if Instant::now() >= self.next_frame {
-            gfx.window.request_redraw();
+            gfx.window().request_redraw();
             self.next_frame = Instant::now() + IDLE_FRAME;
         }
         event_loop.set_control_flow(ControlFlow::WaitUntil(self.next_frame));
