@@ -100,11 +100,16 @@ impl Scene {
             path: path.to_owned(),
             source,
         })?;
-        let text = String::from_utf8(bytes).map_err(|e| SceneError::NotText {
+        Scene::parse_bytes(&bytes, path)
+    }
+
+    /// Parses and validates the bytes of a scene file (UTF-8 TOML); `path` only names the origin in errors.
+    pub fn parse_bytes(bytes: &[u8], path: &Path) -> Result<Scene, SceneError> {
+        let text = std::str::from_utf8(bytes).map_err(|e| SceneError::NotText {
             path: path.to_owned(),
-            offset: e.utf8_error().valid_up_to(),
+            offset: e.valid_up_to(),
         })?;
-        Scene::parse(&text, path)
+        Scene::parse(text, path)
     }
 
     /// The embedded default scene.
