@@ -9,7 +9,7 @@ use std::time::Instant;
 
 use clap::{Parser, Subcommand, ValueEnum};
 
-use crate::export::{self, ExportError, FrameSink, FrameSpec, Progress, Target};
+use crate::export::{self, ExportError, FrameSpec, Progress, Target};
 use crate::gpu::{GpuError, HeadlessRenderer};
 use crate::output::{self, Format, OutputError};
 use crate::reference;
@@ -384,14 +384,10 @@ fn render_frames(
         .animation
         .as_ref()
         .map_or(crate::animation::DEFAULT_FRAME_RATE, |a| a.frame_rate);
-    let mut sink = FrameSink::new(
-        target,
-        width,
-        height,
-        frames.clone(),
-        frame_rate,
-        args.transparent,
-    )?;
+    // A sheet too large for image tools is refused before the GPU starts.
+    if let Target::Sheet { path, columns } = target {
+        export::sheet_grid(path, width, height, frames.clone(), *columns, frame_rate)?;
+    }
     let mut gpu = match args.backend {
         Backend::Gpu => Some(HeadlessRenderer::new()?),
         Backend::Cpu => None,
@@ -412,10 +408,14 @@ fn render_frames(
     }
     let start = Instant::now();
     let mut progress = Progress::new(frames.len() as u32);
-    for frame in frames.clone() {
-        let at = scene.at_frame(frame as f64);
-        if args.brightness {
-            // Only an .exr sequence gets here (checked above): B of each frame, before the blend.
+    let written = if args.brightness {
+        // Only an .exr sequence gets here (checked above): B of each frame, before the blend.
+        let Target::Sequence { pattern, .. } = target else {
+            unreachable!("--brightness is refused for GIFs and sheets")
+        };
+        let mut written = Vec::new();
+        for frame in frames.clone() {
+            let at = scene.at_frame(frame as f64);
             let billboard = at.place_billboard(width as f64 / height as f64);
             let values: Vec<f64> = match &mut gpu {
                 Some(gpu) => (gpu.brightness(&at, &billboard)?.iter())
@@ -423,18 +423,23 @@ fn render_frames(
                     .collect(),
                 None => reference::render_brightness(&at, &billboard).values,
             };
-            let path = match target {
-                Target::Sequence { pattern, .. } => export::frame_path(pattern, frame),
-                _ => args.output.clone(),
-            };
+            let path = export::frame_path(pattern, frame);
             output::write_brightness_exr(&path, at.billboard.resolution, &values)?;
-        } else {
-            let pixels = compose(&at, gpu.as_mut(), width, height, args.transparent)?;
-            sink.push(frame, &pixels)?;
+            written.push(path);
+            progress.frame_done(frame);
         }
-        progress.frame_done(frame);
-    }
-    let written = sink.finish()?;
+        written
+    } else {
+        export::export_frames(
+            scene,
+            target,
+            frames.clone(),
+            (width, height),
+            args.transparent,
+            |at| compose(at, gpu.as_mut(), width, height, args.transparent),
+            |_, frame| progress.frame_done(frame),
+        )?
+    };
     if args.verbose {
         let seconds = start.elapsed().as_secs_f64();
         eprintln!(

@@ -24,9 +24,9 @@ impl Value {
         let mix = |x: f64, y: f64| x + (y - x) * s;
         match (a, b) {
             (Value::Number(x), Value::Number(y)) => Some(Value::Number(mix(x, y))),
-            (Value::Vector(x), Value::Vector(y)) => Some(Value::Vector(std::array::from_fn(|c| {
-                mix(x[c], y[c])
-            }))),
+            (Value::Vector(x), Value::Vector(y)) => {
+                Some(Value::Vector(std::array::from_fn(|c| mix(x[c], y[c]))))
+            }
             _ => None,
         }
     }
@@ -143,7 +143,9 @@ fn indexed(part: &str) -> Option<(&str, Option<usize>)> {
 impl Parameter {
     /// Parses a path such as `curves[0].control_points[1]`; the error says which forms exist.
     pub fn parse(path: &str) -> Result<Parameter, String> {
-        let err = || format!("{path:?} is not a parameter that can be keyed; use one of: {PARAMETER_FORMS}");
+        let err = || {
+            format!("{path:?} is not a parameter that can be keyed; use one of: {PARAMETER_FORMS}")
+        };
         let parts: Vec<&str> = path.trim().split('.').collect();
         let parts: Option<Vec<(&str, Option<usize>)>> = parts.iter().map(|p| indexed(p)).collect();
         let parts = parts.ok_or_else(err)?;
@@ -192,11 +194,13 @@ impl Parameter {
     pub fn source(&self) -> Option<(SourceKind, usize)> {
         match *self {
             Parameter::EnergyColor | Parameter::BackgroundColor => None,
-            Parameter::Position(k, i) | Parameter::Direction(k, i) | Parameter::Coefficient(k, i) => {
-                Some((k, i))
-            }
+            Parameter::Position(k, i)
+            | Parameter::Direction(k, i)
+            | Parameter::Coefficient(k, i) => Some((k, i)),
             Parameter::MajorRadius(i) => Some((SourceKind::Tori, i)),
-            Parameter::ControlPoint(i, _) | Parameter::Weight(i, _) => Some((SourceKind::Curves, i)),
+            Parameter::ControlPoint(i, _) | Parameter::Weight(i, _) => {
+                Some((SourceKind::Curves, i))
+            }
         }
     }
 
@@ -228,10 +232,18 @@ impl Parameter {
             Parameter::Direction(SourceKind::Lines, i) => v(s.lines.get(i)?.direction),
             Parameter::Direction(SourceKind::Tori, i) => v(s.tori.get(i)?.axis),
             Parameter::Direction(..) => return None,
-            Parameter::Coefficient(SourceKind::Points, i) => Value::Number(s.points.get(i)?.coefficient),
-            Parameter::Coefficient(SourceKind::Lines, i) => Value::Number(s.lines.get(i)?.coefficient),
-            Parameter::Coefficient(SourceKind::Tori, i) => Value::Number(s.tori.get(i)?.coefficient),
-            Parameter::Coefficient(SourceKind::Curves, i) => Value::Number(s.curves.get(i)?.coefficient),
+            Parameter::Coefficient(SourceKind::Points, i) => {
+                Value::Number(s.points.get(i)?.coefficient)
+            }
+            Parameter::Coefficient(SourceKind::Lines, i) => {
+                Value::Number(s.lines.get(i)?.coefficient)
+            }
+            Parameter::Coefficient(SourceKind::Tori, i) => {
+                Value::Number(s.tori.get(i)?.coefficient)
+            }
+            Parameter::Coefficient(SourceKind::Curves, i) => {
+                Value::Number(s.curves.get(i)?.coefficient)
+            }
             Parameter::MajorRadius(i) => Value::Number(s.tori.get(i)?.major_radius),
             Parameter::ControlPoint(i, j) => v(*s.curves.get(i)?.control_points.get(j)?),
             Parameter::Weight(i, j) => Value::Number(*s.curves.get(i)?.weights.get(j)?),
@@ -292,7 +304,11 @@ impl Parameter {
                 }
             }
             (Parameter::ControlPoint(i, j), Value::Vector(p)) => {
-                if let Some(slot) = s.curves.get_mut(*i).and_then(|c| c.control_points.get_mut(*j)) {
+                if let Some(slot) = s
+                    .curves
+                    .get_mut(*i)
+                    .and_then(|c| c.control_points.get_mut(*j))
+                {
                     *slot = DVec3::from_array(p);
                 }
             }
@@ -320,7 +336,11 @@ impl fmt::Display for Parameter {
                 write!(f, "{}[{i}].{field}", k.key())
             }
             Parameter::Direction(k, i) => {
-                let field = if *k == SourceKind::Tori { "axis" } else { "direction" };
+                let field = if *k == SourceKind::Tori {
+                    "axis"
+                } else {
+                    "direction"
+                };
                 write!(f, "{}[{i}].{field}", k.key())
             }
             Parameter::Coefficient(k, i) => write!(f, "{}[{i}].coefficient", k.key()),

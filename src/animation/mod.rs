@@ -68,7 +68,10 @@ impl Animation {
 
     /// The pulse of curve `curve`, if it has one.
     pub fn pulse(&self, curve: usize) -> Option<&Pulse> {
-        self.pulses.iter().find(|p| p.curve == curve).map(|p| &p.pulse)
+        self.pulses
+            .iter()
+            .find(|p| p.curve == curve)
+            .map(|p| &p.pulse)
     }
 
     /// The track of `parameter`, if it is keyed.

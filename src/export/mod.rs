@@ -12,6 +12,7 @@ use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 use crate::output::{self, Format, OutputError};
+use crate::scene::Scene;
 
 pub use progress::Progress;
 pub use sheet::{SheetLayout, sheet_grid};
@@ -129,10 +130,7 @@ pub enum Target {
     /// An animated GIF, looping.
     Gif { path: PathBuf },
     /// A flipbook grid PNG, with its layout as JSON beside it.
-    Sheet {
-        path: PathBuf,
-        columns: Option<u32>,
-    },
+    Sheet { path: PathBuf, columns: Option<u32> },
 }
 
 impl Target {
@@ -233,11 +231,7 @@ pub fn frame_path(pattern: &Path, frame: u32) -> PathBuf {
         return pattern.to_owned();
     };
     let width = last - first + 1;
-    let numbered = format!(
-        "{}{frame:0width$}{}",
-        &name[..first],
-        &name[last + 1..]
-    );
+    let numbered = format!("{}{frame:0width$}{}", &name[..first], &name[last + 1..]);
     pattern.with_file_name(numbered)
 }
 
@@ -395,6 +389,38 @@ impl FrameSink {
         }
         Ok(self.written)
     }
+}
+
+/// Renders `frames` of `scene`'s animation with `render` (the composed frame of a scene at one frame, RGBA
+/// display values, `size` pixels) into `target`; `on_frame(done, frame)` after each. Returns the files
+/// written. The command line and the viewer's export both run this.
+pub fn export_frames<E: From<ExportError>>(
+    scene: &Scene,
+    target: &Target,
+    frames: Range<u32>,
+    size: (u32, u32),
+    transparent: bool,
+    mut render: impl FnMut(&Scene) -> Result<Vec<[f64; 4]>, E>,
+    mut on_frame: impl FnMut(u32, u32),
+) -> Result<Vec<PathBuf>, E> {
+    let frame_rate = scene
+        .animation
+        .as_ref()
+        .map_or(crate::animation::DEFAULT_FRAME_RATE, |a| a.frame_rate);
+    let mut sink = FrameSink::new(
+        target,
+        size.0,
+        size.1,
+        frames.clone(),
+        frame_rate,
+        transparent,
+    )?;
+    for (done, frame) in frames.enumerate() {
+        let pixels = render(&scene.at_frame(frame as f64))?;
+        sink.push(frame, &pixels)?;
+        on_frame(done as u32 + 1, frame);
+    }
+    Ok(sink.finish()?)
 }
 
 #[cfg(test)]

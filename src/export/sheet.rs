@@ -77,10 +77,7 @@ pub fn sheet_grid(
         .unwrap_or_else(|| (count as f64).sqrt().ceil() as u32)
         .clamp(1, count);
     let rows = count.div_ceil(columns);
-    let (sw, sh) = (
-        columns as u64 * width as u64,
-        rows as u64 * height as u64,
-    );
+    let (sw, sh) = (columns as u64 * width as u64, rows as u64 * height as u64);
     if sw > MAX_SHEET_SIDE || sh > MAX_SHEET_SIDE {
         return Err(ExportError::Target {
             path: path.to_owned(),
@@ -135,7 +132,14 @@ mod tests {
         assert_eq!(g(10, Some(10)), (10, 1, 100, 20));
         assert_eq!(g(10, Some(3)), (3, 4, 30, 80));
         let l = sheet_grid(Path::new("s.png"), 10, 20, 5..12, Some(3), 30.0).unwrap();
-        assert_eq!(l.frames[4], SheetCell { frame: 9, x: 10, y: 20 });
+        assert_eq!(
+            l.frames[4],
+            SheetCell {
+                frame: 9,
+                x: 10,
+                y: 20
+            }
+        );
         assert!(sheet_grid(Path::new("s.png"), 4096, 4096, 0..25, None, 30.0).is_err());
     }
 }

@@ -102,7 +102,9 @@ pub(super) fn validate(
         };
         let Some(base) = parameter.get(scene) else {
             let why = match parameter {
-                Parameter::Weight(..) => "the curve, or that weight of its W series, does not exist (key weights only of a curve with `weights`)",
+                Parameter::Weight(..) => {
+                    "the curve, or that weight of its W series, does not exist (key weights only of a curve with `weights`)"
+                }
                 _ => "names a source or control point the scene does not have",
             };
             c.fail(&path.key("parameter"), format!("{}: {why}", t.parameter));
@@ -113,13 +115,19 @@ pub(super) fn validate(
         {
             c.fail(
                 &path.key("parameter"),
-                format!("{}: the curve's W series is its pulse; remove the pulse or this track", t.parameter),
+                format!(
+                    "{}: the curve's W series is its pulse; remove the pulse or this track",
+                    t.parameter
+                ),
             );
         }
         if tracks.iter().any(|other| other.parameter == parameter) {
             c.fail(
                 &path.key("parameter"),
-                format!("{}: keyed twice; put all its keys in one track", t.parameter),
+                format!(
+                    "{}: keyed twice; put all its keys in one track",
+                    t.parameter
+                ),
             );
         }
         if t.keys.is_empty() {
@@ -172,15 +180,17 @@ pub(super) fn validate(
     if anim.is_none() && pulses.is_empty() && tracks.is_empty() {
         return None;
     }
-    let frame_rate = anim.and_then(|a| a.frame_rate).map_or(DEFAULT_FRAME_RATE, |x| {
-        c.in_open_range(
-            &anim_path.key("frame_rate"),
-            x,
-            0.0,
-            f64::INFINITY,
-            "frames per second must be positive",
-        )
-    });
+    let frame_rate = anim
+        .and_then(|a| a.frame_rate)
+        .map_or(DEFAULT_FRAME_RATE, |x| {
+            c.in_open_range(
+                &anim_path.key("frame_rate"),
+                x,
+                0.0,
+                f64::INFINITY,
+                "frames per second must be positive",
+            )
+        });
     let frames = match anim.and_then(|a| a.frames) {
         None => Animation::natural_length(&pulses, &tracks),
         Some(n) if (1..=MAX_FRAMES as i64).contains(&n) => n as u32,

@@ -13,6 +13,7 @@ use super::handles::{self, HandleId};
 use super::history::History;
 use super::navigation;
 use super::panel;
+use super::timeline::{self, ExportJob, Playback};
 use super::viewport::{ViewportCallback, ViewportReport, ViewportView};
 use crate::geometry::Camera;
 use crate::scene::Scene;
@@ -81,6 +82,12 @@ pub struct ViewerApp {
     frame_times: VecDeque<f64>,
     last_frame: Option<Instant>,
     requests: Vec<Request>,
+    /// The animation's current frame and transport (not a document edit).
+    pub playback: Playback,
+    /// The Animation section's own fields (the parameter being typed, the export settings).
+    pub animation_form: panel::AnimationForm,
+    /// An export running beside the UI.
+    pub export_job: Option<ExportJob>,
 }
 
 const SAVE: KeyboardShortcut = KeyboardShortcut::new(Modifiers::COMMAND, Key::S);
@@ -119,6 +126,65 @@ impl ViewerApp {
             frame_times: VecDeque::new(),
             last_frame: None,
             requests: Vec::new(),
+            playback: Playback::default(),
+            animation_form: panel::AnimationForm::default(),
+            export_job: None,
+        }
+    }
+
+    /// The scene as shown: the document's scene at the current frame of its animation.
+    pub fn frame_scene(&self) -> Scene {
+        if self.doc.scene.is_animated() {
+            self.doc.scene.at_frame(self.playback.frame as f64)
+        } else {
+            self.doc.scene.clone()
+        }
+    }
+
+    /// Playback, the transport bar and any export running: once per frame, before the rest of the UI.
+    fn animation_ui(&mut self, ui: &mut egui::Ui) {
+        if let Some(job) = &self.export_job {
+            let status = job.status();
+            match status.result {
+                Some(Ok(files)) => {
+                    let first = files
+                        .first()
+                        .map_or(String::new(), |p| p.display().to_string());
+                    let more = if files.len() > 1 {
+                        format!(" (+{} more)", files.len() - 1)
+                    } else {
+                        String::new()
+                    };
+                    self.notify(format!("Exported {first}{more}"), false);
+                    self.export_job = None;
+                }
+                Some(Err(e)) => {
+                    self.notify(format!("Export failed: {e}"), true);
+                    self.export_job = None;
+                }
+                None => ui
+                    .ctx()
+                    .request_repaint_after(std::time::Duration::from_millis(200)),
+            }
+        }
+        let Some(animation) = &self.doc.scene.animation else {
+            self.playback.playing = false;
+            self.playback.frame = 0;
+            return;
+        };
+        let (frames, frame_rate) = (animation.frames, animation.frame_rate);
+        if self.playback.frame >= frames {
+            self.playback.seek(self.playback.frame, frames);
+        }
+        timeline::shortcuts(ui.ctx(), &mut self.playback, frames);
+        // Real time, but at most half a second per UI frame, so a slow frame skips ahead but never far.
+        let dt = ui.input(|i| i.stable_dt).min(0.5) as f64;
+        self.playback.advance(dt, frame_rate, frames);
+        egui::Panel::bottom("energywave.timeline").show(ui, |ui| {
+            timeline::bar(ui, &mut self.playback, frames, frame_rate)
+        });
+        if self.playback.playing {
+            ui.ctx().request_repaint();
         }
     }
 
@@ -292,6 +358,7 @@ impl ViewerApp {
         self.shortcuts(ui.ctx());
 
         egui::Panel::bottom("energywave.status").show(ui, |ui| self.status_bar(ui));
+        self.animation_ui(ui);
         egui::Panel::left("energywave.panel")
             .resizable(true)
             .default_size(340.0)
@@ -376,7 +443,7 @@ impl ViewerApp {
         ui.painter().add(egui_wgpu::Callback::new_paint_callback(
             rect,
             ViewportCallback(ViewportView {
-                scene: self.doc.scene.clone(),
+                scene: self.frame_scene(),
                 size: self.viewport_px,
                 show_grid: self.show_grid,
             }),

@@ -6,6 +6,7 @@
 //! - [`handles`]: the sources' handles, drawn and dragged with egui's painter;
 //! - [`navigation`]: orbit, pan, zoom and framing;
 //! - [`history`]: undo and redo;
+//! - [`timeline`]: playback of the animation (play, pause, step, scrub, loop) and exports beside the UI;
 //! - [`document`]: the scene file, saving, hot reload, screenshot names;
 //! - [`viewport`]: the 3D viewport on the GPU (grid, field, billboard) as an egui-wgpu paint callback;
 //! - [`window`]: the winit window and event loop;
@@ -18,6 +19,7 @@ pub mod history;
 pub mod navigation;
 pub mod offscreen;
 pub mod panel;
+pub mod timeline;
 pub mod viewport;
 pub mod window;
 

@@ -5,6 +5,10 @@ use egui::{Color32, DragValue, Slider, Stroke, Ui};
 use glam::DVec3;
 
 use super::app::ViewerApp;
+use crate::animation::{
+    Animation, CurvePulse, MAX_FRAMES, Parameter, Pulse, SourceKind, Track, Value,
+};
+use crate::export::Target;
 use crate::field::{Curve, Line, Point, Torus, wseries};
 use crate::scene::MAX_DIVISIONS;
 
@@ -87,6 +91,8 @@ pub fn show(ui: &mut Ui, app: &mut ViewerApp) {
     render_section(ui, app);
     ui.separator();
     sources_section(ui, app);
+    ui.separator();
+    animation_section(ui, app);
 }
 
 fn file_section(ui: &mut Ui, app: &mut ViewerApp) {
@@ -340,16 +346,23 @@ fn sources_section(ui: &mut Ui, app: &mut ViewerApp) {
         }
     });
     let s = &mut scene.sources;
-    list(ui, "Point", &mut s.points, |ui, p| {
-        vec3(ui, "position", &mut p.position, 0.02);
-        coefficient(ui, &mut p.coefficient);
-    });
-    list(ui, "Line", &mut s.lines, |ui, l| {
-        vec3(ui, "point", &mut l.point, 0.02);
-        direction(ui, "direction", &mut l.direction);
-        coefficient(ui, &mut l.coefficient);
-    });
-    list(ui, "Torus", &mut s.tori, |ui, t| {
+    let mut edits = Vec::new();
+    edits.push((
+        SourceKind::Points,
+        list(ui, "Point", &mut s.points, |ui, p| {
+            vec3(ui, "position", &mut p.position, 0.02);
+            coefficient(ui, &mut p.coefficient);
+        }),
+    ));
+    edits.push((
+        SourceKind::Lines,
+        list(ui, "Line", &mut s.lines, |ui, l| {
+            vec3(ui, "point", &mut l.point, 0.02);
+            direction(ui, "direction", &mut l.direction);
+            coefficient(ui, &mut l.coefficient);
+        }),
+    ));
+    let tori = list(ui, "Torus", &mut s.tori, |ui, t| {
         vec3(ui, "center", &mut t.center, 0.02);
         direction(ui, "axis", &mut t.axis);
         ui.horizontal(|ui| {
@@ -363,16 +376,37 @@ fn sources_section(ui: &mut Ui, app: &mut ViewerApp) {
         });
         coefficient(ui, &mut t.coefficient);
     });
-    list(ui, "Curve", &mut s.curves, curve_editor);
+    edits.push((SourceKind::Tori, tori));
+    edits.push((
+        SourceKind::Curves,
+        list(ui, "Curve", &mut s.curves, curve_editor),
+    ));
+    // Pulses and keys follow their sources when a source is deleted or duplicated.
+    if let Some(animation) = &mut scene.animation {
+        for (kind, edit) in edits {
+            match edit {
+                Some(ListEdit::Deleted(i)) => animation.source_removed(kind, i),
+                Some(ListEdit::Duplicated(i)) => animation.source_inserted(kind, i + 1),
+                None => {}
+            }
+        }
+    }
 }
 
-/// A list of sources of one kind, each with its editor and Duplicate / Delete.
+/// A source deleted or duplicated in a list.
+enum ListEdit {
+    Deleted(usize),
+    Duplicated(usize),
+}
+
+/// A list of sources of one kind, each with its editor and Duplicate / Delete; says which was deleted or
+/// duplicated.
 fn list<T: Clone>(
     ui: &mut Ui,
     kind: &str,
     items: &mut Vec<T>,
     mut edit: impl FnMut(&mut Ui, &mut T),
-) {
+) -> Option<ListEdit> {
     let mut duplicate = None;
     let mut delete = None;
     for (i, item) in items.iter_mut().enumerate() {
@@ -394,10 +428,13 @@ fn list<T: Clone>(
     if let Some(i) = duplicate {
         let copy = items[i].clone();
         items.insert(i + 1, copy);
+        return Some(ListEdit::Duplicated(i));
     }
     if let Some(i) = delete {
         items.remove(i);
+        return Some(ListEdit::Deleted(i));
     }
+    None
 }
 
 fn curve_editor(ui: &mut Ui, c: &mut Curve) {
@@ -502,4 +539,442 @@ fn wseries_plot(ui: &mut Ui, weights: &[f64]) {
         };
         painter.circle_filled(to_screen(t, w), 2.5, Color32::from_rgb(255, 205, 60));
     }
+}
+
+/// What an export from the viewer writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ExportKind {
+    /// One PNG per frame, numbered.
+    Sequence,
+    Gif,
+    /// A flipbook grid PNG with its layout as JSON beside it.
+    Sheet,
+}
+
+/// The Animation section's fields that are not the document's: the parameter path being typed and the
+/// export's settings.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AnimationForm {
+    /// A parameter path to key, as the scene file names it.
+    pub new_track: String,
+    /// Where to export; empty means beside the scene file.
+    pub export_path: String,
+    pub export_kind: ExportKind,
+    pub transparent: bool,
+    /// Width and height of exported frames, pixels.
+    pub size: [u32; 2],
+}
+
+impl Default for AnimationForm {
+    fn default() -> Self {
+        Self {
+            new_track: String::new(),
+            export_path: String::new(),
+            export_kind: ExportKind::Sequence,
+            transparent: false,
+            size: [256, 256],
+        }
+    }
+}
+
+impl AnimationForm {
+    /// The export's path: the typed one, or beside the scene (`name_####.png`, `name.gif`,
+    /// `name_sheet.png`; the working directory for the embedded default scene).
+    pub fn export_target_path(&self, scene_path: Option<&std::path::Path>) -> std::path::PathBuf {
+        if !self.export_path.trim().is_empty() {
+            return self.export_path.trim().into();
+        }
+        let stem = scene_path
+            .and_then(|p| p.file_stem())
+            .map_or("energywave".to_owned(), |s| {
+                s.to_string_lossy().into_owned()
+            });
+        let name = match self.export_kind {
+            ExportKind::Sequence => format!("{stem}_####.png"),
+            ExportKind::Gif => format!("{stem}.gif"),
+            ExportKind::Sheet => format!("{stem}_sheet.png"),
+        };
+        match scene_path.and_then(|p| p.parent()) {
+            Some(dir) if !dir.as_os_str().is_empty() => dir.join(name),
+            _ => name.into(),
+        }
+    }
+}
+
+/// A number editor for a keyed value (a vector as three).
+fn value_editor(ui: &mut Ui, value: &mut Value, color: bool) {
+    match value {
+        Value::Number(x) => {
+            ui.add(DragValue::new(x).speed(0.02).max_decimals(4));
+        }
+        Value::Vector(v) => {
+            for c in v.iter_mut() {
+                let mut d = DragValue::new(c).speed(0.02).max_decimals(4);
+                if color {
+                    d = d.range(0.0..=1.0).speed(0.005);
+                }
+                ui.add(d);
+            }
+        }
+    }
+}
+
+/// Time: the timeline's settings, pulses along curves, keyed parameters, and the export.
+fn animation_section(ui: &mut Ui, app: &mut ViewerApp) {
+    let frame = app.playback.frame;
+    egui::CollapsingHeader::new("Animation")
+        .default_open(app.doc.scene.is_animated())
+        .show(ui, |ui| {
+            let scene = &mut app.doc.scene;
+            let Some(animation) = &scene.animation else {
+                ui.label("A still scene.");
+                if ui
+                    .button("Animate")
+                    .on_hover_text(
+                        "Add a timeline: then pulses along curves and keys on any parameter",
+                    )
+                    .clicked()
+                {
+                    scene.animation = Some(Animation::default());
+                }
+                return;
+            };
+            let current = scene.at_frame(frame as f64);
+            let mut animation = animation.clone();
+            egui::Grid::new("energywave.timeline_settings")
+                .num_columns(2)
+                .show(ui, |ui| {
+                    labelled(
+                        ui,
+                        "frame rate (1/s)",
+                        DragValue::new(&mut animation.frame_rate)
+                            .range(1.0..=240.0)
+                            .speed(0.1),
+                    );
+                    ui.end_row();
+                    labelled(
+                        ui,
+                        "length (frames)",
+                        DragValue::new(&mut animation.frames).range(1..=MAX_FRAMES),
+                    );
+                    ui.end_row();
+                });
+            let mut remove_animation = false;
+            ui.horizontal(|ui| {
+                if ui
+                    .small_button("natural length")
+                    .on_hover_text("Until the last pulse has passed and the last key")
+                    .clicked()
+                {
+                    animation.frames =
+                        Animation::natural_length(&animation.pulses, &animation.tracks);
+                }
+                if ui
+                    .small_button("make still")
+                    .on_hover_text("Remove the animation (pulses and keys too)")
+                    .clicked()
+                {
+                    remove_animation = true;
+                }
+            });
+
+            ui.strong("Travelling pulses");
+            if scene.sources.curves.is_empty() {
+                ui.label("(add a curve to run a pulse along it)");
+            }
+            for (i, curve) in scene.sources.curves.iter().enumerate() {
+                let index = animation.pulses.iter().position(|p| p.curve == i);
+                let mut on = index.is_some();
+                if ui
+                    .checkbox(&mut on, format!("Curve {}: pulse", i + 1))
+                    .on_hover_text(
+                        "The curve's W series runs the thesis's travelling pulse (eq. 5.1)",
+                    )
+                    .changed()
+                {
+                    match index {
+                        Some(k) => {
+                            animation.pulses.remove(k);
+                        }
+                        None => animation.pulses.push(CurvePulse {
+                            curve: i,
+                            pulse: Pulse::thesis(if curve.weights.is_empty() {
+                                Pulse::THESIS_COUNT
+                            } else {
+                                curve.weights.len()
+                            }),
+                        }),
+                    }
+                }
+                let Some(p) = animation.pulses.iter_mut().find(|p| p.curve == i) else {
+                    continue;
+                };
+                let p = &mut p.pulse;
+                egui::Grid::new(("energywave.pulse", i))
+                    .num_columns(2)
+                    .show(ui, |ui| {
+                        labelled(ui, "weights", DragValue::new(&mut p.count).range(1..=64));
+                        ui.end_row();
+                        labelled(
+                            ui,
+                            "speed",
+                            DragValue::new(&mut p.speed).range(0.01..=100.0).speed(0.01),
+                        );
+                        ui.end_row();
+                        labelled(
+                            ui,
+                            "width (frames)",
+                            DragValue::new(&mut p.width).range(0.1..=10000.0).speed(0.1),
+                        );
+                        ui.end_row();
+                        labelled(
+                            ui,
+                            "delay per weight",
+                            DragValue::new(&mut p.delay)
+                                .range(-1000.0..=1000.0)
+                                .speed(0.1),
+                        );
+                        ui.end_row();
+                        labelled(ui, "start frame", DragValue::new(&mut p.start).speed(0.5));
+                        ui.end_row();
+                        let mut periodic = p.period.is_some();
+                        ui.checkbox(&mut periodic, "repeat every");
+                        let mut period = p.period.unwrap_or(p.natural_length().max(1.0));
+                        ui.add_enabled(
+                            periodic,
+                            DragValue::new(&mut period)
+                                .range(1.0..=100000.0)
+                                .suffix(" frames"),
+                        );
+                        p.period = periodic.then_some(period);
+                        ui.end_row();
+                    });
+                if ui.small_button("thesis's values").clicked() {
+                    *p = Pulse::thesis(p.count);
+                }
+                ui.label(format!("W at frame {frame}"));
+                wseries_plot(ui, &p.weights(frame as f64));
+            }
+
+            ui.strong("Keyed parameters");
+            let mut delete_track = None;
+            for (t, track) in animation.tracks.iter_mut().enumerate() {
+                let color = matches!(
+                    track.parameter,
+                    Parameter::EnergyColor | Parameter::BackgroundColor
+                );
+                egui::CollapsingHeader::new(track.parameter.to_string())
+                    .id_salt(("energywave.track", t))
+                    .default_open(true)
+                    .show(ui, |ui| {
+                        let mut remove_key = None;
+                        let n = track.keys.len();
+                        for k in 0..n {
+                            // Frames stay in order: each key between its neighbours.
+                            let lo = if k > 0 {
+                                track.keys[k - 1].frame + 1.0
+                            } else {
+                                0.0
+                            };
+                            let hi = if k + 1 < n {
+                                track.keys[k + 1].frame - 1.0
+                            } else {
+                                MAX_FRAMES as f64
+                            };
+                            let key = &mut track.keys[k];
+                            let range = lo.min(key.frame)..=hi.max(key.frame);
+                            ui.horizontal(|ui| {
+                                ui.add(
+                                    DragValue::new(&mut key.frame)
+                                        .range(range)
+                                        .speed(0.2)
+                                        .prefix("frame "),
+                                );
+                                value_editor(ui, &mut key.value, color);
+                                if ui.small_button("remove").clicked() {
+                                    remove_key = Some(k);
+                                }
+                            });
+                        }
+                        if let Some(k) = remove_key {
+                            track.keys.remove(k);
+                        }
+                        ui.horizontal(|ui| {
+                            if ui
+                                .small_button(format!("key at frame {frame}"))
+                                .on_hover_text("Set a key here to the value shown now")
+                                .clicked()
+                                && let Some(v) = track
+                                    .value_at(frame as f64)
+                                    .or_else(|| track.parameter.get(&current))
+                            {
+                                track.set_key(frame as f64, v);
+                            }
+                            if ui.small_button("delete track").clicked() {
+                                delete_track = Some(t);
+                            }
+                        });
+                    });
+            }
+            if let Some(t) = delete_track {
+                animation.tracks.remove(t);
+            }
+            animation.tracks.retain(|t| !t.keys.is_empty());
+            ui.horizontal(|ui| {
+                ui.add(
+                    egui::TextEdit::singleline(&mut app.animation_form.new_track)
+                        .hint_text("curves[0].coefficient")
+                        .desired_width(170.0),
+                );
+                if ui
+                    .button(format!("key at frame {frame}"))
+                    .on_hover_text(crate::animation::PARAMETER_FORMS)
+                    .clicked()
+                {
+                    let path = app.animation_form.new_track.trim().to_owned();
+                    match Parameter::parse(&path) {
+                        Ok(parameter) => match parameter.get(&current) {
+                            Some(value) => {
+                                match animation
+                                    .tracks
+                                    .iter_mut()
+                                    .find(|t| t.parameter == parameter)
+                                {
+                                    Some(track) => track.set_key(frame as f64, value),
+                                    None => animation.tracks.push(Track {
+                                        parameter,
+                                        keys: vec![crate::animation::Key {
+                                            frame: frame as f64,
+                                            value,
+                                        }],
+                                    }),
+                                }
+                                app.animation_form.new_track.clear();
+                            }
+                            None => {
+                                app.notice = Some((
+                                    format!(
+                                        "{path}: the scene has no such source, point or weight"
+                                    ),
+                                    true,
+                                ))
+                            }
+                        },
+                        Err(e) => app.notice = Some((e, true)),
+                    }
+                }
+            });
+
+            animation.retain_valid(scene);
+            scene.animation = (!remove_animation).then_some(animation);
+        });
+    export_section(ui, app);
+}
+
+/// Export of the animation to files, on a thread of its own.
+fn export_section(ui: &mut Ui, app: &mut ViewerApp) {
+    let Some(animation) = &app.doc.scene.animation else {
+        return;
+    };
+    let frames = animation.frames;
+    egui::CollapsingHeader::new("Export")
+        .default_open(false)
+        .show(ui, |ui| {
+            let form = &mut app.animation_form;
+            ui.horizontal(|ui| {
+                ui.selectable_value(&mut form.export_kind, ExportKind::Sequence, "PNG sequence");
+                ui.selectable_value(&mut form.export_kind, ExportKind::Gif, "GIF");
+                ui.selectable_value(&mut form.export_kind, ExportKind::Sheet, "sprite sheet");
+            });
+            let default_path = AnimationForm {
+                export_path: String::new(),
+                ..form.clone()
+            }
+            .export_target_path(app.doc.path());
+            ui.add(
+                egui::TextEdit::singleline(&mut form.export_path)
+                    .hint_text(default_path.display().to_string())
+                    .desired_width(f32::INFINITY),
+            );
+            ui.horizontal(|ui| {
+                ui.label("size");
+                ui.add(
+                    DragValue::new(&mut form.size[0])
+                        .range(1..=4096)
+                        .suffix(" px"),
+                );
+                ui.label("\u{d7}");
+                ui.add(
+                    DragValue::new(&mut form.size[1])
+                        .range(1..=4096)
+                        .suffix(" px"),
+                );
+                ui.add_enabled(
+                    form.export_kind != ExportKind::Gif,
+                    egui::Checkbox::new(&mut form.transparent, "transparent"),
+                )
+                .on_hover_text("alpha = min(B, 1), to composite over anything (not in a GIF)");
+            });
+            if let Some(job) = &app.export_job {
+                let status = job.status();
+                ui.add(
+                    egui::ProgressBar::new(status.done as f32 / status.total.max(1) as f32).text(
+                        format!(
+                            "{}: {}/{} frames",
+                            job.description, status.done, status.total
+                        ),
+                    ),
+                );
+                return;
+            }
+            if ui
+                .button(format!("Export {frames} frames"))
+                .on_hover_text("Renders every frame of the animation on a second GPU device")
+                .clicked()
+            {
+                let path = form.export_target_path(app.doc.path());
+                let sheet = form.export_kind == ExportKind::Sheet;
+                let transparent = form.transparent && form.export_kind != ExportKind::Gif;
+                let checked = Target::for_output(&path, sheet, None).and_then(|target| {
+                    let expected = match form.export_kind {
+                        ExportKind::Sequence => matches!(target, Target::Sequence { .. }),
+                        ExportKind::Gif => matches!(target, Target::Gif { .. }),
+                        ExportKind::Sheet => matches!(target, Target::Sheet { .. }),
+                    };
+                    if !expected {
+                        return Err(crate::export::ExportError::Target {
+                            path: path.clone(),
+                            why: "does not fit the kind chosen: a sequence needs a run of # \
+                                  (name_####.png), a GIF ends in .gif, a sheet in .png"
+                                .into(),
+                        });
+                    }
+                    if let Target::Sheet { path, columns } = &target {
+                        crate::export::sheet_grid(
+                            path,
+                            form.size[0],
+                            form.size[1],
+                            0..frames,
+                            *columns,
+                            30.0,
+                        )?;
+                    }
+                    Ok(target)
+                });
+                match checked {
+                    Ok(target) => {
+                        let description = path.display().to_string();
+                        app.export_job = Some(super::timeline::ExportJob::start(
+                            app.doc.scene.clone(),
+                            target,
+                            0..frames,
+                            (form.size[0], form.size[1]),
+                            transparent,
+                            description,
+                        ));
+                    }
+                    Err(e) => app.notice = Some((e.to_string(), true)),
+                }
+            }
+        });
 }
