@@ -78,15 +78,14 @@ impl Pulse {
         (0..self.count).map(|i| self.weight(i, t)).collect()
     }
 
-    /// The frame after which the pulse (without a period) has left the last weight; with a period, the
-    /// period. Relative to frame 0, `start` included.
+    /// The frame after which the pulse (without a period) has left every weight; with a period,
+    /// `start + period`. Weight i is lit while `speed (t - start) - delay i` is in `[0, width]`.
     pub fn natural_length(&self) -> f64 {
         match self.period {
             Some(p) => self.start + p,
             None => {
-                self.start
-                    + (self.delay.abs() * self.count.saturating_sub(1) as f64 + self.width)
-                        / self.speed.abs().max(1e-9)
+                let last = self.delay * self.count.saturating_sub(1) as f64;
+                self.start + (last.max(0.0) + self.width) / self.speed.abs().max(1e-9)
             }
         }
     }
