@@ -601,11 +601,12 @@ impl AnimationForm {
     }
 }
 
-/// A number editor for a keyed value (a vector as three).
-fn value_editor(ui: &mut Ui, value: &mut Value, color: bool) {
+/// A number editor for a keyed value (a vector as three), named by the label `name`.
+fn value_editor(ui: &mut Ui, value: &mut Value, color: bool, name: egui::Id) {
     match value {
         Value::Number(x) => {
-            ui.add(DragValue::new(x).speed(0.02).max_decimals(4));
+            ui.add(DragValue::new(x).speed(0.02).max_decimals(4))
+                .labelled_by(name);
         }
         Value::Vector(v) => {
             for c in v.iter_mut() {
@@ -613,7 +614,7 @@ fn value_editor(ui: &mut Ui, value: &mut Value, color: bool) {
                 if color {
                     d = d.range(0.0..=1.0).speed(0.005);
                 }
-                ui.add(d);
+                ui.add(d).labelled_by(name);
             }
         }
     }
@@ -623,7 +624,7 @@ fn value_editor(ui: &mut Ui, value: &mut Value, color: bool) {
 fn animation_section(ui: &mut Ui, app: &mut ViewerApp) {
     let frame = app.playback.frame;
     egui::CollapsingHeader::new("Animation")
-        .default_open(app.doc.scene.is_animated())
+        .default_open(true)
         .show(ui, |ui| {
             let scene = &mut app.doc.scene;
             let Some(animation) = &scene.animation else {
@@ -738,14 +739,15 @@ fn animation_section(ui: &mut Ui, app: &mut ViewerApp) {
                         labelled(ui, "start frame", DragValue::new(&mut p.start).speed(0.5));
                         ui.end_row();
                         let mut periodic = p.period.is_some();
-                        ui.checkbox(&mut periodic, "repeat every");
+                        let name = ui.checkbox(&mut periodic, "repeat every").id;
                         let mut period = p.period.unwrap_or(p.natural_length().max(1.0));
                         ui.add_enabled(
                             periodic,
                             DragValue::new(&mut period)
                                 .range(1.0..=100000.0)
                                 .suffix(" frames"),
-                        );
+                        )
+                        .labelled_by(name);
                         p.period = periodic.then_some(period);
                         ui.end_row();
                     });
@@ -784,13 +786,15 @@ fn animation_section(ui: &mut Ui, app: &mut ViewerApp) {
                             let key = &mut track.keys[k];
                             let range = lo.min(key.frame)..=hi.max(key.frame);
                             ui.horizontal(|ui| {
+                                let name = ui.label(format!("key {}", k + 1)).id;
                                 ui.add(
                                     DragValue::new(&mut key.frame)
                                         .range(range)
                                         .speed(0.2)
                                         .prefix("frame "),
-                                );
-                                value_editor(ui, &mut key.value, color);
+                                )
+                                .labelled_by(name);
+                                value_editor(ui, &mut key.value, color, name);
                                 if ui.small_button("remove").clicked() {
                                     remove_key = Some(k);
                                 }
@@ -897,18 +901,20 @@ fn export_section(ui: &mut Ui, app: &mut ViewerApp) {
                     .desired_width(f32::INFINITY),
             );
             ui.horizontal(|ui| {
-                ui.label("size");
+                let name = ui.label("size").id;
                 ui.add(
                     DragValue::new(&mut form.size[0])
                         .range(1..=4096)
                         .suffix(" px"),
-                );
+                )
+                .labelled_by(name);
                 ui.label("\u{d7}");
                 ui.add(
                     DragValue::new(&mut form.size[1])
                         .range(1..=4096)
                         .suffix(" px"),
-                );
+                )
+                .labelled_by(name);
                 ui.add_enabled(
                     form.export_kind != ExportKind::Gif,
                     egui::Checkbox::new(&mut form.transparent, "transparent"),

@@ -182,12 +182,12 @@ pub fn shortcuts(ctx: &egui::Context, playback: &mut Playback, frames: u32) {
 pub fn bar(ui: &mut Ui, playback: &mut Playback, frames: u32, frame_rate: f64) {
     ui.horizontal(|ui| {
         let last = frames.max(1) - 1;
-        if ui.button("\u{23ee}").on_hover_text("First frame").clicked() {
+        if ui.button("First").on_hover_text("First frame").clicked() {
             playback.seek(0, frames);
         }
         if ui
-            .button("\u{23f4}|")
-            .on_hover_text("Step back (\u{2190})")
+            .button("< Step")
+            .on_hover_text("Step back (Left arrow key)")
             .clicked()
         {
             playback.playing = false;
@@ -201,8 +201,8 @@ pub fn bar(ui: &mut Ui, playback: &mut Playback, frames: u32, frame_rate: f64) {
             playback.playing = !playback.playing;
         }
         if ui
-            .button("|\u{23f5}")
-            .on_hover_text("Step forward (\u{2192})")
+            .button("Step >")
+            .on_hover_text("Step forward (Right arrow key)")
             .clicked()
         {
             playback.playing = false;
