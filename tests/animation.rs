@@ -7,7 +7,8 @@ use std::path::Path;
 use energywave::animation::{Parameter, Pulse, SourceKind, Value};
 use energywave::scene::Scene;
 
-/// Thesis eq. (5.1), as printed: frame t, weight index i.
+/// Thesis eq. (5.1), as printed (min and max, not a clamp): frame t, weight index i.
+#[allow(clippy::manual_clamp)]
 fn eq_5_1(t: f64, i: usize) -> f64 {
     let theta = (t - 7.0 * i as f64) / 25.0 * PI;
     let theta = if (0.0..=2.0 * PI).contains(&theta) {
@@ -71,7 +72,7 @@ fn the_pulse_parameters_generalise_eq_5_1() {
             tau -= period * (tau / period).floor();
         }
         let theta = (p.speed * tau - p.delay * i as f64) * 2.0 * PI / p.width;
-        let theta = if theta >= 0.0 && theta <= 2.0 * PI {
+        let theta = if (0.0..=2.0 * PI).contains(&theta) {
             theta
         } else {
             0.0

@@ -288,11 +288,8 @@ fn transparent_frames_composite_over_a_checkerboard_like_the_blend() {
             close(over(k), o.get_pixel(x, y), "over the checkerboard");
             // And by hand: (1 - B) Cb + B Ce with B = alpha.
             let by_hand: [f64; 3] = std::array::from_fn(|c| (1.0 - a) * k[c] + a * energy[c]);
-            for c in 0..3 {
-                assert!(
-                    (over(k)[c] - by_hand[c]).abs() <= 2.5 / 255.0,
-                    "({x}, {y}) by hand"
-                );
+            for (got, want) in over(k).iter().zip(by_hand) {
+                assert!((got - want).abs() <= 2.5 / 255.0, "({x}, {y}) by hand");
             }
             if p.0[3] > 0 {
                 partial += 1;

@@ -216,10 +216,10 @@ fn check_value(c: &mut Checker<'_, '_>, path: &FieldPath, parameter: &Parameter,
         (Parameter::EnergyColor | Parameter::BackgroundColor, Value::Vector(v)) => {
             c.color(path, v);
         }
-        (Parameter::Direction(..), Value::Vector(v)) => {
-            if glam::DVec3::from_array(v).length() <= 1e-12 {
-                c.fail(path, "a direction must not be the zero vector");
-            }
+        (Parameter::Direction(..), Value::Vector(v))
+            if glam::DVec3::from_array(v).length() <= 1e-12 =>
+        {
+            c.fail(path, "a direction must not be the zero vector");
         }
         (Parameter::MajorRadius(_), Value::Number(x)) if x <= 0.0 => {
             c.fail(path, format!("{x}: the major radius R must be positive"));
