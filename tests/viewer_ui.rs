@@ -549,3 +549,43 @@ fn a_still_scene_can_be_animated_with_a_key() {
     assert_eq!(frames, [0.0, 50.0]);
     assert!(h.state().history.can_undo(), "keys are document edits");
 }
+
+#[test]
+fn the_viewer_exports_a_sprite_sheet_beside_the_ui() {
+    let dir = std::env::temp_dir().join(format!("energywave-viewer-export-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut scene = pulse_scene();
+    scene.billboard.resolution = 24;
+    scene.integration.divisions = 24;
+    scene.animation.as_mut().unwrap().frames = 5;
+    let mut h = harness(scene);
+    h.get_by_label("Export").click_accesskit();
+    h.run();
+    {
+        let form = &mut h.state_mut().animation_form;
+        form.export_kind = energywave::viewer::panel::ExportKind::Sheet;
+        form.export_path = dir.join("sheet.png").display().to_string();
+        form.size = [20, 16];
+    }
+    h.run();
+    h.get_by_label("Export 5 frames").click_accesskit();
+    h.run();
+    assert!(h.state().export_job.is_some(), "{:?}", h.state().notice);
+    let start = std::time::Instant::now();
+    while h.state().export_job.is_some() && start.elapsed().as_secs() < 120 {
+        std::thread::sleep(std::time::Duration::from_millis(100));
+        h.step();
+    }
+    let notice = h.state().notice.clone();
+    assert!(
+        notice
+            .as_ref()
+            .is_some_and(|(t, e)| !e && t.starts_with("Exported")),
+        "{notice:?}"
+    );
+    let sheet = image::open(dir.join("sheet.png")).unwrap();
+    // Five frames: three columns, two rows.
+    assert_eq!((sheet.width(), sheet.height()), (60, 32));
+    assert!(dir.join("sheet.json").is_file());
+}

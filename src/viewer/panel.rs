@@ -649,7 +649,7 @@ fn animation_section(ui: &mut Ui, app: &mut ViewerApp) {
                         ui,
                         "frame rate (1/s)",
                         DragValue::new(&mut animation.frame_rate)
-                            .range(1.0..=240.0)
+                            .range(0.01..=10000.0)
                             .speed(0.1),
                     );
                     ui.end_row();
@@ -714,26 +714,26 @@ fn animation_section(ui: &mut Ui, app: &mut ViewerApp) {
                 egui::Grid::new(("energywave.pulse", i))
                     .num_columns(2)
                     .show(ui, |ui| {
-                        labelled(ui, "weights", DragValue::new(&mut p.count).range(1..=64));
+                        labelled(ui, "weights", DragValue::new(&mut p.count).range(1..=1024));
                         ui.end_row();
                         labelled(
                             ui,
                             "speed",
-                            DragValue::new(&mut p.speed).range(0.01..=100.0).speed(0.01),
+                            DragValue::new(&mut p.speed)
+                                .range(0.001..=1000.0)
+                                .speed(0.01),
                         );
                         ui.end_row();
                         labelled(
                             ui,
                             "width (frames)",
-                            DragValue::new(&mut p.width).range(0.1..=10000.0).speed(0.1),
+                            DragValue::new(&mut p.width).range(0.001..=1e6).speed(0.1),
                         );
                         ui.end_row();
                         labelled(
                             ui,
                             "delay per weight",
-                            DragValue::new(&mut p.delay)
-                                .range(-1000.0..=1000.0)
-                                .speed(0.1),
+                            DragValue::new(&mut p.delay).range(-1e6..=1e6).speed(0.1),
                         );
                         ui.end_row();
                         labelled(ui, "start frame", DragValue::new(&mut p.start).speed(0.5));
@@ -744,7 +744,7 @@ fn animation_section(ui: &mut Ui, app: &mut ViewerApp) {
                         ui.add_enabled(
                             periodic,
                             DragValue::new(&mut period)
-                                .range(1.0..=100000.0)
+                                .range(0.001..=1e7)
                                 .suffix(" frames"),
                         )
                         .labelled_by(name);
