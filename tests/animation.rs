@@ -139,6 +139,10 @@ keys = [{ frame = 4, value = [0, 1, 0] }, { frame = 8, value = [2, 3, -4] }]
 [[animation.tracks]]
 parameter = "colors.energy"
 keys = [{ frame = 0, value = [1, 0, 0] }, { frame = 20, value = [0, 0, 1] }]
+
+[[animation.tracks]]
+parameter = "integration.nu"
+keys = [{ frame = 0, value = 2.0 }, { frame = 40, value = 4.0 }]
 "#;
 
 #[test]
@@ -171,6 +175,7 @@ fn keys_interpolate_linearly_and_hold_at_the_ends() {
     assert_eq!(cp(7.0), [1.5, 2.5, -3.0]);
     assert_eq!(cp(20.0), [2.0, 3.0, -4.0]);
     assert_eq!(scene.at_frame(5.0).colors.energy, [0.75, 0.0, 0.25]);
+    assert_eq!(scene.at_frame(10.0).integration.nu, 2.5);
     // Unkeyed values and the base scene are untouched.
     assert_eq!(scene.at_frame(5.0).sources.curves[0].coefficient, 2.0);
     assert_eq!(scene.sources.points[0].coefficient, 1.0);
@@ -218,6 +223,7 @@ fn pulses_and_keys_follow_their_sources_when_sources_are_removed() {
         [
             "curves[0].control_points[1]",
             "colors.energy",
+            "integration.nu",
             "points[0].position"
         ]
     );
@@ -227,7 +233,7 @@ fn pulses_and_keys_follow_their_sources_when_sources_are_removed() {
         Parameter::parse("tori[3].major_radius"),
         Ok(Parameter::MajorRadius(3))
     );
-    let mut t = a.tracks[2].clone();
+    let mut t = a.tracks[3].clone();
     t.set_key(5.0, Value::Vector([1.0, 2.0, 3.0]));
     t.set_key(0.0, Value::Vector([9.0, 9.0, 9.0]));
     assert_eq!(t.keys.len(), 2);
@@ -321,6 +327,12 @@ fn malformed_animations_are_refused_with_place_and_field() {
             "animation.tracks[0].keys",
             8,
             "at least one key",
+        ),
+        (
+            track("integration.nu", "[{ frame = 0, value = 1.0 }]"),
+            "animation.tracks[0].keys[0].value",
+            8,
+            "nu must be greater than 1",
         ),
         (
             format!("{CURVE}[curves.pulse]\nwidth = 0\n"),

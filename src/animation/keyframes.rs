@@ -122,12 +122,43 @@ pub enum Parameter {
     ControlPoint(usize, usize),
     /// `curves[i].weights[j]`
     Weight(usize, usize),
+    /// `integration.nu`, `integration.alpha`, `integration.beta`, `integration.epsilon`
+    Integration(IntegrationSetting),
+}
+
+/// The integration settings that can be keyed (the division count is an integer and cannot).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum IntegrationSetting {
+    Nu,
+    Alpha,
+    Beta,
+    Epsilon,
+}
+
+impl IntegrationSetting {
+    pub fn key(self) -> &'static str {
+        match self {
+            IntegrationSetting::Nu => "nu",
+            IntegrationSetting::Alpha => "alpha",
+            IntegrationSetting::Beta => "beta",
+            IntegrationSetting::Epsilon => "epsilon",
+        }
+    }
+
+    /// The smallest value the setting may take: nu above 1, the others above 0.
+    pub fn lower_bound(self) -> f64 {
+        match self {
+            IntegrationSetting::Nu => 1.0,
+            _ => 0.0,
+        }
+    }
 }
 
 /// The parameter paths a track may name, for messages.
 pub const PARAMETER_FORMS: &str = "colors.energy, colors.background, points[i].position, points[i].coefficient, \
 lines[i].point, lines[i].direction, lines[i].coefficient, tori[i].center, tori[i].axis, tori[i].major_radius, \
-tori[i].coefficient, curves[i].control_points[j], curves[i].coefficient, curves[i].weights[j]";
+tori[i].coefficient, curves[i].control_points[j], curves[i].coefficient, curves[i].weights[j], \
+integration.nu, integration.alpha, integration.beta, integration.epsilon";
 
 /// Splits `name[3]` into `("name", Some(3))`, `name` into `("name", None)`.
 fn indexed(part: &str) -> Option<(&str, Option<usize>)> {
@@ -160,6 +191,17 @@ impl Parameter {
         let p = match parts.as_slice() {
             [("colors", None), ("energy", None)] => Parameter::EnergyColor,
             [("colors", None), ("background", None)] => Parameter::BackgroundColor,
+            [("integration", None), (name, None)] => Parameter::Integration(
+                [
+                    IntegrationSetting::Nu,
+                    IntegrationSetting::Alpha,
+                    IntegrationSetting::Beta,
+                    IntegrationSetting::Epsilon,
+                ]
+                .into_iter()
+                .find(|k| k.key() == *name)
+                .ok_or_else(err)?,
+            ),
             [(k, Some(i)), (field, sub)] => match (kind(k).ok_or_else(err)?, *field, sub) {
                 (Points, "position", None) | (Lines, "point", None) | (Tori, "center", None) => {
                     Parameter::Position(kind(k).ok_or_else(err)?, *i)
@@ -193,7 +235,7 @@ impl Parameter {
     /// The source this parameter belongs to, if any.
     pub fn source(&self) -> Option<(SourceKind, usize)> {
         match *self {
-            Parameter::EnergyColor | Parameter::BackgroundColor => None,
+            Parameter::EnergyColor | Parameter::BackgroundColor | Parameter::Integration(_) => None,
             Parameter::Position(k, i)
             | Parameter::Direction(k, i)
             | Parameter::Coefficient(k, i) => Some((k, i)),
@@ -247,6 +289,12 @@ impl Parameter {
             Parameter::MajorRadius(i) => Value::Number(s.tori.get(i)?.major_radius),
             Parameter::ControlPoint(i, j) => v(*s.curves.get(i)?.control_points.get(j)?),
             Parameter::Weight(i, j) => Value::Number(*s.curves.get(i)?.weights.get(j)?),
+            Parameter::Integration(k) => Value::Number(match k {
+                IntegrationSetting::Nu => scene.integration.nu,
+                IntegrationSetting::Alpha => scene.integration.alpha,
+                IntegrationSetting::Beta => scene.integration.beta,
+                IntegrationSetting::Epsilon => scene.integration.epsilon,
+            }),
         })
     }
 
@@ -312,6 +360,17 @@ impl Parameter {
                     *slot = DVec3::from_array(p);
                 }
             }
+            (Parameter::Integration(k), Value::Number(x)) => {
+                let i = &mut scene.integration;
+                let slot = match k {
+                    IntegrationSetting::Nu => &mut i.nu,
+                    IntegrationSetting::Alpha => &mut i.alpha,
+                    IntegrationSetting::Beta => &mut i.beta,
+                    IntegrationSetting::Epsilon => &mut i.epsilon,
+                };
+                // Interpolating between valid keys stays valid; this only guards against rounding.
+                *slot = x.max(k.lower_bound() + 1e-9);
+            }
             (Parameter::Weight(i, j), Value::Number(x)) => {
                 if let Some(slot) = s.curves.get_mut(*i).and_then(|c| c.weights.get_mut(*j)) {
                     *slot = x.max(0.0);
@@ -347,6 +406,7 @@ impl fmt::Display for Parameter {
             Parameter::MajorRadius(i) => write!(f, "tori[{i}].major_radius"),
             Parameter::ControlPoint(i, j) => write!(f, "curves[{i}].control_points[{j}]"),
             Parameter::Weight(i, j) => write!(f, "curves[{i}].weights[{j}]"),
+            Parameter::Integration(k) => write!(f, "integration.{}", k.key()),
         }
     }
 }

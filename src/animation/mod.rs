@@ -8,7 +8,9 @@
 pub mod keyframes;
 pub mod pulse;
 
-pub use keyframes::{Key, PARAMETER_FORMS, Parameter, SourceKind, Track, Value};
+pub use keyframes::{
+    IntegrationSetting, Key, PARAMETER_FORMS, Parameter, SourceKind, Track, Value,
+};
 pub use pulse::Pulse;
 
 use crate::scene::Scene;

@@ -224,6 +224,12 @@ fn check_value(c: &mut Checker<'_, '_>, path: &FieldPath, parameter: &Parameter,
         (Parameter::MajorRadius(_), Value::Number(x)) if x <= 0.0 => {
             c.fail(path, format!("{x}: the major radius R must be positive"));
         }
+        (Parameter::Integration(k), Value::Number(x)) if x <= k.lower_bound() => {
+            c.fail(
+                path,
+                format!("{x}: {} must be greater than {}", k.key(), k.lower_bound()),
+            );
+        }
         (Parameter::Weight(..), Value::Number(x)) if x < 0.0 => {
             c.fail(path, format!("{x}: weights must be at least 0"));
         }
