@@ -5,7 +5,7 @@ use std::sync::{Arc, Mutex};
 
 use egui::accesskit::Role;
 use egui::{Key, Modifiers, Pos2, Vec2};
-use egui_kittest::kittest::Queryable;
+use egui_kittest::kittest::{NodeT, Queryable};
 use egui_kittest::{Harness, wgpu::WgpuTestRenderer};
 use energywave::gpu::GpuContext;
 use energywave::scene::Scene;
@@ -588,4 +588,57 @@ fn the_viewer_exports_a_sprite_sheet_beside_the_ui() {
     // Five frames: three columns, two rows.
     assert_eq!((sheet.width(), sheet.height()), (60, 32));
     assert!(dir.join("sheet.json").is_file());
+}
+
+#[test]
+fn editing_a_keyed_value_while_paused_sets_a_key_at_that_frame() {
+    let mut scene = light_scene();
+    let text = format!(
+        "{}\n[animation]\nframes = 30\n[[animation.tracks]]\nparameter = \"tori[0].major_radius\"\nkeys = [{{ frame = 0, value = 1.0 }}, {{ frame = 20, value = 2.0 }}]\n",
+        scene.to_toml()
+    );
+    scene = Scene::parse(&text, std::path::Path::new("keyed.toml")).unwrap();
+    let base = scene.sources.tori[0].major_radius;
+    let mut h = harness(scene);
+    h.get_by_role_and_label(Role::Slider, "frame")
+        .set_value_accesskit(10.0);
+    h.run();
+    // The panel shows the keyed value at frame 10, 1.5 (by hand: halfway from 1 to 2), not the base value.
+    assert_eq!(
+        h.get_by_role_and_label(Role::SpinButton, "radius R")
+            .accesskit_node()
+            .numeric_value(),
+        Some(1.5)
+    );
+    assert!(
+        !h.state().doc.is_dirty(),
+        "showing keyed values is not an edit"
+    );
+    h.get_by_role_and_label(Role::SpinButton, "radius R")
+        .set_value_accesskit(2.4);
+    h.run();
+    let scene = h.state().scene().clone();
+    let keys: Vec<(f64, f64)> = scene.animation.as_ref().unwrap().tracks[0]
+        .keys
+        .iter()
+        .map(|k| match k.value {
+            energywave::animation::Value::Number(x) => (k.frame, x),
+            _ => panic!("a number"),
+        })
+        .collect();
+    assert_eq!(keys, [(0.0, 1.0), (10.0, 2.4), (20.0, 2.0)]);
+    assert_eq!(
+        scene.sources.tori[0].major_radius, base,
+        "the base value stays"
+    );
+    assert_eq!(scene.at_frame(10.0).sources.tori[0].major_radius, 2.4);
+    // The new key is an undo step.
+    h.key_press_modifiers(Modifiers::COMMAND, Key::Z);
+    h.run();
+    assert_eq!(
+        h.state().scene().animation.as_ref().unwrap().tracks[0]
+            .keys
+            .len(),
+        2
+    );
 }

@@ -15,6 +15,7 @@ use super::navigation;
 use super::panel;
 use super::timeline::{self, ExportJob, Playback};
 use super::viewport::{ViewportCallback, ViewportReport, ViewportView};
+use crate::animation::{Parameter, Value};
 use crate::geometry::Camera;
 use crate::scene::Scene;
 
@@ -88,6 +89,20 @@ pub struct ViewerApp {
     pub animation_form: panel::AnimationForm,
     /// An export running beside the UI.
     pub export_job: Option<ExportJob>,
+    /// The document's title as it was before this frame's edits (see `show_keyed_values`).
+    title: String,
+}
+
+/// How many sources, control points and weights a scene has: keyed values are only written back by path
+/// when no edit renumbered them.
+fn source_shape(scene: &Scene) -> Vec<usize> {
+    let s = &scene.sources;
+    let mut v = vec![s.points.len(), s.lines.len(), s.tori.len(), s.curves.len()];
+    for c in &s.curves {
+        v.push(c.control_points.len());
+        v.push(c.weights.len());
+    }
+    v
 }
 
 const SAVE: KeyboardShortcut = KeyboardShortcut::new(Modifiers::COMMAND, Key::S);
@@ -129,6 +144,64 @@ impl ViewerApp {
             playback: Playback::default(),
             animation_form: panel::AnimationForm::default(),
             export_job: None,
+            title: String::new(),
+        }
+    }
+
+    /// The document's title for the panel (unsaved changes marked), unaffected by the keyed values shown
+    /// during the frame.
+    pub fn title(&self) -> String {
+        if self.title.is_empty() {
+            self.doc.title()
+        } else {
+            self.title.clone()
+        }
+    }
+
+    /// Writes each keyed parameter's value at the current frame into the document's scene, so that the
+    /// panel and the handles show (and edit) what is on screen. Returns (parameter, base value, value
+    /// shown) for `key_edited_values` to undo afterwards.
+    fn show_keyed_values(&mut self) -> Vec<(Parameter, Value, Value)> {
+        let Some(animation) = &self.doc.scene.animation else {
+            return Vec::new();
+        };
+        let frame = self.playback.frame as f64;
+        let mut shown = Vec::new();
+        for track in animation.tracks.clone() {
+            let p = track.parameter.clone();
+            let (Some(base), Some(value)) = (p.get(&self.doc.scene), track.value_at(frame)) else {
+                continue;
+            };
+            p.set(&mut self.doc.scene, value);
+            if let Some(injected) = p.get(&self.doc.scene) {
+                shown.push((p, base, injected));
+            }
+        }
+        shown
+    }
+
+    /// After the panel and the viewport: a keyed value edited there becomes a key at the current frame (an
+    /// edit while paused), and the scene's own values come back. Skipped when an edit renumbered sources,
+    /// points or weights (the paths may name others now; the shown values then stay as the base values,
+    /// which only a still render uses).
+    fn key_edited_values(&mut self, shown: Vec<(Parameter, Value, Value)>, shape: Vec<usize>) {
+        if shown.is_empty() || source_shape(&self.doc.scene) != shape {
+            return;
+        }
+        let frame = self.playback.frame as f64;
+        for (parameter, base, injected) in shown {
+            if let (Some(now), Some(animation)) = (
+                parameter.get(&self.doc.scene),
+                self.doc.scene.animation.as_mut(),
+            ) && now != injected
+                && let Some(track) = animation
+                    .tracks
+                    .iter_mut()
+                    .find(|t| t.parameter == parameter)
+            {
+                track.set_key(frame, now);
+            }
+            parameter.set(&mut self.doc.scene, base);
         }
     }
 
@@ -359,6 +432,9 @@ impl ViewerApp {
 
         egui::Panel::bottom("energywave.status").show(ui, |ui| self.status_bar(ui));
         self.animation_ui(ui);
+        self.title = self.doc.title();
+        let shape = source_shape(&self.doc.scene);
+        let shown = self.show_keyed_values();
         egui::Panel::left("energywave.panel")
             .resizable(true)
             .default_size(340.0)
@@ -368,6 +444,7 @@ impl ViewerApp {
         egui::CentralPanel::default()
             .frame(egui::Frame::NONE)
             .show(ui, |ui| self.viewport(ui));
+        self.key_edited_values(shown, shape);
         self.modals(ui.ctx());
 
         // An edit is committed when it settles: no button held (a drag is one step).

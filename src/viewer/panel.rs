@@ -96,7 +96,7 @@ pub fn show(ui: &mut Ui, app: &mut ViewerApp) {
 }
 
 fn file_section(ui: &mut Ui, app: &mut ViewerApp) {
-    ui.heading(app.doc.title());
+    ui.heading(app.title());
     ui.horizontal(|ui| {
         ui.label("File");
         ui.add(
