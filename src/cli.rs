@@ -411,7 +411,10 @@ fn render_frames(
     let written = if args.brightness {
         // Only an .exr sequence gets here (checked above): B of each frame, before the blend.
         let Target::Sequence { pattern, .. } = target else {
-            unreachable!("--brightness is refused for GIFs and sheets")
+            return Err(CliError::Usage(format!(
+                "{}: --brightness writes one EXR per frame: name it name_####.exr",
+                args.output.display()
+            )));
         };
         let mut written = Vec::new();
         for frame in frames.clone() {

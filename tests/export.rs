@@ -109,6 +109,21 @@ fn a_sequence_gets_numbered_padded_files_that_match_single_renders() {
         ],
     ));
     assert_eq!(files(&more), ["beam_89.png", "beam_90.png", "beam_91.png"]);
+    // The brightness B of each frame, W x W floats, as an EXR sequence.
+    let exr = tmpdir("seq-exr");
+    ok(&render(
+        &preset(),
+        &[
+            "--brightness",
+            "--frames",
+            "0..2",
+            "-o",
+            exr.join("b_#.exr").to_str().unwrap(),
+        ],
+    ));
+    assert_eq!(files(&exr), ["b_0.exr", "b_1.exr"]);
+    let b = image::open(exr.join("b_1.exr")).unwrap().to_rgb32f();
+    assert_eq!(b.dimensions(), (40, 40));
 }
 
 #[test]
