@@ -38,7 +38,8 @@ impl Progress {
         let line = render_line(self.done, self.total, frame, per_frame, left);
         let mut err = std::io::stderr().lock();
         if self.terminal {
-            let _ = write!(err, "\r{line}");
+            // Erase to the end of the line: the previous line may have been longer.
+            let _ = write!(err, "\r{line}\x1b[K");
             if self.done == self.total {
                 let _ = writeln!(err);
             }
