@@ -564,7 +564,7 @@ fn the_viewer_exports_a_sprite_sheet_beside_the_ui() {
     h.run();
     {
         let form = &mut h.state_mut().animation_form;
-        form.export_kind = energywave::viewer::panel::ExportKind::Sheet;
+        form.export_kind = energywave::viewer::animation_panel::ExportKind::Sheet;
         form.export_path = dir.join("sheet.png").display().to_string();
         form.size = [20, 16];
     }

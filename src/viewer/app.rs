@@ -8,6 +8,7 @@ use std::time::{Instant, SystemTime};
 
 use egui::{Color32, Key, KeyboardShortcut, Modifiers, PointerButton, Sense};
 
+use super::animation_panel;
 use super::document::{DiskChange, Document};
 use super::handles::{self, HandleId};
 use super::history::History;
@@ -86,7 +87,7 @@ pub struct ViewerApp {
     /// The animation's current frame and transport (not a document edit).
     pub playback: Playback,
     /// The Animation section's own fields (the parameter being typed, the export settings).
-    pub animation_form: panel::AnimationForm,
+    pub animation_form: animation_panel::AnimationForm,
     /// An export running beside the UI.
     pub export_job: Option<ExportJob>,
     /// The document's title as it was before this frame's edits (see `show_keyed_values`).
@@ -142,7 +143,7 @@ impl ViewerApp {
             last_frame: None,
             requests: Vec::new(),
             playback: Playback::default(),
-            animation_form: panel::AnimationForm::default(),
+            animation_form: animation_panel::AnimationForm::default(),
             export_job: None,
             title: String::new(),
         }

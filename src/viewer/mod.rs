@@ -3,6 +3,7 @@
 //!
 //! - [`app`]: the state and the whole UI (`ViewerApp::ui`), shared by the window and the UI tests;
 //! - [`panel`]: the side panel's editors;
+//! - [`animation_panel`]: its Animation section (pulses, keys, export);
 //! - [`handles`]: the sources' handles, drawn and dragged with egui's painter;
 //! - [`navigation`]: orbit, pan, zoom and framing;
 //! - [`history`]: undo and redo;
@@ -12,6 +13,7 @@
 //! - [`window`]: the winit window and event loop;
 //! - [`offscreen`]: the same viewer drawn into a texture (benchmarks).
 
+pub mod animation_panel;
 pub mod app;
 pub mod document;
 pub mod handles;
