@@ -9,6 +9,7 @@ use std::time::Instant;
 
 use clap::{Parser, Subcommand, ValueEnum};
 
+use crate::export::{self, ExportError, FrameSpec, Progress, Target};
 use crate::gpu::{GpuError, HeadlessRenderer};
 use crate::output::{self, Format, OutputError};
 use crate::reference;
@@ -86,6 +87,18 @@ pub struct RenderArgs {
     /// Print the adapter, what is rendered and how long it took.
     #[arg(short, long)]
     pub verbose: bool,
+    /// Frames of the scene's animation: `A..B` (A to B-1, so `0..50` and `50..100` split an export between
+    /// two machines), `A..=B`, `A..`, `..B`, or one frame `A`. Default: every frame for a sequence (an
+    /// output such as `dir/name_####.png`), a `.gif` or `--sheet`; frame 0 for a single image.
+    #[arg(long, value_parser = FrameSpec::parse)]
+    pub frames: Option<FrameSpec>,
+    /// Write the frames as one sprite sheet (a flipbook grid, row-major from the top-left) to the `.png`
+    /// output, with its layout as JSON beside it (same name, `.json`).
+    #[arg(long, conflicts_with = "brightness")]
+    pub sheet: bool,
+    /// Columns of the sprite sheet (default: as square as it gets).
+    #[arg(long, requires = "sheet")]
+    pub columns: Option<u32>,
 }
 
 /// The renderer behind `render`.
@@ -112,6 +125,8 @@ pub enum CliError {
     Usage(String),
     #[error("{0}")]
     Unavailable(String),
+    #[error("{0}")]
+    Export(#[from] ExportError),
 }
 
 impl CliError {
@@ -123,6 +138,8 @@ impl CliError {
             CliError::Output(e) if e.is_input_error() => 2,
             CliError::Gpu(e) if e.is_input_error() => 2,
             CliError::Viewer(ViewerError::Output(e)) if e.is_input_error() => 2,
+            CliError::Export(e) if e.is_input_error() => 2,
+            CliError::Export(_) => 1,
             CliError::Output(_)
             | CliError::Gpu(_)
             | CliError::Viewer(_)
@@ -267,7 +284,24 @@ fn check_device_limits(
 }
 
 fn render(args: &RenderArgs) -> Result<(), CliError> {
-    let format = output::check_destination(&args.output)?;
+    let target = Target::for_output(&args.output, args.sheet, args.columns)?;
+    let format = match &target {
+        Target::Single { format, .. } | Target::Sequence { format, .. } => *format,
+        Target::Gif { .. } | Target::Sheet { .. } => Format::Png,
+    };
+    if args.transparent && matches!(target, Target::Gif { .. }) {
+        return Err(CliError::Usage(format!(
+            "{}: a GIF has no partial transparency, so it cannot carry alpha = min(B, 1); export a PNG \
+             sequence (name_####.png) or a --sheet with --transparent instead",
+            args.output.display()
+        )));
+    }
+    if args.brightness && matches!(target, Target::Gif { .. }) {
+        return Err(CliError::Usage(format!(
+            "{}: --brightness writes floating-point EXR; give an .exr output (name_####.exr for frames)",
+            args.output.display()
+        )));
+    }
     if args.brightness && format != Format::Exr {
         return Err(CliError::Usage(format!(
             "{}: --brightness writes unclamped floating-point values; give an .exr output",
@@ -281,6 +315,19 @@ fn render(args: &RenderArgs) -> Result<(), CliError> {
     if let Some(n) = args.divisions {
         scene.integration.divisions = n;
     }
+    let frames = export::frames_to_render(args.frames.as_ref(), &target, scene.frame_count())?;
+    if target.is_multi_frame() {
+        return render_frames(args, &scene, &target, frames);
+    }
+    if frames.len() != 1 {
+        return Err(CliError::Usage(format!(
+            "{}: --frames asks for {} frames, but the output is one image: name it with a run of # for a \
+             sequence (name_####.png), use .gif, or add --sheet",
+            args.output.display(),
+            frames.len()
+        )));
+    }
+    let scene = scene.at_frame(frames.start as f64);
     let (width, height) = args.size;
     let billboard = scene.place_billboard(width as f64 / height as f64);
     let name = args
@@ -352,4 +399,115 @@ fn render(args: &RenderArgs) -> Result<(), CliError> {
         eprintln!("wrote {}", args.output.display());
     }
     Ok(())
+}
+
+/// Renders `frames` of the scene's animation into a sequence, a GIF or a sprite sheet, one renderer for all of
+/// them, with a progress bar on stderr.
+fn render_frames(
+    args: &RenderArgs,
+    scene: &Scene,
+    target: &Target,
+    frames: std::ops::Range<u32>,
+) -> Result<(), CliError> {
+    let (width, height) = args.size;
+    let frame_rate = scene
+        .animation
+        .as_ref()
+        .map_or(crate::animation::DEFAULT_FRAME_RATE, |a| a.frame_rate);
+    // A sheet too large for image tools is refused before the GPU starts.
+    if let Target::Sheet { path, columns } = target {
+        export::sheet_grid(path, width, height, frames.clone(), *columns, frame_rate)?;
+    }
+    let mut gpu = match args.backend {
+        Backend::Gpu => Some(HeadlessRenderer::new()?),
+        Backend::Cpu => None,
+    };
+    if args.verbose {
+        if let Some(gpu) = &gpu {
+            eprintln!("adapter: {}", gpu.ctx.adapter_summary());
+        }
+        eprintln!(
+            "frames {}..{} of {} at {frame_rate} frames/s, {width}x{height}, billboard {}x{}, n = {}",
+            frames.start,
+            frames.end,
+            scene.frame_count(),
+            scene.billboard.resolution,
+            scene.billboard.resolution,
+            scene.integration.divisions,
+        );
+    }
+    let start = Instant::now();
+    let mut progress = Progress::new(frames.len() as u32);
+    let written = if args.brightness {
+        // Only an .exr sequence gets here (checked above): B of each frame, before the blend.
+        let Target::Sequence { pattern, .. } = target else {
+            return Err(CliError::Usage(format!(
+                "{}: --brightness writes one EXR per frame: name it name_####.exr",
+                args.output.display()
+            )));
+        };
+        let mut written = Vec::new();
+        for frame in frames.clone() {
+            let at = scene.at_frame(frame as f64);
+            let billboard = at.place_billboard(width as f64 / height as f64);
+            let values: Vec<f64> = match &mut gpu {
+                Some(gpu) => (gpu.brightness(&at, &billboard)?.iter())
+                    .map(|&b| b as f64)
+                    .collect(),
+                None => reference::render_brightness(&at, &billboard).values,
+            };
+            let path = export::frame_path(pattern, frame);
+            output::write_brightness_exr(&path, at.billboard.resolution, &values)?;
+            written.push(path);
+            progress.frame_done(frame);
+        }
+        written
+    } else {
+        export::export_frames(
+            scene,
+            target,
+            frames.clone(),
+            (width, height),
+            args.transparent,
+            |at| compose(at, gpu.as_mut(), width, height, args.transparent),
+            |_, frame| progress.frame_done(frame),
+        )?
+    };
+    if args.verbose {
+        let seconds = start.elapsed().as_secs_f64();
+        eprintln!(
+            "{} frames in {seconds:.2} s ({:.1} ms per frame)",
+            frames.len(),
+            seconds * 1e3 / frames.len().max(1) as f64
+        );
+        for path in written.iter().take(3) {
+            eprintln!("wrote {}", path.display());
+        }
+        if written.len() > 3 {
+            eprintln!("... and {} more", written.len() - 3);
+        }
+    }
+    Ok(())
+}
+
+/// The composed frame of `scene` (RGBA display values, rows from the top), on the GPU when given one, else
+/// on the CPU reference.
+fn compose(
+    scene: &Scene,
+    gpu: Option<&mut HeadlessRenderer>,
+    width: u32,
+    height: u32,
+    transparent: bool,
+) -> Result<Vec<[f64; 4]>, CliError> {
+    Ok(match gpu {
+        Some(gpu) => {
+            let frame = gpu.render(scene, width, height, transparent)?;
+            frame.pixels.iter().map(|p| p.map(|c| c as f64)).collect()
+        }
+        None => {
+            let billboard = scene.place_billboard(width as f64 / height as f64);
+            let texture = reference::render_brightness(scene, &billboard);
+            reference::compose_frame(scene, &billboard, &texture, width, height, transparent)
+        }
+    })
 }

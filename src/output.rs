@@ -15,7 +15,7 @@ pub enum Format {
 /// Why an image could not be written.
 #[derive(Debug, thiserror::Error)]
 pub enum OutputError {
-    #[error("{}: unknown image extension {ext:?}: use .png or .exr", path.display())]
+    #[error("{}: unknown image extension {ext:?}: use .png or .exr (or .gif for an animation)", path.display())]
     UnknownExtension { path: PathBuf, ext: String },
     #[error("{}: the directory {} does not exist", path.display(), dir.display())]
     MissingDirectory { path: PathBuf, dir: PathBuf },
@@ -77,6 +77,23 @@ pub fn check_destination(path: &Path) -> Result<Format, OutputError> {
         });
     }
     Ok(format)
+}
+
+/// Checks that `path` could be written: not a directory, in a directory that exists (any extension).
+pub fn check_directory(path: &Path) -> Result<(), OutputError> {
+    if path.is_dir() {
+        return Err(OutputError::IsDirectory {
+            path: path.to_owned(),
+        });
+    }
+    let dir = parent_dir(path);
+    if !dir.is_dir() {
+        return Err(OutputError::MissingDirectory {
+            path: path.to_owned(),
+            dir: dir.to_owned(),
+        });
+    }
+    Ok(())
 }
 
 fn parent_dir(path: &Path) -> &Path {

@@ -5,7 +5,7 @@ use std::sync::{Arc, Mutex};
 
 use egui::accesskit::Role;
 use egui::{Key, Modifiers, Pos2, Vec2};
-use egui_kittest::kittest::Queryable;
+use egui_kittest::kittest::{NodeT, Queryable};
 use egui_kittest::{Harness, wgpu::WgpuTestRenderer};
 use energywave::gpu::GpuContext;
 use energywave::scene::Scene;
@@ -408,4 +408,237 @@ fn unsaved_changes_are_not_lost_without_asking() {
         other_scene.sources.tori.len() + 1
     );
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The travelling-pulse preset, light enough for a software rasteriser.
+fn pulse_scene() -> Scene {
+    let mut s = Scene::load(
+        &std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("assets/scenes/pulse_travelling.toml"),
+    )
+    .unwrap();
+    s.billboard.resolution = 64;
+    s.integration.divisions = 48;
+    s
+}
+
+fn repaints_continuously(h: &Harness<'static, ViewerApp>) -> bool {
+    h.output()
+        .viewport_output
+        .get(&egui::ViewportId::ROOT)
+        .is_some_and(|v| v.repaint_delay.is_zero())
+}
+
+#[test]
+fn the_animated_preset_plays_steps_scrubs_loops_and_edits_while_paused() {
+    let mut h = harness(pulse_scene());
+    assert_eq!(h.state().playback.frame, 0);
+    assert!(!repaints_continuously(&h), "paused: no continuous repaint");
+    // Frame 0 of eq. 5.1 has every weight 0: nothing glows. At frame 40 the pulse is mid-curve.
+    let dark = viewport_pixels(&mut h);
+    h.get_by_role_and_label(Role::Slider, "frame")
+        .set_value_accesskit(40.0);
+    h.run();
+    assert_eq!(h.state().playback.frame, 40);
+    let lit = viewport_pixels(&mut h);
+    assert!(mean_abs_difference(&dark, &lit) > 5.0, "the pulse shows");
+    // What is drawn is the scene at that frame: eq. 5.1 for w_2 at frame 40, theta = 26 pi / 25.
+    let w = h.state().frame_scene().sources.curves[0].weights.clone();
+    let theta = 26.0 * std::f64::consts::PI / 25.0;
+    assert!((w[2] - ((-theta.cos() + 0.8) / 1.5).min(1.0)).abs() < 1e-12);
+
+    // Step forward and back.
+    h.get_by_label("Step >").click();
+    h.run();
+    assert_eq!(h.state().playback.frame, 41);
+    h.get_by_label("< Step").click();
+    h.get_by_label("< Step").click();
+    h.run();
+    assert_eq!(h.state().playback.frame, 39);
+
+    // Play: frames advance with time and the viewer repaints continuously, only while playing.
+    h.get_by_label("Play").click();
+    h.step();
+    h.step();
+    h.step();
+    assert!(h.state().playback.playing);
+    assert!(h.state().playback.frame > 39, "frames advance");
+    assert!(repaints_continuously(&h));
+    h.get_by_label("Pause").click();
+    h.run();
+    let paused_at = h.state().playback.frame;
+    h.run();
+    assert_eq!(h.state().playback.frame, paused_at);
+    assert!(!repaints_continuously(&h));
+
+    // Looping wraps past the last frame; without it playback stops there.
+    h.get_by_role_and_label(Role::Slider, "frame")
+        .set_value_accesskit(90.0);
+    h.run();
+    h.key_press(Key::Space);
+    h.step();
+    h.step();
+    assert!(h.state().playback.frame < 90, "wrapped to the start");
+    h.key_press(Key::Space);
+    h.run();
+    h.get_by_label("loop").click();
+    h.get_by_role_and_label(Role::Slider, "frame")
+        .set_value_accesskit(90.0);
+    h.run();
+    h.key_press(Key::Space);
+    h.step();
+    h.step();
+    h.run();
+    assert_eq!(h.state().playback.frame, 91);
+    assert!(!h.state().playback.playing, "stopped on the last frame");
+
+    // Playback is not a document edit.
+    assert!(!h.state().history.can_undo());
+    assert!(!h.state().doc.is_dirty());
+
+    // An edit while paused: the pulse's width; it is an undo step, and undo leaves the frame alone.
+    h.get_by_role_and_label(Role::Slider, "frame")
+        .set_value_accesskit(40.0);
+    h.run();
+    let before = viewport_pixels(&mut h);
+    h.get_by_role_and_label(Role::SpinButton, "width (frames)")
+        .set_value_accesskit(20.0);
+    h.run();
+    let pulse = |h: &Harness<'static, ViewerApp>| {
+        h.state().scene().animation.as_ref().unwrap().pulses[0]
+            .pulse
+            .clone()
+    };
+    assert_eq!(pulse(&h).width, 20.0);
+    let after = viewport_pixels(&mut h);
+    assert!(mean_abs_difference(&before, &after) > 2.0, "the edit shows");
+    h.key_press_modifiers(Modifiers::COMMAND, Key::Z);
+    h.run();
+    assert_eq!(pulse(&h).width, 50.0);
+    assert_eq!(h.state().playback.frame, 40);
+    assert!(h.state().report().error.is_none());
+}
+
+#[test]
+fn a_still_scene_can_be_animated_with_a_key() {
+    let mut h = harness(light_scene());
+    assert!(
+        h.query_by_label("Play").is_none(),
+        "no transport for a still scene"
+    );
+    h.get_by_label("Animate").click_accesskit();
+    h.run();
+    assert!(h.state().scene().is_animated());
+    // Key the torus's coefficient at frame 0 (the path typed in the Animation section), then at frame 50.
+    h.state_mut().animation_form.new_track = "tori[0].coefficient".into();
+    h.get_by_label("key at frame 0").click_accesskit();
+    h.run();
+    h.get_by_role_and_label(Role::Slider, "frame")
+        .set_value_accesskit(50.0);
+    h.run();
+    // Both the track's button and the one beside the typed path key the track at the current frame.
+    h.state_mut().animation_form.new_track = "tori[0].coefficient".into();
+    for button in h.get_all_by_label("key at frame 50") {
+        button.click_accesskit();
+    }
+    h.run();
+    let a = h.state().scene().animation.clone().unwrap();
+    assert_eq!(h.state().playback.frame, 50, "{:?}", h.state().notice);
+    assert_eq!(a.tracks.len(), 1, "{:?}", h.state().notice);
+    let frames: Vec<f64> = a.tracks[0].keys.iter().map(|k| k.frame).collect();
+    assert_eq!(frames, [0.0, 50.0]);
+    assert!(h.state().history.can_undo(), "keys are document edits");
+}
+
+#[test]
+fn the_viewer_exports_a_sprite_sheet_beside_the_ui() {
+    let dir = std::env::temp_dir().join(format!("energywave-viewer-export-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut scene = pulse_scene();
+    scene.billboard.resolution = 24;
+    scene.integration.divisions = 24;
+    scene.animation.as_mut().unwrap().frames = 5;
+    let mut h = harness(scene);
+    h.get_by_label("Export").click_accesskit();
+    h.run();
+    {
+        let form = &mut h.state_mut().animation_form;
+        form.export_kind = energywave::viewer::animation_panel::ExportKind::Sheet;
+        form.export_path = dir.join("sheet.png").display().to_string();
+        form.size = [20, 16];
+    }
+    h.run();
+    h.get_by_label("Export 5 frames").click_accesskit();
+    h.run();
+    assert!(h.state().export_job.is_some(), "{:?}", h.state().notice);
+    let start = std::time::Instant::now();
+    while h.state().export_job.is_some() && start.elapsed().as_secs() < 120 {
+        std::thread::sleep(std::time::Duration::from_millis(100));
+        h.step();
+    }
+    let notice = h.state().notice.clone();
+    assert!(
+        notice
+            .as_ref()
+            .is_some_and(|(t, e)| !e && t.starts_with("Exported")),
+        "{notice:?}"
+    );
+    let sheet = image::open(dir.join("sheet.png")).unwrap();
+    // Five frames: three columns, two rows.
+    assert_eq!((sheet.width(), sheet.height()), (60, 32));
+    assert!(dir.join("sheet.json").is_file());
+}
+
+#[test]
+fn editing_a_keyed_value_while_paused_sets_a_key_at_that_frame() {
+    let mut scene = light_scene();
+    let text = format!(
+        "{}\n[animation]\nframes = 30\n[[animation.tracks]]\nparameter = \"tori[0].major_radius\"\nkeys = [{{ frame = 0, value = 1.0 }}, {{ frame = 20, value = 2.0 }}]\n",
+        scene.to_toml()
+    );
+    scene = Scene::parse(&text, std::path::Path::new("keyed.toml")).unwrap();
+    let base = scene.sources.tori[0].major_radius;
+    let mut h = harness(scene);
+    h.get_by_role_and_label(Role::Slider, "frame")
+        .set_value_accesskit(10.0);
+    h.run();
+    // The panel shows the keyed value at frame 10, 1.5 (by hand: halfway from 1 to 2), not the base value.
+    assert_eq!(
+        h.get_by_role_and_label(Role::SpinButton, "radius R")
+            .accesskit_node()
+            .numeric_value(),
+        Some(1.5)
+    );
+    assert!(
+        !h.state().doc.is_dirty(),
+        "showing keyed values is not an edit"
+    );
+    h.get_by_role_and_label(Role::SpinButton, "radius R")
+        .set_value_accesskit(2.4);
+    h.run();
+    let scene = h.state().scene().clone();
+    let keys: Vec<(f64, f64)> = scene.animation.as_ref().unwrap().tracks[0]
+        .keys
+        .iter()
+        .map(|k| match k.value {
+            energywave::animation::Value::Number(x) => (k.frame, x),
+            _ => panic!("a number"),
+        })
+        .collect();
+    assert_eq!(keys, [(0.0, 1.0), (10.0, 2.4), (20.0, 2.0)]);
+    assert_eq!(
+        scene.sources.tori[0].major_radius, base,
+        "the base value stays"
+    );
+    assert_eq!(scene.at_frame(10.0).sources.tori[0].major_radius, 2.4);
+    // The new key is an undo step.
+    h.key_press_modifiers(Modifiers::COMMAND, Key::Z);
+    h.run();
+    assert_eq!(
+        h.state().scene().animation.as_ref().unwrap().tracks[0]
+            .keys
+            .len(),
+        2
+    );
 }

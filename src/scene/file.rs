@@ -29,6 +29,8 @@ pub(crate) struct SceneFile {
     pub tori: Vec<TorusFile>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub curves: Vec<CurveFile>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub animation: Option<AnimationFile>,
 }
 
 #[derive(Debug, Default, Deserialize, Serialize)]
@@ -104,6 +106,62 @@ pub(crate) struct CurveFile {
     pub coefficient: f64,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub weights: Option<Vec<f64>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pulse: Option<PulseFile>,
+}
+
+/// `[animation]`: the timeline and the keyed parameters.
+#[derive(Debug, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct AnimationFile {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub frame_rate: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub frames: Option<i64>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub tracks: Vec<TrackFile>,
+}
+
+/// `[[animation.tracks]]`: one keyed parameter.
+#[derive(Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct TrackFile {
+    pub parameter: String,
+    pub keys: Vec<KeyFile>,
+}
+
+/// One key of a track: `{ frame = 10, value = [0.0, 1.0, 0.0] }`.
+#[derive(Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct KeyFile {
+    pub frame: f64,
+    pub value: ValueFile,
+}
+
+/// A key's value: a number or an array of numbers.
+#[derive(Debug, Deserialize, Serialize)]
+#[serde(untagged)]
+pub(crate) enum ValueFile {
+    Number(f64),
+    Vector(Vec<f64>),
+}
+
+/// `[curves.pulse]`: the curve's W series is the travelling pulse (thesis eq. 5.1).
+#[derive(Debug, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct PulseFile {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub count: Option<i64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub speed: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub width: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub delay: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub start: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub period: Option<f64>,
 }
 
 /// One step of a field path: a table key or an array index.

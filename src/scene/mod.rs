@@ -4,6 +4,7 @@
 //! Loading validates every field before anything reaches a renderer; an invalid file is refused whole with
 //! every problem found, each named by file, line, column and field.
 
+mod animation_file;
 mod error;
 mod file;
 
@@ -14,6 +15,7 @@ use glam::DVec3;
 pub use error::{Problem, SceneError};
 use file::{FieldPath, Locator, SceneFile};
 
+use crate::animation::Animation;
 use crate::field::{Curve, Line, Point, Sources, Torus};
 use crate::geometry::{self, Billboard, Camera};
 use crate::integrate::Integration;
@@ -52,6 +54,8 @@ pub struct Scene {
     pub integration: Integration,
     pub colors: Colors,
     pub sources: Sources,
+    /// Time: `None` for a still scene (see `crate::animation`).
+    pub animation: Option<Animation>,
 }
 
 impl Default for Camera {
@@ -154,7 +158,8 @@ impl Scene {
             }
         })?;
         let mut problems = Vec::new();
-        let scene = validate(&file, &locator, &mut problems);
+        let mut scene = validate(&file, &locator, &mut problems);
+        scene.animation = animation_file::validate(&file, &scene, &locator, &mut problems);
         if problems.is_empty() {
             Ok(scene)
         } else {
@@ -168,7 +173,7 @@ impl Scene {
     /// The scene as TOML text, every setting written out; `Scene::parse` of it gives this scene back.
     pub fn to_toml(&self) -> String {
         let v = |p: DVec3| p.to_array();
-        let file = SceneFile {
+        let mut file = SceneFile {
             camera: Some(file::CameraFile {
                 eye: Some(v(self.camera.eye)),
                 target: Some(v(self.camera.target)),
@@ -217,9 +222,12 @@ impl Scene {
                     control_points: s.control_points.iter().map(|&p| v(p)).collect(),
                     coefficient: s.coefficient,
                     weights: (!s.weights.is_empty()).then(|| s.weights.clone()),
+                    pulse: None,
                 })
                 .collect(),
+            animation: None,
         };
+        animation_file::write(self, &mut file);
         toml::to_string_pretty(&file).expect("a scene always serialises to TOML")
     }
 
@@ -536,5 +544,6 @@ fn validate(file: &SceneFile, locator: &Locator<'_>, problems: &mut Vec<Problem>
         },
         colors: Colors { energy, background },
         sources,
+        animation: None,
     }
 }

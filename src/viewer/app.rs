@@ -8,12 +8,15 @@ use std::time::{Instant, SystemTime};
 
 use egui::{Color32, Key, KeyboardShortcut, Modifiers, PointerButton, Sense};
 
+use super::animation_panel;
 use super::document::{DiskChange, Document};
 use super::handles::{self, HandleId};
 use super::history::History;
 use super::navigation;
 use super::panel;
+use super::timeline::{self, ExportJob, Playback};
 use super::viewport::{ViewportCallback, ViewportReport, ViewportView};
+use crate::animation::{Parameter, Value};
 use crate::geometry::Camera;
 use crate::scene::Scene;
 
@@ -81,6 +84,26 @@ pub struct ViewerApp {
     frame_times: VecDeque<f64>,
     last_frame: Option<Instant>,
     requests: Vec<Request>,
+    /// The animation's current frame and transport (not a document edit).
+    pub playback: Playback,
+    /// The Animation section's own fields (the parameter being typed, the export settings).
+    pub animation_form: animation_panel::AnimationForm,
+    /// An export running beside the UI.
+    pub export_job: Option<ExportJob>,
+    /// The document's title as it was before this frame's edits (see `show_keyed_values`).
+    title: String,
+}
+
+/// How many sources, control points and weights a scene has: keyed values are only written back by path
+/// when no edit renumbered them.
+fn source_shape(scene: &Scene) -> Vec<usize> {
+    let s = &scene.sources;
+    let mut v = vec![s.points.len(), s.lines.len(), s.tori.len(), s.curves.len()];
+    for c in &s.curves {
+        v.push(c.control_points.len());
+        v.push(c.weights.len());
+    }
+    v
 }
 
 const SAVE: KeyboardShortcut = KeyboardShortcut::new(Modifiers::COMMAND, Key::S);
@@ -119,6 +142,123 @@ impl ViewerApp {
             frame_times: VecDeque::new(),
             last_frame: None,
             requests: Vec::new(),
+            playback: Playback::default(),
+            animation_form: animation_panel::AnimationForm::default(),
+            export_job: None,
+            title: String::new(),
+        }
+    }
+
+    /// The document's title for the panel (unsaved changes marked), unaffected by the keyed values shown
+    /// during the frame.
+    pub fn title(&self) -> String {
+        if self.title.is_empty() {
+            self.doc.title()
+        } else {
+            self.title.clone()
+        }
+    }
+
+    /// Writes each keyed parameter's value at the current frame into the document's scene, so that the
+    /// panel and the handles show (and edit) what is on screen. Returns (parameter, base value, value
+    /// shown) for `key_edited_values` to undo afterwards.
+    fn show_keyed_values(&mut self) -> Vec<(Parameter, Value, Value)> {
+        let Some(animation) = &self.doc.scene.animation else {
+            return Vec::new();
+        };
+        let frame = self.playback.frame as f64;
+        let mut shown = Vec::new();
+        for track in animation.tracks.clone() {
+            let p = track.parameter.clone();
+            let (Some(base), Some(value)) = (p.get(&self.doc.scene), track.value_at(frame)) else {
+                continue;
+            };
+            p.set(&mut self.doc.scene, value);
+            if let Some(injected) = p.get(&self.doc.scene) {
+                shown.push((p, base, injected));
+            }
+        }
+        shown
+    }
+
+    /// After the panel and the viewport: a keyed value edited there becomes a key at the current frame (an
+    /// edit while paused), and the scene's own values come back. Skipped when an edit renumbered sources,
+    /// points or weights (the paths may name others now; the shown values then stay as the base values,
+    /// which only a still render uses).
+    fn key_edited_values(&mut self, shown: Vec<(Parameter, Value, Value)>, shape: Vec<usize>) {
+        if shown.is_empty() || source_shape(&self.doc.scene) != shape {
+            return;
+        }
+        let frame = self.playback.frame as f64;
+        for (parameter, base, injected) in shown {
+            if let (Some(now), Some(animation)) = (
+                parameter.get(&self.doc.scene),
+                self.doc.scene.animation.as_mut(),
+            ) && now != injected
+                && let Some(track) = animation
+                    .tracks
+                    .iter_mut()
+                    .find(|t| t.parameter == parameter)
+            {
+                track.set_key(frame, now);
+            }
+            parameter.set(&mut self.doc.scene, base);
+        }
+    }
+
+    /// The scene as shown: the document's scene at the current frame of its animation.
+    pub fn frame_scene(&self) -> Scene {
+        if self.doc.scene.is_animated() {
+            self.doc.scene.at_frame(self.playback.frame as f64)
+        } else {
+            self.doc.scene.clone()
+        }
+    }
+
+    /// Playback, the transport bar and any export running: once per frame, before the rest of the UI.
+    fn animation_ui(&mut self, ui: &mut egui::Ui) {
+        if let Some(job) = &self.export_job {
+            let status = job.status();
+            match status.result {
+                Some(Ok(files)) => {
+                    let first = files
+                        .first()
+                        .map_or(String::new(), |p| p.display().to_string());
+                    let more = if files.len() > 1 {
+                        format!(" (+{} more)", files.len() - 1)
+                    } else {
+                        String::new()
+                    };
+                    self.notify(format!("Exported {first}{more}"), false);
+                    self.export_job = None;
+                }
+                Some(Err(e)) => {
+                    self.notify(format!("Export failed: {e}"), true);
+                    self.export_job = None;
+                }
+                None => ui
+                    .ctx()
+                    .request_repaint_after(std::time::Duration::from_millis(200)),
+            }
+        }
+        let Some(animation) = &self.doc.scene.animation else {
+            self.playback.playing = false;
+            self.playback.frame = 0;
+            return;
+        };
+        let (frames, frame_rate) = (animation.frames, animation.frame_rate);
+        if self.playback.frame >= frames {
+            self.playback.seek(self.playback.frame, frames);
+        }
+        timeline::shortcuts(ui.ctx(), &mut self.playback, frames);
+        // Real time, but at most half a second per UI frame, so a slow frame skips ahead but never far.
+        let dt = ui.input(|i| i.stable_dt).min(0.5) as f64;
+        self.playback.advance(dt, frame_rate, frames);
+        egui::Panel::bottom("energywave.timeline").show(ui, |ui| {
+            timeline::bar(ui, &mut self.playback, frames, frame_rate)
+        });
+        if self.playback.playing {
+            ui.ctx().request_repaint();
         }
     }
 
@@ -292,6 +432,10 @@ impl ViewerApp {
         self.shortcuts(ui.ctx());
 
         egui::Panel::bottom("energywave.status").show(ui, |ui| self.status_bar(ui));
+        self.animation_ui(ui);
+        self.title = self.doc.title();
+        let shape = source_shape(&self.doc.scene);
+        let shown = self.show_keyed_values();
         egui::Panel::left("energywave.panel")
             .resizable(true)
             .default_size(340.0)
@@ -301,6 +445,7 @@ impl ViewerApp {
         egui::CentralPanel::default()
             .frame(egui::Frame::NONE)
             .show(ui, |ui| self.viewport(ui));
+        self.key_edited_values(shown, shape);
         self.modals(ui.ctx());
 
         // An edit is committed when it settles: no button held (a drag is one step).
@@ -376,7 +521,7 @@ impl ViewerApp {
         ui.painter().add(egui_wgpu::Callback::new_paint_callback(
             rect,
             ViewportCallback(ViewportView {
-                scene: self.doc.scene.clone(),
+                scene: self.frame_scene(),
                 size: self.viewport_px,
                 show_grid: self.show_grid,
             }),

@@ -3,15 +3,18 @@
 //!
 //! - [`app`]: the state and the whole UI (`ViewerApp::ui`), shared by the window and the UI tests;
 //! - [`panel`]: the side panel's editors;
+//! - [`animation_panel`]: its Animation section (pulses, keys, export);
 //! - [`handles`]: the sources' handles, drawn and dragged with egui's painter;
 //! - [`navigation`]: orbit, pan, zoom and framing;
 //! - [`history`]: undo and redo;
+//! - [`timeline`]: playback of the animation (play, pause, step, scrub, loop) and exports beside the UI;
 //! - [`document`]: the scene file, saving, hot reload, screenshot names;
 //! - [`viewport`]: the 3D viewport on the GPU (grid, field, billboard) as an egui-wgpu paint callback;
 //! - [`window`]: the winit window and event loop;
 //! - [`presenter`]: one frame of the viewer into a surface, and recovery from surface and device faults;
 //! - [`offscreen`]: the same viewer drawn into a texture (benchmarks, stress tests).
 
+pub mod animation_panel;
 pub mod app;
 pub mod document;
 pub mod handles;
@@ -20,6 +23,7 @@ pub mod navigation;
 pub mod offscreen;
 pub mod panel;
 pub mod presenter;
+pub mod timeline;
 pub mod viewport;
 pub mod window;
 

@@ -164,7 +164,7 @@ impl OffscreenViewer {
     /// The viewport alone at its last size, rendered again and read back (RGBA).
     pub fn viewport_image(&mut self) -> Result<Vec<[f32; 4]>, GpuError> {
         let view = ViewportView {
-            scene: self.app.scene().clone(),
+            scene: self.app.frame_scene(),
             size: [
                 self.app.viewport_px[0].max(1),
                 self.app.viewport_px[1].max(1),

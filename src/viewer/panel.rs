@@ -5,6 +5,7 @@ use egui::{Color32, DragValue, Slider, Stroke, Ui};
 use glam::DVec3;
 
 use super::app::ViewerApp;
+use crate::animation::SourceKind;
 use crate::field::{Curve, Line, Point, Torus, wseries};
 use crate::scene::MAX_DIVISIONS;
 
@@ -60,7 +61,7 @@ fn color(ui: &mut Ui, label: &str, c: &mut [f64; 3]) {
 }
 
 /// A label and a value widget, the widget named by the label for accessibility (screen readers, UI tests).
-fn labelled(ui: &mut Ui, label: &str, widget: impl egui::Widget) -> egui::Response {
+pub(super) fn labelled(ui: &mut Ui, label: &str, widget: impl egui::Widget) -> egui::Response {
     let l = ui.label(label);
     ui.add(widget).labelled_by(l.id)
 }
@@ -87,10 +88,12 @@ pub fn show(ui: &mut Ui, app: &mut ViewerApp) {
     render_section(ui, app);
     ui.separator();
     sources_section(ui, app);
+    ui.separator();
+    super::animation_panel::show(ui, app);
 }
 
 fn file_section(ui: &mut Ui, app: &mut ViewerApp) {
-    ui.heading(app.doc.title());
+    ui.heading(app.title());
     ui.horizontal(|ui| {
         ui.label("File");
         ui.add(
@@ -340,16 +343,23 @@ fn sources_section(ui: &mut Ui, app: &mut ViewerApp) {
         }
     });
     let s = &mut scene.sources;
-    list(ui, "Point", &mut s.points, |ui, p| {
-        vec3(ui, "position", &mut p.position, 0.02);
-        coefficient(ui, &mut p.coefficient);
-    });
-    list(ui, "Line", &mut s.lines, |ui, l| {
-        vec3(ui, "point", &mut l.point, 0.02);
-        direction(ui, "direction", &mut l.direction);
-        coefficient(ui, &mut l.coefficient);
-    });
-    list(ui, "Torus", &mut s.tori, |ui, t| {
+    let mut edits = Vec::new();
+    edits.push((
+        SourceKind::Points,
+        list(ui, "Point", &mut s.points, |ui, p| {
+            vec3(ui, "position", &mut p.position, 0.02);
+            coefficient(ui, &mut p.coefficient);
+        }),
+    ));
+    edits.push((
+        SourceKind::Lines,
+        list(ui, "Line", &mut s.lines, |ui, l| {
+            vec3(ui, "point", &mut l.point, 0.02);
+            direction(ui, "direction", &mut l.direction);
+            coefficient(ui, &mut l.coefficient);
+        }),
+    ));
+    let tori = list(ui, "Torus", &mut s.tori, |ui, t| {
         vec3(ui, "center", &mut t.center, 0.02);
         direction(ui, "axis", &mut t.axis);
         ui.horizontal(|ui| {
@@ -363,16 +373,37 @@ fn sources_section(ui: &mut Ui, app: &mut ViewerApp) {
         });
         coefficient(ui, &mut t.coefficient);
     });
-    list(ui, "Curve", &mut s.curves, curve_editor);
+    edits.push((SourceKind::Tori, tori));
+    edits.push((
+        SourceKind::Curves,
+        list(ui, "Curve", &mut s.curves, curve_editor),
+    ));
+    // Pulses and keys follow their sources when a source is deleted or duplicated.
+    if let Some(animation) = &mut scene.animation {
+        for (kind, edit) in edits {
+            match edit {
+                Some(ListEdit::Deleted(i)) => animation.source_removed(kind, i),
+                Some(ListEdit::Duplicated(i)) => animation.source_inserted(kind, i + 1),
+                None => {}
+            }
+        }
+    }
 }
 
-/// A list of sources of one kind, each with its editor and Duplicate / Delete.
+/// A source deleted or duplicated in a list.
+enum ListEdit {
+    Deleted(usize),
+    Duplicated(usize),
+}
+
+/// A list of sources of one kind, each with its editor and Duplicate / Delete; says which was deleted or
+/// duplicated.
 fn list<T: Clone>(
     ui: &mut Ui,
     kind: &str,
     items: &mut Vec<T>,
     mut edit: impl FnMut(&mut Ui, &mut T),
-) {
+) -> Option<ListEdit> {
     let mut duplicate = None;
     let mut delete = None;
     for (i, item) in items.iter_mut().enumerate() {
@@ -394,10 +425,13 @@ fn list<T: Clone>(
     if let Some(i) = duplicate {
         let copy = items[i].clone();
         items.insert(i + 1, copy);
+        return Some(ListEdit::Duplicated(i));
     }
     if let Some(i) = delete {
         items.remove(i);
+        return Some(ListEdit::Deleted(i));
     }
+    None
 }
 
 fn curve_editor(ui: &mut Ui, c: &mut Curve) {
@@ -469,7 +503,7 @@ fn curve_editor(ui: &mut Ui, c: &mut Curve) {
 }
 
 /// A plot of Sw(t) over [0, 1] with the weights at their nominal parameters i / (n - 1).
-fn wseries_plot(ui: &mut Ui, weights: &[f64]) {
+pub(super) fn wseries_plot(ui: &mut Ui, weights: &[f64]) {
     let (rect, _) = ui.allocate_exact_size(
         egui::vec2(ui.available_width().min(300.0), 70.0),
         egui::Sense::hover(),

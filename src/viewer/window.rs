@@ -286,7 +286,7 @@ fn save_viewport(
 ) -> Result<(), ViewerError> {
     let [w, h] = app.viewport_px;
     let view = ViewportView {
-        scene: app.scene().clone(),
+        scene: app.frame_scene(),
         size: [w.max(1) * scale, h.max(1) * scale],
         show_grid: app.show_grid,
     };

@@ -1,0 +1,412 @@
+//! Keyframes: any numeric parameter of a scene (a coefficient, a control point, a color, ...) animated by
+//! linear interpolation between keys, held before the first key and after the last.
+//!
+//! A parameter is named by its path in the scene file, as `curves[0].control_points[2]` or
+//! `colors.energy`; [`Parameter`] is that path parsed, and knows how to read and write the value in a
+//! [`Scene`].
+
+use std::fmt;
+
+use glam::DVec3;
+
+use crate::scene::Scene;
+
+/// A keyed value: a number, or a vector (positions, directions, colors).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Value {
+    Number(f64),
+    Vector([f64; 3]),
+}
+
+impl Value {
+    /// `a + (b - a) s`, component by component; `None` if the two are not of the same kind.
+    pub fn lerp(a: Value, b: Value, s: f64) -> Option<Value> {
+        let mix = |x: f64, y: f64| x + (y - x) * s;
+        match (a, b) {
+            (Value::Number(x), Value::Number(y)) => Some(Value::Number(mix(x, y))),
+            (Value::Vector(x), Value::Vector(y)) => {
+                Some(Value::Vector(std::array::from_fn(|c| mix(x[c], y[c]))))
+            }
+            _ => None,
+        }
+    }
+
+    /// Every component finite.
+    pub fn is_finite(&self) -> bool {
+        match self {
+            Value::Number(x) => x.is_finite(),
+            Value::Vector(v) => v.iter().all(|x| x.is_finite()),
+        }
+    }
+}
+
+/// One key: the value a parameter has at `frame`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Key {
+    pub frame: f64,
+    pub value: Value,
+}
+
+/// The keys of one parameter, in strictly increasing frame order (the scene loader enforces it).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Track {
+    pub parameter: Parameter,
+    pub keys: Vec<Key>,
+}
+
+impl Track {
+    /// The value at `frame`: linear between the two keys around it, the first key's before it, the last's
+    /// after. `None` without keys.
+    pub fn value_at(&self, frame: f64) -> Option<Value> {
+        let first = self.keys.first()?;
+        let last = self.keys.last()?;
+        if frame <= first.frame {
+            return Some(first.value);
+        }
+        if frame >= last.frame {
+            return Some(last.value);
+        }
+        // The first key after `frame`; the one before it exists since frame > first.frame.
+        let next = self.keys.partition_point(|k| k.frame <= frame);
+        let (a, b) = (&self.keys[next - 1], &self.keys[next]);
+        let s = (frame - a.frame) / (b.frame - a.frame);
+        Value::lerp(a.value, b.value, s)
+    }
+
+    /// Sets the key at `frame` (replacing one at the same frame), keeping the keys in order.
+    pub fn set_key(&mut self, frame: f64, value: Value) {
+        match self.keys.iter().position(|k| k.frame >= frame) {
+            Some(i) if self.keys[i].frame == frame => self.keys[i].value = value,
+            Some(i) => self.keys.insert(i, Key { frame, value }),
+            None => self.keys.push(Key { frame, value }),
+        }
+    }
+}
+
+/// The kinds of source, as the file names their arrays.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SourceKind {
+    Points,
+    Lines,
+    Tori,
+    Curves,
+}
+
+impl SourceKind {
+    pub fn key(self) -> &'static str {
+        match self {
+            SourceKind::Points => "points",
+            SourceKind::Lines => "lines",
+            SourceKind::Tori => "tori",
+            SourceKind::Curves => "curves",
+        }
+    }
+}
+
+/// A parameter that can be keyed: a path into the scene, as the scene file names it.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Parameter {
+    /// `colors.energy`
+    EnergyColor,
+    /// `colors.background`
+    BackgroundColor,
+    /// `points[i].position`, `lines[i].point`, `tori[i].center`
+    Position(SourceKind, usize),
+    /// `lines[i].direction`, `tori[i].axis` (normalised after interpolation)
+    Direction(SourceKind, usize),
+    /// `points[i].coefficient`, ... (any kind)
+    Coefficient(SourceKind, usize),
+    /// `tori[i].major_radius`
+    MajorRadius(usize),
+    /// `curves[i].control_points[j]`
+    ControlPoint(usize, usize),
+    /// `curves[i].weights[j]`
+    Weight(usize, usize),
+    /// `integration.nu`, `integration.alpha`, `integration.beta`, `integration.epsilon`
+    Integration(IntegrationSetting),
+}
+
+/// The integration settings that can be keyed (the division count is an integer and cannot).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum IntegrationSetting {
+    Nu,
+    Alpha,
+    Beta,
+    Epsilon,
+}
+
+impl IntegrationSetting {
+    pub fn key(self) -> &'static str {
+        match self {
+            IntegrationSetting::Nu => "nu",
+            IntegrationSetting::Alpha => "alpha",
+            IntegrationSetting::Beta => "beta",
+            IntegrationSetting::Epsilon => "epsilon",
+        }
+    }
+
+    /// The smallest value the setting may take: nu above 1, the others above 0.
+    pub fn lower_bound(self) -> f64 {
+        match self {
+            IntegrationSetting::Nu => 1.0,
+            _ => 0.0,
+        }
+    }
+}
+
+/// The parameter paths a track may name, for messages.
+pub const PARAMETER_FORMS: &str = "colors.energy, colors.background, points[i].position, points[i].coefficient, \
+lines[i].point, lines[i].direction, lines[i].coefficient, tori[i].center, tori[i].axis, tori[i].major_radius, \
+tori[i].coefficient, curves[i].control_points[j], curves[i].coefficient, curves[i].weights[j], \
+integration.nu, integration.alpha, integration.beta, integration.epsilon";
+
+/// Splits `name[3]` into `("name", Some(3))`, `name` into `("name", None)`.
+fn indexed(part: &str) -> Option<(&str, Option<usize>)> {
+    match part.split_once('[') {
+        None => Some((part, None)),
+        Some((name, rest)) => {
+            let index = rest.strip_suffix(']')?.trim().parse().ok()?;
+            Some((name, Some(index)))
+        }
+    }
+}
+
+impl Parameter {
+    /// Parses a path such as `curves[0].control_points[1]`; the error says which forms exist.
+    pub fn parse(path: &str) -> Result<Parameter, String> {
+        let err = || {
+            format!("{path:?} is not a parameter that can be keyed; use one of: {PARAMETER_FORMS}")
+        };
+        let parts: Vec<&str> = path.trim().split('.').collect();
+        let parts: Option<Vec<(&str, Option<usize>)>> = parts.iter().map(|p| indexed(p)).collect();
+        let parts = parts.ok_or_else(err)?;
+        use SourceKind::*;
+        let kind = |name: &str| match name {
+            "points" => Some(Points),
+            "lines" => Some(Lines),
+            "tori" => Some(Tori),
+            "curves" => Some(Curves),
+            _ => None,
+        };
+        let p = match parts.as_slice() {
+            [("colors", None), ("energy", None)] => Parameter::EnergyColor,
+            [("colors", None), ("background", None)] => Parameter::BackgroundColor,
+            [("integration", None), (name, None)] => Parameter::Integration(
+                [
+                    IntegrationSetting::Nu,
+                    IntegrationSetting::Alpha,
+                    IntegrationSetting::Beta,
+                    IntegrationSetting::Epsilon,
+                ]
+                .into_iter()
+                .find(|k| k.key() == *name)
+                .ok_or_else(err)?,
+            ),
+            [(k, Some(i)), (field, sub)] => match (kind(k).ok_or_else(err)?, *field, sub) {
+                (Points, "position", None) | (Lines, "point", None) | (Tori, "center", None) => {
+                    Parameter::Position(kind(k).ok_or_else(err)?, *i)
+                }
+                (Lines, "direction", None) | (Tori, "axis", None) => {
+                    Parameter::Direction(kind(k).ok_or_else(err)?, *i)
+                }
+                (kind, "coefficient", None) => Parameter::Coefficient(kind, *i),
+                (Tori, "major_radius", None) => Parameter::MajorRadius(*i),
+                (Curves, "control_points", Some(j)) => Parameter::ControlPoint(*i, *j),
+                (Curves, "weights", Some(j)) => Parameter::Weight(*i, *j),
+                _ => return Err(err()),
+            },
+            _ => return Err(err()),
+        };
+        Ok(p)
+    }
+
+    /// True when the value is a vector (three numbers), false for a number.
+    pub fn is_vector(&self) -> bool {
+        matches!(
+            self,
+            Parameter::EnergyColor
+                | Parameter::BackgroundColor
+                | Parameter::Position(..)
+                | Parameter::Direction(..)
+                | Parameter::ControlPoint(..)
+        )
+    }
+
+    /// The source this parameter belongs to, if any.
+    pub fn source(&self) -> Option<(SourceKind, usize)> {
+        match *self {
+            Parameter::EnergyColor | Parameter::BackgroundColor | Parameter::Integration(_) => None,
+            Parameter::Position(k, i)
+            | Parameter::Direction(k, i)
+            | Parameter::Coefficient(k, i) => Some((k, i)),
+            Parameter::MajorRadius(i) => Some((SourceKind::Tori, i)),
+            Parameter::ControlPoint(i, _) | Parameter::Weight(i, _) => {
+                Some((SourceKind::Curves, i))
+            }
+        }
+    }
+
+    /// The same parameter on source `index` instead (sources renumbered after a deletion).
+    pub fn with_source_index(&self, index: usize) -> Parameter {
+        match *self {
+            Parameter::Position(k, _) => Parameter::Position(k, index),
+            Parameter::Direction(k, _) => Parameter::Direction(k, index),
+            Parameter::Coefficient(k, _) => Parameter::Coefficient(k, index),
+            Parameter::MajorRadius(_) => Parameter::MajorRadius(index),
+            Parameter::ControlPoint(_, j) => Parameter::ControlPoint(index, j),
+            Parameter::Weight(_, j) => Parameter::Weight(index, j),
+            ref other => other.clone(),
+        }
+    }
+
+    /// The parameter's current value in `scene`; `None` when the path names nothing there (a source or a
+    /// control point that does not exist, a weight of a curve without a W series).
+    pub fn get(&self, scene: &Scene) -> Option<Value> {
+        let s = &scene.sources;
+        let v = |p: DVec3| Value::Vector(p.to_array());
+        Some(match *self {
+            Parameter::EnergyColor => Value::Vector(scene.colors.energy),
+            Parameter::BackgroundColor => Value::Vector(scene.colors.background),
+            Parameter::Position(SourceKind::Points, i) => v(s.points.get(i)?.position),
+            Parameter::Position(SourceKind::Lines, i) => v(s.lines.get(i)?.point),
+            Parameter::Position(SourceKind::Tori, i) => v(s.tori.get(i)?.center),
+            Parameter::Position(SourceKind::Curves, _) => return None,
+            Parameter::Direction(SourceKind::Lines, i) => v(s.lines.get(i)?.direction),
+            Parameter::Direction(SourceKind::Tori, i) => v(s.tori.get(i)?.axis),
+            Parameter::Direction(..) => return None,
+            Parameter::Coefficient(SourceKind::Points, i) => {
+                Value::Number(s.points.get(i)?.coefficient)
+            }
+            Parameter::Coefficient(SourceKind::Lines, i) => {
+                Value::Number(s.lines.get(i)?.coefficient)
+            }
+            Parameter::Coefficient(SourceKind::Tori, i) => {
+                Value::Number(s.tori.get(i)?.coefficient)
+            }
+            Parameter::Coefficient(SourceKind::Curves, i) => {
+                Value::Number(s.curves.get(i)?.coefficient)
+            }
+            Parameter::MajorRadius(i) => Value::Number(s.tori.get(i)?.major_radius),
+            Parameter::ControlPoint(i, j) => v(*s.curves.get(i)?.control_points.get(j)?),
+            Parameter::Weight(i, j) => Value::Number(*s.curves.get(i)?.weights.get(j)?),
+            Parameter::Integration(k) => Value::Number(match k {
+                IntegrationSetting::Nu => scene.integration.nu,
+                IntegrationSetting::Alpha => scene.integration.alpha,
+                IntegrationSetting::Beta => scene.integration.beta,
+                IntegrationSetting::Epsilon => scene.integration.epsilon,
+            }),
+        })
+    }
+
+    /// Writes `value` into `scene`; does nothing when the path names nothing there or the value is of the
+    /// wrong kind. Directions are normalised (a zero vector leaves the direction as it was), colors clamped
+    /// to 0..1, radii and weights kept positive, as the scene loader would require.
+    pub fn set(&self, scene: &mut Scene, value: Value) {
+        let s = &mut scene.sources;
+        match (self, value) {
+            (Parameter::EnergyColor, Value::Vector(c)) => {
+                scene.colors.energy = c.map(|x| x.clamp(0.0, 1.0))
+            }
+            (Parameter::BackgroundColor, Value::Vector(c)) => {
+                scene.colors.background = c.map(|x| x.clamp(0.0, 1.0))
+            }
+            (Parameter::Position(kind, i), Value::Vector(p)) => {
+                let p = DVec3::from_array(p);
+                let slot = match kind {
+                    SourceKind::Points => s.points.get_mut(*i).map(|x| &mut x.position),
+                    SourceKind::Lines => s.lines.get_mut(*i).map(|x| &mut x.point),
+                    SourceKind::Tori => s.tori.get_mut(*i).map(|x| &mut x.center),
+                    SourceKind::Curves => None,
+                };
+                if let Some(slot) = slot {
+                    *slot = p;
+                }
+            }
+            (Parameter::Direction(kind, i), Value::Vector(d)) => {
+                let d = DVec3::from_array(d);
+                let slot = match kind {
+                    SourceKind::Lines => s.lines.get_mut(*i).map(|x| &mut x.direction),
+                    SourceKind::Tori => s.tori.get_mut(*i).map(|x| &mut x.axis),
+                    _ => None,
+                };
+                if let Some(slot) = slot
+                    && d.length() > 1e-12
+                {
+                    *slot = d.normalize();
+                }
+            }
+            (Parameter::Coefficient(kind, i), Value::Number(x)) => {
+                let slot = match kind {
+                    SourceKind::Points => s.points.get_mut(*i).map(|x| &mut x.coefficient),
+                    SourceKind::Lines => s.lines.get_mut(*i).map(|x| &mut x.coefficient),
+                    SourceKind::Tori => s.tori.get_mut(*i).map(|x| &mut x.coefficient),
+                    SourceKind::Curves => s.curves.get_mut(*i).map(|x| &mut x.coefficient),
+                };
+                if let Some(slot) = slot {
+                    *slot = x;
+                }
+            }
+            (Parameter::MajorRadius(i), Value::Number(x)) => {
+                if let Some(t) = s.tori.get_mut(*i) {
+                    t.major_radius = x.max(1e-9);
+                }
+            }
+            (Parameter::ControlPoint(i, j), Value::Vector(p)) => {
+                if let Some(slot) = s
+                    .curves
+                    .get_mut(*i)
+                    .and_then(|c| c.control_points.get_mut(*j))
+                {
+                    *slot = DVec3::from_array(p);
+                }
+            }
+            (Parameter::Integration(k), Value::Number(x)) => {
+                let i = &mut scene.integration;
+                let slot = match k {
+                    IntegrationSetting::Nu => &mut i.nu,
+                    IntegrationSetting::Alpha => &mut i.alpha,
+                    IntegrationSetting::Beta => &mut i.beta,
+                    IntegrationSetting::Epsilon => &mut i.epsilon,
+                };
+                // Interpolating between valid keys stays valid; this only guards against rounding.
+                *slot = x.max(k.lower_bound() + 1e-9);
+            }
+            (Parameter::Weight(i, j), Value::Number(x)) => {
+                if let Some(slot) = s.curves.get_mut(*i).and_then(|c| c.weights.get_mut(*j)) {
+                    *slot = x.max(0.0);
+                }
+            }
+            _ => {}
+        }
+    }
+}
+
+impl fmt::Display for Parameter {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Parameter::EnergyColor => write!(f, "colors.energy"),
+            Parameter::BackgroundColor => write!(f, "colors.background"),
+            Parameter::Position(k, i) => {
+                let field = match k {
+                    SourceKind::Lines => "point",
+                    SourceKind::Tori => "center",
+                    _ => "position",
+                };
+                write!(f, "{}[{i}].{field}", k.key())
+            }
+            Parameter::Direction(k, i) => {
+                let field = if *k == SourceKind::Tori {
+                    "axis"
+                } else {
+                    "direction"
+                };
+                write!(f, "{}[{i}].{field}", k.key())
+            }
+            Parameter::Coefficient(k, i) => write!(f, "{}[{i}].coefficient", k.key()),
+            Parameter::MajorRadius(i) => write!(f, "tori[{i}].major_radius"),
+            Parameter::ControlPoint(i, j) => write!(f, "curves[{i}].control_points[{j}]"),
+            Parameter::Weight(i, j) => write!(f, "curves[{i}].weights[{j}]"),
+            Parameter::Integration(k) => write!(f, "integration.{}", k.key()),
+        }
+    }
+}

@@ -1,0 +1,171 @@
+//! Time in scenes: a timeline (frame rate, length), travelling pulses along curves (the thesis's eq. 5.1)
+//! and keyframed parameters. A scene without an animation is still; [`Animation::apply`] gives the scene as
+//! it is at one frame, which every renderer then draws as a still.
+//!
+//! - [`pulse`]: the W series of a curve as a function of the frame (METHOD.md section 5);
+//! - [`keyframes`]: linear keys on any numeric parameter, named by its path in the scene file.
+
+pub mod keyframes;
+pub mod pulse;
+
+pub use keyframes::{
+    IntegrationSetting, Key, PARAMETER_FORMS, Parameter, SourceKind, Track, Value,
+};
+pub use pulse::Pulse;
+
+use crate::scene::Scene;
+
+/// Frame rate of a scene that animates without saying how fast.
+pub const DEFAULT_FRAME_RATE: f64 = 30.0;
+/// Longest animation a scene may ask for, in frames.
+pub const MAX_FRAMES: u32 = 1_000_000;
+
+/// A curve's travelling pulse.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CurvePulse {
+    /// Index of the curve in `Sources::curves`.
+    pub curve: usize,
+    pub pulse: Pulse,
+}
+
+/// A scene's animation: its timeline and what moves.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Animation {
+    /// Frames per second, for playback and GIFs.
+    pub frame_rate: f64,
+    /// Length in frames: frames are numbered `0..frames`.
+    pub frames: u32,
+    /// Curves whose W series is a travelling pulse.
+    pub pulses: Vec<CurvePulse>,
+    /// Keyed parameters.
+    pub tracks: Vec<Track>,
+}
+
+impl Default for Animation {
+    fn default() -> Self {
+        Self {
+            frame_rate: DEFAULT_FRAME_RATE,
+            frames: 100,
+            pulses: Vec::new(),
+            tracks: Vec::new(),
+        }
+    }
+}
+
+impl Animation {
+    /// The length an animation without a stated length gets: until the last pulse has passed (or one
+    /// period) and the last key, at least one frame.
+    pub fn natural_length(pulses: &[CurvePulse], tracks: &[Track]) -> u32 {
+        let pulse_end = pulses
+            .iter()
+            .map(|p| p.pulse.natural_length())
+            .fold(0.0f64, f64::max);
+        let key_end = tracks
+            .iter()
+            .filter_map(|t| t.keys.last())
+            .map(|k| k.frame + 1.0)
+            .fold(0.0f64, f64::max);
+        pulse_end.max(key_end).ceil().clamp(1.0, MAX_FRAMES as f64) as u32
+    }
+
+    /// The pulse of curve `curve`, if it has one.
+    pub fn pulse(&self, curve: usize) -> Option<&Pulse> {
+        self.pulses
+            .iter()
+            .find(|p| p.curve == curve)
+            .map(|p| &p.pulse)
+    }
+
+    /// The track of `parameter`, if it is keyed.
+    pub fn track(&self, parameter: &Parameter) -> Option<&Track> {
+        self.tracks.iter().find(|t| &t.parameter == parameter)
+    }
+
+    /// `scene` (whose base values are the unkeyed ones) as it is at `frame`: every track's value set, then
+    /// every pulse's W series. Frames may be fractional (keys interpolate, pulses are continuous in time).
+    pub fn apply(&self, scene: &mut Scene, frame: f64) {
+        for track in &self.tracks {
+            if let Some(value) = track.value_at(frame) {
+                track.parameter.set(scene, value);
+            }
+        }
+        for p in &self.pulses {
+            if let Some(curve) = scene.sources.curves.get_mut(p.curve) {
+                curve.weights = p.pulse.weights(frame);
+            }
+        }
+    }
+
+    /// Source `index` of `kind` was removed: its pulse and tracks go, later sources' move down one.
+    pub fn source_removed(&mut self, kind: SourceKind, index: usize) {
+        if kind == SourceKind::Curves {
+            self.pulses.retain(|p| p.curve != index);
+            for p in &mut self.pulses {
+                if p.curve > index {
+                    p.curve -= 1;
+                }
+            }
+        }
+        self.tracks
+            .retain(|t| t.parameter.source() != Some((kind, index)));
+        for t in &mut self.tracks {
+            if let Some((k, i)) = t.parameter.source()
+                && k == kind
+                && i > index
+            {
+                t.parameter = t.parameter.with_source_index(i - 1);
+            }
+        }
+    }
+
+    /// A source of `kind` was inserted at `index`: later sources' pulses and tracks move up one.
+    pub fn source_inserted(&mut self, kind: SourceKind, index: usize) {
+        if kind == SourceKind::Curves {
+            for p in &mut self.pulses {
+                if p.curve >= index {
+                    p.curve += 1;
+                }
+            }
+        }
+        for t in &mut self.tracks {
+            if let Some((k, i)) = t.parameter.source()
+                && k == kind
+                && i >= index
+            {
+                t.parameter = t.parameter.with_source_index(i + 1);
+            }
+        }
+    }
+
+    /// Drops what no longer names anything in `scene` (a control point or weight removed in the viewer),
+    /// so that the scene still saves as a valid file.
+    pub fn retain_valid(&mut self, scene: &Scene) {
+        let curves = scene.sources.curves.len();
+        self.pulses.retain(|p| p.curve < curves);
+        self.tracks.retain(|t| {
+            t.parameter.get(scene).is_some()
+                && !matches!(t.parameter, Parameter::Weight(i, _) if self.pulses.iter().any(|p| p.curve == i))
+        });
+    }
+}
+
+impl Scene {
+    /// True when the scene has an animation (a timeline; it may still hold nothing that moves).
+    pub fn is_animated(&self) -> bool {
+        self.animation.is_some()
+    }
+
+    /// How many frames the scene has: its animation's length, or 1 for a still scene.
+    pub fn frame_count(&self) -> u32 {
+        self.animation.as_ref().map_or(1, |a| a.frames)
+    }
+
+    /// The scene as it is at `frame`: keyed parameters and pulses applied (a clone of the scene if still).
+    pub fn at_frame(&self, frame: f64) -> Scene {
+        let mut s = self.clone();
+        if let Some(a) = &self.animation {
+            a.apply(&mut s, frame);
+        }
+        s
+    }
+}

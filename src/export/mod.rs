@@ -1,0 +1,462 @@
+//! Exporting an animation: which frames (`--frames A..B`), where they go (a numbered PNG or EXR sequence, an
+//! animated GIF, or a sprite sheet with its layout beside it), and the progress bar.
+//!
+//! Everything a user can get wrong (the range, the pattern, the extension, the directory) is checked by
+//! [`Target::for_output`] and [`FrameSpec::resolve`] before any rendering. Every file is written atomically;
+//! a GIF and a sheet are written once, at the end, so an interrupted export leaves no partial animation.
+
+pub mod progress;
+pub mod sheet;
+
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+
+use crate::output::{self, Format, OutputError};
+use crate::scene::Scene;
+
+pub use progress::Progress;
+pub use sheet::{SheetLayout, sheet_grid};
+
+/// Widest sprite sheet, in pixels per side (what game engines and image tools load without trouble).
+pub const MAX_SHEET_SIDE: u64 = 16384;
+
+/// Why an export cannot go ahead.
+#[derive(Debug, thiserror::Error)]
+pub enum ExportError {
+    #[error("--frames {spec:?}: {why}")]
+    Frames { spec: String, why: String },
+    #[error("{}: {why}", path.display())]
+    Target { path: PathBuf, why: String },
+    #[error("{0}")]
+    Output(#[from] OutputError),
+}
+
+impl ExportError {
+    /// True when the request is at fault (exit status 2).
+    pub fn is_input_error(&self) -> bool {
+        match self {
+            ExportError::Frames { .. } | ExportError::Target { .. } => true,
+            ExportError::Output(e) => e.is_input_error(),
+        }
+    }
+}
+
+/// The frames asked for on the command line, before the scene's length is known.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct FrameSpec {
+    text: String,
+    start: Option<u32>,
+    /// Exclusive.
+    end: Option<u32>,
+}
+
+impl FrameSpec {
+    /// Parses `A..B` (frames A to B - 1, so that `0..50` and `50..100` split an export in two), `A..=B`
+    /// (A to B), `A..` (A to the end), `..B`, `..` or a single frame `A`.
+    pub fn parse(s: &str) -> Result<FrameSpec, String> {
+        let err = || {
+            format!(
+                "{s:?} is not a frame range: use A..B (frames A to B-1), A..=B, A.., ..B or one frame number A"
+            )
+        };
+        let num = |t: &str| -> Result<Option<u32>, String> {
+            let t = t.trim();
+            if t.is_empty() {
+                Ok(None)
+            } else {
+                t.parse::<u32>().map(Some).map_err(|_| err())
+            }
+        };
+        let (start, end) = if let Some((a, b)) = s.split_once("..=") {
+            let b = num(b)?.ok_or_else(err)?;
+            (num(a)?, Some(b.checked_add(1).ok_or_else(err)?))
+        } else if let Some((a, b)) = s.split_once("..") {
+            (num(a)?, num(b)?)
+        } else {
+            let a = num(s)?.ok_or_else(err)?;
+            (Some(a), Some(a.checked_add(1).ok_or_else(err)?))
+        };
+        Ok(FrameSpec {
+            text: s.to_owned(),
+            start,
+            end,
+        })
+    }
+
+    /// The frames of an animation of `count` frames this asks for; an empty range or one beyond the end is
+    /// an error.
+    pub fn resolve(&self, count: u32) -> Result<Range<u32>, ExportError> {
+        let start = self.start.unwrap_or(0);
+        let end = self.end.unwrap_or(count);
+        let fail = |why: String| ExportError::Frames {
+            spec: self.text.clone(),
+            why,
+        };
+        let scene_has = if count == 1 {
+            "the scene has 1 frame, frame 0 (it has no [animation])".to_owned()
+        } else {
+            format!("the scene has {count} frames, 0 to {}", count - 1)
+        };
+        if start >= end {
+            return Err(fail(format!("frames {start}..{end} is empty; {scene_has}")));
+        }
+        if end > count {
+            return Err(fail(format!("goes to frame {}, but {scene_has}", end - 1)));
+        }
+        Ok(start..end)
+    }
+}
+
+/// The frames to render: those of `spec`, else all of them for a multi-frame target, else frame 0.
+pub fn frames_to_render(
+    spec: Option<&FrameSpec>,
+    target: &Target,
+    count: u32,
+) -> Result<Range<u32>, ExportError> {
+    match spec {
+        Some(s) => s.resolve(count),
+        None if matches!(target, Target::Single { .. }) => Ok(0..1),
+        None => Ok(0..count.max(1)),
+    }
+}
+
+/// Where rendered frames go.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Target {
+    /// One image (a single frame).
+    Single { path: PathBuf, format: Format },
+    /// One file per frame: `pattern`'s run of `#` replaced by the zero-padded frame number.
+    Sequence { pattern: PathBuf, format: Format },
+    /// An animated GIF, looping.
+    Gif { path: PathBuf },
+    /// A flipbook grid PNG, with its layout as JSON beside it.
+    Sheet { path: PathBuf, columns: Option<u32> },
+}
+
+impl Target {
+    /// Works out the target from the output path and `--sheet`, checking it (extension, directory, pattern)
+    /// before anything is rendered.
+    pub fn for_output(
+        path: &Path,
+        sheet: bool,
+        columns: Option<u32>,
+    ) -> Result<Target, ExportError> {
+        let fail = |why: &str| ExportError::Target {
+            path: path.to_owned(),
+            why: why.to_owned(),
+        };
+        let name = path
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .unwrap_or("")
+            .to_ascii_lowercase();
+        let hashes = hash_runs(&name);
+        if hashes > 1 {
+            return Err(fail(
+                "the file name has more than one run of #; use one, as in name_####.png",
+            ));
+        }
+        if ext == "gif" {
+            if sheet {
+                return Err(fail("a sprite sheet is a .png"));
+            }
+            if hashes > 0 {
+                return Err(fail(
+                    "a GIF holds every frame in one file: remove the # from its name",
+                ));
+            }
+            output::check_directory(path)?;
+            return Ok(Target::Gif {
+                path: path.to_owned(),
+            });
+        }
+        let format = output::check_destination(path)?;
+        if sheet {
+            if format != Format::Png || hashes > 0 {
+                return Err(fail(
+                    "a sprite sheet is one .png file (its layout goes beside it as .json)",
+                ));
+            }
+            if columns == Some(0) {
+                return Err(fail("--columns must be at least 1"));
+            }
+            let layout = sheet::layout_path(path);
+            if layout.is_dir() {
+                return Err(ExportError::Target {
+                    path: layout,
+                    why: "is a directory; the sheet's layout is written there".into(),
+                });
+            }
+            return Ok(Target::Sheet {
+                path: path.to_owned(),
+                columns,
+            });
+        }
+        Ok(if hashes == 1 {
+            Target::Sequence {
+                pattern: path.to_owned(),
+                format,
+            }
+        } else {
+            Target::Single {
+                path: path.to_owned(),
+                format,
+            }
+        })
+    }
+
+    /// True for the targets that hold several frames.
+    pub fn is_multi_frame(&self) -> bool {
+        !matches!(self, Target::Single { .. })
+    }
+}
+
+/// How many separate runs of `#` the text has.
+fn hash_runs(name: &str) -> usize {
+    name.split(|c| c != '#').filter(|s| !s.is_empty()).count()
+}
+
+/// The file of `frame` in a sequence: the run of `#` in the pattern's file name replaced by the frame
+/// number, zero-padded to the run's length (wider numbers are written in full).
+pub fn frame_path(pattern: &Path, frame: u32) -> PathBuf {
+    let name = pattern
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let (Some(first), Some(last)) = (name.find('#'), name.rfind('#')) else {
+        return pattern.to_owned();
+    };
+    let width = last - first + 1;
+    let numbered = format!("{}{frame:0width$}{}", &name[..first], &name[last + 1..]);
+    pattern.with_file_name(numbered)
+}
+
+/// Display values in [0, 1] to 8 bits, as the PNG writer rounds them.
+pub fn to_rgba8(pixels: &[[f64; 4]], alpha: bool) -> Vec<u8> {
+    pixels
+        .iter()
+        .flat_map(|p| {
+            let a = if alpha { p[3] } else { 1.0 };
+            [p[0], p[1], p[2], a].map(|c| (c.clamp(0.0, 1.0) * 255.0).round() as u8)
+        })
+        .collect()
+}
+
+/// A byte buffer the GIF encoder writes into and the sink reads back when the encoder is done.
+#[derive(Clone, Default)]
+struct SharedBuffer(std::rc::Rc<std::cell::RefCell<Vec<u8>>>);
+
+impl SharedBuffer {
+    fn take(&self) -> Vec<u8> {
+        std::mem::take(&mut self.0.borrow_mut())
+    }
+}
+
+impl std::io::Write for SharedBuffer {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.0.borrow_mut().extend_from_slice(buf);
+        Ok(buf.len())
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+/// Collects rendered frames into a target; [`FrameSink::finish`] writes what is written at the end.
+pub struct FrameSink {
+    target: Target,
+    width: u32,
+    height: u32,
+    alpha: bool,
+    frames: Range<u32>,
+    frame_rate: f64,
+    gif: Option<(image::codecs::gif::GifEncoder<SharedBuffer>, SharedBuffer)>,
+    sheet: Option<(SheetLayout, Vec<[f64; 4]>)>,
+    written: Vec<PathBuf>,
+}
+
+impl FrameSink {
+    /// A sink for `frames` of `width` x `height` pixels at `frame_rate`; `alpha` keeps the alpha channel
+    /// (`--transparent`; a GIF cannot, and the caller refuses that beforehand).
+    pub fn new(
+        target: &Target,
+        width: u32,
+        height: u32,
+        frames: Range<u32>,
+        frame_rate: f64,
+        alpha: bool,
+    ) -> Result<Self, ExportError> {
+        let mut sink = Self {
+            target: target.clone(),
+            width,
+            height,
+            alpha,
+            frames: frames.clone(),
+            frame_rate,
+            gif: None,
+            sheet: None,
+            written: Vec::new(),
+        };
+        match target {
+            Target::Gif { path } => {
+                // Speed 10 of NeuQuant's 1..30: a good palette per frame in a fraction of the render time.
+                let buffer = SharedBuffer::default();
+                let mut enc = image::codecs::gif::GifEncoder::new_with_speed(buffer.clone(), 10);
+                enc.set_repeat(image::codecs::gif::Repeat::Infinite)
+                    .map_err(|source| OutputError::Encode {
+                        path: path.clone(),
+                        source,
+                    })?;
+                sink.gif = Some((enc, buffer));
+            }
+            Target::Sheet { path, columns } => {
+                let layout = sheet_grid(path, width, height, frames.clone(), *columns, frame_rate)?;
+                let pixels = vec![[0.0; 4]; layout.width() as usize * layout.height() as usize];
+                sink.sheet = Some((layout, pixels));
+            }
+            _ => {}
+        }
+        Ok(sink)
+    }
+
+    /// Adds the rendered `frame` (RGBA display values, rows from the top).
+    pub fn push(&mut self, frame: u32, pixels: &[[f64; 4]]) -> Result<(), ExportError> {
+        let (w, h) = (self.width, self.height);
+        match &self.target {
+            Target::Single { path, .. } => {
+                output::write_rgba(path, w, h, pixels, self.alpha)?;
+                self.written.push(path.clone());
+            }
+            Target::Sequence { pattern, .. } => {
+                let path = frame_path(pattern, frame);
+                output::write_rgba(&path, w, h, pixels, self.alpha)?;
+                self.written.push(path);
+            }
+            Target::Gif { path } => {
+                let rgba = image::RgbaImage::from_raw(w, h, to_rgba8(pixels, false))
+                    .expect("the frame's size matches");
+                let delay = image::Delay::from_numer_denom_ms(
+                    (1.0e6 / self.frame_rate).round().max(1.0) as u32,
+                    1000,
+                );
+                let (enc, _) = self.gif.as_mut().expect("made with the target");
+                enc.encode_frame(image::Frame::from_parts(rgba, 0, 0, delay))
+                    .map_err(|source| OutputError::Encode {
+                        path: path.clone(),
+                        source,
+                    })?;
+            }
+            Target::Sheet { .. } => {
+                let (layout, sheet) = self.sheet.as_mut().expect("made with the target");
+                let (x0, y0) = layout.cell(frame - self.frames.start);
+                let sheet_w = layout.width() as usize;
+                for y in 0..h as usize {
+                    let row = &pixels[y * w as usize..(y + 1) * w as usize];
+                    let at = (y0 as usize + y) * sheet_w + x0 as usize;
+                    sheet[at..at + w as usize].copy_from_slice(row);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Writes the GIF or the sheet (and its layout); returns every file written.
+    pub fn finish(mut self) -> Result<Vec<PathBuf>, ExportError> {
+        match &self.target {
+            Target::Gif { path } => {
+                let (enc, buffer) = self.gif.take().expect("made with the target");
+                // The encoder writes the GIF's trailer when dropped.
+                drop(enc);
+                let bytes = buffer.take();
+                output::write_atomically(path, &bytes)?;
+                self.written.push(path.clone());
+            }
+            Target::Sheet { path, .. } => {
+                let (layout, pixels) = self.sheet.take().expect("made with the target");
+                // Cells past the last frame stay transparent (black in an opaque sheet).
+                output::write_rgba(path, layout.width(), layout.height(), &pixels, self.alpha)?;
+                let json = sheet::layout_path(path);
+                output::write_atomically(&json, layout.to_json().as_bytes())?;
+                self.written.push(path.clone());
+                self.written.push(json);
+            }
+            _ => {}
+        }
+        Ok(self.written)
+    }
+}
+
+/// Renders `frames` of `scene`'s animation with `render` (the composed frame of a scene at one frame, RGBA
+/// display values, `size` pixels) into `target`; `on_frame(done, frame)` after each. Returns the files
+/// written. The command line and the viewer's export both run this.
+pub fn export_frames<E: From<ExportError>>(
+    scene: &Scene,
+    target: &Target,
+    frames: Range<u32>,
+    size: (u32, u32),
+    transparent: bool,
+    mut render: impl FnMut(&Scene) -> Result<Vec<[f64; 4]>, E>,
+    mut on_frame: impl FnMut(u32, u32),
+) -> Result<Vec<PathBuf>, E> {
+    let frame_rate = scene
+        .animation
+        .as_ref()
+        .map_or(crate::animation::DEFAULT_FRAME_RATE, |a| a.frame_rate);
+    let mut sink = FrameSink::new(
+        target,
+        size.0,
+        size.1,
+        frames.clone(),
+        frame_rate,
+        transparent,
+    )?;
+    for (done, frame) in frames.enumerate() {
+        let pixels = render(&scene.at_frame(frame as f64))?;
+        sink.push(frame, &pixels)?;
+        on_frame(done as u32 + 1, frame);
+    }
+    Ok(sink.finish()?)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frame_ranges() {
+        let r = |s: &str, n: u32| FrameSpec::parse(s).unwrap().resolve(n).ok();
+        assert_eq!(r("0..10", 100), Some(0..10));
+        assert_eq!(r("10..=19", 100), Some(10..20));
+        assert_eq!(r("90..", 100), Some(90..100));
+        assert_eq!(r("..5", 100), Some(0..5));
+        assert_eq!(r("..", 100), Some(0..100));
+        assert_eq!(r("7", 100), Some(7..8));
+        assert_eq!(r("0..101", 100), None);
+        assert_eq!(r("5..5", 100), None);
+        assert_eq!(r("1", 1), None);
+        for bad in ["", "a..b", "-1..3", "3..-1", "1...2", "..=", "1..2..3"] {
+            assert!(FrameSpec::parse(bad).is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn frame_numbers_are_padded_to_the_run_of_hashes() {
+        let p = Path::new("out/beam_####.png");
+        assert_eq!(frame_path(p, 7), Path::new("out/beam_0007.png"));
+        assert_eq!(frame_path(p, 1234), Path::new("out/beam_1234.png"));
+        assert_eq!(frame_path(p, 12345), Path::new("out/beam_12345.png"));
+        assert_eq!(frame_path(Path::new("f#.exr"), 3), Path::new("f3.exr"));
+        assert_eq!(
+            frame_path(Path::new("a#b/x_###_y.png"), 42),
+            Path::new("a#b/x_042_y.png")
+        );
+        assert_eq!(hash_runs("a_##_b_#.png"), 2);
+        assert_eq!(hash_runs("a_####.png"), 1);
+        assert_eq!(hash_runs("a.png"), 0);
+    }
+}

@@ -1,0 +1,267 @@
+//! Playback of a scene's animation in the viewer: the current frame, play / pause / step / scrub / loop, and
+//! exports running beside the UI.
+//!
+//! Playback state is the view, not the document: it is never an undo step and never saved. The keyed values
+//! and pulses it plays are the document's, edited in the panel's Animation section.
+
+use std::ops::Range;
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
+
+use egui::{Key, Modifiers, Ui};
+
+use crate::export::{self, Target};
+use crate::gpu::HeadlessRenderer;
+use crate::scene::Scene;
+
+/// Where playback is.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Playback {
+    /// The frame shown, in `0..frames`.
+    pub frame: u32,
+    pub playing: bool,
+    /// Start again at frame 0 after the last frame (else stop there).
+    pub looping: bool,
+    /// Time played but not yet a whole frame, in frames.
+    carry: f64,
+}
+
+impl Default for Playback {
+    fn default() -> Self {
+        Self {
+            frame: 0,
+            playing: false,
+            looping: true,
+            carry: 0.0,
+        }
+    }
+}
+
+impl Playback {
+    /// Moves on by `dt` seconds of playback at `frame_rate` over `frames` frames.
+    pub fn advance(&mut self, dt: f64, frame_rate: f64, frames: u32) {
+        if !self.playing || frames == 0 {
+            return;
+        }
+        self.carry += dt.max(0.0) * frame_rate;
+        let whole = self.carry.floor();
+        self.carry -= whole;
+        let next = self.frame as u64 + whole as u64;
+        if next < frames as u64 {
+            self.frame = next as u32;
+        } else if self.looping {
+            self.frame = (next % frames as u64) as u32;
+        } else {
+            self.frame = frames - 1;
+            self.playing = false;
+            self.carry = 0.0;
+        }
+    }
+
+    /// One frame forward (`delta` 1) or back (-1): around the ends when looping, else stopping at them.
+    pub fn step(&mut self, delta: i64, frames: u32) {
+        let frames = frames.max(1) as i64;
+        let next = self.frame as i64 + delta;
+        self.frame = if self.looping {
+            next.rem_euclid(frames)
+        } else {
+            next.clamp(0, frames - 1)
+        } as u32;
+        self.carry = 0.0;
+    }
+
+    /// Goes to `frame` (clamped to the animation).
+    pub fn seek(&mut self, frame: u32, frames: u32) {
+        self.frame = frame.min(frames.max(1) - 1);
+        self.carry = 0.0;
+    }
+}
+
+/// What an export running beside the UI has done.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ExportStatus {
+    pub done: u32,
+    pub total: u32,
+    /// Set when it ended: the files written, or why it failed.
+    pub result: Option<Result<Vec<PathBuf>, String>>,
+}
+
+/// An export on its own thread and GPU device, so that the viewer stays responsive.
+pub struct ExportJob {
+    pub status: Arc<Mutex<ExportStatus>>,
+    pub description: String,
+}
+
+impl ExportJob {
+    /// Starts exporting `frames` of `scene` to `target` at `size` pixels.
+    pub fn start(
+        scene: Scene,
+        target: Target,
+        frames: Range<u32>,
+        size: (u32, u32),
+        transparent: bool,
+        description: String,
+    ) -> Self {
+        let status = Arc::new(Mutex::new(ExportStatus {
+            done: 0,
+            total: frames.len() as u32,
+            result: None,
+        }));
+        let shared = status.clone();
+        std::thread::spawn(move || {
+            let progress = shared.clone();
+            let result = (|| -> Result<Vec<PathBuf>, String> {
+                let mut gpu = HeadlessRenderer::new().map_err(|e| e.to_string())?;
+                export::export_frames(
+                    &scene,
+                    &target,
+                    frames,
+                    size,
+                    transparent,
+                    |at| -> Result<Vec<[f64; 4]>, ExportFailure> {
+                        let frame = gpu.render(at, size.0, size.1, transparent)?;
+                        Ok(frame.pixels.iter().map(|p| p.map(|c| c as f64)).collect())
+                    },
+                    |done, _| {
+                        if let Ok(mut s) = progress.lock() {
+                            s.done = done;
+                        }
+                    },
+                )
+                .map_err(|e| e.0)
+            })();
+            if let Ok(mut s) = shared.lock() {
+                s.result = Some(result);
+            }
+        });
+        Self {
+            status,
+            description,
+        }
+    }
+
+    pub fn status(&self) -> ExportStatus {
+        self.status.lock().map(|s| s.clone()).unwrap_or_default()
+    }
+}
+
+/// Any failure of a viewer export, as its message.
+struct ExportFailure(String);
+
+impl From<export::ExportError> for ExportFailure {
+    fn from(e: export::ExportError) -> Self {
+        Self(e.to_string())
+    }
+}
+
+impl From<crate::gpu::GpuError> for ExportFailure {
+    fn from(e: crate::gpu::GpuError) -> Self {
+        Self(e.to_string())
+    }
+}
+
+/// The keys of playback, unless a text field has the keyboard: Space plays or pauses, the arrow keys step.
+pub fn shortcuts(ctx: &egui::Context, playback: &mut Playback, frames: u32) {
+    if ctx.egui_wants_keyboard_input() {
+        return;
+    }
+    if ctx.input_mut(|i| i.consume_key(Modifiers::NONE, Key::Space)) {
+        playback.playing = !playback.playing;
+    }
+    if ctx.input_mut(|i| i.consume_key(Modifiers::NONE, Key::ArrowRight)) {
+        playback.playing = false;
+        playback.step(1, frames);
+    }
+    if ctx.input_mut(|i| i.consume_key(Modifiers::NONE, Key::ArrowLeft)) {
+        playback.playing = false;
+        playback.step(-1, frames);
+    }
+}
+
+/// The transport bar: play / pause, step back and forward, the scrubber, loop, and the frame number.
+pub fn bar(ui: &mut Ui, playback: &mut Playback, frames: u32, frame_rate: f64) {
+    ui.horizontal(|ui| {
+        let last = frames.max(1) - 1;
+        if ui.button("First").on_hover_text("First frame").clicked() {
+            playback.seek(0, frames);
+        }
+        if ui
+            .button("< Step")
+            .on_hover_text("Step back (Left arrow key)")
+            .clicked()
+        {
+            playback.playing = false;
+            playback.step(-1, frames);
+        }
+        let label = if playback.playing { "Pause" } else { "Play" };
+        if ui.button(label).on_hover_text("Space").clicked() {
+            if !playback.playing && !playback.looping && playback.frame == last {
+                playback.seek(0, frames);
+            }
+            playback.playing = !playback.playing;
+        }
+        if ui
+            .button("Step >")
+            .on_hover_text("Step forward (Right arrow key)")
+            .clicked()
+        {
+            playback.playing = false;
+            playback.step(1, frames);
+        }
+        ui.checkbox(&mut playback.looping, "loop");
+        let mut frame = playback.frame;
+        let scrub = ui.add(
+            egui::Slider::new(&mut frame, 0..=last)
+                .text("frame")
+                .clamping(egui::SliderClamping::Always),
+        );
+        if scrub.changed() {
+            playback.seek(frame, frames);
+        }
+        if scrub.drag_started() {
+            playback.playing = false;
+        }
+        ui.monospace(format!(
+            "{:>w$} / {last}  {:6.2} s",
+            playback.frame,
+            playback.frame as f64 / frame_rate,
+            w = last.to_string().len()
+        ));
+    });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Playback;
+
+    #[test]
+    fn playback_advances_by_time_loops_and_stops() {
+        let mut p = Playback {
+            playing: true,
+            ..Playback::default()
+        };
+        // 0.1 s at 30 frames/s is 3 frames; fractions carry over.
+        p.advance(0.1, 30.0, 92);
+        assert_eq!(p.frame, 3);
+        p.advance(0.02, 30.0, 92);
+        p.advance(0.02, 30.0, 92);
+        assert_eq!(p.frame, 4);
+        p.seek(90, 92);
+        p.advance(0.1, 30.0, 92);
+        assert_eq!(p.frame, 1, "93 wraps to 1 when looping");
+        p.looping = false;
+        p.seek(90, 92);
+        p.advance(0.1, 30.0, 92);
+        assert_eq!((p.frame, p.playing), (91, false), "stops on the last frame");
+        p.step(1, 92);
+        assert_eq!(p.frame, 91);
+        p.looping = true;
+        p.step(1, 92);
+        assert_eq!(p.frame, 0);
+        p.step(-1, 92);
+        assert_eq!(p.frame, 91);
+        let mut paused = Playback::default();
+        paused.advance(5.0, 30.0, 92);
+        assert_eq!(paused.frame, 0, "paused playback does not move");
+    }
+}

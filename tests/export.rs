@@ -1,0 +1,428 @@
+//! Exports of an animation from the command line: PNG sequences (numbering, padding, ranges), GIFs and
+//! sprite sheets decoded back, transparent frames composited over a checkerboard against the blend computed
+//! by hand, and bad requests refused with exit status 2 before anything is rendered.
+//!
+//! Frames are small (48 x 40 pixels, a 40-texel billboard, n = 40) so that the whole file runs in seconds on
+//! a software GPU.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use image::AnimationDecoder;
+
+fn preset() -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("assets/scenes/pulse_travelling.toml")
+        .display()
+        .to_string()
+}
+
+fn tmpdir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("energywave-export-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// `render` of `scene` at test size with `args`.
+fn render(scene: &str, args: &[&str]) -> Output {
+    let size: &[&str] = if args.contains(&"--size") {
+        &[]
+    } else {
+        &["--size", "48x40"]
+    };
+    Command::new(env!("CARGO_BIN_EXE_energywave"))
+        .args(["render", scene, "--resolution", "40", "--divisions", "40"])
+        .args(size)
+        .args(args)
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .expect("the binary runs")
+}
+
+fn ok(o: &Output) {
+    assert!(
+        o.status.success(),
+        "exit {:?}: {}",
+        o.status.code(),
+        String::from_utf8_lossy(&o.stderr)
+    );
+}
+
+fn files(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
+fn rgba(path: &Path) -> image::RgbaImage {
+    image::open(path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        .to_rgba8()
+}
+
+#[test]
+fn a_sequence_gets_numbered_padded_files_that_match_single_renders() {
+    let dir = tmpdir("seq");
+    let pattern = dir.join("beam_####.png");
+    let o = render(
+        &preset(),
+        &["--frames", "20..23", "-o", pattern.to_str().unwrap()],
+    );
+    ok(&o);
+    assert_eq!(
+        files(&dir),
+        ["beam_0020.png", "beam_0021.png", "beam_0022.png"]
+    );
+    // The progress bar, one line per frame when stderr is not a terminal.
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("3/3 frames (frame 22)"), "{err}");
+    let frames: Vec<_> = (20..23)
+        .map(|f| rgba(&dir.join(format!("beam_{f:04}.png"))))
+        .collect();
+    for f in &frames {
+        assert_eq!(f.dimensions(), (48, 40));
+    }
+    // The pulse moves: consecutive frames differ.
+    assert_ne!(frames[0], frames[1]);
+    assert_ne!(frames[1], frames[2]);
+    // An inclusive range, another machine's share of the same export, continues the numbering; and one
+    // frame rendered alone is the same picture as in the sequence.
+    let single = dir.join("single.png");
+    ok(&render(
+        &preset(),
+        &["--frames", "21", "-o", single.to_str().unwrap()],
+    ));
+    assert_eq!(rgba(&single), frames[1]);
+    let more = tmpdir("seq-more");
+    ok(&render(
+        &preset(),
+        &[
+            "--frames",
+            "89..=91",
+            "-o",
+            more.join("beam_##.png").to_str().unwrap(),
+        ],
+    ));
+    assert_eq!(files(&more), ["beam_89.png", "beam_90.png", "beam_91.png"]);
+    // The brightness B of each frame, W x W floats, as an EXR sequence.
+    let exr = tmpdir("seq-exr");
+    ok(&render(
+        &preset(),
+        &[
+            "--brightness",
+            "--frames",
+            "0..2",
+            "-o",
+            exr.join("b_#.exr").to_str().unwrap(),
+        ],
+    ));
+    assert_eq!(files(&exr), ["b_0.exr", "b_1.exr"]);
+    let b = image::open(exr.join("b_1.exr")).unwrap().to_rgb32f();
+    assert_eq!(b.dimensions(), (40, 40));
+}
+
+#[test]
+fn a_gif_and_a_sprite_sheet_decode_to_the_frames() {
+    let dir = tmpdir("gif");
+    let gif = dir.join("pulse.gif");
+    ok(&render(
+        &preset(),
+        &["--frames", "10..16", "-o", gif.to_str().unwrap()],
+    ));
+    let decoder = image::codecs::gif::GifDecoder::new(std::io::BufReader::new(
+        std::fs::File::open(&gif).unwrap(),
+    ))
+    .unwrap();
+    let frames = decoder.into_frames().collect_frames().unwrap();
+    assert_eq!(frames.len(), 6);
+    for f in &frames {
+        assert_eq!(f.buffer().dimensions(), (48, 40));
+        // 30 frames/s; GIF delays are whole hundredths of a second.
+        let (num, den) = f.delay().numer_denom_ms();
+        let ms = num as f64 / den as f64;
+        assert!((30.0..=40.0).contains(&ms), "delay {ms} ms");
+    }
+    assert_ne!(frames[0].buffer(), frames[5].buffer(), "the pulse moves");
+
+    // The sheet: 5 frames in 3 columns, 2 rows, row-major; its cells are the sequence's frames.
+    let sheet = dir.join("sheet.png");
+    ok(&render(
+        &preset(),
+        &[
+            "--frames",
+            "20..25",
+            "--sheet",
+            "--columns",
+            "3",
+            "-o",
+            sheet.to_str().unwrap(),
+        ],
+    ));
+    let img = rgba(&sheet);
+    assert_eq!(img.dimensions(), (3 * 48, 2 * 40));
+    let layout: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("sheet.json")).unwrap()).unwrap();
+    assert_eq!(layout["columns"], 3);
+    assert_eq!(layout["rows"], 2);
+    assert_eq!(layout["frame_count"], 5);
+    assert_eq!(layout["frame_width"], 48);
+    assert_eq!(layout["frame_height"], 40);
+    assert_eq!(layout["image"], "sheet.png");
+    assert_eq!(
+        layout["frames"][4],
+        serde_json::json!({ "frame": 24, "x": 48, "y": 40 })
+    );
+    let seq = tmpdir("gif-seq");
+    ok(&render(
+        &preset(),
+        &[
+            "--frames",
+            "20..25",
+            "-o",
+            seq.join("f_####.png").to_str().unwrap(),
+        ],
+    ));
+    for k in 0..5u32 {
+        let frame = rgba(&seq.join(format!("f_{:04}.png", 20 + k)));
+        let (x0, y0) = ((k % 3) * 48, (k / 3) * 40);
+        let cell = image::imageops::crop_imm(&img, x0, y0, 48, 40).to_image();
+        assert_eq!(cell, frame, "cell {k}");
+        // The GIF's palette is close to the true colors (frames 10..16 there; compare one of each).
+    }
+    // The unused sixth cell is black.
+    assert!(
+        image::imageops::crop_imm(&img, 96, 40, 48, 40)
+            .to_image()
+            .pixels()
+            .all(|p| p.0[..3] == [0, 0, 0])
+    );
+    let gif_frame = frames[0].buffer();
+    let png = tmpdir("gif-one").join("ten.png");
+    ok(&render(
+        &preset(),
+        &["--frames", "10", "-o", png.to_str().unwrap()],
+    ));
+    let truth = rgba(&png);
+    let mean: f64 = gif_frame
+        .pixels()
+        .zip(truth.pixels())
+        .map(|(a, b)| {
+            (0..3)
+                .map(|c| (a.0[c] as f64 - b.0[c] as f64).abs())
+                .sum::<f64>()
+        })
+        .sum::<f64>()
+        / (48.0 * 40.0 * 3.0);
+    assert!(
+        mean < 6.0,
+        "the GIF's palette is close to the frame (mean error {mean})"
+    );
+}
+
+/// The preset with its background color replaced, as a scene file in `dir`.
+fn with_background(dir: &Path, name: &str, cb: [f64; 3]) -> String {
+    let text = std::fs::read_to_string(preset()).unwrap().replace(
+        "background = [0.0, 0.0, 0.02]",
+        &format!("background = [{}, {}, {}]", cb[0], cb[1], cb[2]),
+    );
+    let path = dir.join(name);
+    std::fs::write(&path, text).unwrap();
+    path.display().to_string()
+}
+
+#[test]
+fn transparent_frames_composite_over_a_checkerboard_like_the_blend() {
+    let dir = tmpdir("alpha");
+    let frame = "30";
+    let t = dir.join("t.png");
+    ok(&render(
+        &preset(),
+        &[
+            "--frames",
+            frame,
+            "--transparent",
+            "-o",
+            t.to_str().unwrap(),
+        ],
+    ));
+    let t = rgba(&t);
+    // The checkerboard's two colors, and black.
+    let light = [0.9, 0.8, 0.2];
+    let dark = [0.1, 0.3, 0.6];
+    let opaque = |name: &str, cb: [f64; 3]| {
+        let scene = with_background(&dir, &format!("{name}.toml"), cb);
+        let out = dir.join(format!("{name}.png"));
+        ok(&render(
+            &scene,
+            &["--frames", frame, "-o", out.to_str().unwrap()],
+        ));
+        rgba(&out)
+    };
+    let (o_light, o_dark, o_black) = (
+        opaque("light", light),
+        opaque("dark", dark),
+        opaque("black", [0.0; 3]),
+    );
+    let energy = [0.3, 0.55, 1.0];
+    let (mut partial, mut blown) = (0, 0);
+    for (x, y, p) in t.enumerate_pixels() {
+        let [r, g, b, a] = p.0.map(|c| c as f64 / 255.0);
+        // "Over", by hand: straight color times alpha plus the background times (1 - alpha).
+        let over = |k: [f64; 3]| {
+            [
+                r * a + k[0] * (1.0 - a),
+                g * a + k[1] * (1.0 - a),
+                b * a + k[2] * (1.0 - a),
+            ]
+        };
+        let close = |got: [f64; 3], want: &image::Rgba<u8>, what: &str| {
+            for c in 0..3 {
+                let w = want.0[c] as f64 / 255.0;
+                assert!(
+                    (got[c] - w).abs() <= 2.5 / 255.0,
+                    "({x}, {y}) {what}: composite {got:?} vs blend {:?} (alpha {a})",
+                    want.0
+                );
+            }
+        };
+        // Over black, everywhere, blown-out pixels included.
+        close(over([0.0; 3]), o_black.get_pixel(x, y), "over black");
+        if p.0[3] < 255 {
+            // B < 1 here: over the checkerboard, the viewer's blend with that square's color as Cb.
+            let on_light = (x / 8 + y / 8) % 2 == 0;
+            let (k, o) = if on_light {
+                (light, &o_light)
+            } else {
+                (dark, &o_dark)
+            };
+            close(over(k), o.get_pixel(x, y), "over the checkerboard");
+            // And by hand: (1 - B) Cb + B Ce with B = alpha.
+            let by_hand: [f64; 3] = std::array::from_fn(|c| (1.0 - a) * k[c] + a * energy[c]);
+            for (got, want) in over(k).iter().zip(by_hand) {
+                assert!((got - want).abs() <= 2.5 / 255.0, "({x}, {y}) by hand");
+            }
+            if p.0[3] > 0 {
+                partial += 1;
+            }
+        } else if p.0[..3] != [77, 140, 255] {
+            // Alpha 1 and a color brighter than Ce: B > 1, blown toward white.
+            blown += 1;
+        }
+    }
+    assert!(
+        partial > 200,
+        "the glow's soft edge is covered ({partial} pixels)"
+    );
+    assert!(
+        blown > 20,
+        "blown-out pixels (B > 1) are covered ({blown} pixels)"
+    );
+}
+
+#[test]
+fn bad_requests_exit_2_before_rendering_and_write_nothing() {
+    let dir = tmpdir("bad");
+    let still = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("assets/scenes/torus_r0.9_t5.1.toml")
+        .display()
+        .to_string();
+    let p = |name: &str| dir.join(name).display().to_string();
+    let cases: Vec<(String, Vec<String>, &str)> = vec![
+        (
+            preset(),
+            vec![
+                "--frames".into(),
+                "0..500".into(),
+                "-o".into(),
+                p("a_####.png"),
+            ],
+            "the scene has 92 frames",
+        ),
+        (
+            preset(),
+            vec![
+                "--frames".into(),
+                "5..2".into(),
+                "-o".into(),
+                p("a_####.png"),
+            ],
+            "empty",
+        ),
+        (
+            preset(),
+            vec!["--frames".into(), "0..3".into(), "-o".into(), p("one.png")],
+            "one image",
+        ),
+        (
+            preset(),
+            vec!["--transparent".into(), "-o".into(), p("a.gif")],
+            "GIF",
+        ),
+        (
+            preset(),
+            vec!["-o".into(), p("a_##_#.png")],
+            "more than one run of #",
+        ),
+        (preset(), vec!["-o".into(), p("a_###.gif")], "remove the #"),
+        (
+            preset(),
+            vec!["--sheet".into(), "-o".into(), p("s_##.png")],
+            "sprite sheet",
+        ),
+        (
+            preset(),
+            vec![
+                "--sheet".into(),
+                "--size".into(),
+                "4096x4096".into(),
+                "-o".into(),
+                p("s.png"),
+            ],
+            "over 16384 pixels",
+        ),
+        (
+            still.clone(),
+            vec!["--frames".into(), "1..3".into(), "-o".into(), p("t_##.png")],
+            "has 1 frame",
+        ),
+        (
+            preset(),
+            vec!["-o".into(), p("missing/a_####.png")],
+            "does not exist",
+        ),
+        (
+            preset(),
+            vec![
+                "--frames".into(),
+                "ten".into(),
+                "-o".into(),
+                p("a_####.png"),
+            ],
+            "not a frame range",
+        ),
+        (
+            preset(),
+            vec!["-o".into(), p("a_####.jpg")],
+            "unknown image extension",
+        ),
+    ];
+    for (scene, args, phrase) in &cases {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let o = render(scene, &args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(
+            err.contains(phrase),
+            "{args:?}: expected {phrase:?} in: {err}"
+        );
+        assert!(files(&dir).is_empty(), "{args:?} wrote {:?}", files(&dir));
+    }
+    // A still scene exports as a one-frame sequence.
+    ok(&render(&still, &["-o", &p("still_####.png")]));
+    assert_eq!(files(&dir), ["still_0000.png"]);
+}
