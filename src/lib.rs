@@ -12,6 +12,7 @@
 //! - [`bench`]: the papers' speed grid and other benchmarks;
 //! - [`cli`]: the `energywave` command line.
 
+pub mod adaptive;
 pub mod bench;
 pub mod cli;
 pub mod compose;

@@ -8,6 +8,7 @@ use super::context::{GpuError, checked, texture_2d};
 use super::shaders;
 use crate::field::curve::segments;
 use crate::geometry::Billboard;
+use crate::integrate::Integrator;
 use crate::scene::Scene;
 
 /// Rust mirrors of the WGSL structs of `shaders/field.wgsl` and `shaders/field_common.wgsl` (keep in
@@ -34,9 +35,13 @@ pub mod gpu_data {
         pub line_count: u32,  // 80
         pub torus_count: u32, // 84
         pub curve_count: u32, // 88
-        pub pad0: u32,        // 92
+        pub integrator: u32,  // 92: 0 simpson, 1 adaptive
+        pub tolerance: f32,   // 96: per term, before its coefficient (adaptive::term_tolerance)
+        pub jitter: u32,      // 100
+        pub seed: u32,        // 104
+        pub pad0: u32,        // 108
     }
-    const _: () = assert!(size_of::<FieldParams>() == 96);
+    const _: () = assert!(size_of::<FieldParams>() == 112);
 
     /// `PointSource` in `shaders/field_common.wgsl`.
     #[repr(C)]
@@ -141,6 +146,13 @@ fn pack(scene: &Scene, billboard: &Billboard) -> Packed {
             line_count: s.lines.len() as u32,
             torus_count: s.tori.len() as u32,
             curve_count: s.curves.len() as u32,
+            integrator: match i.integrator {
+                Integrator::Simpson => 0,
+                Integrator::Adaptive => 1,
+            },
+            tolerance: crate::adaptive::term_tolerance(s, i.tolerance) as f32,
+            jitter: i.jitter.is_some() as u32,
+            seed: i.jitter.unwrap_or(0),
             pad0: 0,
         },
         points: (s.points.iter())
@@ -230,9 +242,10 @@ impl StorageBuffer {
     }
 }
 
-/// The field pass: its pipeline and the GPU copies of one scene's data.
+/// The field pass: its pipelines (one per integrator) and the GPU copies of one scene's data.
 pub struct FieldRenderer {
-    pipeline: wgpu::ComputePipeline,
+    /// `integrate` (simpson) and `integrate_adaptive`, indexed by `FieldParams::integrator`.
+    pipelines: [wgpu::ComputePipeline; 2],
     layout: wgpu::BindGroupLayout,
     params: wgpu::Buffer,
     buffers: [StorageBuffer; 6],
@@ -244,7 +257,7 @@ pub struct FieldRenderer {
 }
 
 impl FieldRenderer {
-    /// Builds the pipeline.
+    /// Builds the pipelines.
     pub fn new(device: &wgpu::Device) -> Self {
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("energywave.field.shader"),
@@ -296,13 +309,15 @@ impl FieldRenderer {
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("energywave.field.pipeline"),
-            layout: Some(&pipeline_layout),
-            module: &module,
-            entry_point: Some("integrate"),
-            compilation_options: Default::default(),
-            cache: None,
+        let pipelines = ["integrate", "integrate_adaptive"].map(|entry| {
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: Some(&pipeline_layout),
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
         });
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("energywave.field.params"),
@@ -320,7 +335,7 @@ impl FieldRenderer {
         ]
         .map(|label| StorageBuffer::new(device, label, &[]));
         Self {
-            pipeline,
+            pipelines,
             layout,
             params,
             buffers,
@@ -439,7 +454,7 @@ impl FieldRenderer {
             label: Some("energywave.field.pass"),
             timestamp_writes: timestamps,
         });
-        pass.set_pipeline(&self.pipeline);
+        pass.set_pipeline(&self.pipelines[packed.params.integrator as usize]);
         pass.set_bind_group(0, bind_group, &[]);
         pass.dispatch_workgroups(w.div_ceil(8), w.div_ceil(8), 1);
         self.pending = false;
