@@ -33,7 +33,28 @@ struct FieldParams {
 @group(0) @binding(4) var<storage, read> curves: array<CurveSource>;
 @group(0) @binding(5) var<storage, read> segments: array<CurveSegment>;
 @group(0) @binding(6) var<storage, read> weights: array<f32>;
-@group(0) @binding(7) var brightness: texture_storage_2d<r32float, write>;
+@group(0) @binding(7) var brightness: texture_storage_2d<r32float, read_write>;
+
+// One dispatch's share of the work: a range of Simpson samples, or of the adaptive integrator's terms (points,
+// then lines, tori, curves). A texel's loops must stay under what some drivers allow one invocation (Mesa's
+// llvmpipe and lavapipe stop every loop of an invocation after 65535 iterations in all, silently), so long
+// integrals are split over several dispatches that add into the texture. Rust side: gpu_data::Chunk.
+struct Chunk {
+    first: u32,
+    count: u32,
+    accumulate: u32,  // 0: the first dispatch writes, else adds to what the texel holds
+    pad0: u32,
+}
+
+@group(0) @binding(8) var<uniform> chunk: Chunk;
+
+fn store(id: vec2<u32>, value: f32) {
+    var v = value;
+    if chunk.accumulate != 0u {
+        v += textureLoad(brightness, vec2<i32>(id)).x;
+    }
+    textureStore(brightness, vec2<i32>(id), vec4<f32>(v, 0.0, 0.0, 1.0));
+}
 
 // Sw(t) of a curve's W series (METHOD.md section 2). Twin of wseries::evaluate.
 fn wseries(c: CurveSource, t_in: f32) -> f32 {
@@ -137,23 +158,30 @@ fn integrate(@builtin(global_invocation_id) id: vec3<u32>) {
     let e_point = seg[1];
     let n = params.divisions;
     let nf = f32(n);
+    let first = chunk.first;
     var b = 0.0;
     if params.jitter != 0u {
         let xi = jitter_offset(id.xy);
+        let last = min(first + chunk.count, n);
         var sum = 0.0;
-        for (var k = 0u; k < n; k++) {
+        for (var k = first; k < last; k++) {
             sum += integrand(s_point, e_point, (f32(k) + xi) / nf);
         }
         b = sum / nf;
     } else {
-        var sum = integrand(s_point, e_point, 0.0) + integrand(s_point, e_point, 1.0);
-        for (var k = 1u; k < n; k++) {
-            let weight = select(2.0, 4.0, (k & 1u) == 1u);
+        // Samples k = first .. first + count of 0..=n, with Simpson's weights 1 4 2 4 ... 4 1.
+        let last = min(first + chunk.count, n + 1u);
+        var sum = 0.0;
+        for (var k = first; k < last; k++) {
+            var weight = select(2.0, 4.0, (k & 1u) == 1u);
+            if k == 0u || k == n {
+                weight = 1.0;
+            }
             sum += weight * integrand(s_point, e_point, f32(k) / nf);
         }
         b = sum / (3.0 * nf);
     }
-    textureStore(brightness, vec2<i32>(id.xy), vec4<f32>(b, 0.0, 0.0, 1.0));
+    store(id.xy, b);
 }
 
 // ---- The adaptive integrator (twin of src/adaptive.rs): source by source, s = s* + h sinh(u) around the ray's
@@ -430,17 +458,26 @@ fn integrate_adaptive(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let seg = texel_segment(id.xy);
     var b = 0.0;
-    for (var i = 0u; i < params.point_count; i++) {
-        b += integrate_term(KIND_POINT, i, seg[0], seg[1]);
+    let last = chunk.first + chunk.count;
+    for (var t = chunk.first; t < last; t++) {
+        var index = t;
+        var kind = KIND_POINT;
+        if index >= params.point_count {
+            index -= params.point_count;
+            kind = KIND_LINE;
+            if index >= params.line_count {
+                index -= params.line_count;
+                kind = KIND_TORUS;
+                if index >= params.torus_count {
+                    index -= params.torus_count;
+                    kind = KIND_CURVE;
+                    if index >= params.curve_count {
+                        break;
+                    }
+                }
+            }
+        }
+        b += integrate_term(kind, index, seg[0], seg[1]);
     }
-    for (var i = 0u; i < params.line_count; i++) {
-        b += integrate_term(KIND_LINE, i, seg[0], seg[1]);
-    }
-    for (var i = 0u; i < params.torus_count; i++) {
-        b += integrate_term(KIND_TORUS, i, seg[0], seg[1]);
-    }
-    for (var i = 0u; i < params.curve_count; i++) {
-        b += integrate_term(KIND_CURVE, i, seg[0], seg[1]);
-    }
-    textureStore(brightness, vec2<i32>(id.xy), vec4<f32>(b, 0.0, 0.0, 1.0));
+    store(id.xy, b);
 }

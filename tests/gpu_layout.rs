@@ -92,6 +92,12 @@ fn rust_mirrors_match_the_wgsl_layouts() {
     );
     check_struct(
         &field,
+        "Chunk",
+        size_of::<Chunk>(),
+        fields!(Chunk: first, count, accumulate, pad0),
+    );
+    check_struct(
+        &field,
         "PointSource",
         size_of::<PointSource>(),
         fields!(PointSource: position, coefficient),

@@ -189,3 +189,27 @@ fn jittered_renders_are_the_same_on_the_gpu_and_converge_to_the_reference() {
         "mean of {seeds} jittered renders: {jittered_error}, fixed samples: {fixed_error}"
     );
 }
+
+#[test]
+fn long_integrals_are_not_cut_short_by_a_drivers_loop_limit() {
+    // Mesa's llvmpipe and lavapipe stop all loops of an invocation after 65535 iterations in all, silently:
+    // n = 8192 on a two-segment curve is over 200 000. The field pass splits such integrals over dispatches.
+    let mut gpu = HeadlessRenderer::new().expect("a GPU adapter (lavapipe in CI)");
+    let mut scene = shipped()
+        .into_iter()
+        .find(|(n, _)| n == "bezier_b5.0")
+        .expect("the Bezier preset")
+        .1;
+    scene.billboard.resolution = 12;
+    scene.integration.integrator = Integrator::Simpson;
+    scene.integration.divisions = 8192;
+    let bb = scene.place_billboard(1.0);
+    let g = gpu.brightness(&scene, &bb).unwrap();
+    let c = reference::render_brightness(&scene, &bb).values;
+    for (k, (&gv, &cv)) in g.iter().zip(&c).enumerate() {
+        assert!(
+            (gv as f64 - cv).abs() <= 1e-3 * cv.abs().max(0.01),
+            "texel {k}: GPU {gv} vs CPU {cv}"
+        );
+    }
+}

@@ -43,6 +43,17 @@ pub mod gpu_data {
     }
     const _: () = assert!(size_of::<FieldParams>() == 112);
 
+    /// `Chunk` in `shaders/field.wgsl`: one dispatch's range of samples or terms.
+    #[repr(C)]
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+    pub struct Chunk {
+        pub first: u32,      // 0
+        pub count: u32,      // 4
+        pub accumulate: u32, // 8
+        pub pad0: u32,       // 12
+    }
+    const _: () = assert!(size_of::<Chunk>() == 16);
+
     /// `PointSource` in `shaders/field_common.wgsl`.
     #[repr(C)]
     #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -120,6 +131,56 @@ struct Packed {
     curves: Vec<CurveSource>,
     segments: Vec<CurveSegment>,
     weights: Vec<f32>,
+    /// The dispatches that together integrate the texture.
+    chunks: Vec<Chunk>,
+}
+
+/// Loop iterations one invocation may spend: Mesa's llvmpipe and lavapipe stop all loops of an invocation after
+/// 65535 iterations in all (silently); this leaves room for the estimate's slack.
+const ITERATION_BUDGET: u64 = 30_000;
+/// Integrand evaluations the adaptive integrator typically spends on one term (scan, refinement, panels).
+const ADAPTIVE_EVALUATIONS: u64 = 600;
+
+/// Loop iterations of one evaluation of a source's distance (a curve loops over its segments and roots).
+fn curve_iterations(segments: u32) -> u64 {
+    1 + 12 * segments as u64
+}
+
+/// Splits the integration into dispatches that each stay within `ITERATION_BUDGET` loop iterations a texel.
+fn plan_chunks(p: &Packed) -> Vec<Chunk> {
+    let chunk = |first: u32, count: u32, k: usize| Chunk {
+        first,
+        count,
+        accumulate: (k > 0) as u32,
+        pad0: 0,
+    };
+    let terms: Vec<u64> = (0..p.params.point_count + p.params.line_count + p.params.torus_count)
+        .map(|_| 1)
+        .chain(p.curves.iter().map(|c| curve_iterations(c.segment_count)))
+        .collect();
+    if p.params.integrator == 0 {
+        // Simpson: ranges of samples, each sample costing a walk over every source.
+        let per_sample = 4 + terms.iter().sum::<u64>();
+        let samples = p.params.divisions + 1;
+        let per_chunk = (ITERATION_BUDGET / per_sample).clamp(1, samples as u64) as u32;
+        (0..samples.div_ceil(per_chunk))
+            .map(|k| chunk(k * per_chunk, per_chunk, k as usize))
+            .collect()
+    } else {
+        // Adaptive: ranges of terms.
+        let mut chunks = Vec::new();
+        let (mut first, mut cost) = (0u32, 0u64);
+        for (t, &c) in terms.iter().enumerate() {
+            let c = ADAPTIVE_EVALUATIONS * (c + 1);
+            if cost > 0 && cost + c > ITERATION_BUDGET {
+                chunks.push(chunk(first, t as u32 - first, chunks.len()));
+                (first, cost) = (t as u32, 0);
+            }
+            cost += c;
+        }
+        chunks.push(chunk(first, terms.len() as u32 - first, chunks.len()));
+        chunks
+    }
 }
 
 fn v3(v: glam::DVec3) -> [f32; 3] {
@@ -201,7 +262,18 @@ fn pack(scene: &Scene, billboard: &Billboard) -> Packed {
             ..CurveSource::default()
         });
     }
+    packed.chunks = plan_chunks(&packed);
     packed
+}
+
+/// A uniform buffer for `count` chunks, `stride` bytes apart.
+fn chunk_buffer(device: &wgpu::Device, stride: u64, count: usize) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("energywave.field.chunks"),
+        size: stride * count.max(1) as u64,
+        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
 }
 
 /// A storage buffer that grows as needed (never empty: WebGPU refuses zero-sized bindings).
@@ -248,6 +320,9 @@ pub struct FieldRenderer {
     pipelines: [wgpu::ComputePipeline; 2],
     layout: wgpu::BindGroupLayout,
     params: wgpu::Buffer,
+    /// The chunks, one per `chunk_stride` bytes (bound with a dynamic offset).
+    chunks: wgpu::Buffer,
+    chunk_stride: u64,
     buffers: [StorageBuffer; 6],
     texture: Option<(wgpu::Texture, wgpu::TextureView)>,
     bind_group: Option<wgpu::BindGroup>,
@@ -296,9 +371,19 @@ impl FieldRenderer {
                     binding: 7,
                     visibility: wgpu::ShaderStages::COMPUTE,
                     ty: wgpu::BindingType::StorageTexture {
-                        access: wgpu::StorageTextureAccess::WriteOnly,
+                        access: wgpu::StorageTextureAccess::ReadWrite,
                         format: wgpu::TextureFormat::R32Float,
                         view_dimension: wgpu::TextureViewDimension::D2,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 8,
+                    visibility: wgpu::ShaderStages::COMPUTE,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: true,
+                        min_binding_size: wgpu::BufferSize::new(size_of::<Chunk>() as u64),
                     },
                     count: None,
                 },
@@ -334,10 +419,14 @@ impl FieldRenderer {
             "energywave.field.weights",
         ]
         .map(|label| StorageBuffer::new(device, label, &[]));
+        let chunk_stride = (device.limits().min_uniform_buffer_offset_alignment as u64)
+            .max(size_of::<Chunk>() as u64);
         Self {
             pipelines,
             layout,
             params,
+            chunks: chunk_buffer(device, chunk_stride, 1),
+            chunk_stride,
             buffers,
             texture: None,
             bind_group: None,
@@ -381,6 +470,17 @@ impl FieldRenderer {
                 rebind |= buffer.write(device, queue, bytes);
             }
             queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&packed.params));
+            let needed = packed.chunks.len() as u64 * self.chunk_stride;
+            if self.chunks.size() < needed {
+                self.chunks = chunk_buffer(device, self.chunk_stride, packed.chunks.len());
+                rebind = true;
+            }
+            let mut bytes = vec![0u8; needed as usize];
+            for (k, c) in packed.chunks.iter().enumerate() {
+                let at = k * self.chunk_stride as usize;
+                bytes[at..at + size_of::<Chunk>()].copy_from_slice(bytemuck::bytes_of(c));
+            }
+            queue.write_buffer(&self.chunks, 0, &bytes);
             if self.texture.as_ref().is_none_or(|(t, _)| t.width() != w) {
                 let texture = texture_2d(
                     device,
@@ -424,6 +524,14 @@ impl FieldRenderer {
             binding: 7,
             resource: wgpu::BindingResource::TextureView(view),
         });
+        entries.push(wgpu::BindGroupEntry {
+            binding: 8,
+            resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                buffer: &self.chunks,
+                offset: 0,
+                size: wgpu::BufferSize::new(size_of::<Chunk>() as u64),
+            }),
+        });
         device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("energywave.field.bind_group"),
             layout: &self.layout,
@@ -455,8 +563,10 @@ impl FieldRenderer {
             timestamp_writes: timestamps,
         });
         pass.set_pipeline(&self.pipelines[packed.params.integrator as usize]);
-        pass.set_bind_group(0, bind_group, &[]);
-        pass.dispatch_workgroups(w.div_ceil(8), w.div_ceil(8), 1);
+        for k in 0..packed.chunks.len() {
+            pass.set_bind_group(0, bind_group, &[(k as u64 * self.chunk_stride) as u32]);
+            pass.dispatch_workgroups(w.div_ceil(8), w.div_ceil(8), 1);
+        }
         self.pending = false;
         self.dispatches += 1;
         true
