@@ -12,7 +12,9 @@ use std::time::Instant;
 use glam::DVec3;
 use serde::Serialize;
 
+use crate::geometry::ray_end;
 use crate::gpu::{FieldRenderer, GpuContext, GpuError, map_read};
+use crate::integrate::{self, Integrator};
 use crate::scene::Scene;
 use crate::viewer::Document;
 use crate::viewer::offscreen::OffscreenViewer;
@@ -21,6 +23,13 @@ use crate::viewer::offscreen::OffscreenViewer;
 const TORUS_SCENE: &str = include_str!("../assets/scenes/torus_r0.9_t5.1.toml");
 /// The two smoothly connected Bezier curves of paper figure 9 (b = 5.0).
 const BEZIER_SCENE: &str = include_str!("../assets/scenes/bezier_b5.0.toml");
+/// Every kind of source at once.
+const MIXED_SCENE: &str = include_str!("../assets/scenes/mixed.toml");
+
+/// The converged reference of the equal-error comparison: f64 Simpson with this many divisions.
+pub const REFERENCE_DIVISIONS: u32 = 4096;
+/// The adaptive tolerances tried, cheapest first, for the equal-error comparison.
+const TOLERANCES: [f64; 7] = [1e-3, 3e-4, 1e-4, 3e-5, 1e-5, 3e-6, 1e-6];
 
 const RESOLUTIONS: [u32; 3] = [128, 256, 512];
 const DIVISIONS: [u32; 3] = [64, 128, 256];
@@ -150,6 +159,96 @@ pub struct ViewerFrameRow {
     pub orbiting: Timing,
 }
 
+/// The error of a brightness texture against the converged reference, on B clamped to [0, 1] (what the blend
+/// shows).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct RenderError {
+    pub max_abs: f64,
+    /// Share of texels off by more than 1/255.
+    pub share_over_1_255: f64,
+}
+
+impl RenderError {
+    /// The error of `values` (every `stride`-th texel of a W x W texture, rows and columns) against
+    /// `reference` (those texels only).
+    pub fn of(values: &[f32], w: u32, stride: u32, reference: &[f64]) -> Self {
+        let mut max_abs: f64 = 0.0;
+        let mut over = 0usize;
+        let texels = (0..w).step_by(stride as usize).flat_map(|j| {
+            (0..w)
+                .step_by(stride as usize)
+                .map(move |i| (j * w + i) as usize)
+        });
+        for (k, r) in texels.zip(reference) {
+            let d = (values[k] as f64).clamp(0.0, 1.0) - r.clamp(0.0, 1.0);
+            max_abs = max_abs.max(d.abs());
+            over += (d.abs() > 1.0 / 255.0) as usize;
+        }
+        Self {
+            max_abs,
+            share_over_1_255: over as f64 / reference.len().max(1) as f64,
+        }
+    }
+
+    /// True when no figure of `self` is larger than `other`'s.
+    pub fn no_larger_than(&self, other: &RenderError) -> bool {
+        self.max_abs <= other.max_abs && self.share_over_1_255 <= other.share_over_1_255
+    }
+}
+
+/// The papers' integrator at n = 200 against the adaptive one at the cheapest tolerance whose error is no
+/// larger, both against the converged reference.
+#[derive(Clone, Debug, Serialize)]
+pub struct EqualErrorRow {
+    pub scene: String,
+    pub resolution: u32,
+    /// Every how many texels (in each direction) the error is computed.
+    pub error_stride: u32,
+    pub reference: String,
+    pub simpson_divisions: u32,
+    pub simpson: PassTiming,
+    pub simpson_error: RenderError,
+    pub adaptive_tolerance: f64,
+    pub adaptive: PassTiming,
+    pub adaptive_error: RenderError,
+    /// Whether some tried tolerance reached the error of `simpson` (else the finest tried is shown).
+    pub equal_error: bool,
+    /// Median time of `simpson` over median time of `adaptive` (GPU timestamps where available).
+    pub speedup: f64,
+    /// Every tolerance tried, with its error.
+    pub tried: Vec<(f64, RenderError)>,
+}
+
+/// B by the f64 CPU reference with `divisions` Simpson divisions, for every `stride`-th texel.
+fn reference_texels(scene: &Scene, divisions: u32, stride: u32) -> Vec<f64> {
+    let mut s = scene.clone();
+    s.integration.integrator = Integrator::Simpson;
+    s.integration.jitter = None;
+    s.integration.divisions = divisions;
+    let w = s.billboard.resolution;
+    let billboard = s.place_billboard(1.0);
+    let texels: Vec<(u32, u32)> = (0..w)
+        .step_by(stride as usize)
+        .flat_map(|j| (0..w).step_by(stride as usize).map(move |i| (i, j)))
+        .collect();
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let chunk = texels.len().div_ceil(threads).max(1);
+    let mut out = vec![0.0; texels.len()];
+    std::thread::scope(|scope| {
+        for (ts, os) in texels.chunks(chunk).zip(out.chunks_mut(chunk)) {
+            let (s, billboard) = (&s, &billboard);
+            scope.spawn(move || {
+                for (&(i, j), o) in ts.iter().zip(os) {
+                    let p = billboard.texel_center(i, j, w);
+                    let e = ray_end(p, s.camera.eye, s.integration.nu);
+                    *o = integrate::brightness(&s.sources, &s.integration, p, e, 0.5);
+                }
+            });
+        }
+    });
+    out
+}
+
 /// Everything one run measured.
 #[derive(Clone, Debug, Serialize)]
 pub struct Report {
@@ -161,6 +260,7 @@ pub struct Report {
     pub grid: Vec<GridRow>,
     pub deformation: Vec<DeformationRow>,
     pub viewer: Option<ViewerFrameRow>,
+    pub equal_error: Vec<EqualErrorRow>,
     pub total_seconds: f64,
 }
 
@@ -243,6 +343,14 @@ impl FieldBench {
             None => None,
         };
         Ok((gpu, wall))
+    }
+
+    /// The brightness texture of `scene`, integrated on the GPU and read back.
+    fn brightness(&mut self, scene: &Scene) -> Result<Vec<f32>, GpuError> {
+        self.frame(scene)?;
+        let texture = self.field.texture().expect("integrated above");
+        let bytes = self.ctx.read_texture(texture, 4)?;
+        Ok(bytemuck::cast_slice(&bytes).to_vec())
     }
 
     /// Times `scenes` interleaved frame by frame (so that drift of a shared, noisy machine hits them alike):
@@ -328,6 +436,7 @@ pub fn run(options: BenchOptions, mut progress: impl FnMut(&str)) -> Result<Repo
             .flat_map(|(name, base)| {
                 DIVISIONS.iter().map(move |&n| {
                     let mut s = base.clone();
+                    s.integration.integrator = Integrator::Simpson;
                     s.billboard.resolution = resolution;
                     s.integration.divisions = n;
                     (*name, s)
@@ -359,6 +468,7 @@ pub fn run(options: BenchOptions, mut progress: impl FnMut(&str)) -> Result<Repo
     let mut deformation = Vec::new();
     for (name, base) in &scenes {
         let mut base = base.clone();
+        base.integration.integrator = Integrator::Simpson;
         base.billboard.resolution = 256;
         base.integration.divisions = 128;
         progress(&format!("deformation: {name}, 256 x 256, n = 128"));
@@ -378,6 +488,7 @@ pub fn run(options: BenchOptions, mut progress: impl FnMut(&str)) -> Result<Repo
             deforming: t.next().expect("two variants"),
         });
     }
+    let equal_error = equal_error(&mut bench, &options, &mut progress)?;
     drop(bench);
 
     // Whole viewer frames at 1280 x 720 on the default scene.
@@ -415,8 +526,94 @@ pub fn run(options: BenchOptions, mut progress: impl FnMut(&str)) -> Result<Repo
         grid,
         deformation,
         viewer: Some(viewer_row),
+        equal_error,
         total_seconds: start.elapsed().as_secs_f64(),
     })
+}
+
+/// The equal-error comparison: on the torus, Bezier and mixed scenes at 256 and 512 (256 only with --quick),
+/// the errors of simpson (n = 200) and of the adaptive integrator at each tolerance against the converged
+/// reference, then the two timed interleaved at the cheapest tolerance whose error is no larger.
+fn equal_error(
+    bench: &mut FieldBench,
+    options: &BenchOptions,
+    progress: &mut impl FnMut(&str),
+) -> Result<Vec<EqualErrorRow>, GpuError> {
+    let scenes = [
+        ("torus", load(TORUS_SCENE, "torus_r0.9_t5.1.toml")),
+        ("bezier", load(BEZIER_SCENE, "bezier_b5.0.toml")),
+        ("mixed", load(MIXED_SCENE, "mixed.toml")),
+    ];
+    let resolutions: &[u32] = if options.quick { &[256] } else { &[256, 512] };
+    let mut rows = Vec::new();
+    for &resolution in resolutions {
+        for (name, base) in &scenes {
+            // The f64 reference is the slow part: at 512, every second texel in each direction.
+            let stride = if resolution > 256 { 2 } else { 1 };
+            let mut simpson = base.clone();
+            simpson.billboard.resolution = resolution;
+            simpson.integration.integrator = Integrator::Simpson;
+            simpson.integration.jitter = None;
+            simpson.integration.divisions = 200;
+            progress(&format!(
+                "equal error: {name}, {resolution} x {resolution}: f64 reference (n = {REFERENCE_DIVISIONS})"
+            ));
+            let reference = reference_texels(&simpson, REFERENCE_DIVISIONS, stride);
+            let simpson_error =
+                RenderError::of(&bench.brightness(&simpson)?, resolution, stride, &reference);
+            let mut adaptive = simpson.clone();
+            adaptive.integration.integrator = Integrator::Adaptive;
+            let mut tried = Vec::new();
+            let mut chosen = None;
+            for &tolerance in &TOLERANCES {
+                adaptive.integration.tolerance = tolerance;
+                let error = RenderError::of(
+                    &bench.brightness(&adaptive)?,
+                    resolution,
+                    stride,
+                    &reference,
+                );
+                tried.push((tolerance, error));
+                if error.no_larger_than(&simpson_error) {
+                    chosen = Some(tolerance);
+                    break;
+                }
+            }
+            let equal = chosen.is_some();
+            let tolerance = chosen.unwrap_or(TOLERANCES[TOLERANCES.len() - 1]);
+            adaptive.integration.tolerance = tolerance;
+            let adaptive_error = tried.last().expect("a tolerance was tried").1;
+            progress(&format!(
+                "equal error: {name}, {resolution} x {resolution}: timing simpson n = 200 against adaptive tolerance {tolerance:e}"
+            ));
+            let t = bench.interleaved(2, options.warmup(), options.frames(), |k, _| {
+                if k == 0 {
+                    simpson.clone()
+                } else {
+                    adaptive.clone()
+                }
+            })?;
+            let mut t = t.into_iter();
+            let (ts, ta) = (t.next().expect("two"), t.next().expect("two"));
+            let speedup = ts.best().median_ms / ta.best().median_ms;
+            rows.push(EqualErrorRow {
+                scene: name.to_string(),
+                resolution,
+                error_stride: stride,
+                reference: format!("f64 CPU, Simpson n = {REFERENCE_DIVISIONS}"),
+                simpson_divisions: 200,
+                simpson: ts,
+                simpson_error,
+                adaptive_tolerance: tolerance,
+                adaptive: ta,
+                adaptive_error,
+                equal_error: equal,
+                speedup,
+                tried,
+            });
+        }
+    }
+    Ok(rows)
 }
 
 impl Report {
@@ -509,6 +706,42 @@ impl Report {
                 v.orbiting.fps()
             );
         }
+        if !self.equal_error.is_empty() {
+            let _ = writeln!(
+                s,
+                "\nequal error: simpson n = 200 against adaptive at the cheapest tolerance with no larger error; error vs the converged reference on B clamped to [0, 1] (max |dB|, share of texels off by > 1/255)"
+            );
+            let _ = writeln!(
+                s,
+                "{:<7} {:>4} {:>11} {:>20} {:>9} {:>11} {:>20} {:>8}",
+                "scene",
+                "W",
+                "simpson ms",
+                "simpson error",
+                "tol",
+                "adaptive ms",
+                "adaptive error",
+                "speedup"
+            );
+            for r in &self.equal_error {
+                let e = |e: &RenderError| {
+                    format!("{:.1e} {:.3}%", e.max_abs, 100.0 * e.share_over_1_255)
+                };
+                let _ = writeln!(
+                    s,
+                    "{:<7} {:>4} {:>11.2} {:>20} {:>9.0e} {:>11.2} {:>20} {:>7.2}x{}",
+                    r.scene,
+                    r.resolution,
+                    r.simpson.best().median_ms,
+                    e(&r.simpson_error),
+                    r.adaptive_tolerance,
+                    r.adaptive.best().median_ms,
+                    e(&r.adaptive_error),
+                    r.speedup,
+                    if r.equal_error { "" } else { " (error larger)" }
+                );
+            }
+        }
         let _ = writeln!(s, "\ntotal: {:.0} s", self.total_seconds);
         s
     }
@@ -541,6 +774,28 @@ mod tests {
         );
         let b = load(BEZIER_SCENE, "b");
         assert_eq!(b.sources.curves[0].coefficient, 5.0);
+    }
+
+    #[test]
+    fn render_errors_clamp_count_and_stride() {
+        // 4 x 4 texels, stride 2: texels (0,0), (2,0), (0,2), (2,2) are compared.
+        let mut values = vec![0.5f32; 16];
+        values[0] = 0.51; // 0.01 off
+        values[2] = 3.0; // B > 1 against 1.2: both clamp to 1, no error
+        values[10] = 0.5 + 0.5 / 255.0; // under 1/255
+        values[1] = 100.0; // not sampled
+        let reference = [0.5, 1.2, 0.5, 0.5];
+        let e = RenderError::of(&values, 4, 2, &reference);
+        assert!((e.max_abs - 0.01).abs() < 1e-6, "{e:?}");
+        assert_eq!(e.share_over_1_255, 0.25);
+        assert!(e.no_larger_than(&RenderError {
+            max_abs: 0.02,
+            share_over_1_255: 0.25
+        }));
+        assert!(!e.no_larger_than(&RenderError {
+            max_abs: 0.02,
+            share_over_1_255: 0.2
+        }));
     }
 
     #[test]
@@ -592,6 +847,27 @@ mod tests {
                 idle: Timing::of(vec![16.0]),
                 orbiting: Timing::of(vec![40.0]),
             }),
+            equal_error: vec![EqualErrorRow {
+                scene: "mixed".into(),
+                resolution: 256,
+                error_stride: 1,
+                reference: "f64 CPU, Simpson n = 4096".into(),
+                simpson_divisions: 200,
+                simpson: pass(30.0),
+                simpson_error: RenderError {
+                    max_abs: 0.02,
+                    share_over_1_255: 0.001,
+                },
+                adaptive_tolerance: 1e-4,
+                adaptive: pass(5.0),
+                adaptive_error: RenderError {
+                    max_abs: 0.003,
+                    share_over_1_255: 0.0,
+                },
+                equal_error: true,
+                speedup: 6.0,
+                tried: vec![],
+            }],
             total_seconds: 3.0,
         };
         let table = report.table();
@@ -608,6 +884,12 @@ mod tests {
         let json: serde_json::Value = serde_json::from_str(&report.to_json()).unwrap();
         assert_eq!(json["adapter"], "test adapter");
         assert_eq!(json["grid"][0]["ours"]["gpu"]["median_ms"], 20.0);
+        assert!(
+            table.contains("6.00x") && table.contains("2.0e-2 0.100%"),
+            "{table}"
+        );
+        assert_eq!(json["equal_error"][0]["speedup"], 6.0);
+        assert_eq!(json["equal_error"][0]["adaptive_error"]["max_abs"], 0.003);
         assert_eq!(json["grid"][0]["paper_fps"], 46.49);
         assert_eq!(json["grid"][0]["field_bytes"], 263_168);
         assert_eq!(

@@ -11,6 +11,7 @@ use clap::{Parser, Subcommand, ValueEnum};
 
 use crate::export::{self, ExportError, FrameSpec, Progress, Target};
 use crate::gpu::{GpuError, HeadlessRenderer};
+use crate::integrate::Integrator;
 use crate::output::{self, Format, OutputError};
 use crate::reference;
 use crate::scene::{DEFAULT_SCENE_NAME, MAX_DIVISIONS, MAX_RESOLUTION, Scene, SceneError};
@@ -84,6 +85,17 @@ pub struct RenderArgs {
     /// Override the scene's Simpson division count n (even).
     #[arg(long, value_parser = parse_divisions)]
     pub divisions: Option<u32>,
+    /// Override the scene's integrator: `adaptive` (samples where the field needs them; the default) or
+    /// `simpson` (the papers' n evenly spaced samples).
+    #[arg(long, value_parser = parse_integrator)]
+    pub integrator: Option<Integrator>,
+    /// Override the adaptive integrator's tolerance: the error allowed on B, shared between the sources (default 1e-4).
+    #[arg(long, value_parser = parse_tolerance)]
+    pub tolerance: Option<f64>,
+    /// Jitter the simpson integrator's samples with this seed: each texel's samples are shifted by a random
+    /// fraction of a step, so a low n gives fine noise instead of bands.
+    #[arg(long, value_name = "SEED")]
+    pub jitter: Option<u32>,
     /// Print the adapter, what is rendered and how long it took.
     #[arg(short, long)]
     pub verbose: bool,
@@ -168,6 +180,25 @@ fn parse_divisions(s: &str) -> Result<u32, String> {
         Ok(n) if n >= 2 && n % 2 == 0 && n <= MAX_DIVISIONS => Ok(n),
         _ => Err(format!(
             "{s:?}: Simpson's rule needs an even division count between 2 and {MAX_DIVISIONS}"
+        )),
+    }
+}
+
+fn parse_integrator(s: &str) -> Result<Integrator, String> {
+    match s {
+        "adaptive" => Ok(Integrator::Adaptive),
+        "simpson" => Ok(Integrator::Simpson),
+        _ => Err(format!(
+            "{s:?} is not an integrator: use adaptive (the default) or simpson (the papers' evenly spaced samples)"
+        )),
+    }
+}
+
+fn parse_tolerance(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(t) if t > 1e-9 && t < 0.1 => Ok(t),
+        _ => Err(format!(
+            "{s:?}: the tolerance (the error allowed on B) must be a number between 1e-9 and 0.1, for example 1e-4"
         )),
     }
 }
@@ -315,6 +346,20 @@ fn render(args: &RenderArgs) -> Result<(), CliError> {
     if let Some(n) = args.divisions {
         scene.integration.divisions = n;
     }
+    if let Some(integrator) = args.integrator {
+        scene.integration.integrator = integrator;
+    }
+    if let Some(t) = args.tolerance {
+        scene.integration.tolerance = t;
+    }
+    if let Some(seed) = args.jitter {
+        if scene.integration.integrator != Integrator::Simpson {
+            return Err(CliError::Usage(format!(
+                "--jitter {seed}: jitter shifts the simpson integrator's evenly spaced samples; add --integrator simpson (the adaptive integrator does not band)"
+            )));
+        }
+        scene.integration.jitter = Some(seed);
+    }
     let frames = export::frames_to_render(args.frames.as_ref(), &target, scene.frame_count())?;
     if target.is_multi_frame() {
         return render_frames(args, &scene, &target, frames);
@@ -336,13 +381,15 @@ fn render(args: &RenderArgs) -> Result<(), CliError> {
         .map_or(DEFAULT_SCENE_NAME.to_owned(), |p| p.display().to_string());
     if args.verbose {
         eprintln!(
-            "{name}: {} sources; billboard {}x{} texels, center {:.4}, side {:.4}; n = {}, nu = {}; backend {:?}",
+            "{name}: {} sources; billboard {}x{} texels, center {:.4}, side {:.4}; integrator {} (n = {}, tolerance {:e}), nu = {}; backend {:?}",
             scene.sources.len(),
             scene.billboard.resolution,
             scene.billboard.resolution,
             billboard.center,
             billboard.size,
+            scene.integration.integrator.name(),
             scene.integration.divisions,
+            scene.integration.tolerance,
             scene.integration.nu,
             args.backend,
         );

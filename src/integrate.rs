@@ -4,11 +4,39 @@ use glam::DVec3;
 
 use crate::field::Sources;
 
+/// How B is integrated along a ray.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Integrator {
+    /// The papers' method: n + 1 evenly spaced samples of psi, Simpson's rule (or, with jitter, the randomly
+    /// shifted rectangle rule).
+    Simpson,
+    /// Source by source, samples packed around the ray's closest approach, to a tolerance
+    /// (`crate::adaptive`).
+    #[default]
+    Adaptive,
+}
+
+impl Integrator {
+    /// The name used in scene files, on the command line and in the viewer.
+    pub fn name(self) -> &'static str {
+        match self {
+            Integrator::Simpson => "simpson",
+            Integrator::Adaptive => "adaptive",
+        }
+    }
+}
+
 /// The integration settings of a scene (the papers use `alpha = beta = 1`, `nu = 2`, `n = 200`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Integration {
-    /// Simpson's division count n: even, at least 2.
+    pub integrator: Integrator,
+    /// Simpson's division count n: even, at least 2 (the `simpson` integrator).
     pub divisions: u32,
+    /// Absolute error allowed on B (the `adaptive` integrator), shared between the sources.
+    pub tolerance: f64,
+    /// Random sample placement for the `simpson` integrator, with this seed: each texel's n samples are
+    /// shifted by a random fraction of a step, which turns banding into fine noise and is unbiased.
+    pub jitter: Option<u32>,
     /// How far the segment reaches: `E = V + nu (S - V)`, nu > 1.
     pub nu: f64,
     pub alpha: f64,
@@ -17,10 +45,16 @@ pub struct Integration {
     pub epsilon: f64,
 }
 
+/// The adaptive integrator's default tolerance: well under the 1/255 step of an 8-bit image.
+pub const DEFAULT_TOLERANCE: f64 = 1e-4;
+
 impl Default for Integration {
     fn default() -> Self {
         Self {
+            integrator: Integrator::default(),
             divisions: 200,
+            tolerance: DEFAULT_TOLERANCE,
+            jitter: None,
             nu: 2.0,
             alpha: 1.0,
             beta: 1.0,
@@ -47,11 +81,37 @@ pub fn simpson(f: impl Fn(f64) -> f64, n: u32) -> f64 {
     sum / (3.0 * nf)
 }
 
+/// The randomly shifted rectangle rule over [0, 1]: `(1 / n) sum_k f((k + xi) / n)`, `0 <= xi < 1`. Its mean
+/// over a uniform `xi` is the integral itself.
+pub fn shifted_rectangle(f: impl Fn(f64) -> f64, n: u32, xi: f64) -> f64 {
+    let nf = n as f64;
+    (0..n).map(|k| f((k as f64 + xi) / nf)).sum::<f64>() / nf
+}
+
+/// A texel's random offset in [0, 1) for `seed`: a PCG hash of texel and seed, the same on the GPU.
+pub fn jitter_offset(seed: u32, i: u32, j: u32, w: u32) -> f64 {
+    let index = j.wrapping_mul(w).wrapping_add(i);
+    let h = pcg_hash(index ^ pcg_hash(seed.wrapping_add(0x9e37_79b9)));
+    (h >> 8) as f64 / (1u32 << 24) as f64
+}
+
+/// The PCG hash (Jarzynski and Olano, "Hash Functions for GPU Rendering", 2020).
+pub fn pcg_hash(x: u32) -> u32 {
+    let state = x.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
+    let word = ((state >> ((state >> 28) + 4)) ^ state).wrapping_mul(277_803_737);
+    (word >> 22) ^ word
+}
+
 /// The brightness B of the segment from `s` to `e` (3.30): the integral over [0, 1] of
-/// `psi((1 - t) S + t E) zeta(t)`, by Simpson's rule.
-pub fn brightness(sources: &Sources, settings: &Integration, s: DVec3, e: DVec3) -> f64 {
-    simpson(
-        |t| sources.psi(s + (e - s) * t, settings.epsilon) * zeta(t, settings.alpha, settings.beta),
-        settings.divisions,
-    )
+/// `psi((1 - t) S + t E) zeta(t)`, by the scene's integrator. `xi` is the texel's jitter offset (used by the
+/// jittered `simpson` integrator only).
+pub fn brightness(sources: &Sources, settings: &Integration, s: DVec3, e: DVec3, xi: f64) -> f64 {
+    let f = |t: f64| {
+        sources.psi(s + (e - s) * t, settings.epsilon) * zeta(t, settings.alpha, settings.beta)
+    };
+    match (settings.integrator, settings.jitter) {
+        (Integrator::Simpson, None) => simpson(f, settings.divisions),
+        (Integrator::Simpson, Some(_)) => shifted_rectangle(f, settings.divisions, xi),
+        (Integrator::Adaptive, _) => crate::adaptive::brightness(sources, settings, s, e),
+    }
 }

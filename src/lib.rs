@@ -14,6 +14,7 @@
 //! - [`bench`]: the papers' speed grid and other benchmarks;
 //! - [`cli`]: the `energywave` command line.
 
+pub mod adaptive;
 pub mod animation;
 pub mod bench;
 pub mod cli;

@@ -7,7 +7,7 @@ use glam::DVec3;
 
 use crate::compose::{blend, blend_transparent, sample_bilinear};
 use crate::geometry::{Billboard, ray_end};
-use crate::integrate::brightness;
+use crate::integrate::{brightness, jitter_offset};
 use crate::scene::Scene;
 
 /// The billboard's brightness texture: `resolution` x `resolution` values of B, row-major, rows from the top.
@@ -20,13 +20,10 @@ pub struct BrightnessTexture {
 /// Integrates B for every texel of `billboard` (METHOD.md section 3).
 pub fn render_brightness(scene: &Scene, billboard: &Billboard) -> BrightnessTexture {
     let w = scene.billboard.resolution;
-    let eye = scene.camera.eye;
     let mut values = vec![0.0; (w as usize) * (w as usize)];
     for_each_row(&mut values, w as usize, |j, row| {
         for (i, out) in row.iter_mut().enumerate() {
-            let s = billboard.texel_center(i as u32, j as u32, w);
-            let e = ray_end(s, eye, scene.integration.nu);
-            *out = brightness(&scene.sources, &scene.integration, s, e);
+            *out = texel_brightness(scene, billboard, i as u32, j as u32);
         }
     });
     BrightnessTexture {
@@ -75,9 +72,14 @@ pub fn compose_frame(
 
 /// B of a single texel, for tests that probe one ray.
 pub fn texel_brightness(scene: &Scene, billboard: &Billboard, i: u32, j: u32) -> f64 {
-    let s: DVec3 = billboard.texel_center(i, j, scene.billboard.resolution);
+    let w = scene.billboard.resolution;
+    let s: DVec3 = billboard.texel_center(i, j, w);
     let e = ray_end(s, scene.camera.eye, scene.integration.nu);
-    brightness(&scene.sources, &scene.integration, s, e)
+    let xi = scene
+        .integration
+        .jitter
+        .map_or(0.5, |seed| jitter_offset(seed, i, j, w));
+    brightness(&scene.sources, &scene.integration, s, e, xi)
 }
 
 /// Runs `f(row_index, row)` over the rows of `data` (rows of `width` items) on every core.

@@ -3,7 +3,7 @@
 use energywave::field::{
     Curve, Line, Point, Sources, Torus, line_distance, torus_distance, wseries,
 };
-use energywave::integrate::{Integration, brightness, simpson, zeta};
+use energywave::integrate::{Integration, Integrator, brightness, simpson, zeta};
 use glam::DVec3;
 use proptest::prelude::*;
 
@@ -191,15 +191,17 @@ fn brightness_applies_zeta_and_the_coefficient() {
     };
     let beta = 1e7;
     let settings = Integration {
+        integrator: Integrator::Simpson,
         divisions: 2000,
         nu: 2.0,
         alpha: beta * beta,
         beta,
         epsilon: 1e-9,
+        ..Integration::default()
     };
     let (s, e) = (DVec3::new(0.0, 0.0, 4.0), DVec3::new(0.0, 0.0, -4.0));
     let exact = 2.5 * point_integral_closed_form(s, e, m);
-    let got = brightness(&sources, &settings, s, e);
+    let got = brightness(&sources, &settings, s, e, 0.5);
     assert!((got - exact).abs() < 1e-6 * exact, "{got} vs {exact}");
     // zeta itself.
     assert_eq!(zeta(0.0, 1.0, 1.0), 1.0);
@@ -299,4 +301,48 @@ fn a_chain_is_one_source_with_one_w_series() {
         chain.field(q, eps)
     );
     assert!(chain.field(cps[0] + DVec3::new(-0.5, 0.0, 0.0), eps).abs() < 1e-12);
+}
+
+#[test]
+fn the_adaptive_integrator_matches_the_closed_form_however_sharp_the_peak() {
+    // zeta = alpha / (s + beta)^2 is 1 within 2e-7 for alpha = beta^2, beta = 1e7: the closed form applies.
+    let beta = 1e7;
+    let settings = Integration {
+        integrator: Integrator::Adaptive,
+        tolerance: 1e-7,
+        alpha: beta * beta,
+        beta,
+        epsilon: 1e-9,
+        ..Integration::default()
+    };
+    let (s, e) = (DVec3::new(0.0, 0.0, 4.0), DVec3::new(0.0, 0.0, -4.0));
+    for miss in [1.0, 0.1, 1e-2, 1e-4] {
+        let m = DVec3::new(miss, 0.0, 0.7);
+        let sources = Sources {
+            points: vec![Point {
+                position: m,
+                coefficient: 2.5,
+            }],
+            ..Sources::default()
+        };
+        let exact = 2.5 * point_integral_closed_form(s, e, m);
+        let got = brightness(&sources, &settings, s, e, 0.5);
+        assert!(
+            (got - exact).abs() < 1e-5 * exact,
+            "miss {miss}: {got} vs {exact}"
+        );
+        // Where uniform samples fall apart: 201 samples 0.04 apart cannot see a peak 1e-4 wide.
+        if miss == 1e-4 {
+            let uniform = Integration {
+                integrator: Integrator::Simpson,
+                divisions: 200,
+                ..settings.clone()
+            };
+            let simpson = brightness(&sources, &uniform, s, e, 0.5);
+            assert!(
+                (simpson - exact).abs() > 0.1 * exact,
+                "{simpson} vs {exact}"
+            );
+        }
+    }
 }

@@ -13,6 +13,7 @@ use std::sync::{Mutex, MutexGuard, OnceLock};
 use energywave::field::{Curve, Line, Point, Sources, Torus};
 use energywave::geometry::{Camera, ray_end};
 use energywave::gpu::{GpuError, HeadlessRenderer, field_texture_bytes};
+use energywave::integrate::Integrator;
 use energywave::reference;
 use energywave::scene::Scene;
 use glam::DVec3;
@@ -159,6 +160,8 @@ fn gpu_matches_the_cpu_reference_on_grazing_rays() {
         ],
     };
     scene.integration.epsilon = 1e-3;
+    // The papers' integrator first: uniform samples.
+    scene.integration.integrator = Integrator::Simpson;
     // The aimed texels really graze: their B towers over the typical texel's. (The point between two samples,
     // texel (11, 3), is compared but does not tower: uniform Simpson steps over it, the papers' unevenness.)
     let bb = scene.place_billboard(1.0);
@@ -175,6 +178,22 @@ fn gpu_matches_the_cpu_reference_on_grazing_rays() {
     }
     let worst = compare_brightness("grazing", &scene, 1.0);
     eprintln!("grazing: worst relative error {worst:.2e}");
+
+    // The adaptive integrator, GPU against CPU on the same rays; it finds the point between two samples.
+    scene.integration.integrator = Integrator::Adaptive;
+    let worst = compare_brightness("grazing, adaptive", &scene, 1.0);
+    eprintln!("grazing, adaptive: worst relative error {worst:.2e}");
+    let adaptive = reference::texel_brightness(&scene, &bb, 11, 3);
+    let mut converged = scene.clone();
+    converged.integration.integrator = Integrator::Simpson;
+    converged.integration.divisions = 1 << 16;
+    let converged = reference::texel_brightness(&converged, &bb, 11, 3);
+    let simpson = cpu.values[(3 * w + 11) as usize];
+    assert!(
+        (adaptive - converged).abs() < 1e-3 * converged
+            && (simpson - converged).abs() > 0.1 * converged,
+        "texel (11, 3): adaptive {adaptive}, simpson {simpson}, converged {converged}"
+    );
 }
 
 /// sRGB (display values) to CIE L*a*b* (D65).
@@ -243,6 +262,8 @@ fn composed_frames_match_the_golden_images() {
     let bless = std::env::var_os("ENERGYWAVE_BLESS").is_some();
     for (name, mut scene) in shipped() {
         scene.billboard.resolution = GOLDEN_RESOLUTION;
+        // The goldens hold the compositing pipeline still; the integrators have tests/integrators.rs.
+        scene.integration.integrator = Integrator::Simpson;
         let bb = scene.place_billboard(w as f64 / h as f64);
         let tex = reference::render_brightness(&scene, &bb);
         let cpu = reference::compose_frame(&scene, &bb, &tex, w, h, false);

@@ -395,7 +395,7 @@ proptest! {
         let mut s = scene(camera(eye, target), sources);
         s.camera.fov_y_degrees = fov;
         s.billboard.resolution = 6;
-        s.integration = energywave::integrate::Integration { divisions: 2 * half_n, nu, alpha, beta, epsilon };
+        s.integration = energywave::integrate::Integration { divisions: 2 * half_n, nu, alpha, beta, epsilon, ..Default::default() };
         let text = s.to_toml();
         let loaded = Scene::parse(&text, std::path::Path::new("random.toml")).map_err(|e| TestCaseError::fail(e.to_string()))?;
         let bb = loaded.place_billboard(1.3);

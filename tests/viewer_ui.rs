@@ -8,6 +8,7 @@ use egui::{Key, Modifiers, Pos2, Vec2};
 use egui_kittest::kittest::{NodeT, Queryable};
 use egui_kittest::{Harness, wgpu::WgpuTestRenderer};
 use energywave::gpu::GpuContext;
+use energywave::integrate::Integrator;
 use energywave::scene::Scene;
 use energywave::viewer::handles::{self, HandleId};
 use energywave::viewer::viewport::{ViewportGpu, ViewportReport};
@@ -20,6 +21,7 @@ const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 fn light_scene() -> Scene {
     let mut s = Scene::default_scene();
     s.billboard.resolution = 96;
+    s.integration.integrator = Integrator::Simpson;
     s.integration.divisions = 64;
     s
 }
@@ -641,4 +643,39 @@ fn editing_a_keyed_value_while_paused_sets_a_key_at_that_frame() {
             .len(),
         2
     );
+}
+
+#[test]
+fn the_integrator_switch_shows_each_integrators_settings_and_is_undoable() {
+    let mut h = harness(light_scene());
+    assert!(h.query_by_label("tolerance").is_none());
+    h.get_by_role_and_label(Role::SpinButton, "divisions n");
+    let simpson = viewport_pixels(&mut h);
+    h.get_by_label("adaptive").click();
+    h.run();
+    assert_eq!(
+        h.state().scene().integration.integrator,
+        Integrator::Adaptive
+    );
+    assert!(h.query_by_label("divisions n").is_none());
+    h.get_by_role_and_label(Role::SpinButton, "tolerance")
+        .set_value_accesskit(0.001);
+    h.run();
+    assert_eq!(h.state().scene().integration.tolerance, 0.001);
+    // Both integrate the same field: the picture barely changes (n = 64 against a converged one).
+    let adaptive = viewport_pixels(&mut h);
+    let d = mean_abs_difference(&simpson, &adaptive);
+    assert!(d < 3.0, "mean difference {d}");
+    h.key_press_modifiers(Modifiers::COMMAND, Key::Z);
+    h.run();
+    h.key_press_modifiers(Modifiers::COMMAND, Key::Z);
+    h.run();
+    assert_eq!(
+        h.state().scene().integration.integrator,
+        Integrator::Simpson
+    );
+    // Jitter belongs to simpson.
+    h.get_by_label("jitter (noise instead of bands)").click();
+    h.run();
+    assert_eq!(h.state().scene().integration.jitter, Some(0));
 }

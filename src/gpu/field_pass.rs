@@ -8,6 +8,7 @@ use super::context::{GpuError, checked, texture_2d};
 use super::shaders;
 use crate::field::curve::segments;
 use crate::geometry::Billboard;
+use crate::integrate::Integrator;
 use crate::scene::Scene;
 
 /// Rust mirrors of the WGSL structs of `shaders/field.wgsl` and `shaders/field_common.wgsl` (keep in
@@ -34,9 +35,24 @@ pub mod gpu_data {
         pub line_count: u32,  // 80
         pub torus_count: u32, // 84
         pub curve_count: u32, // 88
-        pub pad0: u32,        // 92
+        pub integrator: u32,  // 92: 0 simpson, 1 adaptive
+        pub tolerance: f32,   // 96: per term, before its coefficient (adaptive::term_tolerance)
+        pub jitter: u32,      // 100
+        pub seed: u32,        // 104
+        pub pad0: u32,        // 108
     }
-    const _: () = assert!(size_of::<FieldParams>() == 96);
+    const _: () = assert!(size_of::<FieldParams>() == 112);
+
+    /// `Chunk` in `shaders/field.wgsl`: one dispatch's range of samples or terms.
+    #[repr(C)]
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+    pub struct Chunk {
+        pub first: u32,      // 0
+        pub count: u32,      // 4
+        pub accumulate: u32, // 8
+        pub pad0: u32,       // 12
+    }
+    const _: () = assert!(size_of::<Chunk>() == 16);
 
     /// `PointSource` in `shaders/field_common.wgsl`.
     #[repr(C)]
@@ -115,6 +131,56 @@ struct Packed {
     curves: Vec<CurveSource>,
     segments: Vec<CurveSegment>,
     weights: Vec<f32>,
+    /// The dispatches that together integrate the texture.
+    chunks: Vec<Chunk>,
+}
+
+/// Loop iterations one invocation may spend: Mesa's llvmpipe and lavapipe stop all loops of an invocation after
+/// 65535 iterations in all (silently); this leaves room for the estimate's slack.
+const ITERATION_BUDGET: u64 = 30_000;
+/// Integrand evaluations the adaptive integrator typically spends on one term (scan, refinement, panels).
+const ADAPTIVE_EVALUATIONS: u64 = 600;
+
+/// Loop iterations of one evaluation of a source's distance (a curve loops over its segments and roots).
+fn curve_iterations(segments: u32) -> u64 {
+    1 + 12 * segments as u64
+}
+
+/// Splits the integration into dispatches that each stay within `ITERATION_BUDGET` loop iterations a texel.
+fn plan_chunks(p: &Packed) -> Vec<Chunk> {
+    let chunk = |first: u32, count: u32, k: usize| Chunk {
+        first,
+        count,
+        accumulate: (k > 0) as u32,
+        pad0: 0,
+    };
+    let terms: Vec<u64> = (0..p.params.point_count + p.params.line_count + p.params.torus_count)
+        .map(|_| 1)
+        .chain(p.curves.iter().map(|c| curve_iterations(c.segment_count)))
+        .collect();
+    if p.params.integrator == 0 {
+        // Simpson: ranges of samples, each sample costing a walk over every source.
+        let per_sample = 4 + terms.iter().sum::<u64>();
+        let samples = p.params.divisions + 1;
+        let per_chunk = (ITERATION_BUDGET / per_sample).clamp(1, samples as u64) as u32;
+        (0..samples.div_ceil(per_chunk))
+            .map(|k| chunk(k * per_chunk, per_chunk, k as usize))
+            .collect()
+    } else {
+        // Adaptive: ranges of terms.
+        let mut chunks = Vec::new();
+        let (mut first, mut cost) = (0u32, 0u64);
+        for (t, &c) in terms.iter().enumerate() {
+            let c = ADAPTIVE_EVALUATIONS * (c + 1);
+            if cost > 0 && cost + c > ITERATION_BUDGET {
+                chunks.push(chunk(first, t as u32 - first, chunks.len()));
+                (first, cost) = (t as u32, 0);
+            }
+            cost += c;
+        }
+        chunks.push(chunk(first, terms.len() as u32 - first, chunks.len()));
+        chunks
+    }
 }
 
 fn v3(v: glam::DVec3) -> [f32; 3] {
@@ -141,6 +207,13 @@ fn pack(scene: &Scene, billboard: &Billboard) -> Packed {
             line_count: s.lines.len() as u32,
             torus_count: s.tori.len() as u32,
             curve_count: s.curves.len() as u32,
+            integrator: match i.integrator {
+                Integrator::Simpson => 0,
+                Integrator::Adaptive => 1,
+            },
+            tolerance: crate::adaptive::term_tolerance(s, i.tolerance) as f32,
+            jitter: i.jitter.is_some() as u32,
+            seed: i.jitter.unwrap_or(0),
             pad0: 0,
         },
         points: (s.points.iter())
@@ -189,7 +262,18 @@ fn pack(scene: &Scene, billboard: &Billboard) -> Packed {
             ..CurveSource::default()
         });
     }
+    packed.chunks = plan_chunks(&packed);
     packed
+}
+
+/// A uniform buffer for `count` chunks, `stride` bytes apart.
+fn chunk_buffer(device: &wgpu::Device, stride: u64, count: usize) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("energywave.field.chunks"),
+        size: stride * count.max(1) as u64,
+        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
 }
 
 /// A storage buffer that grows as needed (never empty: WebGPU refuses zero-sized bindings).
@@ -230,11 +314,15 @@ impl StorageBuffer {
     }
 }
 
-/// The field pass: its pipeline and the GPU copies of one scene's data.
+/// The field pass: its pipelines (one per integrator) and the GPU copies of one scene's data.
 pub struct FieldRenderer {
-    pipeline: wgpu::ComputePipeline,
+    /// `integrate` (simpson) and `integrate_adaptive`, indexed by `FieldParams::integrator`.
+    pipelines: [wgpu::ComputePipeline; 2],
     layout: wgpu::BindGroupLayout,
     params: wgpu::Buffer,
+    /// The chunks, one per `chunk_stride` bytes (bound with a dynamic offset).
+    chunks: wgpu::Buffer,
+    chunk_stride: u64,
     buffers: [StorageBuffer; 6],
     texture: Option<(wgpu::Texture, wgpu::TextureView)>,
     bind_group: Option<wgpu::BindGroup>,
@@ -244,7 +332,7 @@ pub struct FieldRenderer {
 }
 
 impl FieldRenderer {
-    /// Builds the pipeline.
+    /// Builds the pipelines.
     pub fn new(device: &wgpu::Device) -> Self {
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("energywave.field.shader"),
@@ -283,9 +371,19 @@ impl FieldRenderer {
                     binding: 7,
                     visibility: wgpu::ShaderStages::COMPUTE,
                     ty: wgpu::BindingType::StorageTexture {
-                        access: wgpu::StorageTextureAccess::WriteOnly,
+                        access: wgpu::StorageTextureAccess::ReadWrite,
                         format: wgpu::TextureFormat::R32Float,
                         view_dimension: wgpu::TextureViewDimension::D2,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 8,
+                    visibility: wgpu::ShaderStages::COMPUTE,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: true,
+                        min_binding_size: wgpu::BufferSize::new(size_of::<Chunk>() as u64),
                     },
                     count: None,
                 },
@@ -296,13 +394,15 @@ impl FieldRenderer {
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("energywave.field.pipeline"),
-            layout: Some(&pipeline_layout),
-            module: &module,
-            entry_point: Some("integrate"),
-            compilation_options: Default::default(),
-            cache: None,
+        let pipelines = ["integrate", "integrate_adaptive"].map(|entry| {
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: Some(&pipeline_layout),
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
         });
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("energywave.field.params"),
@@ -319,10 +419,14 @@ impl FieldRenderer {
             "energywave.field.weights",
         ]
         .map(|label| StorageBuffer::new(device, label, &[]));
+        let chunk_stride = (device.limits().min_uniform_buffer_offset_alignment as u64)
+            .max(size_of::<Chunk>() as u64);
         Self {
-            pipeline,
+            pipelines,
             layout,
             params,
+            chunks: chunk_buffer(device, chunk_stride, 1),
+            chunk_stride,
             buffers,
             texture: None,
             bind_group: None,
@@ -366,6 +470,17 @@ impl FieldRenderer {
                 rebind |= buffer.write(device, queue, bytes);
             }
             queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&packed.params));
+            let needed = packed.chunks.len() as u64 * self.chunk_stride;
+            if self.chunks.size() < needed {
+                self.chunks = chunk_buffer(device, self.chunk_stride, packed.chunks.len());
+                rebind = true;
+            }
+            let mut bytes = vec![0u8; needed as usize];
+            for (k, c) in packed.chunks.iter().enumerate() {
+                let at = k * self.chunk_stride as usize;
+                bytes[at..at + size_of::<Chunk>()].copy_from_slice(bytemuck::bytes_of(c));
+            }
+            queue.write_buffer(&self.chunks, 0, &bytes);
             if self.texture.as_ref().is_none_or(|(t, _)| t.width() != w) {
                 let texture = texture_2d(
                     device,
@@ -409,6 +524,14 @@ impl FieldRenderer {
             binding: 7,
             resource: wgpu::BindingResource::TextureView(view),
         });
+        entries.push(wgpu::BindGroupEntry {
+            binding: 8,
+            resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                buffer: &self.chunks,
+                offset: 0,
+                size: wgpu::BufferSize::new(size_of::<Chunk>() as u64),
+            }),
+        });
         device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("energywave.field.bind_group"),
             layout: &self.layout,
@@ -439,9 +562,11 @@ impl FieldRenderer {
             label: Some("energywave.field.pass"),
             timestamp_writes: timestamps,
         });
-        pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, bind_group, &[]);
-        pass.dispatch_workgroups(w.div_ceil(8), w.div_ceil(8), 1);
+        pass.set_pipeline(&self.pipelines[packed.params.integrator as usize]);
+        for k in 0..packed.chunks.len() {
+            pass.set_bind_group(0, bind_group, &[(k as u64 * self.chunk_stride) as u32]);
+            pass.dispatch_workgroups(w.div_ceil(8), w.div_ceil(8), 1);
+        }
         self.pending = false;
         self.dispatches += 1;
         true

@@ -19,6 +19,6 @@ pub use headless::{Frame, HeadlessRenderer};
 pub mod layout {
     pub use super::billboard_pass::gpu_data::BillboardParams;
     pub use super::field_pass::gpu_data::{
-        CurveSegment, CurveSource, FieldParams, LineSource, PointSource, TorusSource,
+        Chunk, CurveSegment, CurveSource, FieldParams, LineSource, PointSource, TorusSource,
     };
 }

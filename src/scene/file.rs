@@ -55,7 +55,15 @@ pub(crate) struct BillboardFile {
 #[derive(Debug, Default, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct IntegrationFile {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub integrator: Option<String>,
     pub divisions: Option<u32>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tolerance: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub jitter: Option<bool>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub seed: Option<u32>,
     pub nu: Option<f64>,
     pub alpha: Option<f64>,
     pub beta: Option<f64>,

@@ -18,7 +18,7 @@ use file::{FieldPath, Locator, SceneFile};
 use crate::animation::Animation;
 use crate::field::{Curve, Line, Point, Sources, Torus};
 use crate::geometry::{self, Billboard, Camera};
-use crate::integrate::Integration;
+use crate::integrate::{Integration, Integrator};
 
 /// The scene used when none is given, embedded in the binary.
 pub const DEFAULT_SCENE_TOML: &str = include_str!("../../assets/scenes/default.toml");
@@ -186,7 +186,11 @@ impl Scene {
                 resolution: Some(self.billboard.resolution),
             }),
             integration: Some(file::IntegrationFile {
+                integrator: Some(self.integration.integrator.name().to_owned()),
                 divisions: Some(self.integration.divisions),
+                tolerance: Some(self.integration.tolerance),
+                jitter: Some(self.integration.jitter.is_some()),
+                seed: self.integration.jitter,
                 nu: Some(self.integration.nu),
                 alpha: Some(self.integration.alpha),
                 beta: Some(self.integration.beta),
@@ -406,6 +410,42 @@ fn validate(file: &SceneFile, locator: &Locator<'_>, problems: &mut Vec<Problem>
             format!("{divisions}: Simpson's rule needs an even division count between 2 and {MAX_DIVISIONS} (the papers use 200)"),
         );
     }
+    let integrator = match int.and_then(|i| i.integrator.as_deref()) {
+        None => defaults.integrator,
+        Some("adaptive") => Integrator::Adaptive,
+        Some("simpson") => Integrator::Simpson,
+        Some(other) => {
+            c.fail(
+                &int_path.key("integrator"),
+                format!("{other:?} is not an integrator: use \"adaptive\" (samples where the field needs them, the default) or \"simpson\" (the papers' n evenly spaced samples)"),
+            );
+            defaults.integrator
+        }
+    };
+    let tolerance = int.and_then(|i| i.tolerance).map_or(defaults.tolerance, |x| {
+        c.in_open_range(
+            &int_path.key("tolerance"),
+            x,
+            1e-9,
+            0.1,
+            "the error the adaptive integrator allows on B must lie between 1e-9 and 0.1 (default 1e-4)",
+        )
+    });
+    let jitter = int.and_then(|i| i.jitter).unwrap_or(false);
+    let seed = int.and_then(|i| i.seed);
+    if seed.is_some() && !jitter {
+        c.fail(
+            &int_path.key("seed"),
+            "a seed only matters with jitter = true",
+        );
+    }
+    if jitter && integrator == Integrator::Adaptive {
+        c.fail(
+            &int_path.key("jitter"),
+            "jitter shifts the simpson integrator's evenly spaced samples: set integrator = \"simpson\" with it (the adaptive integrator does not band)",
+        );
+    }
+    let jitter = jitter.then(|| seed.unwrap_or(0));
     let nu = int.and_then(|i| i.nu).map_or(defaults.nu, |x| {
         c.in_open_range(&int_path.key("nu"), x, 1.0, f64::INFINITY, "nu must be greater than 1 (E = V + nu (S - V) lies behind the billboard; the papers use 2)")
     });
@@ -536,7 +576,10 @@ fn validate(file: &SceneFile, locator: &Locator<'_>, problems: &mut Vec<Problem>
             resolution,
         },
         integration: Integration {
+            integrator,
             divisions,
+            tolerance,
+            jitter,
             nu,
             alpha,
             beta,

@@ -7,6 +7,7 @@ use glam::DVec3;
 use super::app::ViewerApp;
 use crate::animation::SourceKind;
 use crate::field::{Curve, Line, Point, Torus, wseries};
+use crate::integrate::Integrator;
 use crate::scene::MAX_DIVISIONS;
 
 /// Largest Simpson division count the panel offers (the file format allows more, for batch renders).
@@ -211,17 +212,53 @@ fn render_section(ui: &mut Ui, app: &mut ViewerApp) {
             egui::Grid::new("energywave.integration")
                 .num_columns(2)
                 .show(ui, |ui| {
-                    let mut n = i.divisions;
-                    labelled(
-                        ui,
-                        "divisions n",
-                        DragValue::new(&mut n)
-                            .range(2..=PANEL_MAX_DIVISIONS)
-                            .speed(2),
-                    );
-                    // Simpson's rule needs an even count.
-                    i.divisions = (n + n % 2).clamp(2, PANEL_MAX_DIVISIONS);
+                    ui.label("integrator");
+                    ui.horizontal(|ui| {
+                        for integrator in [Integrator::Adaptive, Integrator::Simpson] {
+                            ui.selectable_value(&mut i.integrator, integrator, integrator.name())
+                                .on_hover_text(match integrator {
+                                    Integrator::Adaptive => "Samples where the field needs them, to a tolerance (fast, no banding)",
+                                    Integrator::Simpson => "The papers' n evenly spaced samples (bands at a low n)",
+                                });
+                        }
+                    });
                     ui.end_row();
+                    match i.integrator {
+                        Integrator::Adaptive => {
+                            i.jitter = None;
+                            labelled(
+                                ui,
+                                "tolerance",
+                                DragValue::new(&mut i.tolerance)
+                                    .range(1e-7..=0.05)
+                                    .speed(1e-5)
+                                    .max_decimals(7),
+                            );
+                            ui.end_row();
+                        }
+                        Integrator::Simpson => {
+                            let mut n = i.divisions;
+                            labelled(
+                                ui,
+                                "divisions n",
+                                DragValue::new(&mut n)
+                                    .range(2..=PANEL_MAX_DIVISIONS)
+                                    .speed(2),
+                            );
+                            // Simpson's rule needs an even count.
+                            i.divisions = (n + n % 2).clamp(2, PANEL_MAX_DIVISIONS);
+                            ui.end_row();
+                            let mut jitter = i.jitter.is_some();
+                            ui.label("");
+                            ui.checkbox(&mut jitter, "jitter (noise instead of bands)");
+                            ui.end_row();
+                            i.jitter = match (jitter, i.jitter) {
+                                (true, Some(seed)) => Some(seed),
+                                (true, None) => Some(0),
+                                (false, _) => None,
+                            };
+                        }
+                    }
                     labelled(
                         ui,
                         "\u{3bd} (ray reach)",

@@ -1,0 +1,215 @@
+//! The integrators against independent oracles: the adaptive one on the GPU against the converged f64
+//! reference (uniform Simpson, n = 4096) on every shipped scene; jittered sampling unbiased (its mean over
+//! seeds converges to the reference, on the CPU and on the GPU) and identical on both (same hash, same
+//! offsets).
+//!
+//! Error of a render, as the benchmark states it: on B clamped to [0, 1], the largest difference and the share
+//! of texels off by more than 1/255.
+
+use std::path::{Path, PathBuf};
+
+use energywave::bench::{REFERENCE_DIVISIONS, RenderError};
+use energywave::field::{Point, Sources};
+use energywave::gpu::HeadlessRenderer;
+use energywave::integrate::{Integration, Integrator, brightness, jitter_offset, zeta};
+use energywave::reference;
+use energywave::scene::Scene;
+use glam::DVec3;
+
+fn shipped() -> Vec<(String, Scene)> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes");
+    let mut v: Vec<(String, Scene)> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p: &PathBuf| p.extension().is_some_and(|e| e == "toml"))
+        .map(|p| {
+            (
+                p.file_stem().unwrap().to_string_lossy().into_owned(),
+                Scene::load(&p).unwrap(),
+            )
+        })
+        .collect();
+    v.sort_by(|a, b| a.0.cmp(&b.0));
+    v
+}
+
+/// The converged reference of `scene`'s brightness texture.
+fn converged(scene: &Scene) -> Vec<f64> {
+    let mut s = scene.clone();
+    s.integration.integrator = Integrator::Simpson;
+    s.integration.jitter = None;
+    s.integration.divisions = REFERENCE_DIVISIONS;
+    reference::render_brightness(&s, &s.place_billboard(1.0)).values
+}
+
+#[test]
+fn the_adaptive_integrator_on_the_gpu_matches_the_converged_reference_on_every_shipped_scene() {
+    let mut gpu = HeadlessRenderer::new().expect("a GPU adapter (lavapipe in CI)");
+    for (name, mut scene) in shipped() {
+        scene.billboard.resolution = 40;
+        scene.integration.integrator = Integrator::Adaptive;
+        scene.integration.jitter = None;
+        let reference = converged(&scene);
+        let bb = scene.place_billboard(1.0);
+        let adaptive = gpu.brightness(&scene, &bb).unwrap();
+        let error = RenderError::of(&adaptive, 40, 1, &reference);
+        // At the default tolerance (1e-4 per source), nothing visible: no texel off by 1/255.
+        assert!(
+            error.max_abs <= 1.0 / 255.0 && error.share_over_1_255 == 0.0,
+            "{name}: {error:?}"
+        );
+        assert!(
+            reference.iter().any(|&b| b > 0.05),
+            "{name}: the scene shows something"
+        );
+    }
+}
+
+/// One ray past a point source, with the papers' decay, and its integrand.
+fn grazing_ray() -> (Sources, Integration, DVec3, DVec3) {
+    let sources = Sources {
+        points: vec![Point {
+            position: DVec3::new(0.003, 0.0, -3.3),
+            coefficient: 1.0,
+        }],
+        ..Sources::default()
+    };
+    let settings = Integration {
+        integrator: Integrator::Simpson,
+        divisions: 8,
+        jitter: Some(0),
+        ..Integration::default()
+    };
+    (sources, settings, DVec3::ZERO, DVec3::new(0.0, 0.0, -10.0))
+}
+
+#[test]
+fn jittered_sampling_is_unbiased_where_fixed_samples_are_not() {
+    let (sources, settings, s, e) = grazing_ray();
+    let f = |t: f64| sources.psi(s + (e - s) * t, settings.epsilon) * zeta(t, 1.0, 1.0);
+    let exact = energywave::integrate::simpson(f, 1 << 20);
+    // Eight evenly spaced samples miss the peak: the fixed rule is off by far more than its noise would be.
+    let fixed = brightness(
+        &sources,
+        &Integration {
+            jitter: None,
+            ..settings.clone()
+        },
+        s,
+        e,
+        0.5,
+    );
+    // The jittered estimate over many offsets (the hash's, texel by texel, as a render draws them).
+    let n = 20_000u32;
+    let estimates: Vec<f64> = (0..n)
+        .map(|k| {
+            brightness(
+                &sources,
+                &settings,
+                s,
+                e,
+                jitter_offset(7, k % 200, k / 200, 200),
+            )
+        })
+        .collect();
+    let mean = estimates.iter().sum::<f64>() / n as f64;
+    let var = estimates.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1) as f64;
+    let standard_error = (var / n as f64).sqrt();
+    assert!(
+        (mean - exact).abs() < 4.0 * standard_error,
+        "mean {mean} vs {exact} (standard error {standard_error})"
+    );
+    assert!(
+        (fixed - exact).abs() > 20.0 * standard_error,
+        "fixed {fixed} vs {exact}: the bias the jitter removes"
+    );
+    // The offsets are uniform on [0, 1): their mean and variance are 1/2 and 1/12.
+    let xi: Vec<f64> = (0..n).map(|k| jitter_offset(3, k, 0, n)).collect();
+    let m = xi.iter().sum::<f64>() / n as f64;
+    let v = xi.iter().map(|x| (x - m).powi(2)).sum::<f64>() / n as f64;
+    assert!(
+        (m - 0.5).abs() < 0.01 && (v - 1.0 / 12.0).abs() < 0.003,
+        "{m} {v}"
+    );
+}
+
+#[test]
+fn jittered_renders_are_the_same_on_the_gpu_and_converge_to_the_reference() {
+    let mut gpu = HeadlessRenderer::new().expect("a GPU adapter (lavapipe in CI)");
+    let mut scene = shipped()
+        .into_iter()
+        .find(|(n, _)| n == "divisions_torus_t4.0")
+        .expect("the division-count preset")
+        .1;
+    let w = 24u32;
+    scene.billboard.resolution = w;
+    scene.integration.integrator = Integrator::Simpson;
+    scene.integration.divisions = 8;
+    let bb = scene.place_billboard(1.0);
+    let reference = converged(&scene);
+
+    // The GPU draws the very offsets the CPU does: one seed, texel by texel.
+    scene.integration.jitter = Some(11);
+    let g = gpu.brightness(&scene, &bb).unwrap();
+    let c = reference::render_brightness(&scene, &bb).values;
+    for (k, (&gv, &cv)) in g.iter().zip(&c).enumerate() {
+        assert!(
+            (gv as f64 - cv).abs() <= 1e-3 * cv.abs().max(0.01),
+            "texel {k}: {gv} vs {cv}"
+        );
+    }
+
+    // The mean over seeds approaches the reference; fixed samples at the same n stay biased (bands).
+    let seeds = 48;
+    let mut sum = vec![0.0f64; (w * w) as usize];
+    for seed in 0..seeds {
+        scene.integration.jitter = Some(seed);
+        for (acc, v) in sum.iter_mut().zip(gpu.brightness(&scene, &bb).unwrap()) {
+            *acc += v as f64;
+        }
+    }
+    let mean: Vec<f64> = sum.iter().map(|s| s / seeds as f64).collect();
+    scene.integration.jitter = None;
+    let fixed: Vec<f64> = gpu
+        .brightness(&scene, &bb)
+        .unwrap()
+        .iter()
+        .map(|&v| v as f64)
+        .collect();
+    let mean_abs = |v: &[f64]| {
+        v.iter()
+            .zip(&reference)
+            .map(|(a, b)| (a - b).abs())
+            .sum::<f64>()
+            / v.len() as f64
+    };
+    let (jittered_error, fixed_error) = (mean_abs(&mean), mean_abs(&fixed));
+    assert!(
+        jittered_error < 0.25 * fixed_error,
+        "mean of {seeds} jittered renders: {jittered_error}, fixed samples: {fixed_error}"
+    );
+}
+
+#[test]
+fn long_integrals_are_not_cut_short_by_a_drivers_loop_limit() {
+    // Mesa's llvmpipe and lavapipe stop all loops of an invocation after 65535 iterations in all, silently:
+    // n = 8192 on a two-segment curve is over 200 000. The field pass splits such integrals over dispatches.
+    let mut gpu = HeadlessRenderer::new().expect("a GPU adapter (lavapipe in CI)");
+    let mut scene = shipped()
+        .into_iter()
+        .find(|(n, _)| n == "bezier_b5.0")
+        .expect("the Bezier preset")
+        .1;
+    scene.billboard.resolution = 12;
+    scene.integration.integrator = Integrator::Simpson;
+    scene.integration.divisions = 8192;
+    let bb = scene.place_billboard(1.0);
+    let g = gpu.brightness(&scene, &bb).unwrap();
+    let c = reference::render_brightness(&scene, &bb).values;
+    for (k, (&gv, &cv)) in g.iter().zip(&c).enumerate() {
+        assert!(
+            (gv as f64 - cv).abs() <= 1e-3 * cv.abs().max(0.01),
+            "texel {k}: GPU {gv} vs CPU {cv}"
+        );
+    }
+}
