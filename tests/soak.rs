@@ -3,6 +3,7 @@
 //! stays flat.
 
 use energywave::field::{Curve, Point, Torus};
+use energywave::integrate::Integrator;
 use energywave::scene::Scene;
 use energywave::viewer::Document;
 use energywave::viewer::offscreen::OffscreenViewer;
@@ -46,6 +47,8 @@ const FRAMES: usize = 2000;
 fn thousands_of_frames_of_random_edits() {
     let mut scene = Scene::default_scene();
     scene.billboard.resolution = 24;
+    // Mostly the cheap uniform integrator; case 7 switches to the adaptive one now and then.
+    scene.integration.integrator = Integrator::Simpson;
     scene.integration.divisions = 16;
     let mut v = OffscreenViewer::new(Document::new(scene, None), 640, 400)
         .expect("a GPU adapter (lavapipe in CI)");
@@ -107,6 +110,12 @@ fn thousands_of_frames_of_random_edits() {
                 }
             }
             7 => {
+                s.integration.integrator = if rng.below(4) == 0 {
+                    Integrator::Adaptive
+                } else {
+                    Integrator::Simpson
+                };
+                s.integration.tolerance = rng.range(1e-4, 1e-2);
                 s.integration.divisions = 2 * (1 + rng.below(24)) as u32;
                 s.billboard.resolution = 8 + rng.below(32) as u32;
                 s.integration.epsilon = rng.range(1e-4, 0.1);
