@@ -194,6 +194,8 @@ const KIND_CURVE: u32 = 3u;
 const SCAN: u32 = 12u;
 const PANELS: u32 = 8u;
 const DEPTH: u32 = 12u;
+const SPLITS: u32 = 200u;
+const RELATIVE_FLOOR: f32 = 4e-6;
 const MAX_WIDTH: f32 = 4.0;
 
 // One source's (distance, W series weight) at p.
@@ -387,7 +389,7 @@ fn g_u(ray: Ray, p: Peak, u: f32) -> f32 {
 }
 
 // Adaptive Simpson on [a, b] in u, iterative with an explicit stack. Twin of adaptive_simpson.
-fn adaptive_simpson(ray: Ray, p: Peak, a0: f32, b0: f32, f0: vec3<f32>, tol0: f32) -> f32 {
+fn adaptive_simpson(ray: Ray, p: Peak, a0: f32, b0: f32, f0: vec3<f32>, tol0: f32, splits: ptr<function, u32>) -> f32 {
     // Depth-first, left half first: at most DEPTH + 1 entries.
     var bounds: array<vec4<f32>, 14>;  // a, b, tol, depth
     var values: array<vec3<f32>, 14>;  // f(a), f(m), f(b)
@@ -408,9 +410,11 @@ fn adaptive_simpson(ray: Ray, p: Peak, a0: f32, b0: f32, f0: vec3<f32>, tol0: f3
         let left = (m - a) / 6.0 * (f.x + 4.0 * flm + f.y);
         let right = (b - m) / 6.0 * (f.y + 4.0 * frm + f.z);
         let delta = left + right - whole;
-        if bd.w < 0.5 || abs(delta) <= 15.0 * bd.z {
+        let allowed = 15.0 * max(bd.z, RELATIVE_FLOOR * abs(left + right));
+        if bd.w < 0.5 || *splits == 0u || abs(delta) <= allowed {
             sum += left + right + delta / 15.0;
         } else {
+            *splits -= 1u;
             // Right half below the left, so the left is taken first (the recursion's order).
             bounds[top] = vec4<f32>(m, b, 0.5 * bd.z, bd.w - 1.0);
             values[top] = vec3<f32>(f.y, frm, f.z);
@@ -432,6 +436,7 @@ fn integrate_term(kind: u32, index: u32, s_point: vec3<f32>, e_point: vec3<f32>)
     let found = find_peaks(ray);
     let tol = params.tolerance / f32(found.count);
     var sum = 0.0;
+    var splits = SPLITS;
     for (var k = 0u; k < found.count; k++) {
         let p = found.peaks[k];
         let u0 = stable_asinh((p.lo - p.center) / p.width);
@@ -444,7 +449,7 @@ fn integrate_term(kind: u32, index: u32, s_point: vec3<f32>, e_point: vec3<f32>)
             let a = u0 + width * f32(i);
             let b = a + width;
             let f = vec3<f32>(g_u(ray, p, a), g_u(ray, p, 0.5 * (a + b)), g_u(ray, p, b));
-            sum += adaptive_simpson(ray, p, a, b, f, tol / f32(PANELS));
+            sum += adaptive_simpson(ray, p, a, b, f, tol / f32(PANELS), &splits);
         }
     }
     return c * sum;

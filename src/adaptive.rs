@@ -32,6 +32,11 @@ pub const SCAN: u32 = 12;
 pub const PANELS: u32 = 8;
 /// Deepest bisection of a panel.
 pub const DEPTH: u32 = 12;
+/// Most bisections for one term, all its panels together: bounds a term's work (and its loop iterations on the
+/// GPU, which some drivers cap).
+pub const SPLITS: u32 = 200;
+/// The smallest error asked of a panel, relative to its value.
+pub const RELATIVE_FLOOR: f64 = 4e-6;
 
 /// One source's term along a ray: `(d^2, f)` at a point, f with coefficient and W series, before zeta.
 #[derive(Clone, Copy)]
@@ -222,8 +227,9 @@ fn refine(d2: &impl Fn(f64) -> f64, c: f64, h: f64, g0: f64, g1: f64, g2: f64) -
     (c, value.min(g[1]).max(0.0), a.max(0.0))
 }
 
-/// Simpson on `[a, b]` from its end and middle values, split in halves while they disagree with the whole by
-/// more than `15 tol` (Richardson), `depth` levels at most.
+/// Simpson on `[a, b]` from its end and middle values, split in halves (left first) while they disagree with the
+/// whole by more than `15 tol` (Richardson), `depth` levels at most and while `splits` lasts. The test never asks
+/// for less than `RELATIVE_FLOOR` of the panel's value: below that f32 rounding (on the GPU) would split forever.
 fn adaptive_simpson(
     g: &impl Fn(f64) -> f64,
     a: f64,
@@ -231,6 +237,7 @@ fn adaptive_simpson(
     [fa, fm, fb]: [f64; 3],
     tol: f64,
     depth: u32,
+    splits: &mut u32,
 ) -> f64 {
     let m = 0.5 * (a + b);
     let whole = (b - a) / 6.0 * (fa + 4.0 * fm + fb);
@@ -239,11 +246,13 @@ fn adaptive_simpson(
     let left = (m - a) / 6.0 * (fa + 4.0 * flm + fm);
     let right = (b - m) / 6.0 * (fm + 4.0 * frm + fb);
     let delta = left + right - whole;
-    if depth == 0 || delta.abs() <= 15.0 * tol {
+    let allowed = 15.0 * tol.max(RELATIVE_FLOOR * (left + right).abs());
+    if depth == 0 || *splits == 0 || delta.abs() <= allowed {
         return left + right + delta / 15.0;
     }
-    adaptive_simpson(g, a, m, [fa, flm, fm], 0.5 * tol, depth - 1)
-        + adaptive_simpson(g, m, b, [fm, frm, fb], 0.5 * tol, depth - 1)
+    *splits -= 1;
+    let l = adaptive_simpson(g, a, m, [fa, flm, fm], 0.5 * tol, depth - 1, splits);
+    l + adaptive_simpson(g, m, b, [fm, frm, fb], 0.5 * tol, depth - 1, splits)
 }
 
 /// The error allowed on one term's integral before its coefficient: the scene's tolerance on B shared between
@@ -272,6 +281,7 @@ fn integrate_term(term: Term, s: DVec3, e: DVec3, settings: &Integration, tol: f
     // Shared between the peaks.
     let tol = tol / count as f64;
     let mut sum = 0.0;
+    let mut splits = SPLITS;
     for p in &peaks[..count] {
         let u0 = ((p.lo - p.center) / p.width).asinh();
         let u1 = ((p.hi - p.center) / p.width).asinh();
@@ -288,7 +298,15 @@ fn integrate_term(term: Term, s: DVec3, e: DVec3, settings: &Integration, tol: f
             let a = u0 + width * i as f64;
             let b = a + width;
             let (fa, fm, fb) = (g(a), g(0.5 * (a + b)), g(b));
-            sum += adaptive_simpson(&g, a, b, [fa, fm, fb], tol / PANELS as f64, DEPTH);
+            sum += adaptive_simpson(
+                &g,
+                a,
+                b,
+                [fa, fm, fb],
+                tol / PANELS as f64,
+                DEPTH,
+                &mut splits,
+            );
         }
     }
     c * sum

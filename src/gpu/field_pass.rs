@@ -138,8 +138,11 @@ struct Packed {
 /// Loop iterations one invocation may spend: Mesa's llvmpipe and lavapipe stop all loops of an invocation after
 /// 65535 iterations in all (silently); this leaves room for the estimate's slack.
 const ITERATION_BUDGET: u64 = 30_000;
-/// Integrand evaluations the adaptive integrator typically spends on one term (scan, refinement, panels).
-const ADAPTIVE_EVALUATIONS: u64 = 600;
+/// Integrand evaluations the adaptive integrator spends on one term at most: the scan and its refinement, the
+/// panels, and two per bisection (`adaptive::SPLITS`).
+const ADAPTIVE_EVALUATIONS: u64 = 60
+    + 2 * 3 * crate::adaptive::PANELS as u64
+    + 2 * (2 * crate::adaptive::PANELS as u64 + 2 * crate::adaptive::SPLITS as u64);
 
 /// Loop iterations of one evaluation of a source's distance (a curve loops over its segments and roots).
 fn curve_iterations(segments: u32) -> u64 {
