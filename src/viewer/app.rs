@@ -18,6 +18,7 @@ use super::timeline::{self, ExportJob, Playback};
 use super::viewport::{ViewportCallback, ViewportReport, ViewportView};
 use crate::animation::{Parameter, Value};
 use crate::geometry::Camera;
+use crate::integrate::Integrator;
 use crate::scene::Scene;
 
 /// What the UI asks of the window around it.
@@ -486,10 +487,15 @@ impl ViewerApp {
             ui.label(&self.adapter);
             ui.separator();
             let w = self.doc.scene.billboard.resolution;
-            ui.label(format!(
-                "billboard {w}\u{d7}{w}, n = {}",
-                self.doc.scene.integration.divisions
-            ));
+            let i = &self.doc.scene.integration;
+            let integrator = match i.integrator {
+                Integrator::Adaptive => format!("adaptive, tolerance {:e}", i.tolerance),
+                Integrator::Simpson if i.jitter.is_some() => {
+                    format!("simpson, n = {}, jittered", i.divisions)
+                }
+                Integrator::Simpson => format!("simpson, n = {}", i.divisions),
+            };
+            ui.label(format!("billboard {w}\u{d7}{w}, {integrator}"));
             ui.separator();
             ui.label(self.doc.title());
             if let Some((text, is_error)) = &self.notice {
