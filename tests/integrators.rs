@@ -45,6 +45,15 @@ fn worst_against_twin(gpu: &mut HeadlessRenderer, scene: &Scene) -> f64 {
         .fold(0.0, f64::max)
 }
 
+/// The shipped preset `name` (file stem).
+fn preset(name: &str) -> Scene {
+    shipped()
+        .into_iter()
+        .find(|(n, _)| n == name)
+        .unwrap_or_else(|| panic!("the preset {name}"))
+        .1
+}
+
 /// The converged reference of `scene`'s brightness texture.
 fn converged(scene: &Scene) -> Vec<f64> {
     let mut s = scene.clone();
@@ -148,11 +157,7 @@ fn jittered_sampling_is_unbiased_where_fixed_samples_are_not() {
 #[test]
 fn jittered_renders_are_the_same_on_the_gpu_and_converge_to_the_reference() {
     let mut gpu = HeadlessRenderer::new().expect("a GPU adapter (lavapipe in CI)");
-    let mut scene = shipped()
-        .into_iter()
-        .find(|(n, _)| n == "divisions_torus_t4.0")
-        .expect("the division-count preset")
-        .1;
+    let mut scene = preset("divisions_torus_t4.0");
     let w = 24u32;
     scene.billboard.resolution = w;
     scene.integration.integrator = Integrator::Simpson;
@@ -204,11 +209,7 @@ fn long_integrals_are_not_cut_short_by_a_drivers_loop_limit() {
     // Mesa's llvmpipe and lavapipe stop all loops of an invocation after 65535 iterations in all, silently:
     // n = 8192 on a two-segment curve is over 200 000. The field pass splits such integrals over dispatches.
     let mut gpu = HeadlessRenderer::new().expect("a GPU adapter (lavapipe in CI)");
-    let mut scene = shipped()
-        .into_iter()
-        .find(|(n, _)| n == "bezier_b5.0")
-        .expect("the Bezier preset")
-        .1;
+    let mut scene = preset("bezier_b5.0");
     scene.billboard.resolution = 12;
     scene.integration.integrator = Integrator::Simpson;
     scene.integration.divisions = 8192;
@@ -224,11 +225,7 @@ fn the_adaptive_pass_matches_its_f64_twin_on_every_texel_of_the_mixed_scene() {
     // At the scene's own resolution rays pass within 1e-4 of the line: there f32 rounding once kept the
     // refinement splitting until the driver's loop limit cut the texel short (dark dashes along the line).
     let mut gpu = HeadlessRenderer::new().expect("a GPU adapter (lavapipe in CI)");
-    let scene = shipped()
-        .into_iter()
-        .find(|(n, _)| n == "mixed")
-        .expect("the mixed preset")
-        .1;
+    let scene = preset("mixed");
     assert_eq!(scene.integration.integrator, Integrator::Adaptive);
     let worst = worst_against_twin(&mut gpu, &scene);
     assert!(worst <= 1e-3, "worst relative difference {worst:.2e}");
