@@ -5,7 +5,13 @@ use energywave::bench::{BenchOptions, run};
 
 fn main() {
     let quick = std::env::args().any(|a| a == "--quick");
-    match run(BenchOptions { quick }, |p| eprintln!("{p}")) {
+    match run(
+        BenchOptions {
+            quick,
+            ..Default::default()
+        },
+        |p| eprintln!("{p}"),
+    ) {
         Ok(report) => print!("{}", report.table()),
         Err(e) => {
             eprintln!("benchmark failed: {e}");

@@ -59,6 +59,63 @@ pub fn paper_fps(scene: &str, resolution: u32, divisions: u32) -> Option<f64> {
 pub struct BenchOptions {
     /// Fewer frames, and the largest resolution left out: under two minutes on a 2-core software GPU.
     pub quick: bool,
+    /// The sections to run.
+    pub sections: Sections,
+}
+
+/// One part of the benchmark, for `bench --only`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum Section {
+    /// The papers' grid of resolutions and division counts.
+    Grid,
+    /// The same scene static and deforming.
+    Deformation,
+    /// The adaptive integrator against simpson at equal error.
+    EqualError,
+    /// Whole viewer frames.
+    Viewer,
+}
+
+/// Which sections run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub struct Sections {
+    pub grid: bool,
+    pub deformation: bool,
+    pub equal_error: bool,
+    pub viewer: bool,
+}
+
+impl Sections {
+    /// Every section.
+    pub const ALL: Sections = Sections {
+        grid: true,
+        deformation: true,
+        equal_error: true,
+        viewer: true,
+    };
+
+    /// Only those listed; every section for an empty list.
+    pub fn only(list: &[Section]) -> Sections {
+        if list.is_empty() {
+            return Sections::ALL;
+        }
+        Sections {
+            grid: list.contains(&Section::Grid),
+            deformation: list.contains(&Section::Deformation),
+            equal_error: list.contains(&Section::EqualError),
+            viewer: list.contains(&Section::Viewer),
+        }
+    }
+}
+
+impl Default for BenchOptions {
+    fn default() -> Self {
+        Self {
+            quick: false,
+            sections: Sections::ALL,
+        }
+    }
 }
 
 impl BenchOptions {
@@ -428,9 +485,15 @@ pub fn run(options: BenchOptions, mut progress: impl FnMut(&str)) -> Result<Repo
         ("bezier", load(BEZIER_SCENE, "bezier_b5.0.toml")),
     ];
 
+    let timestamp_queries = bench.queries.is_some();
     // The papers' grid: every cell of a resolution interleaved, frame by frame.
     let mut grid = Vec::new();
-    for &resolution in options.resolutions() {
+    let resolutions = if options.sections.grid {
+        options.resolutions()
+    } else {
+        &[]
+    };
+    for &resolution in resolutions {
         let cells: Vec<(&str, Scene)> = scenes
             .iter()
             .flat_map(|(name, base)| {
@@ -466,7 +529,12 @@ pub fn run(options: BenchOptions, mut progress: impl FnMut(&str)) -> Result<Repo
 
     // Deformation costs nothing extra: the same scene static and moving, interleaved.
     let mut deformation = Vec::new();
-    for (name, base) in &scenes {
+    let deforming: &[_] = if options.sections.deformation {
+        &scenes
+    } else {
+        &[]
+    };
+    for (name, base) in deforming {
         let mut base = base.clone();
         base.integration.integrator = Integrator::Simpson;
         base.billboard.resolution = 256;
@@ -488,10 +556,37 @@ pub fn run(options: BenchOptions, mut progress: impl FnMut(&str)) -> Result<Repo
             deforming: t.next().expect("two variants"),
         });
     }
-    let equal_error = equal_error(&mut bench, &options, &mut progress)?;
+    let equal_error = if options.sections.equal_error {
+        equal_error(&mut bench, &options, &mut progress)?
+    } else {
+        Vec::new()
+    };
     drop(bench);
+    let viewer = if options.sections.viewer {
+        Some(viewer_frames(&options, &mut progress)?)
+    } else {
+        None
+    };
 
-    // Whole viewer frames at 1280 x 720 on the default scene.
+    Ok(Report {
+        adapter,
+        timestamp_queries,
+        machine: machine(),
+        options,
+        warmup_frames: options.warmup(),
+        grid,
+        deformation,
+        viewer,
+        equal_error,
+        total_seconds: start.elapsed().as_secs_f64(),
+    })
+}
+
+/// Whole viewer frames at 1280 x 720 on the default scene: idle, and orbiting (the field integrated every frame).
+fn viewer_frames(
+    options: &BenchOptions,
+    progress: &mut impl FnMut(&str),
+) -> Result<ViewerFrameRow, GpuError> {
     progress("viewer: 1280 x 720, default scene");
     let mut viewer = OffscreenViewer::new(Document::new(Scene::default_scene(), None), 1280, 720)?;
     for _ in 0..options.warmup() {
@@ -509,25 +604,12 @@ pub fn run(options: BenchOptions, mut progress: impl FnMut(&str)) -> Result<Repo
         orbiting.push(t.elapsed().as_secs_f64() * 1e3);
         debug_assert_eq!(viewer.field_renders(), renders + 1);
     }
-    let viewer_row = ViewerFrameRow {
+    Ok(ViewerFrameRow {
         width: 1280,
         height: 720,
         scene: "default".into(),
         idle: Timing::of(idle),
         orbiting: Timing::of(orbiting),
-    };
-
-    Ok(Report {
-        adapter,
-        timestamp_queries: grid.first().is_some_and(|r| r.ours.gpu.is_some()),
-        machine: machine(),
-        options,
-        warmup_frames: options.warmup(),
-        grid,
-        deformation,
-        viewer: Some(viewer_row),
-        equal_error,
-        total_seconds: start.elapsed().as_secs_f64(),
     })
 }
 
@@ -823,7 +905,10 @@ mod tests {
             adapter: "test adapter".into(),
             timestamp_queries: true,
             machine: "test machine".into(),
-            options: BenchOptions { quick: true },
+            options: BenchOptions {
+                quick: true,
+                ..Default::default()
+            },
             warmup_frames: 1,
             grid: vec![GridRow {
                 scene: "torus".into(),

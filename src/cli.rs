@@ -43,6 +43,9 @@ pub struct BenchArgs {
     /// Also write every figure, with its unit, the adapter and the settings, as JSON.
     #[arg(long)]
     pub json: Option<PathBuf>,
+    /// Run only these sections (comma-separated or repeated); all of them by default.
+    #[arg(long, value_enum, value_delimiter = ',')]
+    pub only: Vec<crate::bench::Section>,
 }
 
 #[derive(Debug, Default, clap::Args)]
@@ -274,9 +277,13 @@ fn bench(args: &BenchArgs) -> Result<(), CliError> {
             )));
         }
     }
-    let report = crate::bench::run(crate::bench::BenchOptions { quick: args.quick }, |p| {
-        eprintln!("{p}")
-    })?;
+    let report = crate::bench::run(
+        crate::bench::BenchOptions {
+            quick: args.quick,
+            sections: crate::bench::Sections::only(&args.only),
+        },
+        |p| eprintln!("{p}"),
+    )?;
     print!("{}", report.table());
     if let Some(path) = &args.json {
         output::write_atomically(path, report.to_json().as_bytes())?;

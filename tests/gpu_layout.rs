@@ -88,13 +88,13 @@ fn rust_mirrors_match_the_wgsl_layouts() {
         "FieldParams",
         size_of::<FieldParams>(),
         fields!(FieldParams: center, size, right, resolution, up, divisions, eye, nu, alpha, beta, epsilon,
-            point_count, line_count, torus_count, curve_count, integrator, tolerance, jitter, seed, pad0),
+            point_count, line_count, torus_count, curve_count, integrator, tolerance, jitter, seed, gauss_order),
     );
     check_struct(
         &field,
         "Chunk",
         size_of::<Chunk>(),
-        fields!(Chunk: first, count, accumulate, pad0),
+        fields!(Chunk: first, count, accumulate, pipeline),
     );
     check_struct(
         &field,

@@ -39,7 +39,7 @@ pub mod gpu_data {
         pub tolerance: f32,   // 96: per term, before its coefficient (adaptive::term_tolerance)
         pub jitter: u32,      // 100
         pub seed: u32,        // 104
-        pub pad0: u32,        // 108
+        pub gauss_order: u32, // 108: adaptive: Gauss-Legendre nodes (adaptive::gauss_order)
     }
     const _: () = assert!(size_of::<FieldParams>() == 112);
 
@@ -50,7 +50,7 @@ pub mod gpu_data {
         pub first: u32,      // 0
         pub count: u32,      // 4
         pub accumulate: u32, // 8
-        pub pad0: u32,       // 12
+        pub pipeline: u32, // 12: which of `FieldRenderer`'s pipelines runs it (read on the CPU only)
     }
     const _: () = assert!(size_of::<Chunk>() == 16);
 
@@ -138,52 +138,72 @@ struct Packed {
 /// Loop iterations one invocation may spend: Mesa's llvmpipe and lavapipe stop all loops of an invocation after
 /// 65535 iterations in all (silently); this leaves room for the estimate's slack.
 const ITERATION_BUDGET: u64 = 30_000;
-/// Integrand evaluations the adaptive integrator spends on one term at most: the scan and its refinement, the
-/// panels, and two per bisection (`adaptive::SPLITS`).
-const ADAPTIVE_EVALUATIONS: u64 = 60
+/// Loop iterations the adaptive integrator spends on a curve's term at most, per evaluation of its distance: the
+/// scan and its refinement, the panels, and two per bisection (`adaptive::SPLITS`).
+const CURVE_EVALUATIONS: u64 = 60
     + 2 * 3 * crate::adaptive::PANELS as u64
     + 2 * (2 * crate::adaptive::PANELS as u64 + 2 * crate::adaptive::SPLITS as u64);
+/// Loop iterations of a point's, a line's or a torus's term at most: Newton on the ring, then three pieces of
+/// three cuts, each of at most `MAX_GAUSS_PANELS` rules of 8 pairs.
+const SMOOTH_ITERATIONS: u64 = 20 + 3 * 3 * crate::adaptive::MAX_GAUSS_PANELS as u64 * 8;
 
 /// Loop iterations of one evaluation of a source's distance (a curve loops over its segments and roots).
 fn curve_iterations(segments: u32) -> u64 {
     1 + 12 * segments as u64
 }
 
+/// The pipelines: simpson's, the adaptive integrator's for points, lines and tori, and for curves.
+const SIMPSON: u32 = 0;
+const ADAPTIVE_SMOOTH: u32 = 1;
+const ADAPTIVE_CURVES: u32 = 2;
+
 /// Splits the integration into dispatches that each stay within `ITERATION_BUDGET` loop iterations a texel.
 fn plan_chunks(p: &Packed) -> Vec<Chunk> {
-    let chunk = |first: u32, count: u32, k: usize| Chunk {
+    let chunk = |first: u32, count: u32, k: usize, pipeline: u32| Chunk {
         first,
         count,
         accumulate: (k > 0) as u32,
-        pad0: 0,
+        pipeline,
     };
-    let terms: Vec<u64> = (0..p.params.point_count + p.params.line_count + p.params.torus_count)
-        .map(|_| 1)
-        .chain(p.curves.iter().map(|c| curve_iterations(c.segment_count)))
+    let smooth = p.params.point_count + p.params.line_count + p.params.torus_count;
+    let curves: Vec<u64> = p
+        .curves
+        .iter()
+        .map(|c| curve_iterations(c.segment_count))
         .collect();
     if p.params.integrator == 0 {
         // Simpson: ranges of samples, each sample costing a walk over every source.
-        let per_sample = 4 + terms.iter().sum::<u64>();
+        let per_sample = 4 + smooth as u64 + curves.iter().sum::<u64>();
         let samples = p.params.divisions + 1;
         let per_chunk = (ITERATION_BUDGET / per_sample).clamp(1, samples as u64) as u32;
-        (0..samples.div_ceil(per_chunk))
-            .map(|k| chunk(k * per_chunk, per_chunk, k as usize))
-            .collect()
-    } else {
-        // Adaptive: ranges of terms.
-        let mut chunks = Vec::new();
-        let (mut first, mut cost) = (0u32, 0u64);
-        for (t, &c) in terms.iter().enumerate() {
-            let c = ADAPTIVE_EVALUATIONS * (c + 1);
-            if cost > 0 && cost + c > ITERATION_BUDGET {
-                chunks.push(chunk(first, t as u32 - first, chunks.len()));
-                (first, cost) = (t as u32, 0);
-            }
-            cost += c;
-        }
-        chunks.push(chunk(first, terms.len() as u32 - first, chunks.len()));
-        chunks
+        return (0..samples.div_ceil(per_chunk))
+            .map(|k| chunk(k * per_chunk, per_chunk, k as usize, SIMPSON))
+            .collect();
     }
+    // Adaptive: ranges of terms, the points, lines and tori first, then the curves, each on its pipeline.
+    let costs = (0..smooth)
+        .map(|_| (SMOOTH_ITERATIONS, ADAPTIVE_SMOOTH))
+        .chain(
+            curves
+                .iter()
+                .map(|&c| (CURVE_EVALUATIONS * (c + 1), ADAPTIVE_CURVES)),
+        );
+    let mut chunks = Vec::new();
+    let (mut first, mut cost, mut pipeline) = (0u32, 0u64, ADAPTIVE_SMOOTH);
+    for (t, (c, kind)) in costs.enumerate() {
+        let t = t as u32;
+        if t > first && (cost + c > ITERATION_BUDGET || kind != pipeline) {
+            chunks.push(chunk(first, t - first, chunks.len(), pipeline));
+            (first, cost) = (t, 0);
+        }
+        pipeline = kind;
+        cost += c;
+    }
+    let total = smooth + p.params.curve_count;
+    if total > first || chunks.is_empty() {
+        chunks.push(chunk(first, total - first, chunks.len(), pipeline));
+    }
+    chunks
 }
 
 fn v3(v: glam::DVec3) -> [f32; 3] {
@@ -217,7 +237,7 @@ fn pack(scene: &Scene, billboard: &Billboard) -> Packed {
             tolerance: crate::adaptive::term_tolerance(s, i.tolerance) as f32,
             jitter: i.jitter.is_some() as u32,
             seed: i.jitter.unwrap_or(0),
-            pad0: 0,
+            gauss_order: crate::adaptive::gauss_order(i.tolerance),
         },
         points: (s.points.iter())
             .map(|p| PointSource {
@@ -320,7 +340,7 @@ impl StorageBuffer {
 /// The field pass: its pipelines (one per integrator) and the GPU copies of one scene's data.
 pub struct FieldRenderer {
     /// `integrate` (simpson) and `integrate_adaptive`, indexed by `FieldParams::integrator`.
-    pipelines: [wgpu::ComputePipeline; 2],
+    pipelines: [wgpu::ComputePipeline; 3],
     layout: wgpu::BindGroupLayout,
     params: wgpu::Buffer,
     /// The chunks, one per `chunk_stride` bytes (bound with a dynamic offset).
@@ -397,7 +417,12 @@ impl FieldRenderer {
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-        let pipelines = ["integrate", "integrate_adaptive"].map(|entry| {
+        let pipelines = [
+            "integrate",
+            "integrate_adaptive",
+            "integrate_adaptive_curves",
+        ]
+        .map(|entry| {
             device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                 label: Some(entry),
                 layout: Some(&pipeline_layout),
@@ -565,8 +590,8 @@ impl FieldRenderer {
             label: Some("energywave.field.pass"),
             timestamp_writes: timestamps,
         });
-        pass.set_pipeline(&self.pipelines[packed.params.integrator as usize]);
-        for k in 0..packed.chunks.len() {
+        for (k, c) in packed.chunks.iter().enumerate() {
+            pass.set_pipeline(&self.pipelines[c.pipeline as usize]);
             pass.set_bind_group(0, bind_group, &[(k as u64 * self.chunk_stride) as u32]);
             pass.dispatch_workgroups(w.div_ceil(8), w.div_ceil(8), 1);
         }
