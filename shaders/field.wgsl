@@ -730,12 +730,16 @@ fn integrate_curve_term(index: u32, s_point: vec3<f32>, e_point: vec3<f32>) -> f
         if u1 <= u0 {
             continue;
         }
+        // Neighbouring panels share their end value.
         let width = (u1 - u0) / f32(PANELS);
+        var fa = curve_g(ray, p, u0);
         for (var i = 0u; i < PANELS; i++) {
             let a = u0 + width * f32(i);
             let b = a + width;
-            let f = vec3<f32>(curve_g(ray, p, a), curve_g(ray, p, 0.5 * (a + b)), curve_g(ray, p, b));
+            let fb = curve_g(ray, p, b);
+            let f = vec3<f32>(fa, curve_g(ray, p, 0.5 * (a + b)), fb);
             sum += adaptive_simpson(ray, p, a, b, f, tol / f32(PANELS), &splits);
+            fa = fb;
         }
     }
     return coefficient * sum;

@@ -544,11 +544,13 @@ fn integrate_term(term: Term, s: DVec3, e: DVec3, settings: &Integration, tol: f
             f(t) * p.width * u.cosh()
         };
         if curve {
+            // Neighbouring panels share their end value.
             let width = (u1 - u0) / PANELS as f64;
+            let mut fa = g(u0);
             for i in 0..PANELS {
                 let a = u0 + width * i as f64;
                 let b = a + width;
-                let (fa, fm, fb) = (g(a), g(0.5 * (a + b)), g(b));
+                let (fm, fb) = (g(0.5 * (a + b)), g(b));
                 sum += adaptive_simpson(
                     &g,
                     a,
@@ -558,6 +560,7 @@ fn integrate_term(term: Term, s: DVec3, e: DVec3, settings: &Integration, tol: f
                     DEPTH,
                     &mut splits,
                 );
+                fa = fb;
             }
             continue;
         }
