@@ -29,7 +29,7 @@ const MIXED_SCENE: &str = include_str!("../assets/scenes/mixed.toml");
 /// The converged reference of the equal-error comparison: f64 Simpson with this many divisions.
 pub const REFERENCE_DIVISIONS: u32 = 4096;
 /// The adaptive tolerances tried, cheapest first, for the equal-error comparison.
-const TOLERANCES: [f64; 7] = [1e-3, 3e-4, 1e-4, 3e-5, 1e-5, 3e-6, 1e-6];
+const TOLERANCES: [f64; 9] = [1e-2, 3e-3, 1e-3, 3e-4, 1e-4, 3e-5, 1e-5, 3e-6, 1e-6];
 
 const RESOLUTIONS: [u32; 3] = [128, 256, 512];
 const DIVISIONS: [u32; 3] = [64, 128, 256];
