@@ -193,8 +193,8 @@ fn integrate(@builtin(global_invocation_id) id: vec3<u32>) {
 const KIND_POINT: u32 = 0u;
 const KIND_LINE: u32 = 1u;
 const KIND_TORUS: u32 = 2u;
-const SCAN: u32 = 8u;
-const PANELS: u32 = 8u;
+const SCAN: u32 = 6u;
+const PANELS: u32 = 6u;
 const DEPTH: u32 = 12u;
 const SPLITS: u32 = 200u;
 const RELATIVE_FLOOR: f32 = 4e-6;
@@ -624,7 +624,7 @@ fn refine(ray: Ray, c0: f32, h: f32, g0: f32, g1: f32, g2: f32) -> vec3<f32> {
 fn curve_features(ray: Ray) -> Peaks {
     var out: Peaks;
     let step = 1.0 / f32(SCAN);
-    var g: array<f32, 9>;
+    var g: array<f32, 7>;  // SCAN + 1
     for (var i = 0u; i <= SCAN; i++) {
         g[i] = curve_d2(ray, f32(i) * step);
     }
@@ -668,10 +668,12 @@ fn curve_features(ray: Ray) -> Peaks {
 
 // A curve's integrand in u: f(s(u)) ds/du, f = w / max(eps, d) zeta(s).
 fn curve_g(ray: Ray, p: Peak, u: f32) -> f32 {
-    let t = clamp(p.center + p.width * sinh(u), p.lo, p.hi);
+    // sinh and cosh from one exp.
+    let e = exp(u);
+    let t = clamp(p.center + p.width * 0.5 * (e - 1.0 / e), p.lo, p.hi);
     let c = curves[ray.index];
     let n = curve_nearest(c, ray.start + ray.dir * t);
-    return wseries(c, n.x) * falloff(n.y, params.epsilon) * zeta_at(t) * p.width * cosh(u);
+    return wseries(c, n.x) * falloff(n.y, params.epsilon) * zeta_at(t) * p.width * 0.5 * (e + 1.0 / e);
 }
 
 // Adaptive Simpson on [a, b] in u, iterative with an explicit stack. Twin of adaptive_simpson.

@@ -41,9 +41,9 @@ use crate::field::{Sources, curve, falloff, line_distance, torus_distance, wseri
 use crate::integrate::{Integration, zeta};
 
 /// Intervals of the scan that locates a torus's or a curve's closest approaches.
-pub const SCAN: u32 = 8;
+pub const SCAN: u32 = 6;
 /// Simpson panels in u per piece of a curve before any refinement.
-pub const PANELS: u32 = 8;
+pub const PANELS: u32 = 6;
 /// Deepest bisection of a panel.
 pub const DEPTH: u32 = 12;
 /// Most bisections for one term, all its panels together: bounds a term's work (and its loop iterations on the
