@@ -46,7 +46,7 @@ struct Chunk {
     pipeline: u32,    // the entry point that runs it (read on the CPU only)
 }
 
-@group(0) @binding(8) var<uniform> chunk: Chunk;
+@group(0) @binding(8) var<storage, read> chunk: Chunk;
 
 fn store(id: vec2<u32>, value: f32) {
     var v = value;
@@ -581,8 +581,9 @@ fn integrate_adaptive(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let seg = texel_segment(id.xy);
     var b = 0.0;
-    let last = min(chunk.first + chunk.count, params.point_count + params.line_count + params.torus_count);
-    for (var t = chunk.first; t < last; t++) {
+    // The range holds points, lines and tori only (gpu::field_pass::plan_chunks); its bounds come from the chunk
+    // alone, a storage buffer, so no driver specialises the shader for them.
+    for (var t = chunk.first; t < chunk.first + chunk.count; t++) {
         var index = t;
         var kind = KIND_POINT;
         if index >= params.point_count {
@@ -756,8 +757,8 @@ fn integrate_adaptive_curves(@builtin(global_invocation_id) id: vec3<u32>) {
     let seg = texel_segment(id.xy);
     let first_curve = params.point_count + params.line_count + params.torus_count;
     var b = 0.0;
-    let last = min(chunk.first + chunk.count, first_curve + params.curve_count);
-    for (var t = max(chunk.first, first_curve); t < last; t++) {
+    // The range holds curves only (gpu::field_pass::plan_chunks).
+    for (var t = chunk.first; t < chunk.first + chunk.count; t++) {
         b += integrate_curve_term(t - first_curve, seg[0], seg[1]);
     }
     store(id.xy, b);

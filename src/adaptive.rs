@@ -13,27 +13,30 @@
 //! **Features.** A term's integrand needs samples where it bends sharply; each such place is a feature
 //! (center and width in s):
 //! - points and lines: the closest approach, in closed form (d^2 is quadratic in s);
-//! - tori and curves: the local minima of d^2 on a scan of `SCAN + 1` samples (the two deepest: a ray can pass
-//!   close to a ring twice), each refined by one parabolic step;
-//! - tori also have their axis: the distance to the ring is `sqrt((rho - R)^2 + z^2)` with `rho` the distance from
-//!   the axis, and rho along a ray is a hyperbola, `sqrt(rho*^2 + a (s - s*)^2)`, a kink where the ray crosses the
-//!   axis. It is a feature of width `rho* / sqrt(a)` at the ray's closest approach to the axis.
+//! - tori: the distance to the ring is `sqrt((rho - R)^2 + z^2)` with `rho` the distance from the axis. Along a
+//!   ray `rho^2` is quadratic and z linear, so `d^2` and its derivatives are closed forms (`Ring`). rho is a
+//!   hyperbola, `sqrt(rho*^2 + a (s - s*)^2)`, with a kink where the ray crosses the axis: that is a feature of
+//!   width `rho* / sqrt(a)`, and on either side of it Newton's method finds the ring's closest approach (a ray
+//!   can pass close to a ring twice, once on each side), with no sampling;
+//! - curves: the local minima of d^2 on a scan of `SCAN + 1` samples (the two deepest), each refined by one
+//!   parabolic step.
 //!
-//! The features, sorted along the ray, share it into pieces: each piece is mapped around its feature, and two
-//! neighbours meet where their maps are equally dense (`share_ray`). Where a point, a line or a
-//! torus comes closer than eps, the falloff's flat top `1 / eps` has a kink at each end; the piece is cut there
-//! too (exactly for points and lines, where d^2 is exactly quadratic).
+//! The features, sorted along the ray, share it into pieces: each stretch of the ray goes to the feature whose map
+//! is densest there (`share_ray`), so a narrow peak keeps its shoulders beside a broad feature. Where a point, a
+//! line or a torus comes closer than eps, the falloff's flat top `1 / eps` has a kink at each end; the piece is
+//! cut there too (exactly for points and lines, where d^2 is exactly quadratic).
 //!
 //! **Rules.** Points, lines and tori: in u each cut of a piece is smooth (analytic), and Gauss-Legendre with
 //! `gauss_order(tolerance)` nodes (6 to 16) on each `U_PANEL` of u converges geometrically; the order grows as
-//! the tolerance shrinks (measured: the papers' torus, with 10 nodes, is within 2e-7 of the converged f64 value
-//! in every texel). Curves: the nearest point of a chain jumps where the ray crosses the chain's medial surface,
-//! a kink in d (and a step in W) that no fixed rule converges over, so a curve's pieces are integrated by
-//! adaptive Simpson, `PANELS` panels each bisected (at most `DEPTH` times) while its halves disagree with it by
-//! more than the tolerance allows. The tolerance is shared between the sources in proportion to their
-//! coefficients, so it bounds the whole of B, however many sources there are.
+//! the tolerance shrinks (measured: on the papers' torus, 10 nodes are within 2e-7 of the converged f64 value in
+//! every texel, with about 19 evaluations of the torus a ray against Simpson's 201). Curves: the nearest point
+//! of a chain jumps where the ray crosses the chain's medial surface, a kink in d (and a step in W) that no fixed
+//! rule converges over, so a curve's pieces are integrated by adaptive Simpson, `PANELS` panels each bisected
+//! (at most `DEPTH` times) while its halves disagree with it by more than the tolerance allows. The tolerance is
+//! shared between the curves and every other source in proportion to their coefficients.
 //!
-//! `shaders/field.wgsl` (`integrate_adaptive`) is the f32 twin of this file.
+//! `shaders/field.wgsl` is the f32 twin of this file: `integrate_adaptive` for points, lines and tori and
+//! `integrate_adaptive_curves` for curves, dispatched apart (`gpu::field_pass::plan_chunks`).
 
 use glam::DVec3;
 

@@ -289,12 +289,12 @@ fn pack(scene: &Scene, billboard: &Billboard) -> Packed {
     packed
 }
 
-/// A uniform buffer for `count` chunks, `stride` bytes apart.
+/// A storage buffer for `count` chunks, `stride` bytes apart.
 fn chunk_buffer(device: &wgpu::Device, stride: u64, count: usize) -> wgpu::Buffer {
     device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("energywave.field.chunks"),
         size: stride * count.max(1) as u64,
-        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     })
 }
@@ -400,11 +400,14 @@ impl FieldRenderer {
                     },
                     count: None,
                 },
+                // A read-only storage buffer rather than a uniform one: lavapipe recompiles a shader for the
+                // values of uniforms that bound its loops (to unroll them), and a chunk's range bounds the term
+                // loop, so every new range meant a new compile (seconds each, minutes for some).
                 wgpu::BindGroupLayoutEntry {
                     binding: 8,
                     visibility: wgpu::ShaderStages::COMPUTE,
                     ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
+                        ty: wgpu::BufferBindingType::Storage { read_only: true },
                         has_dynamic_offset: true,
                         min_binding_size: wgpu::BufferSize::new(size_of::<Chunk>() as u64),
                     },
@@ -447,7 +450,7 @@ impl FieldRenderer {
             "energywave.field.weights",
         ]
         .map(|label| StorageBuffer::new(device, label, &[]));
-        let chunk_stride = (device.limits().min_uniform_buffer_offset_alignment as u64)
+        let chunk_stride = (device.limits().min_storage_buffer_offset_alignment as u64)
             .max(size_of::<Chunk>() as u64);
         Self {
             pipelines,
@@ -627,5 +630,99 @@ impl FieldRenderer {
     /// Forgets the uploaded scene, so the next `prepare` re-renders.
     pub fn invalidate(&mut self) {
         self.uploaded = None;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::field::{Curve, Point, Torus};
+    use glam::DVec3;
+
+    /// A scene of `points` points, one torus and curves of the given segment counts.
+    fn scene(points: usize, curves: &[usize], integrator: Integrator) -> Packed {
+        let mut s = Scene::default_scene();
+        s.sources.points = (0..points)
+            .map(|i| Point {
+                position: DVec3::new(i as f64, 0.0, 0.0),
+                coefficient: 1.0,
+            })
+            .collect();
+        s.sources.lines.clear();
+        s.sources.tori = vec![Torus {
+            center: DVec3::ZERO,
+            axis: DVec3::Z,
+            major_radius: 1.0,
+            coefficient: 1.0,
+        }];
+        s.sources.curves = curves
+            .iter()
+            .map(|&k| Curve {
+                control_points: (0..=2 * k)
+                    .map(|i| DVec3::new(i as f64, 1.0, 0.0))
+                    .collect(),
+                coefficient: 1.0,
+                weights: vec![1.0],
+            })
+            .collect();
+        s.integration.integrator = integrator;
+        pack(&s, &s.place_billboard(1.0))
+    }
+
+    /// Every term exactly once, in order; the first dispatch writes and the others add.
+    fn check_cover(p: &Packed, terms: u32) {
+        let mut next = 0;
+        for (k, c) in p.chunks.iter().enumerate() {
+            assert_eq!(c.first, next, "chunk {k} starts where the last ended");
+            assert!(c.count > 0 || terms == 0);
+            assert_eq!(c.accumulate, (k > 0) as u32);
+            next += c.count;
+        }
+        assert_eq!(next, terms);
+    }
+
+    #[test]
+    fn adaptive_dispatches_run_points_lines_and_tori_apart_from_curves_within_the_budget() {
+        let p = scene(2, &[1, 2, 40], Integrator::Adaptive);
+        check_cover(&p, 6);
+        for c in &p.chunks {
+            let last = c.first + c.count;
+            // Points and the torus (terms 0..3) on the Gauss-Legendre pipeline, curves on their own.
+            let want = if last <= 3 {
+                ADAPTIVE_SMOOTH
+            } else {
+                assert!(c.first >= 3, "a dispatch mixes the two families: {c:?}");
+                ADAPTIVE_CURVES
+            };
+            assert_eq!(c.pipeline, want, "{c:?}");
+            // A dispatch of several curves stays within the budget.
+            if c.pipeline == ADAPTIVE_CURVES && c.count > 1 {
+                let cost: u64 = (c.first..last)
+                    .map(|t| p.curves[(t - 3) as usize].segment_count)
+                    .map(|k| CURVE_EVALUATIONS * (curve_iterations(k) + 1))
+                    .sum();
+                assert!(cost <= ITERATION_BUDGET, "{c:?} costs {cost}");
+            }
+        }
+        // The 40-segment chain costs more than the budget alone: it has a dispatch of its own.
+        assert!(p.chunks.iter().any(|c| c.first == 5 && c.count == 1));
+        assert!(p.chunks.len() >= 3);
+    }
+
+    #[test]
+    fn simpson_dispatches_are_ranges_of_samples_on_its_pipeline() {
+        let p = scene(1, &[2], Integrator::Simpson);
+        check_cover(&p, p.params.divisions + 1);
+        assert!(p.chunks.iter().all(|c| c.pipeline == SIMPSON));
+    }
+
+    #[test]
+    fn a_scene_without_sources_still_writes_the_texture() {
+        let mut p = scene(0, &[], Integrator::Adaptive);
+        p.params.torus_count = 0;
+        p.tori.clear();
+        let chunks = plan_chunks(&p);
+        assert_eq!(chunks.len(), 1);
+        assert_eq!((chunks[0].count, chunks[0].accumulate), (0, 0));
     }
 }
