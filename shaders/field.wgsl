@@ -26,7 +26,7 @@ struct FieldParams {
     gauss_order: u32,   // adaptive: Gauss-Legendre nodes per panel for points, lines and tori (6, 8, 10, 12, 16)
 }
 
-@group(0) @binding(0) var<uniform> params: FieldParams;
+@group(0) @binding(0) var<storage, read> params: FieldParams;
 @group(0) @binding(1) var<storage, read> points: array<PointSource>;
 @group(0) @binding(2) var<storage, read> lines: array<LineSource>;
 @group(0) @binding(3) var<storage, read> tori: array<TorusSource>;

@@ -377,8 +377,11 @@ impl FieldRenderer {
                 wgpu::BindGroupLayoutEntry {
                     binding: 0,
                     visibility: wgpu::ShaderStages::COMPUTE,
+                    // Read-only storage, like the chunks (binding 8): lavapipe specialises a shader for the
+                    // values of the uniforms its loops and branches depend on, a compile (and its memory) for
+                    // every new scene.
                     ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
+                        ty: wgpu::BufferBindingType::Storage { read_only: true },
                         has_dynamic_offset: false,
                         min_binding_size: wgpu::BufferSize::new(size_of::<FieldParams>() as u64),
                     },
@@ -438,7 +441,7 @@ impl FieldRenderer {
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("energywave.field.params"),
             size: size_of::<FieldParams>() as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
         let buffers = [
