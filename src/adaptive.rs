@@ -499,10 +499,10 @@ pub fn term_tolerance(sources: &Sources, tolerance: f64) -> f64 {
 }
 
 /// The cuts of a piece in u: its ends and, for a source closer than eps, the ends of the falloff's flat top.
-fn cuts(p: &Peak, u0: f64, u1: f64, cut_flat: bool) -> ([f64; 4], usize) {
+fn cuts(p: &Peak, u0: f64, u1: f64) -> ([f64; 4], usize) {
     let mut out = [u0, u1, u1, u1];
     let mut n = 2;
-    if cut_flat && p.flat > 0.0 {
+    if p.flat > 0.0 {
         let k = (p.flat / p.width).asinh();
         n = 1;
         for u in [-k, k] {
@@ -567,7 +567,7 @@ fn integrate_term(term: Term, s: DVec3, e: DVec3, settings: &Integration, tol: f
             }
             continue;
         }
-        let (cut, n) = cuts(p, u0, u1, true);
+        let (cut, n) = cuts(p, u0, u1);
         for w in cut[..n].windows(2) {
             let (a, b) = (w[0], w[1]);
             let panels = ((b - a) / U_PANEL)
