@@ -20,7 +20,7 @@ struct FieldParams {
     torus_count: u32,
     curve_count: u32,
     integrator: u32,    // 0: simpson, 1: adaptive
-    tolerance: f32,     // adaptive: error allowed on a term's integral before its coefficient
+    pad0: f32,
     jitter: u32,        // simpson: 1 for the randomly shifted rectangle rule
     seed: u32,
     gauss_order: u32,   // adaptive: Gauss-Legendre nodes per panel for points, lines and tori (6, 8, 10, 12, 16)
@@ -194,10 +194,6 @@ const KIND_POINT: u32 = 0u;
 const KIND_LINE: u32 = 1u;
 const KIND_TORUS: u32 = 2u;
 const SCAN: u32 = 6u;
-const PANELS: u32 = 6u;
-const DEPTH: u32 = 12u;
-const SPLITS: u32 = 200u;
-const RELATIVE_FLOOR: f32 = 4e-6;
 const MAX_WIDTH: f32 = 4.0;
 const MIN_AXIS_WIDTH: f32 = 1e-4;
 const U_PANEL: f32 = 4.0;
@@ -502,28 +498,83 @@ fn smooth_f(ray: Ray, p: Peak, t_in: f32) -> f32 {
     return falloff(d, params.epsilon) * zeta_at(t);
 }
 
-// Gauss-Legendre on [a, b] in u, params.gauss_order nodes. Twin of gauss_legendre. The nodes come in pairs
-// c -+ r x, whose exponentials are exp(c) / exp(r x) and exp(c) exp(r x): one exp a pair, no sinh or cosh.
-fn gauss_legendre(ray: Ray, p: Peak, a: f32, b: f32) -> f32 {
+// The Gauss-Legendre pairs of the rule of params.gauss_order nodes: [first, last) in GAUSS.
+fn gauss_pairs() -> vec2<u32> {
     let first = gauss_start(params.gauss_order);
-    let last = first + select(8u, params.gauss_order / 2u, first < 18u);
+    return vec2<u32>(first, first + select(8u, params.gauss_order / 2u, first < 18u));
+}
+
+// The k-th pair of Gauss-Legendre nodes on [a, b] in u, mapped to s by p's map: (s, weight) of the node
+// c - r x and of c + r x, the weights with ds/du = h cosh(u) and the panel's half width r. A pair's
+// exponentials are exp(c) / exp(r x) and exp(c) exp(r x): one exp a pair (and one for c), no sinh or cosh.
+fn gauss_pair(p: Peak, a: f32, b: f32, k: u32) -> vec4<f32> {
     let c = 0.5 * (a + b);
     let r = 0.5 * (b - a);
+    let xw = GAUSS[k];
     let ec = exp(c);
+    let ex = exp(r * xw.x);
+    let hi = ec * ex;
+    let lo = ec / ex;
+    let w = xw.y * r * p.width;
+    return vec4<f32>(
+        p.center + p.width * 0.5 * (lo - 1.0 / lo),
+        w * 0.5 * (lo + 1.0 / lo),
+        p.center + p.width * 0.5 * (hi - 1.0 / hi),
+        w * 0.5 * (hi + 1.0 / hi),
+    );
+}
+
+// Gauss-Legendre on [a, b] in u of a point's, a line's or a torus's term. Twin of gauss_legendre.
+fn gauss_legendre(ray: Ray, p: Peak, a: f32, b: f32) -> f32 {
+    let pairs = gauss_pairs();
     var sum = 0.0;
-    for (var k = first; k < last; k++) {
-        let xw = GAUSS[k];
-        let ex = exp(r * xw.x);
-        let hi = ec * ex;
-        let lo = ec / ex;
-        // sinh and cosh of c + r x (hi) and c - r x (lo).
-        let sh = 0.5 * (hi - 1.0 / hi);
-        let ch = 0.5 * (hi + 1.0 / hi);
-        let sl = 0.5 * (lo - 1.0 / lo);
-        let cl = 0.5 * (lo + 1.0 / lo);
-        sum += xw.y * (smooth_f(ray, p, p.center + p.width * sl) * cl + smooth_f(ray, p, p.center + p.width * sh) * ch);
+    for (var k = pairs.x; k < pairs.y; k++) {
+        let n = gauss_pair(p, a, b, k);
+        sum += n.y * smooth_f(ray, p, n.x) + n.w * smooth_f(ray, p, n.z);
     }
-    return r * p.width * sum;
+    return sum;
+}
+
+// The cuts of a piece in u, sorted: its ends, for a source closer than eps the ends of the falloff's flat top,
+// and the kinks (in s) inside the piece. Twin of cuts.
+struct Cuts {
+    at: array<f32, 12>,  // 4 + MAX_KINKS
+    count: u32,
+}
+
+fn piece_cuts(p: Peak, u0: f32, u1: f32, kinks: array<f32, 8>, kink_count: u32) -> Cuts {
+    var out: Cuts;
+    out.at[0] = u0;
+    out.count = 1u;
+    var inner: array<f32, 10>;  // 2 + MAX_KINKS
+    var n = 0u;
+    if p.flat > 0.0 {
+        let kf = stable_asinh(p.flat / p.width);
+        inner[0] = -kf;
+        inner[1] = kf;
+        n = 2u;
+    }
+    for (var i = 0u; i < kink_count; i++) {
+        inner[n] = stable_asinh((kinks[i] - p.center) / p.width);
+        n++;
+    }
+    // Those inside (u0, u1), in order (insertion sort).
+    for (var i = 0u; i < n; i++) {
+        let u = inner[i];
+        if !(u > u0 && u < u1) {
+            continue;
+        }
+        var j = out.count;
+        while j > 1u && out.at[j - 1u] > u {
+            out.at[j] = out.at[j - 1u];
+            j--;
+        }
+        out.at[j] = u;
+        out.count++;
+    }
+    out.at[out.count] = u1;
+    out.count++;
+    return out;
 }
 
 // A point's, a line's or a torus's term of B over its pieces. Twin of integrate_term.
@@ -534,6 +585,7 @@ fn integrate_smooth_term(kind: u32, index: u32, s_point: vec3<f32>, e_point: vec
     }
     let ray = Ray(s_point, e_point - s_point, kind, index);
     let found = smooth_features(ray);
+    var no_kinks: array<f32, 8>;
     var sum = 0.0;
     for (var k = 0u; k < found.count; k++) {
         let p = found.peaks[k];
@@ -542,26 +594,10 @@ fn integrate_smooth_term(kind: u32, index: u32, s_point: vec3<f32>, e_point: vec
         if u1 <= u0 {
             continue;
         }
-        // The cuts: the piece's ends and, closer than eps, the ends of the falloff's flat top. Twin of cuts.
-        var cut = array<f32, 4>(u0, u1, u1, u1);
-        var n = 2u;
-        if p.flat > 0.0 {
-            let kf = stable_asinh(p.flat / p.width);
-            n = 1u;
-            if -kf > u0 && -kf < u1 {
-                cut[n] = -kf;
-                n += 1u;
-            }
-            if kf > u0 && kf < u1 {
-                cut[n] = kf;
-                n += 1u;
-            }
-            cut[n] = u1;
-            n += 1u;
-        }
-        for (var j = 0u; j + 1u < n; j++) {
-            let a = cut[j];
-            let b = cut[j + 1u];
+        let cut = piece_cuts(p, u0, u1, no_kinks, 0u);
+        for (var j = 0u; j + 1u < cut.count; j++) {
+            let a = cut.at[j];
+            let b = cut.at[j + 1u];
             let panels = u32(clamp(ceil((b - a) / U_PANEL), 1.0, f32(MAX_GAUSS_PANELS)));
             let width = (b - a) / f32(panels);
             for (var i = 0u; i < panels; i++) {
@@ -599,150 +635,437 @@ fn integrate_adaptive(@builtin(global_invocation_id) id: vec3<u32>) {
     store(id.xy, b);
 }
 
-// -- Curves: adaptive Simpson in u.
+// -- Curves: Gauss-Legendre in u between the chain's kinks.
 
-// A curve's squared distance at t along the ray.
-fn curve_d2(ray: Ray, t: f32) -> f32 {
-    let d = curve_nearest(curves[ray.index], ray.start + ray.dir * t).y;
-    return d * d;
+const JUMP: f32 = 0.1;
+const KINK_ROUNDS: u32 = 4u;
+const KINK_BRACKET: f32 = 1e-3;
+const KINK_PROBE: f32 = 0.05;
+const MAX_KINKS: u32 = 8u;
+const PEAK_NEWTON: u32 = 2u;
+const PEAK_SETTLED: f32 = 0.25;
+
+// A chain's nearest point to the ray's point at t. Twin of ChainSample.
+struct ChainSample {
+    t: f32,
+    param: f32,      // the chain parameter of the nearest point
+    d2: f32,
+    known: f32,      // 1 where the velocity is known, 0 where it is infinite (a center of curvature)
+    point: vec3<f32>,
+    slope: f32,      // d(d^2)/dt
+    velocity: vec3<f32>,
+    curvature: f32,  // d^2(d^2)/dt^2, -F32_MAX where the velocity is unknown
 }
 
-// One parabolic step from a bracketed minimum at c: (vertex, value there, curvature a). Twin of refine.
-fn refine(ray: Ray, c0: f32, h: f32, g0: f32, g1: f32, g2: f32) -> vec3<f32> {
-    let second = g0 - 2.0 * g1 + g2;
-    let a = second / (2.0 * h * h);
-    var offset = 0.0;
-    if second > 0.0 {
-        offset = clamp(0.5 * h * (g0 - g2) / second, -h, h);
+// Twin of ChainSample::at: the nearest point, its velocity along the ray from the stationarity
+// (C(u) - L(t)) . C'(u) = 0, at rest at an end of the chain unless `moving`.
+fn chain_sample(ray: Ray, t: f32, moving: bool) -> ChainSample {
+    let c = curves[ray.index];
+    let p = ray.start + ray.dir * t;
+    let n = curve_nearest(c, p);
+    let k = c.segment_count;
+    let x = clamp(n.x, 0.0, 1.0) * f32(k);
+    let j = min(u32(floor(x)), k - 1u);
+    let seg = segments[c.first_segment + j];
+    let local = x - f32(j);
+    let point = segment_at(seg, local);
+    let d1 = 2.0 * seg.c2 * local + seg.c1;
+    let denominator = dot(d1, d1) - dot(p - point, 2.0 * seg.c2);
+    var velocity = vec3<f32>(0.0);
+    var known = 1.0;
+    var curvature = 2.0 * dot(ray.dir, ray.dir);
+    if moving || (local > 0.0 && local < 1.0) {
+        if denominator > 0.0 {
+            velocity = d1 * (dot(d1, ray.dir) / denominator);
+            curvature = 2.0 * dot(ray.dir, ray.dir - velocity);
+        } else {
+            known = 0.0;
+            curvature = -F32_MAX;
+        }
     }
-    let c = c0 + offset;
-    let value = curve_d2(ray, c);
-    return vec3<f32>(c, max(min(value, g1), 0.0), max(a, 0.0));
+    return ChainSample(t, n.x, n.y * n.y, known, point, 2.0 * dot(p - point, ray.dir), velocity, curvature);
 }
 
-// A curve's features: the two deepest local minima of d^2 on a scan, sorted, each owning its piece. Twin of
-// features / scanned_peaks.
-fn curve_features(ray: Ray) -> Peaks {
-    var out: Peaks;
-    let step = 1.0 / f32(SCAN);
-    var g: array<f32, 7>;  // SCAN + 1
-    for (var i = 0u; i <= SCAN; i++) {
-        g[i] = curve_d2(ray, f32(i) * step);
+// Where the nearest point would be at t had it moved on smoothly from x. Twin of ChainSample::predict.
+fn predict(x: ChainSample, t: f32) -> vec3<f32> {
+    return x.point + x.velocity * (t - x.t);
+}
+
+// The width of the peak of d^2 seen from x (0 where d^2 is not convex). Twin of ChainSample::width.
+fn chain_width(x: ChainSample) -> f32 {
+    if x.curvature > 0.0 {
+        let d2 = max(x.d2 - 0.5 * x.slope * x.slope / x.curvature, 0.0);
+        return sqrt(2.0 * d2 / x.curvature);
     }
-    // The two deepest local minima (ties to the left).
-    var best0 = 0xffffffffu;
-    var best1 = 0xffffffffu;
-    for (var i = 0u; i <= SCAN; i++) {
-        let left = i == 0u || g[i] < g[i - 1u];
-        let right = i == SCAN || g[i] <= g[i + 1u];
-        if !(left && right) {
+    return 0.0;
+}
+
+// A Newton step toward the minimum of d^2 from x, in [lo, hi]. Twin of ChainSample::newton.
+fn chain_newton(x: ChainSample, lo: f32, hi: f32) -> f32 {
+    var t = select(lo, hi, x.slope <= 0.0);
+    if x.curvature > 0.0 {
+        t = x.t - x.slope / x.curvature;
+    }
+    if abs(t) > 1e30 || t != t {
+        return x.t;
+    }
+    return clamp(t, lo, hi);
+}
+
+// How far the nearest point lands at b from its smooth motion from a, relative to the distance. Twin of miss.
+fn miss(a: ChainSample, b: ChainSample) -> f32 {
+    if b.t <= a.t {
+        return 0.0;
+    }
+    if a.known == 0.0 || b.known == 0.0 {
+        return F32_MAX;
+    }
+    let glide = (a.velocity + b.velocity) * (0.5 * (b.t - a.t));
+    return min(length(b.point - a.point - glide) / max(sqrt(min(a.d2, b.d2)), 1e-30), F32_MAX);
+}
+
+// The ray's crossing of the bisector plane of a and b, clamped to [lo, hi]. Twin of bisector.
+fn bisector(ray: Ray, a: vec3<f32>, b: vec3<f32>, lo: f32, hi: f32) -> f32 {
+    let n = b - a;
+    let along = dot(ray.dir, n);
+    var t = 0.5 * (lo + hi);
+    if along != 0.0 {
+        t = dot(0.5 * (a + b) - ray.start, n) / along;
+    }
+    if abs(t) > 1e30 || t != t {
+        return 0.5 * (lo + hi);
+    }
+    return clamp(t, lo, hi);
+}
+
+// Where the two branches' models (each nearest point moving on with its velocity) are equally far from the
+// ray's point: (1, t), or (0, 0) where they do not cross on [a.t, b.t]. Twin of model_crossing.
+fn model_crossing(ray: Ray, a: ChainSample, b: ChainSample) -> vec2<f32> {
+    let ra = ray.start - a.point + a.velocity * a.t;
+    let qa = ray.dir - a.velocity;
+    let rb = ray.start - b.point + b.velocity * b.t;
+    let qb = ray.dir - b.velocity;
+    let c2 = dot(qa, qa) - dot(qb, qb);
+    let c1 = 2.0 * (dot(ra, qa) - dot(rb, qb));
+    let c0 = dot(ra, ra) - dot(rb, rb);
+    let fa = (c2 * a.t + c1) * a.t + c0;
+    let fb = (c2 * b.t + c1) * b.t + c0;
+    if !(fa * fb <= 0.0) {
+        return vec2<f32>(0.0);
+    }
+    let disc = max(c1 * c1 - 4.0 * c2 * c0, 0.0);
+    let q = -0.5 * (c1 + select(-1.0, 1.0, c1 >= 0.0) * sqrt(disc));
+    let roots = array<f32, 3>(q / c2, c0 / q, a.t + (b.t - a.t) * fa / (fa - fb));
+    for (var i = 0u; i < 3u; i++) {
+        let t = roots[i];
+        if abs(t) < 1e30 && t >= a.t && t <= b.t {
+            return vec2<f32>(1.0, t);
+        }
+    }
+    return vec2<f32>(0.0);
+}
+
+// The estimate of a kink between a and b. Twin of the estimates in find_kink.
+fn kink_estimate(ray: Ray, a: ChainSample, b: ChainSample) -> f32 {
+    let m = model_crossing(ray, a, b);
+    if m.x > 0.0 {
+        return m.y;
+    }
+    return bisector(ray, a.point, b.point, a.t, b.t);
+}
+
+// The kink where the nearest point jumps between *a and *b: returns it, and leaves the final bracket in *a, *b.
+// Twin of find_kink.
+fn find_kink(ray: Ray, a: ptr<function, ChainSample>, b: ptr<function, ChainSample>) -> f32 {
+    var last_moved = 0i;
+    var stale = false;
+    for (var round = 0u; round < KINK_ROUNDS; round++) {
+        if (*b).t - (*a).t <= KINK_BRACKET {
+            break;
+        }
+        var guess = 0.5 * ((*a).t + (*b).t);
+        if !stale {
+            guess = kink_estimate(ray, *a, *b);
+        }
+        let tau = KINK_PROBE * ((*b).t - (*a).t);
+        var moved_a = false;
+        var moved_b = false;
+        for (var side = 0u; side < 2u; side++) {
+            let probe = guess + select(-tau, tau, side == 1u);
+            if probe <= (*a).t || probe >= (*b).t {
+                continue;
+            }
+            let m = chain_sample(ray, probe, false);
+            if length(m.point - predict(*a, probe)) <= length(m.point - predict(*b, probe)) {
+                *a = m;
+                moved_a = true;
+            } else {
+                *b = m;
+                moved_b = true;
+            }
+        }
+        var moved = 0i;
+        if moved_a && !moved_b {
+            moved = -1i;
+        } else if moved_b && !moved_a {
+            moved = 1i;
+        }
+        stale = moved != 0i && moved == last_moved;
+        last_moved = moved;
+    }
+    return kink_estimate(ray, *a, *b);
+}
+
+// The kinks of a chain along the ray, at most MAX_KINKS (more are dropped). Twin of Kinks.
+struct Kinks {
+    at: array<f32, 8>,  // MAX_KINKS
+    count: u32,
+}
+
+fn push_kink(kinks: ptr<function, Kinks>, t: f32) {
+    if (*kinks).count < MAX_KINKS {
+        (*kinks).at[(*kinks).count] = t;
+        (*kinks).count++;
+    }
+}
+
+// The jumps of the nearest point between a and b: the kink where it lands far from its smooth motion, and
+// where the bracket left around it still jumps, one more search on either side. Twin of search_jumps (one call
+// site of find_kink: drivers inline every call).
+fn search_jumps(ray: Ray, a: ChainSample, b: ChainSample, kinks: ptr<function, Kinks>) {
+    var a1 = a;
+    var b1 = b;
+    for (var round = 0u; round < 3u; round++) {
+        var x = a;
+        var y = b;
+        if round == 1u {
+            y = a1;
+        } else if round == 2u {
+            x = b1;
+        }
+        if miss(x, y) <= JUMP {
+            if round == 0u {
+                return;
+            }
             continue;
         }
-        if best0 == 0xffffffffu || g[i] < g[best0] {
-            best1 = best0;
-            best0 = i;
-        } else if best1 == 0xffffffffu || g[i] < g[best1] {
-            best1 = i;
+        push_kink(kinks, find_kink(ray, &x, &y));
+        if round == 0u {
+            a1 = x;
+            b1 = y;
+            if miss(a1, b1) <= JUMP {
+                return;
+            }
         }
     }
-    if best0 == 0xffffffffu {
-        best0 = 0u;
+}
+
+// The two deepest local minima of d^2 on the scan, offered in order (ties to the left). Twin of Minima.
+struct Minima {
+    best0: ChainSample,
+    best1: ChainSample,
+    count: u32,
+}
+
+fn offer(m: ptr<function, Minima>, x: ChainSample, g_left: f32, g_right: f32) {
+    if !(x.d2 < g_left && x.d2 <= g_right) {
+        return;
     }
-    let minima = array<u32, 2>(best0, best1);
-    out.count = 1u;
-    if best1 != 0xffffffffu {
-        out.count = 2u;
+    if (*m).count == 0u {
+        (*m).best0 = x;
+        (*m).count = 1u;
+    } else if x.d2 < (*m).best0.d2 {
+        (*m).best1 = (*m).best0;
+        (*m).best0 = x;
+        (*m).count = 2u;
+    } else if (*m).count == 1u {
+        (*m).best1 = x;
+        (*m).count = 2u;
+    } else if x.d2 < (*m).best1.d2 {
+        (*m).best1 = x;
     }
-    for (var slot = 0u; slot < out.count; slot++) {
-        let i = minima[slot];
-        let center = f32(i) * step;
-        var g0 = 0.0;
-        var g2 = 0.0;
-        if i > 0u { g0 = g[i - 1u]; } else { g0 = curve_d2(ray, center - step); }
-        if i < SCAN { g2 = g[i + 1u]; } else { g2 = curve_d2(ray, center + step); }
-        let r = refine(ray, center, step, g0, g[i], g2);
-        out.peaks[slot] = make_peak(r.x, r.y, r.z);
+}
+
+// A chain's features along the ray: its closest approaches (each owning its piece) and its kinks.
+struct CurveFeatures {
+    found: Peaks,
+    kinks: array<f32, 8>,  // MAX_KINKS
+    kink_count: u32,
+}
+
+// Twin of chain_features and chain_peaks: one pass over the scan's intervals, each split at the normal planes
+// of the chain's ends and searched for jumps, then the closest approaches refined by Newton.
+fn curve_features(ray: Ray) -> CurveFeatures {
+    let c = curves[ray.index];
+    let first = segments[c.first_segment];
+    let last = segments[c.first_segment + c.segment_count - 1u];
+    let last_tangent = 2.0 * last.c2 + last.c1;
+    var end_t = vec2<f32>(
+        dot(first.c0 - ray.start, first.c1) / dot(ray.dir, first.c1),
+        dot(last.c2 + last.c1 + last.c0 - ray.start, last_tangent) / dot(ray.dir, last_tangent),
+    );
+    var end_at = vec2<f32>(0.0, 1.0);
+    if end_t.y < end_t.x {
+        end_t = end_t.yx;
+        end_at = end_at.yx;
     }
-    share_ray(&out);
+    let step = 1.0 / f32(SCAN);
+    var minima: Minima;
+    minima.count = 0u;
+    var kinks: Kinks;
+    kinks.count = 0u;
+    var before: ChainSample;
+    var g_before_before = F32_MAX;
+    for (var i = 0u; i <= SCAN; i++) {
+        let after = chain_sample(ray, f32(i) * step, false);
+        if i == 0u {
+            before = after;
+            continue;
+        }
+        offer(&minima, before, g_before_before, after.d2);
+        // The interval's parts between the ends' normal planes inside it (one call site of search_jumps).
+        var left = before;
+        var e = 0u;
+        for (var part = 0u; part < 3u; part++) {
+            var right = after;
+            var next_left = after;
+            var cut = -1.0;
+            for (; e < 2u; e++) {
+                let t = end_t[e];
+                let at_end = end_at[e];
+                if !(t > before.t && t < after.t) || (before.param != at_end && after.param != at_end) {
+                    continue;
+                }
+                let moving = chain_sample(ray, t, true);
+                var at_rest = moving;
+                at_rest.velocity = vec3<f32>(0.0);
+                at_rest.curvature = 2.0 * dot(ray.dir, ray.dir);
+                right = moving;
+                next_left = at_rest;
+                if left.param == at_end {
+                    right = at_rest;
+                    next_left = moving;
+                }
+                cut = t;
+                e++;
+                break;
+            }
+            search_jumps(ray, left, right, &kinks);
+            if cut < 0.0 {
+                break;
+            }
+            push_kink(&kinks, cut);
+            left = next_left;
+        }
+        // The chain's joints: where the nearest point passes one, a cut at the joint's normal plane (two at a
+        // corner) inside the interval.
+        for (var j = 1u; j < c.segment_count; j++) {
+            let pj = f32(j) / f32(c.segment_count);
+            if (before.param - pj) * (after.param - pj) > 0.0 {
+                continue;
+            }
+            let into = segments[c.first_segment + j - 1u];
+            let out_of = segments[c.first_segment + j];
+            let joint = out_of.c0;
+            let t_in = 2.0 * into.c2 + into.c1;
+            let t_out = out_of.c1;
+            let cr = cross(t_in, t_out);
+            let corner = dot(cr, cr) > 1e-12 * dot(t_in, t_in) * dot(t_out, t_out);
+            for (var plane = 0u; plane < select(1u, 2u, corner); plane++) {
+                let tangent = select(t_out, t_in, plane == 1u);
+                let t = dot(joint - ray.start, tangent) / dot(ray.dir, tangent);
+                if t > before.t && t < after.t {
+                    push_kink(&kinks, t);
+                }
+            }
+        }
+        g_before_before = before.d2;
+        before = after;
+    }
+    offer(&minima, before, g_before_before, F32_MAX);
+    var found: Peaks;
+    found.count = 0u;
+    for (var slot = 0u; slot < minima.count; slot++) {
+        var x = minima.best0;
+        if slot == 1u {
+            x = minima.best1;
+        }
+        let lo = max(x.t - step, 0.0);
+        let hi = min(x.t + step, 1.0);
+        for (var k = 0u; k < PEAK_NEWTON; k++) {
+            let next = chain_newton(x, lo, hi);
+            if abs(next - x.t) <= PEAK_SETTLED * chain_width(x) {
+                break;
+            }
+            x = chain_sample(ray, next, false);
+        }
+        var center = x.t;
+        var d2 = x.d2;
+        if x.curvature > 0.0 {
+            center = chain_newton(x, lo, hi);
+            d2 = x.d2 - 0.5 * x.slope * x.slope / x.curvature;
+        }
+        found.peaks[found.count] = make_peak(center, max(d2, 0.0), 0.5 * max(x.curvature, 0.0));
+        found.count++;
+    }
+    if found.count == 0u {
+        // A flat scan (constant distance): one uniform piece.
+        found.peaks[0] = make_peak(0.0, 0.0, 0.0);
+        found.count = 1u;
+    }
+    share_ray(&found);
+    var out: CurveFeatures;
+    out.found = found;
+    out.kinks = kinks.at;
+    out.kink_count = kinks.count;
     return out;
 }
 
-// A curve's integrand in u: f(s(u)) ds/du, f = w / max(eps, d) zeta(s).
-fn curve_g(ray: Ray, p: Peak, u: f32) -> f32 {
-    // sinh and cosh from one exp.
-    let e = exp(u);
-    let t = clamp(p.center + p.width * 0.5 * (e - 1.0 / e), p.lo, p.hi);
+// A curve's integrand in s at t clamped to the piece, f = w / max(eps, d) zeta(t) (before the coefficient).
+fn curve_f(ray: Ray, p: Peak, t_in: f32) -> f32 {
+    let t = clamp(t_in, p.lo, p.hi);
     let c = curves[ray.index];
     let n = curve_nearest(c, ray.start + ray.dir * t);
-    return wseries(c, n.x) * falloff(n.y, params.epsilon) * zeta_at(t) * p.width * 0.5 * (e + 1.0 / e);
+    return wseries(c, n.x) * falloff(n.y, params.epsilon) * zeta_at(t);
 }
 
-// Adaptive Simpson on [a, b] in u, iterative with an explicit stack. Twin of adaptive_simpson.
-fn adaptive_simpson(ray: Ray, p: Peak, a0: f32, b0: f32, f0: vec3<f32>, tol0: f32, splits: ptr<function, u32>) -> f32 {
-    // Depth-first, left half first: at most DEPTH + 1 entries.
-    var bounds: array<vec4<f32>, 14>;  // a, b, tol, depth
-    var values: array<vec3<f32>, 14>;  // f(a), f(m), f(b)
-    bounds[0] = vec4<f32>(a0, b0, tol0, f32(DEPTH));
-    values[0] = f0;
-    var top = 1u;
+// Gauss-Legendre on [a, b] in u of a curve's term. Twin of gauss_legendre.
+fn curve_gauss_legendre(ray: Ray, p: Peak, a: f32, b: f32) -> f32 {
+    let pairs = gauss_pairs();
     var sum = 0.0;
-    while top > 0u {
-        top -= 1u;
-        let bd = bounds[top];
-        let f = values[top];
-        let a = bd.x;
-        let b = bd.y;
-        let m = 0.5 * (a + b);
-        let flm = curve_g(ray, p, 0.5 * (a + m));
-        let frm = curve_g(ray, p, 0.5 * (m + b));
-        let whole = (b - a) / 6.0 * (f.x + 4.0 * f.y + f.z);
-        let left = (m - a) / 6.0 * (f.x + 4.0 * flm + f.y);
-        let right = (b - m) / 6.0 * (f.y + 4.0 * frm + f.z);
-        let delta = left + right - whole;
-        let allowed = 15.0 * max(bd.z, RELATIVE_FLOOR * abs(left + right));
-        if bd.w < 0.5 || *splits == 0u || abs(delta) <= allowed {
-            sum += left + right + delta / 15.0;
-        } else {
-            *splits -= 1u;
-            // Right half below the left, so the left is taken first (the recursion's order).
-            bounds[top] = vec4<f32>(m, b, 0.5 * bd.z, bd.w - 1.0);
-            values[top] = vec3<f32>(f.y, frm, f.z);
-            bounds[top + 1u] = vec4<f32>(a, m, 0.5 * bd.z, bd.w - 1.0);
-            values[top + 1u] = vec3<f32>(f.x, flm, f.y);
-            top += 2u;
-        }
+    for (var k = pairs.x; k < pairs.y; k++) {
+        let n = gauss_pair(p, a, b, k);
+        sum += n.y * curve_f(ray, p, n.x) + n.w * curve_f(ray, p, n.z);
     }
     return sum;
 }
 
-// A curve's term of B over its pieces. Twin of integrate_term.
+// A curve's term of B over its pieces, each cut at its kinks. Twin of integrate_term.
 fn integrate_curve_term(index: u32, s_point: vec3<f32>, e_point: vec3<f32>) -> f32 {
     let coefficient = curves[index].coefficient;
     if coefficient == 0.0 {
         return 0.0;
     }
     let ray = Ray(s_point, e_point - s_point, 3u, index);
-    let found = curve_features(ray);
-    let tol = params.tolerance / f32(found.count);
+    let features = curve_features(ray);
     var sum = 0.0;
-    var splits = SPLITS;
-    for (var k = 0u; k < found.count; k++) {
-        let p = found.peaks[k];
+    for (var k = 0u; k < features.found.count; k++) {
+        let p = features.found.peaks[k];
         let u0 = stable_asinh((p.lo - p.center) / p.width);
         let u1 = stable_asinh((p.hi - p.center) / p.width);
         if u1 <= u0 {
             continue;
         }
-        // Neighbouring panels share their end value.
-        let width = (u1 - u0) / f32(PANELS);
-        var fa = curve_g(ray, p, u0);
-        for (var i = 0u; i < PANELS; i++) {
-            let a = u0 + width * f32(i);
-            let b = a + width;
-            let fb = curve_g(ray, p, b);
-            let f = vec3<f32>(fa, curve_g(ray, p, 0.5 * (a + b)), fb);
-            sum += adaptive_simpson(ray, p, a, b, f, tol / f32(PANELS), &splits);
-            fa = fb;
+        let cut = piece_cuts(p, u0, u1, features.kinks, features.kink_count);
+        for (var j = 0u; j + 1u < cut.count; j++) {
+            let a = cut.at[j];
+            let b = cut.at[j + 1u];
+            let panels = u32(clamp(ceil((b - a) / U_PANEL), 1.0, f32(MAX_GAUSS_PANELS)));
+            let width = (b - a) / f32(panels);
+            for (var i = 0u; i < panels; i++) {
+                let pa = a + width * f32(i);
+                sum += curve_gauss_legendre(ray, p, pa, pa + width);
+            }
         }
     }
     return coefficient * sum;

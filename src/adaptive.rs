@@ -45,15 +45,17 @@ use crate::integrate::{Integration, zeta};
 
 /// Intervals of the scan that locates a torus's or a curve's closest approaches.
 pub const SCAN: u32 = 6;
-/// Simpson panels in u per piece of a curve before any refinement.
-pub const PANELS: u32 = 6;
-/// Deepest bisection of a panel.
-pub const DEPTH: u32 = 12;
-/// Most bisections for one term, all its panels together: bounds a term's work (and its loop iterations on the
-/// GPU, which some drivers cap).
-pub const SPLITS: u32 = 200;
-/// The smallest error asked of a panel, relative to its value.
-pub const RELATIVE_FLOOR: f64 = 4e-6;
+/// A chain's nearest point jumps between two samples where it lands farther than this many times the distance
+/// from where a smooth motion would have taken it.
+pub const JUMP: f64 = 0.1;
+/// Most rounds of the kink search, each one or two probes.
+pub const KINK_ROUNDS: u32 = 4;
+/// The kink search stops when its bracket is this short (in t, the ray being 1 long).
+pub const KINK_BRACKET: f64 = 1e-3;
+/// How far either side of its estimate a round of the kink search probes, relative to the bracket.
+pub const KINK_PROBE: f64 = 0.05;
+/// Most kinks cut on one curve's ray.
+pub const MAX_KINKS: usize = 8;
 /// The longest stretch of u one Gauss-Legendre rule covers.
 pub const U_PANEL: f64 = 4.0;
 /// Most Gauss-Legendre panels on one cut of a piece.
@@ -296,10 +298,20 @@ impl Ring {
 const RING_NEWTON: u32 = 6;
 const RING_STEP: f64 = 0.125;
 
+/// A term's features along the ray, each owning its piece, and the kinks where a curve's nearest point jumps.
+struct Features {
+    peaks: [Peak; 3],
+    count: usize,
+    kinks: [f64; MAX_KINKS],
+    kink_count: usize,
+}
+
 /// The features of a term along `s -> e` (at most three), sorted along the ray, each owning its piece.
-fn features(term: Term, s: DVec3, e: DVec3, scan: u32, eps: f64) -> ([Peak; 3], usize) {
+fn features(term: Term, s: DVec3, e: DVec3, scan: u32, eps: f64) -> Features {
     let dir = e - s;
     let mut out = [peak(0.0, 0.0, 0.0, eps); 3];
+    let mut kinks = [0.0; MAX_KINKS];
+    let mut kink_count = 0;
     let count = match term {
         Term::Point(p) => {
             let a = dir.length_squared();
@@ -345,18 +357,350 @@ fn features(term: Term, s: DVec3, e: DVec3, scan: u32, eps: f64) -> ([Peak; 3], 
             }
             count
         }
-        Term::Curve(_) => {
-            let d2 = |t: f64| {
-                let d = term.distance(s + dir * t).0;
-                d * d
-            };
-            let (found, count) = scanned_peaks(d2, scan, eps);
+        Term::Curve(c) => {
+            let mut found_kinks = Kinks::default();
+            let (found, count) = chain_features(c, s, dir, scan, eps, &mut found_kinks);
             out[..count].copy_from_slice(&found[..count]);
+            kinks = found_kinks.at;
+            kink_count = found_kinks.count;
             count
         }
     };
     share_ray(&mut out[..count]);
-    (out, count)
+    Features {
+        peaks: out,
+        count,
+        kinks,
+        kink_count,
+    }
+}
+
+/// A chain's closest approaches along the ray `s + t dir` and its kinks (appended to `kinks`), in one pass over
+/// the scan's `scan` intervals:
+/// - the closest approaches: the two deepest local minima of d^2 on the scan, refined by Newton (`chain_peaks`);
+/// - the chain's ends: where the ray crosses the normal plane at an end, the nearest point starts (or stops)
+///   moving along the chain, so d turns from the distance to the end point to the distance to the curve, smoothly
+///   but with a jump in its second derivative. Where a scan sample beside the crossing is at that end, the
+///   crossing is cut and sampled, and its interval split there: the side at the end with the point at rest, the
+///   other with it moving off;
+/// - the jumps of the nearest point in each (part of an) interval (`search_jumps`).
+fn chain_features(
+    c: &crate::field::Curve,
+    s: DVec3,
+    dir: DVec3,
+    scan: u32,
+    eps: f64,
+    kinks: &mut Kinks,
+) -> ([Peak; 2], usize) {
+    let sample = |t: f64| ChainSample::at(c, s, dir, t, false);
+    let k = scan.max(2);
+    let step = 1.0 / k as f64;
+    let cp = &c.control_points;
+    let last = cp.len() - 1;
+    let segments = last / 2;
+    let mut ends = [
+        (cp[0], cp[1] - cp[0], 0.0),
+        (cp[last], cp[last] - cp[last - 1], 1.0),
+    ]
+    .map(|(end, tangent, at_end)| ((end - s).dot(tangent) / dir.dot(tangent), at_end));
+    if ends[1].0 < ends[0].0 {
+        ends.swap(0, 1);
+    }
+    let mut minima = Minima::default();
+    let mut before = sample(0.0);
+    let mut g_before_before = f64::INFINITY;
+    for i in 1..=k {
+        let after = sample(i as f64 * step);
+        minima.offer(before, g_before_before, after.d2);
+        // The interval (before, after), split at the ends' normal planes inside it.
+        let mut left = before;
+        for &(t, at_end) in &ends {
+            let inside = t > before.t && t < after.t;
+            if !inside || (before.param != at_end && after.param != at_end) {
+                continue;
+            }
+            let moving = ChainSample::at(c, s, dir, t, true);
+            let at_rest = ChainSample {
+                velocity: DVec3::ZERO,
+                curvature: 2.0 * dir.length_squared(),
+                ..moving
+            };
+            let (x, y) = if left.param == at_end {
+                (at_rest, moving)
+            } else {
+                (moving, at_rest)
+            };
+            search_jumps(&sample, (s, dir), left, x, kinks);
+            kinks.push(t);
+            left = y;
+        }
+        search_jumps(&sample, (s, dir), left, after, kinks);
+        // The chain's joints: where its nearest point passes one, the chain's curvature changes (it is smooth
+        // only to first order there), and d's second derivative jumps, where the ray crosses the joint's normal
+        // plane (two planes at a corner, with the joint nearest between them). Cut there where the interval's
+        // samples lie on either side of the joint.
+        for j in 1..segments {
+            let pj = j as f64 / segments as f64;
+            if (before.param - pj) * (after.param - pj) > 0.0 {
+                continue;
+            }
+            let joint = cp[2 * j];
+            let (t_in, t_out) = (joint - cp[2 * j - 1], cp[2 * j + 1] - joint);
+            let corner = t_in.cross(t_out).length_squared()
+                > 1e-12 * t_in.length_squared() * t_out.length_squared();
+            let planes = [t_out, t_in];
+            for tangent in &planes[..1 + corner as usize] {
+                let t = (joint - s).dot(*tangent) / dir.dot(*tangent);
+                if t > before.t && t < after.t {
+                    kinks.push(t);
+                }
+            }
+        }
+        g_before_before = before.d2;
+        before = after;
+    }
+    minima.offer(before, g_before_before, f64::INFINITY);
+    chain_peaks(&sample, &minima, step, eps)
+}
+
+/// The kinks of a chain along the ray (in t), at most `MAX_KINKS` (more are dropped).
+#[derive(Clone, Copy, Debug, Default)]
+struct Kinks {
+    at: [f64; MAX_KINKS],
+    count: usize,
+}
+
+impl Kinks {
+    fn push(&mut self, t: f64) {
+        if self.count < MAX_KINKS {
+            self.at[self.count] = t;
+            self.count += 1;
+        }
+    }
+}
+
+/// The jumps of a chain's nearest point between samples `a` and `b`: where it lands far from its smooth motion
+/// (`miss`), the kink is found (`find_kink`); if the bracket left around it still jumps, the rest of the interval
+/// on either side is searched once more (an interval may hold two jumps).
+fn search_jumps(
+    sample: &impl Fn(f64) -> ChainSample,
+    ray: (DVec3, DVec3),
+    a: ChainSample,
+    b: ChainSample,
+    kinks: &mut Kinks,
+) {
+    if miss(&a, &b) <= JUMP {
+        return;
+    }
+    let (kink, a1, b1) = find_kink(sample, ray, a, b);
+    kinks.push(kink);
+    if miss(&a1, &b1) <= JUMP {
+        return;
+    }
+    for (x, y) in [(a, a1), (b1, b)] {
+        if miss(&x, &y) > JUMP {
+            kinks.push(find_kink(sample, ray, x, y).0);
+        }
+    }
+}
+
+/// A curve chain's nearest point to the ray's point at t: the squared distance, the point and its velocity along
+/// the ray (the nearest point moves as the ray's point does).
+#[derive(Clone, Copy, Debug)]
+struct ChainSample {
+    t: f64,
+    /// The chain parameter of the nearest point.
+    param: f64,
+    d2: f64,
+    point: DVec3,
+    /// Zero where unknown.
+    velocity: DVec3,
+    /// Whether the velocity is known (it is infinite at a center of curvature).
+    known: bool,
+    /// The first and second derivatives of `d^2` along the ray (the second `-inf` where the velocity is
+    /// unknown).
+    slope: f64,
+    curvature: f64,
+}
+
+impl ChainSample {
+    /// The velocity comes from differentiating the stationarity `(C(u) - L(t)) . C'(u) = 0`:
+    /// `du/dt = (C' . dir) / (|C'|^2 - (L - C) . C'')`. At an end of the chain (a clamped `u`) the nearest point
+    /// stays put; where the denominator vanishes (a center of curvature) the velocity is infinite.
+    fn at(c: &crate::field::Curve, s: DVec3, dir: DVec3, t: f64, moving: bool) -> ChainSample {
+        let p = s + dir * t;
+        let n = curve::nearest_on_chain(&c.control_points, p);
+        let (point, d1, d2, clamped) = curve::chain_frame(&c.control_points, n.t);
+        let denominator = d1.length_squared() - (p - point).dot(d2);
+        let (velocity, known) = if clamped && !moving {
+            (DVec3::ZERO, true)
+        } else if denominator > 0.0 {
+            (d1 * (d1.dot(dir) / denominator), true)
+        } else {
+            (DVec3::ZERO, false)
+        };
+        // The nearest point moves along the chain, perpendicular to p - point: d^2's slope is that of the
+        // distance to a fixed point, 2 (p - point) . dir; its curvature 2 dir . (dir - velocity).
+        ChainSample {
+            t,
+            param: n.t,
+            d2: n.distance * n.distance,
+            point,
+            velocity,
+            known,
+            slope: 2.0 * (p - point).dot(dir),
+            curvature: if known {
+                2.0 * dir.dot(dir - velocity)
+            } else {
+                f64::NEG_INFINITY
+            },
+        }
+    }
+
+    /// The width `d / sqrt(a)` of the peak d^2 ~ d*^2 + a (t - t*)^2 seen from here (0 where d^2 is not convex).
+    fn width(&self) -> f64 {
+        if self.curvature > 0.0 {
+            let d2 = (self.d2 - 0.5 * self.slope * self.slope / self.curvature).max(0.0);
+            (2.0 * d2 / self.curvature).sqrt()
+        } else {
+            0.0
+        }
+    }
+
+    /// A Newton step toward the minimum of `d^2`, kept in `[lo, hi]`; where `d^2` is not convex, to the end
+    /// downhill.
+    fn newton(&self, lo: f64, hi: f64) -> f64 {
+        let t = if self.curvature > 0.0 {
+            self.t - self.slope / self.curvature
+        } else if self.slope > 0.0 {
+            lo
+        } else {
+            hi
+        };
+        if t.is_finite() {
+            t.clamp(lo, hi)
+        } else {
+            self.t
+        }
+    }
+
+    /// Where the nearest point would be at `t` if it moved on smoothly from here.
+    fn predict(&self, t: f64) -> DVec3 {
+        self.point + self.velocity * (t - self.t)
+    }
+}
+
+/// How far the nearest point of a chain lands between two samples from where it would be had it moved smoothly
+/// (the trapezoid rule on its velocity), relative to the distance: over `JUMP`, it jumped (or its velocity is
+/// unknown, infinite).
+fn miss(a: &ChainSample, b: &ChainSample) -> f64 {
+    if b.t <= a.t {
+        return 0.0;
+    }
+    if !(a.known && b.known) {
+        return f64::MAX;
+    }
+    let moved = b.point - a.point;
+    let smooth = (a.velocity + b.velocity) * (0.5 * (b.t - a.t));
+    let miss = (moved - smooth).length() / a.d2.min(b.d2).sqrt().max(1e-30);
+    if miss.is_finite() { miss } else { f64::MAX }
+}
+
+/// Where along the ray `s + t dir` the points `a` and `b` are equally far: the ray's crossing of their bisector
+/// plane (the middle of `[lo, hi]` where the ray runs parallel to it), clamped to `[lo, hi]`.
+fn bisector(s: DVec3, dir: DVec3, a: DVec3, b: DVec3, lo: f64, hi: f64) -> f64 {
+    let n = b - a;
+    let along = dir.dot(n);
+    let t = if along != 0.0 {
+        (0.5 * (a + b) - s).dot(n) / along
+    } else {
+        0.5 * (lo + hi)
+    };
+    if t.is_finite() {
+        t.clamp(lo, hi)
+    } else {
+        0.5 * (lo + hi)
+    }
+}
+
+/// Where the two branches' models are equally far from the ray's point: each branch modelled by its nearest
+/// point at a bracket end moving on with its velocity there, `P(t) = point + velocity (t - t0)`, so the difference
+/// of the squared distances is a quadratic in t. `None` where it does not change sign on the bracket.
+fn model_crossing(s: DVec3, dir: DVec3, a: &ChainSample, b: &ChainSample) -> Option<f64> {
+    // L(t) - P(t) = r + q t.
+    let rq = |x: &ChainSample| {
+        let v = x.velocity;
+        (s - x.point + v * x.t, dir - v)
+    };
+    let ((ra, qa), (rb, qb)) = (rq(a), rq(b));
+    let c2 = qa.length_squared() - qb.length_squared();
+    let c1 = 2.0 * (ra.dot(qa) - rb.dot(qb));
+    let c0 = ra.length_squared() - rb.length_squared();
+    let f = |t: f64| (c2 * t + c1) * t + c0;
+    let (fa, fb) = (f(a.t), f(b.t));
+    if !(fa * fb <= 0.0) {
+        return None;
+    }
+    let inside = |t: f64| t >= a.t && t <= b.t;
+    let disc = (c1 * c1 - 4.0 * c2 * c0).max(0.0);
+    let q = -0.5 * (c1 + c1.signum() * disc.sqrt());
+    [q / c2, c0 / q]
+        .into_iter()
+        .find(|&t| t.is_finite() && inside(t))
+        .or_else(|| Some(a.t + (b.t - a.t) * fa / (fa - fb)).filter(|t| inside(*t)))
+}
+
+/// The kink between two samples of a chain whose nearest point jumps between them (`miss`): where the ray crosses
+/// the chain's medial surface, d is the smaller of two smooth distances (to either branch) and has a kink, and W
+/// a step. Each round estimates it where the branches' models cross (`model_crossing`, else the bisector plane
+/// of the two nearest points, else the middle where one end has not moved for two rounds) and probes either side
+/// of the estimate; a probe belongs to the end whose predicted point is nearer its own. The rounds stop when the
+/// bracket is shorter than `KINK_BRACKET`; the kink is the last estimate. Returns it and the final bracket.
+fn find_kink(
+    sample: &impl Fn(f64) -> ChainSample,
+    (s, dir): (DVec3, DVec3),
+    mut a: ChainSample,
+    mut b: ChainSample,
+) -> (f64, ChainSample, ChainSample) {
+    // Which end the last round moved (+1 b, -1 a, 0 both), to catch a stale end.
+    let mut last_moved = 0i32;
+    let mut stale = false;
+    for _ in 0..KINK_ROUNDS {
+        if b.t - a.t <= KINK_BRACKET {
+            break;
+        }
+        let guess = if stale {
+            0.5 * (a.t + b.t)
+        } else {
+            model_crossing(s, dir, &a, &b)
+                .unwrap_or_else(|| bisector(s, dir, a.point, b.point, a.t, b.t))
+        };
+        let tau = KINK_PROBE * (b.t - a.t);
+        let (mut moved_a, mut moved_b) = (false, false);
+        for probe in [guess - tau, guess + tau] {
+            if probe <= a.t || probe >= b.t {
+                continue;
+            }
+            let m = sample(probe);
+            if m.point.distance(a.predict(probe)) <= m.point.distance(b.predict(probe)) {
+                a = m;
+                moved_a = true;
+            } else {
+                b = m;
+                moved_b = true;
+            }
+        }
+        let moved = match (moved_a, moved_b) {
+            (true, false) => -1,
+            (false, true) => 1,
+            _ => 0,
+        };
+        stale = moved != 0 && moved == last_moved;
+        last_moved = moved;
+    }
+    let kink = model_crossing(s, dir, &a, &b)
+        .unwrap_or_else(|| bisector(s, dir, a.point, b.point, a.t, b.t));
+    (kink, a, b)
 }
 
 /// Sorts features along the ray and gives each its piece: every stretch of the ray goes to the feature whose map
@@ -407,135 +751,116 @@ fn share_ray(features: &mut [Peak]) {
     }
 }
 
-/// Local minima of `d2` on a scan of `scan` intervals, at most the two deepest, each refined by one parabolic
-/// step through its neighbours.
-fn scanned_peaks(d2: impl Fn(f64) -> f64, scan: u32, eps: f64) -> ([Peak; 2], usize) {
-    let k = scan.max(2) as usize;
-    let step = 1.0 / k as f64;
-    let g: Vec<f64> = (0..=k).map(|i| d2(i as f64 * step)).collect();
-    // The two deepest local minima (ties to the left).
-    let mut best = [usize::MAX; 2];
-    for i in 0..=k {
-        let left = i == 0 || g[i] < g[i - 1];
-        let right = i == k || g[i] <= g[i + 1];
-        if !(left && right) {
-            continue;
+/// Newton steps that refine a chain's closest approach from the scan, at most.
+pub const PEAK_NEWTON: u32 = 2;
+/// Newton stops once its step is this small against the peak's width (a broad peak needs no refinement: the map
+/// is exact whatever its center, and a center off by a fraction of the width costs little accuracy).
+pub const PEAK_SETTLED: f64 = 0.25;
+
+/// The two deepest local minima of d^2 on a scan, offered in order (ties to the left).
+#[derive(Clone, Copy, Debug, Default)]
+struct Minima {
+    best: [Option<ChainSample>; 2],
+}
+
+impl Minima {
+    /// Offers sample `x` with d^2 `g_left` and `g_right` at its neighbours (infinite beyond the ray).
+    fn offer(&mut self, x: ChainSample, g_left: f64, g_right: f64) {
+        if !(x.d2 < g_left && x.d2 <= g_right) {
+            return;
         }
-        if best[0] == usize::MAX || g[i] < g[best[0]] {
-            best[1] = best[0];
-            best[0] = i;
-        } else if best[1] == usize::MAX || g[i] < g[best[1]] {
-            best[1] = i;
+        match self.best {
+            [None, _] => self.best[0] = Some(x),
+            [Some(b0), _] if x.d2 < b0.d2 => self.best = [Some(x), Some(b0)],
+            [_, None] => self.best[1] = Some(x),
+            [_, Some(b1)] if x.d2 < b1.d2 => self.best[1] = Some(x),
+            _ => {}
         }
     }
-    if best[0] == usize::MAX {
-        // A flat scan (constant distance): one uniform interval.
-        best[0] = 0;
-    }
-    let count = if best[1] == usize::MAX { 1 } else { 2 };
+}
+
+/// The closest approaches of a chain along the ray: its scan's local minima of d^2, each refined by
+/// `PEAK_NEWTON` Newton steps on the exact slope and curvature of d^2, within its scan neighbours (`step` away).
+fn chain_peaks(
+    sample: &impl Fn(f64) -> ChainSample,
+    minima: &Minima,
+    step: f64,
+    eps: f64,
+) -> ([Peak; 2], usize) {
     let mut out = [peak(0.0, 0.0, 0.0, eps); 2];
-    for (slot, &i) in best.iter().take(count).enumerate() {
-        let center = i as f64 * step;
-        let g0 = if i > 0 { g[i - 1] } else { d2(center - step) };
-        let g2 = if i < k { g[i + 1] } else { d2(center + step) };
-        let (c, value, a) = refine(&d2, center, step, g0, g[i], g2);
-        out[slot] = peak(c, value, a, eps);
+    let mut count = 0;
+    for x in minima.best.iter().flatten() {
+        let (lo, hi) = ((x.t - step).max(0.0), (x.t + step).min(1.0));
+        let mut x = *x;
+        for _ in 0..PEAK_NEWTON {
+            let next = x.newton(lo, hi);
+            if (next - x.t).abs() <= PEAK_SETTLED * x.width() {
+                break;
+            }
+            x = sample(next);
+        }
+        let (center, d2) = if x.curvature > 0.0 {
+            (
+                x.newton(lo, hi),
+                x.d2 - 0.5 * x.slope * x.slope / x.curvature,
+            )
+        } else {
+            (x.t, x.d2)
+        };
+        out[count] = peak(center, d2.max(0.0), 0.5 * x.curvature.max(0.0), eps);
+        count += 1;
+    }
+    if count == 0 {
+        // A flat scan (constant distance): one uniform piece.
+        count = 1;
     }
     (out, count)
 }
 
-/// One parabolic step from a bracketed minimum at `c` (samples `g0, g1, g2` at `c - h, c, c + h`): the vertex,
-/// the value there and the curvature `a` of `d2 ~ value + a (s - vertex)^2`.
-fn refine(d2: &impl Fn(f64) -> f64, c: f64, h: f64, g0: f64, g1: f64, g2: f64) -> (f64, f64, f64) {
-    let second = g0 - 2.0 * g1 + g2;
-    let a = second / (2.0 * h * h);
-    let offset = if second > 0.0 {
-        (0.5 * h * (g0 - g2) / second).clamp(-h, h)
-    } else {
-        0.0
+/// Most cuts of a piece in u: its ends, the flat top's two ends and the kinks.
+const MAX_CUTS: usize = 4 + MAX_KINKS;
+
+/// The cuts of a piece in u, sorted: its ends, for a source closer than eps the ends of the falloff's flat top,
+/// and the kinks (in s) inside the piece.
+fn cuts(p: &Peak, u0: f64, u1: f64, kinks: &[f64]) -> ([f64; MAX_CUTS], usize) {
+    let mut out = [u1; MAX_CUTS];
+    out[0] = u0;
+    let mut n = 1;
+    let mut add = |u: f64| {
+        if u > u0 && u < u1 {
+            out[n] = u;
+            n += 1;
+        }
     };
-    let c = c + offset;
-    let value = d2(c);
-    (c, value.min(g1).max(0.0), a.max(0.0))
-}
-
-/// Simpson on `[a, b]` from its end and middle values, split in halves (left first) while they disagree with the
-/// whole by more than `15 tol` (Richardson), `depth` levels at most and while `splits` lasts. The test never asks
-/// for less than `RELATIVE_FLOOR` of the panel's value: below that f32 rounding (on the GPU) would split forever.
-fn adaptive_simpson(
-    g: &impl Fn(f64) -> f64,
-    a: f64,
-    b: f64,
-    [fa, fm, fb]: [f64; 3],
-    tol: f64,
-    depth: u32,
-    splits: &mut u32,
-) -> f64 {
-    let m = 0.5 * (a + b);
-    let whole = (b - a) / 6.0 * (fa + 4.0 * fm + fb);
-    let (lm, rm) = (0.5 * (a + m), 0.5 * (m + b));
-    let (flm, frm) = (g(lm), g(rm));
-    let left = (m - a) / 6.0 * (fa + 4.0 * flm + fm);
-    let right = (b - m) / 6.0 * (fm + 4.0 * frm + fb);
-    let delta = left + right - whole;
-    let allowed = 15.0 * tol.max(RELATIVE_FLOOR * (left + right).abs());
-    if depth == 0 || *splits == 0 || delta.abs() <= allowed {
-        return left + right + delta / 15.0;
-    }
-    *splits -= 1;
-    let l = adaptive_simpson(g, a, m, [fa, flm, fm], 0.5 * tol, depth - 1, splits);
-    l + adaptive_simpson(g, m, b, [fm, frm, fb], 0.5 * tol, depth - 1, splits)
-}
-
-/// The error allowed on one term's integral before its coefficient: the scene's tolerance on B shared between
-/// the sources in proportion to their coefficients, `tolerance / sum |c|`. Twin of `FieldParams::tolerance`.
-pub fn term_tolerance(sources: &Sources, tolerance: f64) -> f64 {
-    let total: f64 = (sources.points.iter().map(|s| s.coefficient.abs()))
-        .chain(sources.lines.iter().map(|s| s.coefficient.abs()))
-        .chain(sources.tori.iter().map(|s| s.coefficient.abs()))
-        .chain(sources.curves.iter().map(|s| s.coefficient.abs()))
-        .sum();
-    tolerance / total.max(1e-30)
-}
-
-/// The cuts of a piece in u: its ends and, for a source closer than eps, the ends of the falloff's flat top.
-fn cuts(p: &Peak, u0: f64, u1: f64) -> ([f64; 4], usize) {
-    let mut out = [u0, u1, u1, u1];
-    let mut n = 2;
     if p.flat > 0.0 {
         let k = (p.flat / p.width).asinh();
-        n = 1;
-        for u in [-k, k] {
-            if u > u0 && u < u1 {
-                out[n] = u;
-                n += 1;
-            }
-        }
-        out[n] = u1;
-        n += 1;
+        add(-k);
+        add(k);
     }
-    (out, n)
+    for &kink in kinks {
+        add(((kink - p.center) / p.width).asinh());
+    }
+    out[..n].sort_by(f64::total_cmp);
+    out[n] = u1;
+    (out, n + 1)
 }
 
-/// One term's integral over its pieces, to `tol` before the coefficient.
-fn integrate_term(term: Term, s: DVec3, e: DVec3, settings: &Integration, tol: f64) -> f64 {
+/// One term's integral over its pieces, to the scene's tolerance.
+fn integrate_term(term: Term, s: DVec3, e: DVec3, settings: &Integration) -> f64 {
     let c = term.coefficient();
     if c == 0.0 {
         return 0.0;
     }
-    let (pieces, count) = features(term, s, e, SCAN, settings.epsilon);
+    let found = features(term, s, e, SCAN, settings.epsilon);
     let dir = e - s;
     let f = |t: f64| {
         let (d, w) = term.distance(s + dir * t);
         w * falloff(d, settings.epsilon) * zeta(t, settings.alpha, settings.beta)
     };
-    let curve = matches!(term, Term::Curve(_));
     let order = gauss_order(settings.tolerance);
-    // Shared between the pieces.
-    let tol = tol / count as f64;
+    let kinks = &found.kinks[..found.kink_count];
     let mut sum = 0.0;
-    let mut splits = SPLITS;
-    for p in &pieces[..count] {
+    for p in &found.peaks[..found.count] {
         let u0 = ((p.lo - p.center) / p.width).asinh();
         let u1 = ((p.hi - p.center) / p.width).asinh();
         if u1 <= u0 {
@@ -546,28 +871,7 @@ fn integrate_term(term: Term, s: DVec3, e: DVec3, settings: &Integration, tol: f
             let t = (p.center + p.width * u.sinh()).clamp(p.lo, p.hi);
             f(t) * p.width * u.cosh()
         };
-        if curve {
-            // Neighbouring panels share their end value.
-            let width = (u1 - u0) / PANELS as f64;
-            let mut fa = g(u0);
-            for i in 0..PANELS {
-                let a = u0 + width * i as f64;
-                let b = a + width;
-                let (fm, fb) = (g(0.5 * (a + b)), g(b));
-                sum += adaptive_simpson(
-                    &g,
-                    a,
-                    b,
-                    [fa, fm, fb],
-                    tol / PANELS as f64,
-                    DEPTH,
-                    &mut splits,
-                );
-                fa = fb;
-            }
-            continue;
-        }
-        let (cut, n) = cuts(p, u0, u1);
+        let (cut, n) = cuts(p, u0, u1, kinks);
         for w in cut[..n].windows(2) {
             let (a, b) = (w[0], w[1]);
             let panels = ((b - a) / U_PANEL)
@@ -592,14 +896,13 @@ pub fn brightness(sources: &Sources, settings: &Integration, s: DVec3, e: DVec3)
         .chain(sources.lines.iter().map(Term::Line))
         .chain(sources.tori.iter().map(Term::Torus))
         .chain(sources.curves.iter().map(Term::Curve));
-    let tol = term_tolerance(sources, settings.tolerance);
-    terms.map(|t| integrate_term(t, s, e, settings, tol)).sum()
+    terms.map(|t| integrate_term(t, s, e, settings)).sum()
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::field::{Point, Torus};
+    use crate::field::{Curve, Point, Torus};
     use crate::integrate::simpson;
 
     fn settings() -> Integration {
@@ -649,7 +952,8 @@ mod tests {
         };
         let (s, e) = (DVec3::new(0.02, 0.001, 0.0), DVec3::new(0.02, 0.001, -10.0));
         // Two ring passes and, between them, the axis.
-        let (p, count) = features(Term::Torus(&sources.tori[0]), s, e, SCAN, 0.01);
+        let found = features(Term::Torus(&sources.tori[0]), s, e, SCAN, 0.01);
+        let (p, count) = (found.peaks, found.count);
         assert_eq!(count, 3);
         assert!((p[0].center - 0.4).abs() < 2e-3 && (p[2].center - 0.6).abs() < 2e-3);
         assert!((p[1].center - 0.5).abs() < 1e-9);
@@ -724,6 +1028,98 @@ mod tests {
             .map(|&(s, e)| reference(&sources, s, e, 1 << 18))
             .collect();
         for tolerance in [1e-3, 1e-4, 1e-5, 1e-6] {
+            let mut st = settings();
+            st.tolerance = tolerance;
+            for (&(s, e), &want) in rays.iter().zip(&want) {
+                let got = brightness(&sources, &st, s, e);
+                assert!(
+                    (got - want).abs() < tolerance,
+                    "tolerance {tolerance:e}: {got} vs {want} on {s} -> {e}"
+                );
+            }
+        }
+    }
+
+    /// An arch, one segment from (-1, 0, 0) over (0, 2, 0) to (1, 0, 0), symmetric about x = 0.
+    fn arch() -> Curve {
+        Curve {
+            control_points: vec![
+                DVec3::new(-1.0, 0.0, 0.0),
+                DVec3::new(0.0, 2.0, 0.0),
+                DVec3::new(1.0, 0.0, 0.0),
+            ],
+            coefficient: 1.0,
+            weights: vec![],
+        }
+    }
+
+    #[test]
+    fn a_chain_s_kinks_are_found_where_the_nearest_point_jumps_and_at_its_ends() {
+        // Under the arch, on x = 0 the two halves are equally near: a ray along x crosses that medial plane at
+        // t = 0.5 (a kink, found to second order in its bracket), and the normal planes at the arch's ends, where
+        // the nearest point stops at the end: (p - end) . tangent = 0 with tangents (1, 2, 0) at (-1, 0, 0) and
+        // (1, -2, 0) at (1, 0, 0). The ray passes under the arch's center of curvature, where the nearest point
+        // races along the arch: the search may cut there too (a cut costs work, never accuracy).
+        let c = arch();
+        let (y, z) = (0.3, 0.2);
+        let (s, e) = (DVec3::new(-3.0, y, z), DVec3::new(3.0, y, z));
+        let found = features(Term::Curve(&c), s, e, SCAN, 0.01);
+        let kinks = &found.kinks[..found.kink_count];
+        let near = |t: f64, within: f64| kinks.iter().any(|&k| (k - t).abs() < within);
+        assert!(near(0.5, 1e-5), "the medial crossing: {kinks:?}");
+        // The ends' normal planes: x + 2 y = -1 and x - 2 y = 1, at x = -1 - 2 y and 1 + 2 y.
+        for x in [-1.0 - 2.0 * y, 1.0 + 2.0 * y] {
+            assert!(
+                near((x + 3.0) / 6.0, 1e-12),
+                "the end plane at x = {x}: {kinks:?}"
+            );
+        }
+        // Far above the arch the nearest point moves smoothly: no kink but the ends'.
+        let (s, e) = (DVec3::new(-3.0, 3.0, z), DVec3::new(3.0, 3.0, z));
+        let found = features(Term::Curve(&c), s, e, SCAN, 0.01);
+        assert!(
+            found.kink_count <= 2,
+            "{:?}",
+            &found.kinks[..found.kink_count]
+        );
+    }
+
+    #[test]
+    fn a_chain_is_integrated_within_the_tolerance_across_its_kinks_and_steps() {
+        // The mixed scene's chain: two segments with a W series, so where the nearest point jumps W steps too.
+        // Rays from an eye through a grid around it: over the segments, through the medial surfaces, past the
+        // ends, one passing closer than eps. Against Simpson with 2^18 intervals (its own error here is under
+        // 1e-6: W's steps converge at first order).
+        let sources = Sources {
+            curves: vec![Curve {
+                control_points: vec![
+                    DVec3::new(-3.0, 2.0, 0.0),
+                    DVec3::new(-1.0, -1.0, 1.0),
+                    DVec3::new(1.0, 0.0, 0.0),
+                    DVec3::new(3.0, 1.0, -1.0),
+                    DVec3::new(3.5, 3.0, 0.0),
+                ],
+                coefficient: 3.0,
+                weights: vec![0.3, 1.0, 0.5, 1.0],
+            }],
+            ..Default::default()
+        };
+        let eye = DVec3::new(0.5, 1.0, 9.0);
+        let mut rays: Vec<(DVec3, DVec3)> = (0..7)
+            .flat_map(|i| (0..5).map(move |j| (i, j)))
+            .map(|(i, j)| {
+                let target = DVec3::new(-3.6 + 1.2 * i as f64, -1.5 + 1.0 * j as f64, 0.0);
+                (eye, eye + (target - eye) * 2.0)
+            })
+            .collect();
+        // Through the chain's joint, 0.004 off it.
+        let joint = DVec3::new(1.0, 0.004, 0.0);
+        rays.push((eye, eye + (joint - eye) * 2.0));
+        let want: Vec<f64> = rays
+            .iter()
+            .map(|&(s, e)| reference(&sources, s, e, 1 << 18))
+            .collect();
+        for tolerance in [1e-3, 1e-4, 1e-5] {
             let mut st = settings();
             st.tolerance = tolerance;
             for (&(s, e), &want) in rays.iter().zip(&want) {

@@ -9,12 +9,34 @@ use energywave::gpu::shaders;
 fn parse_and_validate(name: &str, source: &str) -> naga::Module {
     let module = naga::front::wgsl::parse_str(source)
         .unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(source)));
-    naga::valid::Validator::new(
+    let info = naga::valid::Validator::new(
         naga::valid::ValidationFlags::all(),
         naga::valid::Capabilities::default(),
     )
     .validate(&module)
     .unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(source)));
+    // Every entry point also compiles to SPIR-V, as the Vulkan backend does at pipeline creation: naga's
+    // front end accepts some code its SPIR-V writer cannot handle (a pointer to a struct member passed to a
+    // function), which would otherwise show only on a GPU, as an invalid pipeline.
+    for entry in &module.entry_points {
+        let pipeline = naga::back::spv::PipelineOptions {
+            shader_stage: entry.stage,
+            entry_point: entry.name.clone(),
+        };
+        let written = std::panic::catch_unwind(|| {
+            naga::back::spv::write_vec(
+                &module,
+                &info,
+                &naga::back::spv::Options::default(),
+                Some(&pipeline),
+            )
+        });
+        match written {
+            Ok(Ok(words)) => assert!(!words.is_empty(), "{name}: {}: no SPIR-V", entry.name),
+            Ok(Err(e)) => panic!("{name}: {}: SPIR-V: {e}", entry.name),
+            Err(_) => panic!("{name}: {}: the SPIR-V writer panicked", entry.name),
+        }
+    }
     module
 }
 
@@ -88,7 +110,7 @@ fn rust_mirrors_match_the_wgsl_layouts() {
         "FieldParams",
         size_of::<FieldParams>(),
         fields!(FieldParams: center, size, right, resolution, up, divisions, eye, nu, alpha, beta, epsilon,
-            point_count, line_count, torus_count, curve_count, integrator, tolerance, jitter, seed, gauss_order),
+            point_count, line_count, torus_count, curve_count, integrator, pad0, jitter, seed, gauss_order),
     );
     check_struct(
         &field,

@@ -131,6 +131,23 @@ pub fn nearest_on_chain(control_points: &[DVec3], p: DVec3) -> Nearest {
     best
 }
 
+/// A chain at the chain parameter `t = (j + t_j) / k`: the point, its first and second derivatives in the
+/// segment's own parameter `t_j`, and whether `t_j` is an end of the segment (0 or 1).
+pub fn chain_frame(control_points: &[DVec3], t: f64) -> (DVec3, DVec3, DVec3, bool) {
+    let k = (control_points.len() - 1) / 2;
+    let x = t.clamp(0.0, 1.0) * k as f64;
+    let j = (x.floor() as usize).min(k - 1);
+    let b = &control_points[2 * j..2 * j + 3];
+    let segment = Segment::from_bezier(b[0], b[1], b[2]);
+    let local = x - j as f64;
+    (
+        segment.at(local),
+        2.0 * segment.c2 * local + segment.c1,
+        2.0 * segment.c2,
+        local <= 0.0 || local >= 1.0,
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

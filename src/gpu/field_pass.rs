@@ -36,7 +36,7 @@ pub mod gpu_data {
         pub torus_count: u32, // 84
         pub curve_count: u32, // 88
         pub integrator: u32,  // 92: 0 simpson, 1 adaptive
-        pub tolerance: f32,   // 96: per term, before its coefficient (adaptive::term_tolerance)
+        pub pad0: f32,        // 96
         pub jitter: u32,      // 100
         pub seed: u32,        // 104
         pub gauss_order: u32, // 108: adaptive: Gauss-Legendre nodes (adaptive::gauss_order)
@@ -138,11 +138,19 @@ struct Packed {
 /// Loop iterations one invocation may spend: Mesa's llvmpipe and lavapipe stop all loops of an invocation after
 /// 65535 iterations in all (silently); this leaves room for the estimate's slack.
 const ITERATION_BUDGET: u64 = 30_000;
-/// Loop iterations the adaptive integrator spends on a curve's term at most, per evaluation of its distance: the
-/// scan and its refinement, the panels, and two per bisection (`adaptive::SPLITS`).
-const CURVE_EVALUATIONS: u64 = 60
-    + 2 * 3 * crate::adaptive::PANELS as u64
-    + 2 * (2 * crate::adaptive::PANELS as u64 + 2 * crate::adaptive::SPLITS as u64);
+/// Evaluations of a curve's distance the adaptive integrator spends on its term at most (each a loop over its
+/// segments): the scan, the samples at its ends, the kink search's probes, the Newton steps of its closest
+/// approaches, and Gauss-Legendre on every cut (at most two pieces, each cut at its flat top's ends, and the
+/// kinks), `MAX_GAUSS_PANELS` rules of 16 nodes each.
+const CURVE_EVALUATIONS: u64 = {
+    use crate::adaptive::{KINK_ROUNDS, MAX_GAUSS_PANELS, MAX_KINKS, PEAK_NEWTON, SCAN};
+    let cuts = 2 + 2 * 2 + MAX_KINKS as u64;
+    (SCAN as u64 + 1)
+        + 2
+        + 2 * KINK_ROUNDS as u64 * MAX_KINKS as u64
+        + 2 * PEAK_NEWTON as u64
+        + cuts * MAX_GAUSS_PANELS as u64 * 16
+};
 /// Loop iterations of a point's, a line's or a torus's term at most: Newton on the ring, then three pieces of
 /// three cuts, each of at most `MAX_GAUSS_PANELS` rules of 8 pairs.
 const SMOOTH_ITERATIONS: u64 = 20 + 3 * 3 * crate::adaptive::MAX_GAUSS_PANELS as u64 * 8;
@@ -234,7 +242,7 @@ fn pack(scene: &Scene, billboard: &Billboard) -> Packed {
                 Integrator::Simpson => 0,
                 Integrator::Adaptive => 1,
             },
-            tolerance: crate::adaptive::term_tolerance(s, i.tolerance) as f32,
+            pad0: 0.0,
             jitter: i.jitter.is_some() as u32,
             seed: i.jitter.unwrap_or(0),
             gauss_order: crate::adaptive::gauss_order(i.tolerance),
