@@ -18,22 +18,28 @@
 //!   hyperbola, `sqrt(rho*^2 + a (s - s*)^2)`, with a kink where the ray crosses the axis: that is a feature of
 //!   width `rho* / sqrt(a)`, and on either side of it Newton's method finds the ring's closest approach (a ray
 //!   can pass close to a ring twice, once on each side), with no sampling;
-//! - curves: the local minima of d^2 on a scan of `SCAN + 1` samples (the two deepest), each refined by one
-//!   parabolic step.
+//! - curves: the local minima of d^2 on a scan of `SCAN + 1` samples (the two deepest), each refined by Newton
+//!   steps on the exact slope and curvature of d^2 along the ray (the nearest point moves perpendicular to the
+//!   distance, so the slope is that of the distance to a fixed point, and its velocity follows from the
+//!   stationarity condition).
 //!
 //! The features, sorted along the ray, share it into pieces: each stretch of the ray goes to the feature whose map
-//! is densest there (`share_ray`), so a narrow peak keeps its shoulders beside a broad feature. Where a point, a
-//! line or a torus comes closer than eps, the falloff's flat top `1 / eps` has a kink at each end; the piece is
-//! cut there too (exactly for points and lines, where d^2 is exactly quadratic).
+//! is densest there (`share_ray`), so a narrow peak keeps its shoulders beside a broad feature. Where a source
+//! comes closer than eps, the falloff's flat top `1 / eps` has a kink at each end; the piece is cut there too
+//! (exactly for points and lines, where d^2 is exactly quadratic).
 //!
-//! **Rules.** Points, lines and tori: in u each cut of a piece is smooth (analytic), and Gauss-Legendre with
-//! `gauss_order(tolerance)` nodes (6 to 16) on each `U_PANEL` of u converges geometrically; the order grows as
-//! the tolerance shrinks (measured: on the papers' torus, 10 nodes are within 2e-7 of the converged f64 value in
-//! every texel, with about 19 evaluations of the torus a ray against Simpson's 201). Curves: the nearest point
-//! of a chain jumps where the ray crosses the chain's medial surface, a kink in d (and a step in W) that no fixed
-//! rule converges over, so a curve's pieces are integrated by adaptive Simpson, `PANELS` panels each bisected
-//! (at most `DEPTH` times) while its halves disagree with it by more than the tolerance allows. The tolerance is
-//! shared between the curves and every other source in proportion to their coefficients.
+//! **Kinks of a curve.** A chain's distance along a ray is smooth except where its nearest point jumps (the ray
+//! crosses the chain's medial surface: a kink in d, a step in W), stops at or leaves an end of the chain (the
+//! end's normal plane: a jump in d's second derivative) or passes a joint (the joint's normal plane, where the
+//! curvature changes). Ends and joints are cut in closed form where the scan shows the nearest point there;
+//! jumps are found from the scan too: the nearest point's velocity predicts where it should land, a miss of more
+//! than `JUMP` times the distance is a jump, and `find_kink` brackets it where the two branches' models cross.
+//!
+//! **Rule.** Between its cuts each piece is analytic in u, and Gauss-Legendre with `gauss_order(tolerance)` nodes
+//! (6 to 16) on each `U_PANEL` of u converges geometrically; the order grows as the tolerance shrinks (measured:
+//! on the papers' torus, 10 nodes are within 2e-7 of the converged f64 value in every texel, with about 19
+//! evaluations of the torus a ray against Simpson's 201; on the papers' Bezier scene, within 7e-6 with about 38
+//! evaluations of the chain).
 //!
 //! `shaders/field.wgsl` is the f32 twin of this file: `integrate_adaptive` for points, lines and tori and
 //! `integrate_adaptive_curves` for curves, dispatched apart (`gpu::field_pass::plan_chunks`).
@@ -43,7 +49,7 @@ use glam::DVec3;
 use crate::field::{Sources, curve, falloff, line_distance, torus_distance, wseries};
 use crate::integrate::{Integration, zeta};
 
-/// Intervals of the scan that locates a torus's or a curve's closest approaches.
+/// Intervals of the scan along a curve's ray, which finds its closest approaches and kinks.
 pub const SCAN: u32 = 6;
 /// A chain's nearest point jumps between two samples where it lands farther than this many times the distance
 /// from where a smooth motion would have taken it.
