@@ -712,7 +712,8 @@ fn chain_newton(x: ChainSample, lo: f32, hi: f32) -> f32 {
     return clamp(t, lo, hi);
 }
 
-// How far the nearest point lands at b from its smooth motion from a, relative to the distance. Twin of miss.
+// How far the nearest point lands at b from its smooth motion from a, relative to the distance (at least eps).
+// Twin of miss.
 fn miss(a: ChainSample, b: ChainSample) -> f32 {
     if b.t <= a.t {
         return 0.0;
@@ -721,7 +722,7 @@ fn miss(a: ChainSample, b: ChainSample) -> f32 {
         return F32_MAX;
     }
     let glide = (a.velocity + b.velocity) * (0.5 * (b.t - a.t));
-    return min(length(b.point - a.point - glide) / max(sqrt(min(a.d2, b.d2)), 1e-30), F32_MAX);
+    return min(length(b.point - a.point - glide) / max(sqrt(min(a.d2, b.d2)), max(params.epsilon, 1e-30)), F32_MAX);
 }
 
 // The ray's crossing of the bisector plane of a and b, clamped to [lo, hi]. Twin of bisector.
@@ -930,6 +931,7 @@ fn curve_features(ray: Ray) -> CurveFeatures {
             var right = after;
             var next_left = after;
             var cut = -1.0;
+            var end_sample = after;
             for (; e < 2u; e++) {
                 let t = end_t[e];
                 let at_end = end_at[e];
@@ -937,6 +939,7 @@ fn curve_features(ray: Ray) -> CurveFeatures {
                     continue;
                 }
                 let moving = chain_sample(ray, t, true);
+                end_sample = moving;
                 var at_rest = moving;
                 at_rest.velocity = vec3<f32>(0.0);
                 at_rest.curvature = 2.0 * dot(ray.dir, ray.dir);
@@ -950,11 +953,27 @@ fn curve_features(ray: Ray) -> CurveFeatures {
                 e++;
                 break;
             }
+            if cut >= 0.0 {
+                push_kink(&kinks, cut);
+                // Through the end closer than eps: the flat top ends where the end point is eps away.
+                let eps = params.epsilon;
+                if end_sample.d2 < eps * eps {
+                    let q = ray.start - end_sample.point;
+                    let a = dot(ray.dir, ray.dir);
+                    let b = dot(ray.dir, q);
+                    let root = sqrt(max(b * b - a * (dot(q, q) - eps * eps), 0.0));
+                    for (var r = 0u; r < 2u; r++) {
+                        let t = (-b + select(-root, root, r == 1u)) / a;
+                        if t > 0.0 && t < 1.0 {
+                            push_kink(&kinks, t);
+                        }
+                    }
+                }
+            }
             search_jumps(ray, left, right, &kinks);
             if cut < 0.0 {
                 break;
             }
-            push_kink(&kinks, cut);
             left = next_left;
         }
         // The chain's joints: where the nearest point passes one, a cut at the joint's normal plane (two at a

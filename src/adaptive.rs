@@ -436,11 +436,26 @@ fn chain_features(
             } else {
                 (moving, at_rest)
             };
-            search_jumps(&sample, (s, dir), left, x, kinks);
             kinks.push(t);
+            // A ray through the end closer than eps: the falloff's flat top ends where the end point is eps away.
+            if moving.d2 < eps * eps {
+                let q = s - moving.point;
+                let (a, b, c) = (
+                    dir.length_squared(),
+                    dir.dot(q),
+                    q.length_squared() - eps * eps,
+                );
+                let root = (b * b - a * c).max(0.0).sqrt();
+                for t in [(-b - root) / a, (-b + root) / a] {
+                    if t > 0.0 && t < 1.0 {
+                        kinks.push(t);
+                    }
+                }
+            }
+            search_jumps(&sample, (s, dir), left, x, eps, kinks);
             left = y;
         }
-        search_jumps(&sample, (s, dir), left, after, kinks);
+        search_jumps(&sample, (s, dir), left, after, eps, kinks);
         // The chain's joints: where its nearest point passes one, the chain's curvature changes (it is smooth
         // only to first order there), and d's second derivative jumps, where the ray crosses the joint's normal
         // plane (two planes at a corner, with the joint nearest between them). Cut there where the interval's
@@ -493,18 +508,19 @@ fn search_jumps(
     ray: (DVec3, DVec3),
     a: ChainSample,
     b: ChainSample,
+    eps: f64,
     kinks: &mut Kinks,
 ) {
-    if miss(&a, &b) <= JUMP {
+    if miss(&a, &b, eps) <= JUMP {
         return;
     }
     let (kink, a1, b1) = find_kink(sample, ray, a, b);
     kinks.push(kink);
-    if miss(&a1, &b1) <= JUMP {
+    if miss(&a1, &b1, eps) <= JUMP {
         return;
     }
     for (x, y) in [(a, a1), (b1, b)] {
-        if miss(&x, &y) > JUMP {
+        if miss(&x, &y, eps) > JUMP {
             kinks.push(find_kink(sample, ray, x, y).0);
         }
     }
@@ -597,9 +613,9 @@ impl ChainSample {
 }
 
 /// How far the nearest point of a chain lands between two samples from where it would be had it moved smoothly
-/// (the trapezoid rule on its velocity), relative to the distance: over `JUMP`, it jumped (or its velocity is
-/// unknown, infinite).
-fn miss(a: &ChainSample, b: &ChainSample) -> f64 {
+/// (the trapezoid rule on its velocity), relative to the distance (at least eps: closer, the falloff is flat and
+/// a jump there is only W's): over `JUMP`, it jumped (or its velocity is unknown, infinite).
+fn miss(a: &ChainSample, b: &ChainSample, eps: f64) -> f64 {
     if b.t <= a.t {
         return 0.0;
     }
@@ -608,7 +624,7 @@ fn miss(a: &ChainSample, b: &ChainSample) -> f64 {
     }
     let moved = b.point - a.point;
     let smooth = (a.velocity + b.velocity) * (0.5 * (b.t - a.t));
-    let miss = (moved - smooth).length() / a.d2.min(b.d2).sqrt().max(1e-30);
+    let miss = (moved - smooth).length() / a.d2.min(b.d2).sqrt().max(eps).max(1e-30);
     if miss.is_finite() { miss } else { f64::MAX }
 }
 
