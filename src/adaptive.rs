@@ -940,6 +940,29 @@ mod tests {
         )
     }
 
+    /// Every ray's B by the adaptive integrator within each tolerance of Simpson's with 2^18 intervals.
+    fn assert_within_each_tolerance(
+        sources: &Sources,
+        rays: &[(DVec3, DVec3)],
+        tolerances: &[f64],
+    ) {
+        let want: Vec<f64> = rays
+            .iter()
+            .map(|&(s, e)| reference(sources, s, e, 1 << 18))
+            .collect();
+        for &tolerance in tolerances {
+            let mut st = settings();
+            st.tolerance = tolerance;
+            for (&(s, e), &want) in rays.iter().zip(&want) {
+                let got = brightness(sources, &st, s, e);
+                assert!(
+                    (got - want).abs() < tolerance,
+                    "tolerance {tolerance:e}: {got} vs {want} on {s} -> {e}"
+                );
+            }
+        }
+    }
+
     #[test]
     fn a_point_on_the_ray_is_integrated_to_high_accuracy() {
         // The peak is 1 / max(eps, |s - 0.37| L), a sharp spike that uniform Simpson needs thousands of samples
@@ -1045,21 +1068,7 @@ mod tests {
                 (eye, eye + (target - eye) * 2.0)
             })
             .collect();
-        let want: Vec<f64> = rays
-            .iter()
-            .map(|&(s, e)| reference(&sources, s, e, 1 << 18))
-            .collect();
-        for tolerance in [1e-3, 1e-4, 1e-5, 1e-6] {
-            let mut st = settings();
-            st.tolerance = tolerance;
-            for (&(s, e), &want) in rays.iter().zip(&want) {
-                let got = brightness(&sources, &st, s, e);
-                assert!(
-                    (got - want).abs() < tolerance,
-                    "tolerance {tolerance:e}: {got} vs {want} on {s} -> {e}"
-                );
-            }
-        }
+        assert_within_each_tolerance(&sources, &rays, &[1e-3, 1e-4, 1e-5, 1e-6]);
     }
 
     /// An arch, one segment from (-1, 0, 0) over (0, 2, 0) to (1, 0, 0), symmetric about x = 0.
@@ -1137,20 +1146,6 @@ mod tests {
         // Through the chain's joint, 0.004 off it.
         let joint = DVec3::new(1.0, 0.004, 0.0);
         rays.push((eye, eye + (joint - eye) * 2.0));
-        let want: Vec<f64> = rays
-            .iter()
-            .map(|&(s, e)| reference(&sources, s, e, 1 << 18))
-            .collect();
-        for tolerance in [1e-3, 1e-4, 1e-5] {
-            let mut st = settings();
-            st.tolerance = tolerance;
-            for (&(s, e), &want) in rays.iter().zip(&want) {
-                let got = brightness(&sources, &st, s, e);
-                assert!(
-                    (got - want).abs() < tolerance,
-                    "tolerance {tolerance:e}: {got} vs {want} on {s} -> {e}"
-                );
-            }
-        }
+        assert_within_each_tolerance(&sources, &rays, &[1e-3, 1e-4, 1e-5]);
     }
 }
