@@ -1040,21 +1040,60 @@ fn curve_features(ray: Ray) -> CurveFeatures {
     return out;
 }
 
-// A curve's integrand in s at t clamped to the piece, f = w / max(eps, d) zeta(t) (before the coefficient).
-fn curve_f(ray: Ray, p: Peak, t_in: f32) -> f32 {
+// No segment known yet (nearest_on_chain_from).
+const NO_SEGMENT: u32 = 0xffffffffu;
+
+// Twin of curve::nearest_on_chain_from: the nearest point of the chain to p where it lies on segment *segment
+// (NO_SEGMENT where not known) or has moved on from it through a joint: that segment's nearest point unless it
+// sits at one of the segment's joints, and then the whole chain's, leaving *segment on its segment. (param, d).
+fn nearest_on_chain_from(c: CurveSource, p: vec3<f32>, segment: ptr<function, u32>) -> vec2<f32> {
+    var lo = 0u;
+    var hi = c.segment_count;
+    if *segment < c.segment_count {
+        lo = *segment;
+        hi = lo + 1u;
+    }
+    var best = vec2<f32>(0.0, F32_MAX);
+    var best_j = lo;
+    // Two passes at most: the piece's segment, then (at a joint) the whole chain. One call site of the solver.
+    loop {
+        for (var j = lo; j < hi; j++) {
+            let n = nearest_on_segment(segments[c.first_segment + j], p);
+            if n.y < best.y {
+                best = n;
+                best_j = j;
+            }
+        }
+        let at_joint = (best.x == 0.0 && best_j > 0u) || (best.x == 1.0 && best_j + 1u < c.segment_count);
+        if hi - lo == c.segment_count || !at_joint {
+            break;
+        }
+        lo = 0u;
+        hi = c.segment_count;
+        best = vec2<f32>(0.0, F32_MAX);
+        best_j = 0u;
+    }
+    *segment = best_j;
+    return vec2<f32>((f32(best_j) + best.x) / f32(c.segment_count), best.y);
+}
+
+// A curve's integrand in s at t clamped to the piece, f = w / max(eps, d) zeta(t) (before the coefficient),
+// the nearest point solved on the piece's segment (*segment).
+fn curve_f(ray: Ray, p: Peak, t_in: f32, segment: ptr<function, u32>) -> f32 {
     let t = clamp(t_in, p.lo, p.hi);
     let c = curves[ray.index];
-    let n = curve_nearest(c, ray.start + ray.dir * t);
+    let n = nearest_on_chain_from(c, ray.start + ray.dir * t, segment);
     return wseries(c, n.x) * falloff(n.y, params.epsilon) * zeta_at(t);
 }
 
-// Gauss-Legendre on [a, b] in u of a curve's term. Twin of gauss_legendre.
-fn curve_gauss_legendre(ray: Ray, p: Peak, a: f32, b: f32) -> f32 {
+// Gauss-Legendre on [a, b] in u of a curve's term, node c - r x before c + r x. Twin of gauss_legendre.
+fn curve_gauss_legendre(ray: Ray, p: Peak, a: f32, b: f32, segment: ptr<function, u32>) -> f32 {
     let pairs = gauss_pairs();
     var sum = 0.0;
     for (var k = pairs.x; k < pairs.y; k++) {
         let n = gauss_pair(p, a, b, k);
-        sum += n.y * curve_f(ray, p, n.x) + n.w * curve_f(ray, p, n.z);
+        sum += n.y * curve_f(ray, p, n.x, segment);
+        sum += n.w * curve_f(ray, p, n.z, segment);
     }
     return sum;
 }
@@ -1081,9 +1120,10 @@ fn integrate_curve_term(index: u32, s_point: vec3<f32>, e_point: vec3<f32>) -> f
             let b = cut.at[j + 1u];
             let panels = u32(clamp(ceil((b - a) / U_PANEL), 1.0, f32(MAX_GAUSS_PANELS)));
             let width = (b - a) / f32(panels);
+            var segment = NO_SEGMENT;
             for (var i = 0u; i < panels; i++) {
                 let pa = a + width * f32(i);
-                sum += curve_gauss_legendre(ray, p, pa, pa + width);
+                sum += curve_gauss_legendre(ray, p, pa, pa + width, &segment);
             }
         }
     }

@@ -44,6 +44,8 @@
 //! `shaders/field.wgsl` is the f32 twin of this file: `integrate_adaptive` for points, lines and tori and
 //! `integrate_adaptive_curves` for curves, dispatched apart (`gpu::field_pass::plan_chunks`).
 
+use std::cell::Cell;
+
 use glam::DVec3;
 
 use crate::field::{Sources, curve, falloff, line_distance, torus_distance, wseries};
@@ -152,6 +154,18 @@ impl Term<'_> {
                 let n = curve::nearest_on_chain(&s.control_points, p);
                 (n.distance, wseries::evaluate(&s.weights, n.t))
             }
+        }
+    }
+
+    /// `distance` at a point of one piece of the ray, where a chain's nearest point stays on one segment or
+    /// moves on from it through a joint: only that segment is solved (`curve::nearest_on_chain_from`).
+    fn distance_on_piece(&self, p: DVec3, segment: &mut Option<usize>) -> (f64, f64) {
+        match self {
+            Term::Curve(s) => {
+                let n = curve::nearest_on_chain_from(&s.control_points, p, segment);
+                (n.distance, wseries::evaluate(&s.weights, n.t))
+            }
+            _ => self.distance(p),
         }
     }
 
@@ -875,8 +889,13 @@ fn integrate_term(term: Term, s: DVec3, e: DVec3, settings: &Integration) -> f64
     }
     let found = features(term, s, e, SCAN, settings.epsilon);
     let dir = e - s;
+    // A chain's nearest point stays on one segment between cuts, or passes a joint continuously: each cut
+    // piece starts with a whole-chain search, at its first node, and then solves that segment only.
+    let segment = Cell::new(None);
     let f = |t: f64| {
-        let (d, w) = term.distance(s + dir * t);
+        let mut on = segment.get();
+        let (d, w) = term.distance_on_piece(s + dir * t, &mut on);
+        segment.set(on);
         w * falloff(d, settings.epsilon) * zeta(t, settings.alpha, settings.beta)
     };
     let order = gauss_order(settings.tolerance);
@@ -896,6 +915,7 @@ fn integrate_term(term: Term, s: DVec3, e: DVec3, settings: &Integration) -> f64
         let (cut, n) = cuts(p, u0, u1, kinks);
         for w in cut[..n].windows(2) {
             let (a, b) = (w[0], w[1]);
+            segment.set(None);
             let panels = ((b - a) / U_PANEL)
                 .ceil()
                 .clamp(1.0, MAX_GAUSS_PANELS as f64) as u32;
