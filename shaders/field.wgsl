@@ -831,9 +831,10 @@ fn push_kink(kinks: ptr<function, Kinks>, t: f32) {
 }
 
 // The jumps of the nearest point between a and b: the kink where it lands far from its smooth motion, and
-// where the bracket left around it still jumps, one more search on either side. Twin of search_jumps (one call
-// site of find_kink: drivers inline every call).
-fn search_jumps(ray: Ray, a: ChainSample, b: ChainSample, kinks: ptr<function, Kinks>) {
+// where the bracket left around it still jumps, one more search on either side. Returns the bracket left around
+// the first kink, (t, param) of either end, t = -1 where there was none. Twin of search_jumps (one call site of
+// find_kink: drivers inline every call).
+fn search_jumps(ray: Ray, a: ChainSample, b: ChainSample, kinks: ptr<function, Kinks>) -> vec4<f32> {
     var a1 = a;
     var b1 = b;
     for (var round = 0u; round < 3u; round++) {
@@ -846,7 +847,7 @@ fn search_jumps(ray: Ray, a: ChainSample, b: ChainSample, kinks: ptr<function, K
         }
         if miss(x, y) <= JUMP {
             if round == 0u {
-                return;
+                return vec4<f32>(-1.0, 0.0, -1.0, 0.0);
             }
             continue;
         }
@@ -855,7 +856,35 @@ fn search_jumps(ray: Ray, a: ChainSample, b: ChainSample, kinks: ptr<function, K
             a1 = x;
             b1 = y;
             if miss(a1, b1) <= JUMP {
-                return;
+                break;
+            }
+        }
+    }
+    return vec4<f32>(a1.t, a1.param, b1.t, b1.param);
+}
+
+// The cuts at the chain's joints between two samples x and y, (t, param), with no jump between them: where the
+// nearest point passes a joint, the joint's normal plane (two at a corner) where the samples lie on either side
+// of the joint. Twin of joint_cuts.
+fn joint_cuts(ray: Ray, x: vec2<f32>, y: vec2<f32>, kinks: ptr<function, Kinks>) {
+    let c = curves[ray.index];
+    for (var j = 1u; j < c.segment_count; j++) {
+        let pj = f32(j) / f32(c.segment_count);
+        if (x.y - pj) * (y.y - pj) > 0.0 {
+            continue;
+        }
+        let into = segments[c.first_segment + j - 1u];
+        let out_of = segments[c.first_segment + j];
+        let joint = out_of.c0;
+        let t_in = 2.0 * into.c2 + into.c1;
+        let t_out = out_of.c1;
+        let cr = cross(t_in, t_out);
+        let corner = dot(cr, cr) > 1e-12 * dot(t_in, t_in) * dot(t_out, t_out);
+        for (var plane = 0u; plane < select(1u, 2u, corner); plane++) {
+            let tangent = select(t_out, t_in, plane == 1u);
+            let t = dot(joint - ray.start, tangent) / dot(ray.dir, tangent);
+            if t > x.x && t < y.x {
+                push_kink(kinks, t);
             }
         }
     }
@@ -924,8 +953,10 @@ fn curve_features(ray: Ray) -> CurveFeatures {
             continue;
         }
         offer(&minima, before, g_before_before, after.d2);
-        // The interval's parts between the ends' normal planes inside it (one call site of search_jumps).
+        // The interval's parts between the ends' normal planes inside it (one call site of search_jumps). calm
+        // starts the stretch since the last jump, which the joints' cuts look at: (t, param).
         var left = before;
+        var calm = vec2<f32>(before.t, before.param);
         var e = 0u;
         for (var part = 0u; part < 3u; part++) {
             var right = after;
@@ -970,34 +1001,21 @@ fn curve_features(ray: Ray) -> CurveFeatures {
                     }
                 }
             }
-            search_jumps(ray, left, right, &kinks);
+            let bracket = search_jumps(ray, left, right, &kinks);
+            if bracket.x >= 0.0 {
+                // Up to the jump, and inside its bracket (the nearest point may have passed a joint as well).
+                for (var q = 0u; q < 2u; q++) {
+                    joint_cuts(ray, select(calm, bracket.xy, q == 1u), select(bracket.xy, bracket.zw, q == 1u), &kinks);
+                }
+                calm = bracket.zw;
+            }
             if cut < 0.0 {
                 break;
             }
             left = next_left;
         }
-        // The chain's joints: where the nearest point passes one, a cut at the joint's normal plane (two at a
-        // corner) inside the interval.
-        for (var j = 1u; j < c.segment_count; j++) {
-            let pj = f32(j) / f32(c.segment_count);
-            if (before.param - pj) * (after.param - pj) > 0.0 {
-                continue;
-            }
-            let into = segments[c.first_segment + j - 1u];
-            let out_of = segments[c.first_segment + j];
-            let joint = out_of.c0;
-            let t_in = 2.0 * into.c2 + into.c1;
-            let t_out = out_of.c1;
-            let cr = cross(t_in, t_out);
-            let corner = dot(cr, cr) > 1e-12 * dot(t_in, t_in) * dot(t_out, t_out);
-            for (var plane = 0u; plane < select(1u, 2u, corner); plane++) {
-                let tangent = select(t_out, t_in, plane == 1u);
-                let t = dot(joint - ray.start, tangent) / dot(ray.dir, tangent);
-                if t > before.t && t < after.t {
-                    push_kink(&kinks, t);
-                }
-            }
-        }
+        // The stretch since the last jump.
+        joint_cuts(ray, calm, vec2<f32>(after.t, after.param), &kinks);
         g_before_before = before.d2;
         before = after;
     }
