@@ -34,6 +34,13 @@
 //! curvature changes). Ends and joints are cut in closed form where the scan shows the nearest point there;
 //! jumps are found from the scan too: the nearest point's velocity predicts where it should land, a miss of more
 //! than `JUMP` times the distance is a jump, and `find_kink` brackets it where the two branches' models cross.
+//! Joints are looked for on each stretch between jumps and inside each jump's bracket: a nearest point can jump
+//! onto a segment and then pass a joint within one interval of the scan.
+//!
+//! **One segment a piece.** Between its cuts a chain's nearest point neither jumps nor passes a joint, so it
+//! stays on one segment: a piece's first node searches the whole chain, the others solve only that segment's
+//! cubic (`curve::nearest_on_chain_from`, which falls back to the whole chain where the segment's nearest point
+//! sits at a joint). On the two-segment Bezier scene that takes the curve pass from about 490 to 420 ms at 256.
 //!
 //! **Rule.** Between its cuts each piece is analytic in u, and Gauss-Legendre with `gauss_order(tolerance)` nodes
 //! (6 to 16) on each `U_PANEL` of u converges geometrically; the order grows as the tolerance shrinks (measured:
