@@ -160,6 +160,13 @@ fn curve_iterations(segments: u32) -> u64 {
     1 + 12 * segments as u64
 }
 
+/// Loop iterations of a curve's term in the adaptive integrator at most, `iterations` those of one evaluation of
+/// its distance: each evaluation may first solve the piece's segment alone, then the whole chain
+/// (`nearest_on_chain_from` in the shader), in an outer loop of its own.
+fn adaptive_curve_iterations(iterations: u64) -> u64 {
+    CURVE_EVALUATIONS * (iterations + curve_iterations(1) + 1)
+}
+
 /// The pipelines: simpson's, the adaptive integrator's for points, lines and tori, and for curves.
 const SIMPSON: u32 = 0;
 const ADAPTIVE_SMOOTH: u32 = 1;
@@ -194,7 +201,7 @@ fn plan_chunks(p: &Packed) -> Vec<Chunk> {
         .chain(
             curves
                 .iter()
-                .map(|&c| (CURVE_EVALUATIONS * (c + 1), ADAPTIVE_CURVES)),
+                .map(|&c| (adaptive_curve_iterations(c), ADAPTIVE_CURVES)),
         );
     let mut chunks = Vec::new();
     let (mut first, mut cost, mut pipeline) = (0u32, 0u64, ADAPTIVE_SMOOTH);
@@ -710,7 +717,7 @@ mod tests {
             if c.pipeline == ADAPTIVE_CURVES && c.count > 1 {
                 let cost: u64 = (c.first..last)
                     .map(|t| p.curves[(t - 3) as usize].segment_count)
-                    .map(|k| CURVE_EVALUATIONS * (curve_iterations(k) + 1))
+                    .map(|k| adaptive_curve_iterations(curve_iterations(k)))
                     .sum();
                 assert!(cost <= ITERATION_BUDGET, "{c:?} costs {cost}");
             }
