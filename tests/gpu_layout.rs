@@ -162,4 +162,11 @@ fn rust_mirrors_match_the_wgsl_layouts() {
         size_of::<BillboardParams>(),
         fields!(BillboardParams: view_proj, center, size, right, resolution, up, transparent, energy),
     );
+    let average = parse_and_validate("average", shaders::AVERAGE_PASS);
+    check_struct(
+        &average,
+        "AverageParams",
+        size_of::<AverageParams>(),
+        fields!(AverageParams: weight, pad0, pad1, pad2),
+    );
 }

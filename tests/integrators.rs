@@ -205,6 +205,78 @@ fn jittered_renders_are_the_same_on_the_gpu_and_converge_to_the_reference() {
 }
 
 #[test]
+fn averaged_frames_are_the_mean_of_their_seeds_and_their_noise_falls() {
+    let mut gpu = HeadlessRenderer::new().expect("a GPU adapter (lavapipe in CI)");
+    let mut scene = preset("divisions_torus_t4.0");
+    let w = 24u32;
+    scene.billboard.resolution = w;
+    scene.integration.integrator = Integrator::Simpson;
+    scene.integration.divisions = 8;
+    scene.integration.jitter = Some(5);
+    let bb = scene.place_billboard(1.0);
+    let reference = converged(&scene);
+    let mean_abs = |v: &[f32]| {
+        v.iter()
+            .zip(&reference)
+            .map(|(&a, b)| (a as f64 - b).abs())
+            .sum::<f64>()
+            / v.len() as f64
+    };
+
+    // The oracle: the f64 twin's renders with seeds 5, 6, ..., averaged on the CPU.
+    let frames = 6u32;
+    let mut cpu_mean = vec![0.0f64; (w * w) as usize];
+    for k in 0..frames {
+        let mut s = scene.clone();
+        s.integration.jitter = Some(5 + k);
+        for (acc, v) in cpu_mean
+            .iter_mut()
+            .zip(reference::render_brightness(&s, &bb).values)
+        {
+            *acc += v / frames as f64;
+        }
+    }
+    gpu.set_average_frames(frames);
+    let first = gpu.brightness(&scene, &bb).unwrap();
+    let mut last = first.clone();
+    for _ in 1..frames {
+        last = gpu.brightness(&scene, &bb).unwrap();
+    }
+    let worst = last
+        .iter()
+        .zip(&cpu_mean)
+        .map(|(&g, &c)| (g as f64 - c).abs() / c.abs().max(0.01))
+        .fold(0.0, f64::max);
+    assert!(
+        worst <= 1e-3,
+        "mean of {frames} frames: worst relative difference {worst:.2e}"
+    );
+    // Full: the scene is not rendered again, and the picture stays.
+    let renders = gpu.field().dispatch_count();
+    assert_eq!(gpu.brightness(&scene, &bb).unwrap(), last);
+    assert_eq!(gpu.field().dispatch_count(), renders);
+
+    // A change starts a new mean, from the first seed again.
+    scene.integration.alpha *= 1.5;
+    let changed = gpu.brightness(&scene, &bb).unwrap();
+    gpu.set_average_frames(1);
+    assert_eq!(gpu.brightness(&scene, &bb).unwrap(), changed);
+    scene.integration.alpha /= 1.5;
+
+    // Unbiased, so the mean's error is noise, falling as 1/sqrt(frames): 32 frames, about 1/5.7 of one's.
+    gpu.set_average_frames(32);
+    let mut mean = Vec::new();
+    for _ in 0..32 {
+        mean = gpu.brightness(&scene, &bb).unwrap();
+    }
+    let (one, many) = (mean_abs(&first), mean_abs(&mean));
+    assert!(
+        many < 0.35 * one,
+        "error of one jittered frame {one:.3e}, of the mean of 32 {many:.3e}"
+    );
+}
+
+#[test]
 fn long_integrals_are_not_cut_short_by_a_drivers_loop_limit() {
     // Mesa's llvmpipe and lavapipe stop all loops of an invocation after 65535 iterations in all, silently:
     // n = 8192 on a two-segment curve is over 200 000. The field pass splits such integrals over dispatches.

@@ -148,3 +148,69 @@ fn a_lost_device_is_recreated_keeping_the_scene_its_history_and_the_picture() {
     v.app.undo();
     assert_eq!(v.app.scene(), &original, "the history survived the loss");
 }
+
+/// Runs frames until the UI stops asking for the next (its animations, such as a scroll bar fading in, end).
+fn settle(v: &mut OffscreenViewer) {
+    for _ in 0..60 {
+        if v.frame().unwrap() == (Outcome::Drawn { repaint_now: false }) {
+            return;
+        }
+    }
+    panic!("the viewer still repaints after 60 frames of a still view");
+}
+
+#[test]
+fn a_still_jittered_view_averages_its_frames_then_rests() {
+    let mut v = viewer();
+    let mean_abs = |a: &[[f32; 4]], b: &[[f32; 4]]| {
+        let sum: f64 = (a.iter().zip(b))
+            .map(|(p, q)| (0..3).map(|c| (p[c] - q[c]).abs() as f64).sum::<f64>())
+            .sum();
+        sum / (3 * a.len()) as f64
+    };
+    // What the jittered frames converge to: the adaptive integrator's picture.
+    let converged = v.viewport_image().unwrap();
+    assert!(lit_share(&converged) > 0.01);
+
+    let i = &mut v.app.doc.scene.integration;
+    i.integrator = energywave::integrate::Integrator::Simpson;
+    i.divisions = 6;
+    i.jitter = Some(3);
+    v.app.average_frames = 1;
+    settle(&mut v);
+    let one = v.viewport_image().unwrap();
+    assert_eq!(v.app.report().averaged, None);
+
+    // Averaging: each frame asks for the next until the mean holds them all, then the viewer rests.
+    v.app.average_frames = 24;
+    let renders = v.field_renders();
+    for k in 1..=24 {
+        let outcome = v.frame().unwrap();
+        assert_eq!(v.app.report().averaged, Some((k, 24)));
+        assert_eq!(
+            outcome,
+            Outcome::Drawn {
+                repaint_now: k < 24
+            },
+            "frame {k}"
+        );
+    }
+    assert_eq!(v.field_renders(), renders + 24);
+    assert_eq!(v.frame().unwrap(), Outcome::Drawn { repaint_now: false });
+    assert_eq!(
+        v.field_renders(),
+        renders + 24,
+        "a full mean is not rendered again"
+    );
+    let mean = v.viewport_image().unwrap();
+    let (e1, e24) = (mean_abs(&one, &converged), mean_abs(&mean, &converged));
+    assert!(
+        e24 < 0.4 * e1,
+        "mean difference from the converged picture: one frame {e1:.2e}, the mean of 24 {e24:.2e}"
+    );
+
+    // Orbiting starts a new mean.
+    energywave::viewer::navigation::orbit(&mut v.app.doc.scene.camera, 0.3, 0.0);
+    assert_eq!(v.frame().unwrap(), Outcome::Drawn { repaint_now: true });
+    assert_eq!(v.app.report().averaged, Some((1, 24)));
+}

@@ -5,6 +5,7 @@
 use wgpu::util::DeviceExt;
 
 use super::context::{GpuError, checked, texture_2d};
+use super::frame_average::FrameAverage;
 use super::shaders;
 use crate::field::curve::segments;
 use crate::geometry::Billboard;
@@ -367,6 +368,12 @@ pub struct FieldRenderer {
     uploaded: Option<Packed>,
     pending: bool,
     dispatches: u64,
+    /// The mean of the jittered frames rendered since the scene last changed.
+    average: FrameAverage,
+    /// How many jittered frames to average at most (1: none, each frame stands alone).
+    average_frames: u32,
+    /// How many frames the mean holds now.
+    averaged: u32,
 }
 
 impl FieldRenderer {
@@ -482,7 +489,40 @@ impl FieldRenderer {
             uploaded: None,
             pending: false,
             dispatches: 0,
+            average: FrameAverage::new(device),
+            average_frames: 1,
+            averaged: 0,
         }
+    }
+
+    /// While the scene stays the same, averages up to `frames` renders of the jittered integrator, frame k
+    /// (0-based) drawing its offsets with the seed `seed + k`; 1 (the default) renders each scene once. Applies
+    /// to jittered scenes only: the others are deterministic, and rendered once.
+    pub fn set_average_frames(&mut self, frames: u32) {
+        self.average_frames = frames.max(1);
+    }
+
+    /// Whether the uploaded scene is averaged over frames.
+    fn averaging(&self) -> bool {
+        self.average_frames > 1 && self.uploaded.as_ref().is_some_and(|p| p.params.jitter != 0)
+    }
+
+    /// While averaging: the frames the picture holds and the most it will hold.
+    pub fn averaged_frames(&self) -> Option<(u32, u32)> {
+        self.averaging()
+            .then_some((self.averaged, self.average_frames.max(self.averaged)))
+    }
+
+    /// The weight of the next frame of the mean, and the offsets' seed (frame `averaged`).
+    fn prepare_average_frame(&mut self, device: &wgpu::Device, queue: &wgpu::Queue) {
+        let (Some(packed), Some((texture, view))) = (&self.uploaded, &self.texture) else {
+            return;
+        };
+        let mut params = packed.params;
+        params.seed = params.seed.wrapping_add(self.averaged);
+        queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+        self.average
+            .prepare(device, queue, texture, view, self.averaged + 1);
     }
 
     /// Uploads what the texture depends on. Returns true when it changed (the next `encode` re-renders).
@@ -503,7 +543,13 @@ impl FieldRenderer {
         }
         let packed = pack(scene, billboard);
         if self.uploaded.as_ref() == Some(&packed) {
-            return Ok(false);
+            if !self.averaging() || self.averaged >= self.average_frames {
+                return Ok(false);
+            }
+            // The next frame of the average: new offsets, nothing else changes.
+            checked(device, || self.prepare_average_frame(device, queue))?;
+            self.pending = true;
+            return Ok(true);
         }
         checked(device, || {
             let mut rebind = self.bind_group.is_none();
@@ -549,6 +595,10 @@ impl FieldRenderer {
             }
         })?;
         self.uploaded = Some(packed);
+        self.averaged = 0;
+        if self.averaging() {
+            checked(device, || self.prepare_average_frame(device, queue))?;
+        }
         self.pending = true;
         Ok(true)
     }
@@ -616,6 +666,10 @@ impl FieldRenderer {
             pass.set_bind_group(0, bind_group, &[(k as u64 * self.chunk_stride) as u32]);
             pass.dispatch_workgroups(w.div_ceil(8), w.div_ceil(8), 1);
         }
+        if self.averaging() {
+            self.average.encode(&mut pass);
+            self.averaged += 1;
+        }
         self.pending = false;
         self.dispatches += 1;
         true
@@ -627,17 +681,30 @@ impl FieldRenderer {
             .texture
             .as_ref()
             .map_or(0, |(t, _)| field_texture_bytes(t.width()));
-        texture + self.params.size() + self.buffers.iter().map(|b| b.buffer.size()).sum::<u64>()
+        texture
+            + self.params.size()
+            + self.buffers.iter().map(|b| b.buffer.size()).sum::<u64>()
+            + self.average.gpu_bytes()
+    }
+
+    /// The brightness texture and its view (after the first `prepare`): the mean of the frames so far while
+    /// averaging, else the last frame.
+    fn shown(&self) -> Option<(&wgpu::Texture, &wgpu::TextureView)> {
+        if self.averaging() && self.averaged > 0 {
+            self.average.mean()
+        } else {
+            self.texture.as_ref().map(|(t, v)| (t, v))
+        }
     }
 
     /// The brightness texture (after the first `prepare`).
     pub fn texture(&self) -> Option<&wgpu::Texture> {
-        self.texture.as_ref().map(|(t, _)| t)
+        self.shown().map(|(t, _)| t)
     }
 
     /// A view of the brightness texture (after the first `prepare`).
     pub fn view(&self) -> Option<&wgpu::TextureView> {
-        self.texture.as_ref().map(|(_, v)| v)
+        self.shown().map(|(_, v)| v)
     }
 
     /// How many times the texture has been rendered.

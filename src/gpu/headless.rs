@@ -38,6 +38,12 @@ impl HeadlessRenderer {
         self.renderer.field()
     }
 
+    /// Averages up to `frames` jittered renders of an unchanged scene, one more each call
+    /// (`FieldRenderer::set_average_frames`); 1, the default, renders each scene once.
+    pub fn set_average_frames(&mut self, frames: u32) {
+        self.renderer.field_mut().set_average_frames(frames);
+    }
+
     /// B for every texel of `billboard` (W x W, rows from the top), rendered again only if the scene or the
     /// billboard changed since the last call.
     pub fn brightness(

@@ -6,6 +6,7 @@ mod billboard_pass;
 mod context;
 mod field_pass;
 mod frame;
+mod frame_average;
 mod headless;
 pub mod shaders;
 
@@ -21,4 +22,5 @@ pub mod layout {
     pub use super::field_pass::gpu_data::{
         Chunk, CurveSegment, CurveSource, FieldParams, LineSource, PointSource, TorusSource,
     };
+    pub use super::frame_average::gpu_data::AverageParams;
 }

@@ -8,6 +8,9 @@ pub const FIELD_PASS: &str = include_str!("../../shaders/field.wgsl");
 /// The billboard pass.
 pub const BILLBOARD_PASS: &str = include_str!("../../shaders/billboard.wgsl");
 
+/// The running mean of jittered frames.
+pub const AVERAGE_PASS: &str = include_str!("../../shaders/average.wgsl");
+
 /// The viewer's ground grid.
 pub const GRID_PASS: &str = include_str!("../../shaders/grid.wgsl");
 /// The viewer's copy of its offscreen viewport into egui's frame.
@@ -23,6 +26,7 @@ pub fn all_modules() -> Vec<(&'static str, String)> {
     vec![
         ("field.wgsl (with field_common.wgsl)", field_module_source()),
         ("billboard.wgsl", BILLBOARD_PASS.to_string()),
+        ("average.wgsl", AVERAGE_PASS.to_string()),
         ("grid.wgsl", GRID_PASS.to_string()),
         ("blit.wgsl", BLIT_PASS.to_string()),
     ]

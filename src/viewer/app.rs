@@ -56,12 +56,18 @@ enum Gesture {
     },
 }
 
+/// Jittered frames the viewport averages while the view is still, unless set otherwise: the noise falls to
+/// 1/8 of one frame's.
+pub const DEFAULT_AVERAGE_FRAMES: u32 = 64;
+
 /// The viewer's state.
 pub struct ViewerApp {
     pub doc: Document,
     pub history: History,
     pub show_grid: bool,
     pub show_handles: bool,
+    /// With jitter: how many frames the viewport averages while the view is still (1: none).
+    pub average_frames: u32,
     /// Screenshot size relative to the viewport: 1, 2 or 4.
     pub screenshot_scale: u32,
     /// The path typed in the file section.
@@ -130,6 +136,7 @@ impl ViewerApp {
             doc,
             show_grid: true,
             show_handles: true,
+            average_frames: DEFAULT_AVERAGE_FRAMES,
             screenshot_scale: 1,
             adapter,
             max_resolution,
@@ -491,7 +498,11 @@ impl ViewerApp {
             let integrator = match i.integrator {
                 Integrator::Adaptive => format!("adaptive, tolerance {:e}", i.tolerance),
                 Integrator::Simpson if i.jitter.is_some() => {
-                    format!("simpson, n = {}, jittered", i.divisions)
+                    let averaged = match self.report().averaged {
+                        Some((k, most)) => format!(", mean of {k}/{most} frames"),
+                        None => String::new(),
+                    };
+                    format!("simpson, n = {}, jittered{averaged}", i.divisions)
                 }
                 Integrator::Simpson => format!("simpson, n = {}", i.divisions),
             };
@@ -530,6 +541,7 @@ impl ViewerApp {
                 scene: self.frame_scene(),
                 size: self.viewport_px,
                 show_grid: self.show_grid,
+                average_frames: self.average_frames,
             }),
         ));
 

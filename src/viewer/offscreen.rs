@@ -88,6 +88,8 @@ pub struct OffscreenViewer {
     pub surface: TextureSurface,
     /// How many times the GPU side has been recreated after a device loss.
     pub recoveries: u32,
+    /// Frames run so far: the UI's clock, a 60 Hz frame each, so that its animations end as in a window.
+    frames: u64,
 }
 
 impl OffscreenViewer {
@@ -109,6 +111,7 @@ impl OffscreenViewer {
             gpu,
             surface,
             recoveries: 0,
+            frames: 0,
         })
     }
 
@@ -127,7 +130,10 @@ impl OffscreenViewer {
     /// the window does, and the frame reported as `DeviceLost`.
     pub fn frame(&mut self) -> Result<Outcome, GpuError> {
         let [w, h] = self.surface.configured_size();
+        self.frames += 1;
         let input = egui::RawInput {
+            time: Some(self.frames as f64 / 60.0),
+            predicted_dt: 1.0 / 60.0,
             screen_rect: Some(egui::Rect::from_min_size(
                 egui::Pos2::ZERO,
                 egui::vec2(w as f32, h as f32),
@@ -170,6 +176,7 @@ impl OffscreenViewer {
                 self.app.viewport_px[1].max(1),
             ],
             show_grid: self.app.show_grid,
+            average_frames: self.app.average_frames,
         };
         let (device, queue) = (&self.gpu.ctx.device, &self.gpu.ctx.queue);
         match self

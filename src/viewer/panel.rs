@@ -204,6 +204,7 @@ fn view_section(ui: &mut Ui, app: &mut ViewerApp) {
 
 fn render_section(ui: &mut Ui, app: &mut ViewerApp) {
     let max_resolution = app.max_resolution;
+    let average_frames = &mut app.average_frames;
     let scene = &mut app.doc.scene;
     egui::CollapsingHeader::new("Rendering")
         .default_open(true)
@@ -257,6 +258,18 @@ fn render_section(ui: &mut Ui, app: &mut ViewerApp) {
                                 (true, None) => Some(0),
                                 (false, _) => None,
                             };
+                            if jitter {
+                                labelled(
+                                    ui,
+                                    "average frames",
+                                    DragValue::new(average_frames).range(1..=1024),
+                                )
+                                .on_hover_text(
+                                    "While the view is still, average this many jittered frames \
+                                     (the noise falls as 1/\u{221a}frames); 1: none",
+                                );
+                                ui.end_row();
+                            }
                         }
                     }
                     labelled(

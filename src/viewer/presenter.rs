@@ -174,7 +174,7 @@ impl ViewerGpu {
             }
         };
         let output = self.egui_ctx.run_ui(input, |ui| app.ui(ui));
-        let repaint_now = output
+        let ui_repaint_now = output
             .viewport_output
             .get(&egui::ViewportId::ROOT)
             .is_some_and(|v| v.repaint_delay.is_zero());
@@ -197,6 +197,8 @@ impl ViewerGpu {
         let mut buffers = self
             .renderer
             .update_buffers(device, queue, &mut encoder, &jobs, &screen);
+        // The viewport (recorded just now, by `update_buffers`) may want the next frame for its average.
+        let repaint_now = ui_repaint_now || self.report.lock().is_ok_and(|r| r.averaging());
         draw_egui(
             &self.renderer,
             &mut encoder,

@@ -45,6 +45,8 @@ pub struct ViewportView {
     /// Size in physical pixels.
     pub size: [u32; 2],
     pub show_grid: bool,
+    /// With a jittered integrator: how many frames to average while the scene stays the same (1: none).
+    pub average_frames: u32,
 }
 
 /// What the GPU side reports back to the UI.
@@ -54,6 +56,15 @@ pub struct ViewportReport {
     pub error: Option<String>,
     /// How many times the field texture has been rendered.
     pub field_renders: u64,
+    /// While jittered frames are averaged: how many the picture holds, and the most it will hold.
+    pub averaged: Option<(u32, u32)>,
+}
+
+impl ViewportReport {
+    /// Whether the viewport wants another frame to add to its average.
+    pub fn averaging(&self) -> bool {
+        self.averaged.is_some_and(|(k, most)| k < most)
+    }
 }
 
 /// The viewport's pipelines and GPU state, kept in egui-wgpu's callback resources.
@@ -302,6 +313,9 @@ impl ViewportGpu {
             &self.grid_vertices,
             self.grid_count,
         ));
+        self.scene_renderer
+            .field_mut()
+            .set_average_frames(view.average_frames);
         let result = self.scene_renderer.record(
             device,
             queue,
@@ -324,6 +338,7 @@ impl ViewportGpu {
         if let Ok(mut r) = self.report.lock() {
             r.error = result.as_ref().err().map(|e| e.to_string());
             r.field_renders = self.scene_renderer.field().dispatch_count();
+            r.averaged = self.scene_renderer.field().averaged_frames();
         }
         result
     }

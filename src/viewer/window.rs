@@ -289,6 +289,7 @@ fn save_viewport(
         scene: app.frame_scene(),
         size: [w.max(1) * scale, h.max(1) * scale],
         show_grid: app.show_grid,
+        average_frames: app.average_frames,
     };
     let (device, queue) = (&gpu.ctx.device, &gpu.ctx.queue);
     let vp = gpu

@@ -1,0 +1,185 @@
+//! The running mean of jittered field frames (`shaders/average.wgsl`): while the view is still, the viewer
+//! renders the jittered integrator again with new offsets and shows the mean of the frames so far, whose
+//! noise falls as 1/sqrt(k) towards the converged picture (the jittered estimate is unbiased).
+
+use super::context::texture_2d;
+use super::shaders;
+
+/// Rust mirror of `AverageParams` in `shaders/average.wgsl` (keep in sync; `tests/gpu_layout.rs` checks it).
+pub mod gpu_data {
+    use bytemuck::{Pod, Zeroable};
+
+    #[repr(C)]
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+    pub struct AverageParams {
+        pub weight: f32, // 0: 1 / k for the k-th frame
+        pub pad0: f32,   // 4
+        pub pad1: f32,   // 8
+        pub pad2: f32,   // 12
+    }
+    const _: () = assert!(size_of::<AverageParams>() == 16);
+}
+
+use gpu_data::AverageParams;
+
+/// The pipeline, the mean texture (r32float, W x W) and its bind group over one field texture.
+pub struct FrameAverage {
+    pipeline: wgpu::ComputePipeline,
+    layout: wgpu::BindGroupLayout,
+    params: wgpu::Buffer,
+    /// The field texture bound, the mean texture, its view and the bind group over both.
+    mean: Option<Bound>,
+}
+
+struct Bound {
+    frame: wgpu::Texture,
+    mean: wgpu::Texture,
+    view: wgpu::TextureView,
+    bind_group: wgpu::BindGroup,
+}
+
+impl FrameAverage {
+    pub fn new(device: &wgpu::Device) -> Self {
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("energywave.average.shader"),
+            source: wgpu::ShaderSource::Wgsl(shaders::AVERAGE_PASS.into()),
+        });
+        let compute = wgpu::ShaderStages::COMPUTE;
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("energywave.average.bind_group_layout"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: compute,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: wgpu::BufferSize::new(size_of::<AverageParams>() as u64),
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 1,
+                    visibility: compute,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 2,
+                    visibility: compute,
+                    ty: wgpu::BindingType::StorageTexture {
+                        access: wgpu::StorageTextureAccess::ReadWrite,
+                        format: wgpu::TextureFormat::R32Float,
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                    },
+                    count: None,
+                },
+            ],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("energywave.average.pipeline_layout"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("average_frames"),
+            layout: Some(&pipeline_layout),
+            module: &module,
+            entry_point: Some("average_frames"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        let params = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("energywave.average.params"),
+            size: size_of::<AverageParams>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        Self {
+            pipeline,
+            layout,
+            params,
+            mean: None,
+        }
+    }
+
+    /// Makes the mean texture match `frame` (W x W) and sets the weight of the next `encode` to that of frame
+    /// `k` (1-based): 1 / k, so the first frame overwrites the mean.
+    pub fn prepare(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        frame: &wgpu::Texture,
+        frame_view: &wgpu::TextureView,
+        k: u32,
+    ) {
+        // Rebound when the field pass replaced its texture (a new resolution); otherwise only the weight changes.
+        if self.mean.as_ref().is_none_or(|b| &b.frame != frame) {
+            let texture = texture_2d(
+                device,
+                "energywave.average.mean",
+                [frame.width(), frame.height()],
+                wgpu::TextureFormat::R32Float,
+                wgpu::TextureUsages::STORAGE_BINDING
+                    | wgpu::TextureUsages::TEXTURE_BINDING
+                    | wgpu::TextureUsages::COPY_SRC,
+            );
+            let view = texture.create_view(&Default::default());
+            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("energywave.average.bind_group"),
+                layout: &self.layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: self.params.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: wgpu::BindingResource::TextureView(frame_view),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 2,
+                        resource: wgpu::BindingResource::TextureView(&view),
+                    },
+                ],
+            });
+            self.mean = Some(Bound {
+                frame: frame.clone(),
+                mean: texture,
+                view,
+                bind_group,
+            });
+        }
+        let params = AverageParams {
+            weight: 1.0 / k.max(1) as f32,
+            ..AverageParams::default()
+        };
+        queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+    }
+
+    /// Records the dispatch that folds the field texture into the mean (after the field pass's dispatches).
+    pub fn encode(&self, pass: &mut wgpu::ComputePass<'_>) {
+        if let Some(b) = &self.mean {
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &b.bind_group, &[]);
+            pass.dispatch_workgroups(b.mean.width().div_ceil(8), b.mean.height().div_ceil(8), 1);
+        }
+    }
+
+    /// The mean texture and its view (after the first `prepare`).
+    pub fn mean(&self) -> Option<(&wgpu::Texture, &wgpu::TextureView)> {
+        self.mean.as_ref().map(|b| (&b.mean, &b.view))
+    }
+
+    /// GPU memory held: the mean texture and the uniform, in bytes.
+    pub fn gpu_bytes(&self) -> u64 {
+        let texture = (self.mean.as_ref()).map_or(0, |b| {
+            super::field_pass::field_texture_bytes(b.mean.width())
+        });
+        texture + self.params.size()
+    }
+}
