@@ -26,8 +26,13 @@ const BEZIER_SCENE: &str = include_str!("../assets/scenes/bezier_b5.0.toml");
 /// Every kind of source at once.
 const MIXED_SCENE: &str = include_str!("../assets/scenes/mixed.toml");
 
-/// The converged reference of the equal-error comparison: f64 Simpson with this many divisions.
+/// The converged reference of the equal-error comparison: f64 Simpson with this many divisions, refined
+/// (`integrate::simpson_refined`) wherever its estimated error exceeds `REFERENCE_TOLERANCE` on B.
 pub const REFERENCE_DIVISIONS: u32 = 4096;
+/// The reference's estimated error on B, texel by texel.
+pub const REFERENCE_TOLERANCE: f64 = 1e-7;
+/// How many times the reference splits an interval at most (down to a width of 2^-40).
+pub const REFERENCE_MAX_DEPTH: u32 = 28;
 /// The adaptive tolerances tried, cheapest first, for the equal-error comparison.
 const TOLERANCES: [f64; 9] = [1e-2, 3e-3, 1e-3, 3e-4, 1e-4, 3e-5, 1e-5, 3e-6, 1e-6];
 
@@ -276,12 +281,10 @@ pub struct EqualErrorRow {
     pub tried: Vec<(f64, RenderError)>,
 }
 
-/// B by the f64 CPU reference with `divisions` Simpson divisions, for every `stride`-th texel.
-fn reference_texels(scene: &Scene, divisions: u32, stride: u32) -> Vec<f64> {
-    let mut s = scene.clone();
-    s.integration.integrator = Integrator::Simpson;
-    s.integration.jitter = None;
-    s.integration.divisions = divisions;
+/// The converged f64 reference of B (`REFERENCE_DIVISIONS`, `REFERENCE_TOLERANCE`) for every `stride`-th
+/// texel of `scene`'s billboard (rows, then columns), and how it was reached.
+pub fn converged_reference(scene: &Scene, stride: u32) -> (Vec<f64>, ReferenceStats) {
+    let s = scene;
     let w = s.billboard.resolution;
     let billboard = s.place_billboard(1.0);
     let texels: Vec<(u32, u32)> = (0..w)
@@ -290,7 +293,7 @@ fn reference_texels(scene: &Scene, divisions: u32, stride: u32) -> Vec<f64> {
         .collect();
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     let chunk = texels.len().div_ceil(threads).max(1);
-    let mut out = vec![0.0; texels.len()];
+    let mut out = vec![(0.0, 0); texels.len()];
     std::thread::scope(|scope| {
         for (ts, os) in texels.chunks(chunk).zip(out.chunks_mut(chunk)) {
             let (s, billboard) = (&s, &billboard);
@@ -298,12 +301,52 @@ fn reference_texels(scene: &Scene, divisions: u32, stride: u32) -> Vec<f64> {
                 for (&(i, j), o) in ts.iter().zip(os) {
                     let p = billboard.texel_center(i, j, w);
                     let e = ray_end(p, s.camera.eye, s.integration.nu);
-                    *o = integrate::brightness(&s.sources, &s.integration, p, e, 0.5);
+                    let i = &s.integration;
+                    let f = |t: f64| {
+                        s.sources.psi(p + (e - p) * t, i.epsilon)
+                            * integrate::zeta(t, i.alpha, i.beta)
+                    };
+                    *o = integrate::simpson_refined(
+                        f,
+                        REFERENCE_DIVISIONS,
+                        REFERENCE_TOLERANCE,
+                        REFERENCE_MAX_DEPTH,
+                    );
                 }
             });
         }
     });
-    out
+    // Without refinement, a texel spends the n + 1 samples and 2 more a pair of intervals, to check them.
+    let unrefined = 2 * REFERENCE_DIVISIONS as u64 + 1;
+    let stats = ReferenceStats {
+        refined_share: out.iter().filter(|(_, e)| *e > unrefined).count() as f64
+            / out.len().max(1) as f64,
+        mean_evaluations: out.iter().map(|(_, e)| *e as f64).sum::<f64>() / out.len().max(1) as f64,
+        max_evaluations: out.iter().map(|(_, e)| *e).max().unwrap_or(0),
+    };
+    (out.into_iter().map(|(b, _)| b).collect(), stats)
+}
+
+/// How the converged reference of one render was reached.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct ReferenceStats {
+    /// Share of texels refined beyond the uniform `REFERENCE_DIVISIONS` (and its check).
+    pub refined_share: f64,
+    /// Evaluations of the integrand a texel, on average and at most.
+    pub mean_evaluations: f64,
+    pub max_evaluations: u64,
+}
+
+impl std::fmt::Display for ReferenceStats {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "f64 CPU, Simpson n = {REFERENCE_DIVISIONS} refined to an estimated {REFERENCE_TOLERANCE:e} on B ({:.1}% of texels refined; {:.0} evaluations a texel on average, {} at most)",
+            100.0 * self.refined_share,
+            self.mean_evaluations,
+            self.max_evaluations,
+        )
+    }
 }
 
 /// Everything one run measured.
@@ -638,9 +681,9 @@ fn equal_error(
             simpson.integration.jitter = None;
             simpson.integration.divisions = 200;
             progress(&format!(
-                "equal error: {name}, {resolution} x {resolution}: f64 reference (n = {REFERENCE_DIVISIONS})"
+                "equal error: {name}, {resolution} x {resolution}: f64 reference (n = {REFERENCE_DIVISIONS} and more)"
             ));
-            let reference = reference_texels(&simpson, REFERENCE_DIVISIONS, stride);
+            let (reference, reference_stats) = converged_reference(&simpson, stride);
             let simpson_error =
                 RenderError::of(&bench.brightness(&simpson)?, resolution, stride, &reference);
             let mut adaptive = simpson.clone();
@@ -682,7 +725,7 @@ fn equal_error(
                 scene: name.to_string(),
                 resolution,
                 error_stride: stride,
-                reference: format!("f64 CPU, Simpson n = {REFERENCE_DIVISIONS}"),
+                reference: reference_stats.to_string(),
                 simpson_divisions: 200,
                 simpson: ts,
                 simpson_error,

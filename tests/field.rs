@@ -3,7 +3,7 @@
 use energywave::field::{
     Curve, Line, Point, Sources, Torus, line_distance, torus_distance, wseries,
 };
-use energywave::integrate::{Integration, Integrator, brightness, simpson, zeta};
+use energywave::integrate::{Integration, Integrator, brightness, simpson, simpson_refined, zeta};
 use glam::DVec3;
 use proptest::prelude::*;
 
@@ -136,6 +136,51 @@ fn simpson_is_exact_on_cubics() {
     }
     // And not on quartics (so the test above is not vacuous): error of s^4 with n = 2 is 1/120.
     assert!((simpson(|s| s.powi(4), 2) - 0.2 - 1.0 / 120.0).abs() < 1e-14);
+}
+
+#[test]
+fn refined_simpson_reaches_the_closed_form_where_a_fixed_n_does_not() {
+    // A ray passing 1e-3 from a point source: the peak of 1/d is narrower than a step of n = 4096.
+    let m = DVec3::new(0.001, 0.0, 0.0);
+    let sources = Sources {
+        points: vec![Point {
+            position: m,
+            coefficient: 1.0,
+        }],
+        ..Sources::default()
+    };
+    let (s, e) = (DVec3::new(0.0, 0.0, 5.3), DVec3::new(0.0, 0.0, -4.7));
+    let f = |t: f64| sources.psi(s + (e - s) * t, 1e-12);
+    let exact = point_integral_closed_form(s, e, m);
+    let fixed = simpson(f, 4096);
+    let (refined, evaluations) = simpson_refined(f, 4096, 1e-9, 28);
+    assert!(
+        (fixed - exact).abs() > 1e-2 * exact,
+        "n = 4096 alone is off: {fixed} vs {exact}"
+    );
+    assert!(
+        (refined - exact).abs() < 1e-8 * exact,
+        "{refined} vs {exact} ({evaluations} evaluations)"
+    );
+    // Only around the peak: far fewer evaluations than a uniform n that small a step would take.
+    assert!(evaluations < 20_000, "{evaluations} evaluations");
+
+    // A step (where a curve's nearest point jumps, W does): first order for a fixed n, refined to the end.
+    let c = 0.3;
+    let step = |t: f64| if t < c { 1.0 } else { 2.0 };
+    let (refined, evaluations) = simpson_refined(step, 4096, 1e-9, 28);
+    assert!((simpson(step, 4096) - (2.0 - c)).abs() > 1e-5);
+    assert!(
+        (refined - (2.0 - c)).abs() < 1e-8 && evaluations < 10_000,
+        "{refined} ({evaluations} evaluations)"
+    );
+
+    // Where n = 4096 has converged, one check of each pair of intervals, and Simpson's value at n = 8192.
+    let far = DVec3::new(0.8, 0.0, 0.0);
+    let g = |t: f64| 1.0 / (s + (e - s) * t - far).length();
+    let (value, evaluations) = simpson_refined(g, 4096, 1e-9, 28);
+    assert_eq!(evaluations, 2 * 4096 + 1);
+    assert!((value - simpson(g, 8192)).abs() < 1e-12, "{value}");
 }
 
 /// `integral_0^1 ds / sqrt(A s^2 + 2 B s + C) = [asinh((A s + B) / sqrt(A C - B^2)) / sqrt(A)]_0^1`.

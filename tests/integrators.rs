@@ -1,14 +1,14 @@
 //! The integrators against independent oracles: the adaptive one on the GPU against the converged f64
-//! reference (uniform Simpson, n = 4096) on every shipped scene; jittered sampling unbiased (its mean over
-//! seeds converges to the reference, on the CPU and on the GPU) and identical on both (same hash, same
-//! offsets).
+//! reference (Simpson from n = 4096, doubled texel by texel until converged) on every shipped scene; jittered
+//! sampling unbiased (its mean over seeds converges to the reference, on the CPU and on the GPU) and identical
+//! on both (same hash, same offsets).
 //!
 //! Error of a render, as the benchmark states it: on B clamped to [0, 1], the largest difference and the share
 //! of texels off by more than 1/255.
 
 use std::path::{Path, PathBuf};
 
-use energywave::bench::{REFERENCE_DIVISIONS, RenderError};
+use energywave::bench::{RenderError, converged_reference};
 use energywave::field::{Point, Sources};
 use energywave::gpu::HeadlessRenderer;
 use energywave::integrate::{Integration, Integrator, brightness, jitter_offset, zeta};
@@ -54,13 +54,9 @@ fn preset(name: &str) -> Scene {
         .1
 }
 
-/// The converged reference of `scene`'s brightness texture.
+/// The converged reference of `scene`'s brightness texture, as the benchmark computes it.
 fn converged(scene: &Scene) -> Vec<f64> {
-    let mut s = scene.clone();
-    s.integration.integrator = Integrator::Simpson;
-    s.integration.jitter = None;
-    s.integration.divisions = REFERENCE_DIVISIONS;
-    reference::render_brightness(&s, &s.place_billboard(1.0)).values
+    converged_reference(scene, 1).0
 }
 
 #[test]
