@@ -150,14 +150,28 @@ fn jittered_sampling_is_unbiased_where_fixed_samples_are_not() {
     );
 }
 
+/// The papers' torus, small (24 x 24) and with simpson at n = 8: far from converged, banded without jitter.
+fn coarse_torus() -> Scene {
+    let mut scene = preset("divisions_torus_t4.0");
+    scene.billboard.resolution = 24;
+    scene.integration.integrator = Integrator::Simpson;
+    scene.integration.divisions = 8;
+    scene
+}
+
+/// Mean absolute difference of `values` from `reference`, texel by texel.
+fn mean_abs_error<T: Copy + Into<f64>>(values: &[T], reference: &[f64]) -> f64 {
+    let sum: f64 = (values.iter().zip(reference))
+        .map(|(&a, b)| (a.into() - b).abs())
+        .sum();
+    sum / values.len() as f64
+}
+
 #[test]
 fn jittered_renders_are_the_same_on_the_gpu_and_converge_to_the_reference() {
     let mut gpu = HeadlessRenderer::new().expect("a GPU adapter (lavapipe in CI)");
-    let mut scene = preset("divisions_torus_t4.0");
-    let w = 24u32;
-    scene.billboard.resolution = w;
-    scene.integration.integrator = Integrator::Simpson;
-    scene.integration.divisions = 8;
+    let mut scene = coarse_torus();
+    let w = scene.billboard.resolution;
     let bb = scene.place_billboard(1.0);
     let reference = converged(&scene);
 
@@ -186,14 +200,10 @@ fn jittered_renders_are_the_same_on_the_gpu_and_converge_to_the_reference() {
         .iter()
         .map(|&v| v as f64)
         .collect();
-    let mean_abs = |v: &[f64]| {
-        v.iter()
-            .zip(&reference)
-            .map(|(a, b)| (a - b).abs())
-            .sum::<f64>()
-            / v.len() as f64
-    };
-    let (jittered_error, fixed_error) = (mean_abs(&mean), mean_abs(&fixed));
+    let (jittered_error, fixed_error) = (
+        mean_abs_error(&mean, &reference),
+        mean_abs_error(&fixed, &reference),
+    );
     assert!(
         jittered_error < 0.25 * fixed_error,
         "mean of {seeds} jittered renders: {jittered_error}, fixed samples: {fixed_error}"
@@ -203,21 +213,11 @@ fn jittered_renders_are_the_same_on_the_gpu_and_converge_to_the_reference() {
 #[test]
 fn averaged_frames_are_the_mean_of_their_seeds_and_their_noise_falls() {
     let mut gpu = HeadlessRenderer::new().expect("a GPU adapter (lavapipe in CI)");
-    let mut scene = preset("divisions_torus_t4.0");
-    let w = 24u32;
-    scene.billboard.resolution = w;
-    scene.integration.integrator = Integrator::Simpson;
-    scene.integration.divisions = 8;
+    let mut scene = coarse_torus();
+    let w = scene.billboard.resolution;
     scene.integration.jitter = Some(5);
     let bb = scene.place_billboard(1.0);
     let reference = converged(&scene);
-    let mean_abs = |v: &[f32]| {
-        v.iter()
-            .zip(&reference)
-            .map(|(&a, b)| (a as f64 - b).abs())
-            .sum::<f64>()
-            / v.len() as f64
-    };
 
     // The oracle: the f64 twin's renders with seeds 5, 6, ..., averaged on the CPU.
     let frames = 6u32;
@@ -265,7 +265,10 @@ fn averaged_frames_are_the_mean_of_their_seeds_and_their_noise_falls() {
     for _ in 0..32 {
         mean = gpu.brightness(&scene, &bb).unwrap();
     }
-    let (one, many) = (mean_abs(&first), mean_abs(&mean));
+    let (one, many) = (
+        mean_abs_error(&first, &reference),
+        mean_abs_error(&mean, &reference),
+    );
     assert!(
         many < 0.35 * one,
         "error of one jittered frame {one:.3e}, of the mean of 32 {many:.3e}"
