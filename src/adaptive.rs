@@ -707,7 +707,8 @@ fn model_crossing(s: DVec3, dir: DVec3, a: &ChainSample, b: &ChainSample) -> Opt
     let c0 = ra.length_squared() - rb.length_squared();
     let f = |t: f64| (c2 * t + c1) * t + c0;
     let (fa, fb) = (f(a.t), f(b.t));
-    if !(fa * fb <= 0.0) {
+    // No sign change, or a NaN: no crossing to find.
+    if fa * fb > 0.0 || (fa * fb).is_nan() {
         return None;
     }
     let inside = |t: f64| t >= a.t && t <= b.t;
