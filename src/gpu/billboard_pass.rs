@@ -3,6 +3,7 @@
 
 use glam::DMat4;
 
+use super::context::uniform_buffer;
 use crate::geometry::{Billboard, Camera};
 
 /// Rust mirror of `BillboardParams` in `shaders/billboard.wgsl` (keep in sync; `tests/gpu_layout.rs` checks
@@ -139,12 +140,7 @@ impl BillboardRenderer {
             multiview_mask: None,
             cache: None,
         });
-        let params = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("energywave.billboard.params"),
-            size: size_of::<BillboardParams>() as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
+        let params = uniform_buffer::<BillboardParams>(device, "energywave.billboard.params");
         Self {
             pipeline,
             layout,

@@ -64,6 +64,16 @@ pub fn checked<T>(device: &wgpu::Device, f: impl FnOnce() -> T) -> Result<T, Gpu
     }
 }
 
+/// A uniform buffer for one `T`, written with `Queue::write_buffer`.
+pub fn uniform_buffer<T>(device: &wgpu::Device, label: &str) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: size_of::<T>() as u64,
+        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
+}
+
 /// A 2D texture of one mip level and one sample.
 pub fn texture_2d(
     device: &wgpu::Device,

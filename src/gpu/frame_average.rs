@@ -2,7 +2,7 @@
 //! renders the jittered integrator again with new offsets and shows the mean of the frames so far, whose
 //! noise falls as 1/sqrt(k) towards the converged picture (the jittered estimate is unbiased).
 
-use super::context::texture_2d;
+use super::context::{texture_2d, uniform_buffer};
 use super::shaders;
 
 /// Rust mirror of `AverageParams` in `shaders/average.wgsl` (keep in sync; `tests/gpu_layout.rs` checks it).
@@ -93,12 +93,7 @@ impl FrameAverage {
             compilation_options: Default::default(),
             cache: None,
         });
-        let params = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("energywave.average.params"),
-            size: size_of::<AverageParams>() as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
+        let params = uniform_buffer::<AverageParams>(device, "energywave.average.params");
         Self {
             pipeline,
             layout,

@@ -11,7 +11,9 @@ mod headless;
 pub mod shaders;
 
 pub use billboard_pass::{BillboardRenderer, billboard_params, view_projection};
-pub use context::{GpuContext, GpuError, checked, describe, map_read, read_texture, texture_2d};
+pub use context::{
+    GpuContext, GpuError, checked, describe, map_read, read_texture, texture_2d, uniform_buffer,
+};
 pub use field_pass::{FieldRenderer, field_texture_bytes};
 pub use frame::{FRAME_FORMAT, FrameTargets, SceneRenderer, f16_to_f32, read_frame};
 pub use headless::{Frame, HeadlessRenderer};

@@ -6,7 +6,7 @@ use std::sync::{Arc, Mutex};
 
 use wgpu::util::DeviceExt;
 
-use crate::gpu::{FRAME_FORMAT, FrameTargets, GpuError, SceneRenderer, read_frame};
+use crate::gpu::{FRAME_FORMAT, FrameTargets, GpuError, SceneRenderer, read_frame, uniform_buffer};
 use crate::scene::Scene;
 
 /// Format of the offscreen viewport: half floats, so the blend and the grid keep more than 8 bits.
@@ -108,12 +108,7 @@ impl ViewportGpu {
                 count: None,
             }],
         });
-        let grid_params = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("energywave.grid.params"),
-            size: size_of::<GridParams>() as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
+        let grid_params = uniform_buffer::<GridParams>(device, "energywave.grid.params");
         let grid_bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("energywave.grid.bind_group"),
             layout: &grid_layout,
