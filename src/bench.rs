@@ -356,7 +356,9 @@ pub struct Report {
     pub timestamp_queries: bool,
     pub machine: String,
     pub options: BenchOptions,
+    /// Warm-up before each timed set: at least this many frames and `warmup_seconds`.
     pub warmup_frames: usize,
+    pub warmup_seconds: f64,
     pub grid: Vec<GridRow>,
     pub deformation: Vec<DeformationRow>,
     pub viewer: Option<ViewerFrameRow>,
@@ -454,7 +456,8 @@ impl FieldBench {
     }
 
     /// Times `scenes` interleaved frame by frame (so that drift of a shared, noisy machine hits them alike):
-    /// `warmup` untimed rounds, then `frames` timed ones. `next(k, i)` gives scene `k` for round `i`.
+    /// at least `warmup` untimed rounds and `WARMUP_SECONDS`, then `frames` timed ones. `next(k, i)` gives scene
+    /// `k` for round `i`.
     fn interleaved(
         &mut self,
         count: usize,
@@ -464,14 +467,20 @@ impl FieldBench {
     ) -> Result<Vec<PassTiming>, GpuError> {
         let mut gpu = vec![Vec::new(); count];
         let mut wall = vec![Vec::new(); count];
-        for round in 0..warmup + frames {
+        let start = Instant::now();
+        let mut round = 0;
+        while round < warmup || warming(start, round) {
+            for k in 0..count {
+                self.frame(&next(k, round))?;
+            }
+            round += 1;
+        }
+        for round in round..round + frames {
             for k in 0..count {
                 let (g, w) = self.frame(&next(k, round))?;
-                if round >= warmup {
-                    wall[k].push(w);
-                    if let Some(g) = g {
-                        gpu[k].push(g);
-                    }
+                wall[k].push(w);
+                if let Some(g) = g {
+                    gpu[k].push(g);
                 }
             }
         }
@@ -482,6 +491,19 @@ impl FieldBench {
             })
             .collect())
     }
+}
+
+/// Least time spent warming up before anything is timed. A real GPU idles at a fraction of its clock and only
+/// reaches full speed after a moment of steady work: an H200 timed after two warm-up frames that followed a
+/// few seconds of CPU work (the equal-error reference) ran at its idle clock, 345 of 1980 MHz, about 5.7 times
+/// slower than in the grid section just before. On lavapipe the warm-up frames alone take longer than this.
+pub const WARMUP_SECONDS: f64 = 0.5;
+/// Most warm-up rounds, whatever the time: a pass of a few microseconds reaches `WARMUP_SECONDS` in well under this.
+const MAX_WARMUP_ROUNDS: usize = 100_000;
+
+/// Whether warm-up that began at `start` and has run `rounds` rounds should go on.
+fn warming(start: Instant, rounds: usize) -> bool {
+    rounds < MAX_WARMUP_ROUNDS && start.elapsed().as_secs_f64() < WARMUP_SECONDS
 }
 
 fn load(text: &str, name: &str) -> Scene {
@@ -617,6 +639,7 @@ pub fn run(options: BenchOptions, mut progress: impl FnMut(&str)) -> Result<Repo
         machine: machine(),
         options,
         warmup_frames: options.warmup(),
+        warmup_seconds: WARMUP_SECONDS,
         grid,
         deformation,
         viewer,
@@ -632,8 +655,11 @@ fn viewer_frames(
 ) -> Result<ViewerFrameRow, GpuError> {
     progress("viewer: 1280 x 720, default scene");
     let mut viewer = OffscreenViewer::new(Document::new(Scene::default_scene(), None), 1280, 720)?;
-    for _ in 0..options.warmup() {
+    let start = Instant::now();
+    let mut rounds = 0;
+    while rounds < options.warmup() || warming(start, rounds) {
         viewer.frame()?;
+        rounds += 1;
     }
     let (mut idle, mut orbiting) = (Vec::new(), Vec::new());
     for _ in 0..options.frames() {
@@ -755,9 +781,10 @@ impl Report {
         let _ = writeln!(s, "machine: {}", self.machine);
         let _ = writeln!(
             s,
-            "field pass only, {source}; median of {} frames after {} warm-up (min..max)\n",
+            "field pass only, {source}; median of {} frames after at least {} warm-up frames and {} s (min..max)\n",
             self.grid.first().map_or(0, |r| r.ours.best().samples),
-            self.warmup_frames
+            self.warmup_frames,
+            self.warmup_seconds
         );
         let _ = writeln!(
             s,
@@ -953,6 +980,7 @@ mod tests {
                 ..Default::default()
             },
             warmup_frames: 1,
+            warmup_seconds: WARMUP_SECONDS,
             grid: vec![GridRow {
                 scene: "torus".into(),
                 resolution: 256,
