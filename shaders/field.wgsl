@@ -242,8 +242,11 @@ struct Peak {
     flat: f32,
 }
 
+// At most MAX_PEAKS: a torus's two ring passes and its axis, or a chain's two closest approaches and two ends.
+const MAX_PEAKS: u32 = 4u;
+
 struct Peaks {
-    peaks: array<Peak, 3>,
+    peaks: array<Peak, 4>,  // MAX_PEAKS
     count: u32,
 }
 
@@ -311,24 +314,17 @@ fn share_ray(found: ptr<function, Peaks>) {
             j -= 1u;
         }
     }
-    var bounds = vec2<f32>(1.0, 1.0);
-    if n == 2u {
-        bounds.x = meet((*found).peaks[0], (*found).peaks[1]);
-    } else if n == 3u {
-        let b01 = meet((*found).peaks[0], (*found).peaks[1]);
-        let b12 = meet((*found).peaks[1], (*found).peaks[2]);
-        if b01 < b12 {
-            bounds = vec2<f32>(b01, b12);
-        } else {
-            let b02 = meet((*found).peaks[0], (*found).peaks[2]);
-            bounds = vec2<f32>(b02, b02);
-        }
-    }
+    // Feature i hands over at the first takeover by any later one (an empty piece where it is nowhere the
+    // densest).
     var lo = 0.0;
     for (var i = 0u; i < n; i++) {
         var hi = 1.0;
         if i + 1u < n {
-            hi = clamp(bounds[i], lo, 1.0);
+            var to = 1e30;
+            for (var j = i + 1u; j < n; j++) {
+                to = min(to, meet((*found).peaks[i], (*found).peaks[j]));
+            }
+            hi = clamp(to, lo, 1.0);
         }
         (*found).peaks[i].lo = lo;
         (*found).peaks[i].hi = hi;
@@ -883,7 +879,7 @@ fn joint_cuts(ray: Ray, x: vec2<f32>, y: vec2<f32>, kinks: ptr<function, Kinks>)
         for (var plane = 0u; plane < select(1u, 2u, corner); plane++) {
             let tangent = select(t_out, t_in, plane == 1u);
             let t = dot(joint - ray.start, tangent) / dot(ray.dir, tangent);
-            if t > x.x && t < y.x {
+            if t > x.x && t <= y.x {
                 push_kink(kinks, t);
             }
         }
@@ -944,6 +940,9 @@ fn curve_features(ray: Ray) -> CurveFeatures {
     minima.count = 0u;
     var kinks: Kinks;
     kinks.count = 0u;
+    // The ends' peaks, where the ray crosses their normal planes (with_ends).
+    var ends: array<Peak, 2>;
+    var end_count = 0u;
     var before: ChainSample;
     var g_before_before = F32_MAX;
     for (var i = 0u; i <= SCAN; i++) {
@@ -966,7 +965,7 @@ fn curve_features(ray: Ray) -> CurveFeatures {
             for (; e < 2u; e++) {
                 let t = end_t[e];
                 let at_end = end_at[e];
-                if !(t > before.t && t < after.t) || (before.param != at_end && after.param != at_end) {
+                if !(t > before.t && t <= after.t) || (before.param != at_end && after.param != at_end) {
                     continue;
                 }
                 let moving = chain_sample(ray, t, true);
@@ -986,6 +985,15 @@ fn curve_features(ray: Ray) -> CurveFeatures {
             }
             if cut >= 0.0 {
                 push_kink(&kinks, cut);
+                var end = first.c0;
+                if end_at[e - 1u] == 1.0 {
+                    end = last.c2 + last.c1 + last.c0;
+                }
+                let a = dot(ray.dir, ray.dir);
+                let center = dot(end - ray.start, ray.dir) / a;
+                let off = ray.start + ray.dir * center - end;
+                ends[end_count] = make_peak(center, dot(off, off), a);
+                end_count++;
                 // Through the end closer than eps: the flat top ends where the end point is eps away.
                 let eps = params.epsilon;
                 if end_sample.d2 < eps * eps {
@@ -1049,6 +1057,21 @@ fn curve_features(ray: Ray) -> CurveFeatures {
         // A flat scan (constant distance): one uniform piece.
         found.peaks[0] = make_peak(0.0, 0.0, 0.0);
         found.count = 1u;
+    }
+    // Twin of with_ends: each end's peak whose map at its center is more than twice as dense as every feature's
+    // before it.
+    for (var k = 0u; k < end_count; k++) {
+        let end = ends[k];
+        var sharper = found.count < MAX_PEAKS;
+        for (var i = 0u; i < found.count; i++) {
+            let p = found.peaks[i];
+            let gap = end.center - p.center;
+            sharper = sharper && 4.0 * end.width * end.width < p.width * p.width + gap * gap;
+        }
+        if sharper {
+            found.peaks[found.count] = end;
+            found.count++;
+        }
     }
     share_ray(&found);
     var out: CurveFeatures;

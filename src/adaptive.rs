@@ -328,18 +328,22 @@ impl Ring {
 const RING_NEWTON: u32 = 6;
 const RING_STEP: f64 = 0.125;
 
+/// Most features of one term: a torus's two ring passes and its axis, or a chain's two closest approaches and its
+/// two ends.
+pub const MAX_PEAKS: usize = 4;
+
 /// A term's features along the ray, each owning its piece, and the kinks where a curve's nearest point jumps.
 struct Features {
-    peaks: [Peak; 3],
+    peaks: [Peak; MAX_PEAKS],
     count: usize,
     kinks: [f64; MAX_KINKS],
     kink_count: usize,
 }
 
-/// The features of a term along `s -> e` (at most three), sorted along the ray, each owning its piece.
+/// The features of a term along `s -> e` (at most `MAX_PEAKS`), sorted along the ray, each owning its piece.
 fn features(term: Term, s: DVec3, e: DVec3, scan: u32, eps: f64) -> Features {
     let dir = e - s;
-    let mut out = [peak(0.0, 0.0, 0.0, eps); 3];
+    let mut out = [peak(0.0, 0.0, 0.0, eps); MAX_PEAKS];
     let mut kinks = [0.0; MAX_KINKS];
     let mut kink_count = 0;
     let count = match term {
@@ -412,7 +416,9 @@ fn features(term: Term, s: DVec3, e: DVec3, scan: u32, eps: f64) -> Features {
 ///   moving along the chain, so d turns from the distance to the end point to the distance to the curve, smoothly
 ///   but with a jump in its second derivative. Where a scan sample beside the crossing is at that end, the
 ///   crossing is cut and sampled, and its interval split there: the side at the end with the point at rest, the
-///   other with it moving off;
+///   other with it moving off. On the side at rest d is exactly the distance to the end point, a point source's
+///   peak, which is also a feature where it is sharper than the closest approaches (`with_ends`): a ray along a
+///   straight beam sees d flat along it (no curvature, a uniform map) and then a narrow fall past each end;
 /// - the jumps of the nearest point in each (part of an) interval (`search_jumps`).
 fn chain_features(
     c: &crate::field::Curve,
@@ -421,7 +427,7 @@ fn chain_features(
     scan: u32,
     eps: f64,
     kinks: &mut Kinks,
-) -> ([Peak; 2], usize) {
+) -> ([Peak; MAX_PEAKS], usize) {
     let sample = |t: f64| ChainSample::at(c, s, dir, t, false);
     let k = scan.max(2);
     let step = 1.0 / k as f64;
@@ -435,6 +441,8 @@ fn chain_features(
     if ends[1].0 < ends[0].0 {
         ends.swap(0, 1);
     }
+    let mut end_peaks = [peak(0.0, 0.0, 0.0, eps); 2];
+    let mut end_count = 0;
     let mut minima = Minima::default();
     let mut before = sample(0.0);
     let mut g_before_before = f64::INFINITY;
@@ -446,7 +454,8 @@ fn chain_features(
         let mut left = before;
         let mut calm = before;
         for &(t, at_end) in &ends {
-            let inside = t > before.t && t < after.t;
+            // Half open, so that a crossing on a sample is cut once.
+            let inside = t > before.t && t <= after.t;
             if !inside || (before.param != at_end && after.param != at_end) {
                 continue;
             }
@@ -462,6 +471,16 @@ fn chain_features(
                 (moving, at_rest)
             };
             kinks.push(t);
+            let end = if at_end == 0.0 { cp[0] } else { cp[last] };
+            let a = dir.length_squared();
+            let center = (end - s).dot(dir) / a;
+            end_peaks[end_count] = peak(
+                center,
+                (s + dir * center - end).length_squared(),
+                a,
+                eps,
+            );
+            end_count += 1;
             // A ray through the end closer than eps: the falloff's flat top ends where the end point is eps away.
             if moving.d2 < eps * eps {
                 let q = s - moving.point;
@@ -492,7 +511,27 @@ fn chain_features(
         before = after;
     }
     minima.offer(before, g_before_before, f64::INFINITY);
-    chain_peaks(&sample, &minima, step, eps)
+    let (peaks, count) = chain_peaks(&sample, &minima, step, eps);
+    with_ends(peaks, count, &end_peaks[..end_count])
+}
+
+/// The closest approaches and, after them, each end's peak whose map at its center is more than twice as dense as
+/// every feature's before it (where an end is the closest approach, Newton has found it already).
+fn with_ends(found: [Peak; 2], count: usize, ends: &[Peak]) -> ([Peak; MAX_PEAKS], usize) {
+    let mut out = [found[0]; MAX_PEAKS];
+    out[..count].copy_from_slice(&found[..count]);
+    let mut n = count;
+    for end in ends {
+        let sharper = out[..n].iter().all(|p| {
+            let gap = end.center - p.center;
+            4.0 * end.width * end.width < p.width * p.width + gap * gap
+        });
+        if sharper && n < MAX_PEAKS {
+            out[n] = *end;
+            n += 1;
+        }
+    }
+    (out, n)
 }
 
 /// The cuts at a chain's joints between samples in order along the ray: from the start of a stretch with no
@@ -522,7 +561,7 @@ fn joint_cuts(
             let planes = [t_out, t_in];
             for tangent in &planes[..1 + corner as usize] {
                 let t = (joint - s).dot(*tangent) / dir.dot(*tangent);
-                if t > x.t && t < y.t {
+                if t > x.t && t <= y.t {
                     kinks.push(t);
                 }
             }
@@ -777,7 +816,7 @@ fn find_kink(
 /// is densest there. The map around `s*` places samples `1 / sqrt(h^2 + (s - s*)^2)` apart, so the owner of `s`
 /// is the feature with the least `h^2 + (s - s*)^2 = (h^2 + s*^2) - 2 s* s + s^2`: the lower envelope of lines
 /// in s. A narrow peak beside a broad feature keeps its whole shoulder and may hide the broad one entirely (whose
-/// piece is then empty). At most three features.
+/// piece is then empty).
 fn share_ray(features: &mut [Peak]) {
     features.sort_by(|x, y| x.center.total_cmp(&y.center));
     let n = features.len();
@@ -793,27 +832,17 @@ fn share_ray(features: &mut [Peak]) {
             f64::INFINITY
         }
     };
-    let bounds: [f64; 2] = match n {
-        2 => [meet(0, 1), 1.0],
-        3 => {
-            let (b01, b12) = (meet(0, 1), meet(1, 2));
-            if b01 < b12 {
-                [b01, b12]
-            } else {
-                // The middle one is nowhere the densest.
-                let b02 = meet(0, 2);
-                [b02, b02]
-            }
-        }
-        _ => [1.0, 1.0],
-    };
+    // Feature i hands over at the first takeover by any later one. One that is nowhere the densest is taken
+    // over before the feature before it hands over (the lower envelope's order), so its piece comes out empty.
+    let mut bounds = [1.0; MAX_PEAKS];
     let mut lo = 0.0;
-    for (i, f) in features.iter_mut().enumerate() {
-        let hi = if i + 1 < n {
-            bounds[i].clamp(lo, 1.0)
-        } else {
-            1.0
-        };
+    for (i, bound) in bounds.iter_mut().enumerate().take(n.saturating_sub(1)) {
+        let to = (i + 1..n).map(|j| meet(i, j)).fold(f64::INFINITY, f64::min);
+        *bound = to.clamp(lo, 1.0);
+        lo = *bound;
+    }
+    let mut lo = 0.0;
+    for (f, &hi) in features.iter_mut().zip(&bounds) {
         f.lo = lo;
         f.hi = hi;
         f.center = f.center.clamp(lo, hi);
@@ -1167,6 +1196,79 @@ mod tests {
             "{:?}",
             &found.kinks[..found.kink_count]
         );
+    }
+
+    #[test]
+    fn share_ray_gives_every_stretch_to_the_densest_map() {
+        // Against brute force: for up to MAX_PEAKS random features (some sharing a center, some far off the
+        // ray), the pieces tile [0, 1] in order and every point belongs to a feature with the least
+        // h^2 + (s - s*)^2 there.
+        let mut state = 0x2545_f491_u64;
+        let mut uniform = move || {
+            state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for round in 0..4000 {
+            let n = 1 + round % MAX_PEAKS;
+            let mut found: Vec<Peak> = (0..n)
+                .map(|_| {
+                    let center = if uniform() < 0.2 { 0.5 } else { 1.6 * uniform() - 0.3 };
+                    let width = 10f64.powf(-4.0 * uniform());
+                    peak(center, width * width, 1.0, 0.0)
+                })
+                .collect();
+            let original = found.clone();
+            share_ray(&mut found);
+            assert_eq!(found[0].lo, 0.0);
+            assert_eq!(found[n - 1].hi, 1.0);
+            for pair in found.windows(2) {
+                assert!(pair[0].center <= pair[1].center && pair[0].hi == pair[1].lo);
+            }
+            for k in 0..=200 {
+                let x = k as f64 / 200.0;
+                let density = |p: &Peak| p.width * p.width + (x - p.center).powi(2);
+                let best = original.iter().map(density).fold(f64::INFINITY, f64::min);
+                let owner = found.iter().position(|p| p.lo <= x && x <= p.hi && p.lo < p.hi);
+                let owner = owner.map(|i| original.iter().find(|p| p.width == found[i].width).unwrap());
+                let got = density(owner.expect("every point has an owner"));
+                assert!(
+                    got <= best * (1.0 + 1e-9) + 1e-15,
+                    "round {round}, s = {x}: owner {got}, best {best}: {found:?}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn a_beam_seen_end_on_is_integrated_within_the_tolerance() {
+        // A straight chain along the view direction, rays along it and nearly so, inside eps and outside. Along
+        // the beam the distance is flat (the nearest point moves with the ray); past each end it is the distance
+        // to the end point, so the integrand falls off the plateau as a point source's half peak, as narrow as
+        // the ray is near the axis. The scan's minimum sits on the flat stretch, where d^2 has no curvature and
+        // its map is uniform: only the ends' own maps resolve the fall.
+        let sources = Sources {
+            curves: vec![Curve {
+                control_points: vec![
+                    DVec3::new(0.0, 0.0, -3.0),
+                    DVec3::new(0.0, 0.0, -3.8),
+                    DVec3::new(0.0, 0.0, -5.0),
+                ],
+                coefficient: 0.4,
+                weights: vec![],
+            }],
+            ..Default::default()
+        };
+        let mut rays = Vec::new();
+        for x in [0.0, 0.004, 0.0099, 0.02, 0.1, 0.5] {
+            let s = DVec3::new(x, 0.3 * x, 0.0);
+            rays.push((s, s + DVec3::new(0.0, 0.0, -10.0)));
+        }
+        // Tilted through the beam's middle, by 1e-3 and 1e-2 radians.
+        for tilt in [1e-3, 1e-2] {
+            let s = DVec3::new(4.0 * tilt, 0.0, 0.0);
+            rays.push((s, s + DVec3::new(-tilt, 0.0, -1.0) * 10.0));
+        }
+        assert_within_each_tolerance(&sources, &rays, &[1e-3, 1e-4, 1e-5]);
     }
 
     #[test]

@@ -141,11 +141,11 @@ struct Packed {
 const ITERATION_BUDGET: u64 = 30_000;
 /// Evaluations of a curve's distance the adaptive integrator spends on its term at most (each a loop over its
 /// segments): the scan, the samples at its ends, the kink search's probes, the Newton steps of its closest
-/// approaches, and Gauss-Legendre on every cut (at most two pieces, each cut at its flat top's ends, and the
-/// kinks), `MAX_GAUSS_PANELS` rules of 16 nodes each.
+/// approaches, and Gauss-Legendre on every cut (at most `MAX_PEAKS` pieces, two closest approaches and two ends,
+/// each cut at its flat top's ends, and the kinks), `MAX_GAUSS_PANELS` rules of 16 nodes each.
 const CURVE_EVALUATIONS: u64 = {
-    use crate::adaptive::{KINK_ROUNDS, MAX_GAUSS_PANELS, MAX_KINKS, PEAK_NEWTON, SCAN};
-    let cuts = 2 + 2 * 2 + MAX_KINKS as u64;
+    use crate::adaptive::{KINK_ROUNDS, MAX_GAUSS_PANELS, MAX_KINKS, MAX_PEAKS, PEAK_NEWTON, SCAN};
+    let cuts = 3 * MAX_PEAKS as u64 + MAX_KINKS as u64;
     (SCAN as u64 + 1)
         + 2
         + 2 * KINK_ROUNDS as u64 * MAX_KINKS as u64
