@@ -21,7 +21,10 @@
 //! - curves: the local minima of d^2 on a scan of `SCAN + 1` samples (the two deepest), each refined by Newton
 //!   steps on the exact slope and curvature of d^2 along the ray (the nearest point moves perpendicular to the
 //!   distance, so the slope is that of the distance to a fixed point, and its velocity follows from the
-//!   stationarity condition).
+//!   stationarity condition); and the chain's end points, in closed form, where the ray crosses an end's normal
+//!   plane and the end's peak is sharper than the minima's. A ray along a straight beam (a beam pointed at the
+//!   camera) sees d flat along it, a minimum with no curvature and so a uniform map, and then d grows as the
+//!   distance to the end point: a point source's half peak, as narrow as the ray is near the axis.
 //!
 //! The features, sorted along the ray, share it into pieces: each stretch of the ray goes to the feature whose map
 //! is densest there (`share_ray`), so a narrow peak keeps its shoulders beside a broad feature. Where a source
