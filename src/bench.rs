@@ -19,6 +19,9 @@ use crate::scene::Scene;
 use crate::viewer::Document;
 use crate::viewer::offscreen::OffscreenViewer;
 
+/// The equal-error reference is computed on at most this many texels per side (a subset of larger textures).
+const REFERENCE_SIZE: u32 = 256;
+
 /// The torus of paper figure 7 (R = 0.9, t = 5.1).
 const TORUS_SCENE: &str = include_str!("../assets/scenes/torus_r0.9_t5.1.toml");
 /// The two smoothly connected Bezier curves of paper figure 9 (b = 5.0).
@@ -60,12 +63,14 @@ pub fn paper_fps(scene: &str, resolution: u32, divisions: u32) -> Option<f64> {
 }
 
 /// How much to measure.
-#[derive(Clone, Copy, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize)]
 pub struct BenchOptions {
     /// Fewer frames, and the largest resolution left out: under two minutes on a 2-core software GPU.
     pub quick: bool,
     /// The sections to run.
     pub sections: Sections,
+    /// The equal-error comparison's billboard resolutions, instead of 256 and 512 (256 with `quick`).
+    pub equal_error_sizes: Option<Vec<u32>>,
 }
 
 /// One part of the benchmark, for `bench --only`.
@@ -119,6 +124,7 @@ impl Default for BenchOptions {
         Self {
             quick: false,
             sections: Sections::ALL,
+            equal_error_sizes: None,
         }
     }
 }
@@ -637,8 +643,8 @@ pub fn run(options: BenchOptions, mut progress: impl FnMut(&str)) -> Result<Repo
         adapter,
         timestamp_queries,
         machine: machine(),
-        options,
         warmup_frames: options.warmup(),
+        options,
         warmup_seconds: WARMUP_SECONDS,
         grid,
         deformation,
@@ -695,12 +701,17 @@ fn equal_error(
         ("bezier", load(BEZIER_SCENE, "bezier_b5.0.toml")),
         ("mixed", load(MIXED_SCENE, "mixed.toml")),
     ];
-    let resolutions: &[u32] = if options.quick { &[256] } else { &[256, 512] };
+    let resolutions: &[u32] = match (&options.equal_error_sizes, options.quick) {
+        (Some(sizes), _) => sizes,
+        (None, true) => &[256],
+        (None, false) => &[256, 512],
+    };
     let mut rows = Vec::new();
     for &resolution in resolutions {
         for (name, base) in &scenes {
-            // The f64 reference is the slow part: at 512, every second texel in each direction.
-            let stride = if resolution > 256 { 2 } else { 1 };
+            // The f64 reference is the slow part: above 256, every (W / 256)-th texel in each direction, so
+            // that it costs the same at every size.
+            let stride = (resolution / REFERENCE_SIZE).max(1);
             let mut simpson = base.clone();
             simpson.billboard.resolution = resolution;
             simpson.integration.integrator = Integrator::Simpson;
@@ -768,27 +779,12 @@ fn equal_error(
 }
 
 impl Report {
-    /// The report as a human-readable table.
-    pub fn table(&self) -> String {
+    /// The papers' grid beside their figures.
+    fn grid_table(&self, s: &mut String) {
         use std::fmt::Write;
-        let mut s = String::new();
-        let source = if self.timestamp_queries {
-            "GPU timestamps"
-        } else {
-            "wall time (no timestamp queries)"
-        };
-        let _ = writeln!(s, "adapter: {}", self.adapter);
-        let _ = writeln!(s, "machine: {}", self.machine);
         let _ = writeln!(
             s,
-            "field pass only, {source}; median of {} frames after at least {} warm-up frames and {} s (min..max)\n",
-            self.grid.first().map_or(0, |r| r.ours.best().samples),
-            self.warmup_frames,
-            self.warmup_seconds
-        );
-        let _ = writeln!(
-            s,
-            "{:<7} {:>5} {:>4} {:>11} {:>19} {:>9} {:>10} {:>8} {:>10}",
+            "\n{:<7} {:>5} {:>4} {:>11} {:>19} {:>9} {:>10} {:>8} {:>10}",
             "scene",
             "W",
             "n",
@@ -825,10 +821,35 @@ impl Report {
                 "(--quick: 512 x 512 left out; run without --quick for the whole grid)"
             );
         }
+    }
+
+    /// The report as a human-readable table.
+    pub fn table(&self) -> String {
+        use std::fmt::Write;
+        let mut s = String::new();
+        let source = if self.timestamp_queries {
+            "GPU timestamps"
+        } else {
+            "wall time (no timestamp queries)"
+        };
+        let _ = writeln!(s, "adapter: {}", self.adapter);
+        let _ = writeln!(s, "machine: {}", self.machine);
         let _ = writeln!(
             s,
-            "\ndeformation (interleaved with the static scene; GPU ms where available, wall ms):"
+            "field pass only, {source}; median of {} frames after at least {} warm-up frames and {} s (min..max)",
+            self.options.frames(),
+            self.warmup_frames,
+            self.warmup_seconds
         );
+        if !self.grid.is_empty() {
+            self.grid_table(&mut s);
+        }
+        if !self.deformation.is_empty() {
+            let _ = writeln!(
+                s,
+                "\ndeformation (interleaved with the static scene; GPU ms where available, wall ms):"
+            );
+        }
         for d in &self.deformation {
             let (a, b) = (d.static_scene.best(), d.deforming.best());
             let _ = writeln!(
@@ -1054,6 +1075,18 @@ mod tests {
         );
         assert_eq!(json["viewer"]["orbiting"]["median_ms"], 40.0);
         assert_eq!(json["options"]["quick"], true);
+        // A run of some sections prints only theirs.
+        let only = Report {
+            grid: Vec::new(),
+            deformation: Vec::new(),
+            viewer: None,
+            ..report
+        };
+        let table = only.table();
+        assert!(table.contains("speedup") && table.contains("6.00x"), "{table}");
+        for absent in ["paper FPS", "deformation", "viewer frame", "--quick"] {
+            assert!(!table.contains(absent), "{absent}: {table}");
+        }
     }
 
     #[test]

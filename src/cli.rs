@@ -46,6 +46,10 @@ pub struct BenchArgs {
     /// Run only these sections (comma-separated or repeated); all of them by default.
     #[arg(long, value_enum, value_delimiter = ',')]
     pub only: Vec<crate::bench::Section>,
+    /// The equal-error comparison's billboard resolutions (comma-separated), instead of 256 and 512. A real GPU
+    /// is filled only by larger textures; the f64 reference costs the same at every size (a 256 x 256 subset).
+    #[arg(long, value_delimiter = ',', value_parser = clap::value_parser!(u32).range(16..=16384))]
+    pub equal_error_sizes: Vec<u32>,
 }
 
 #[derive(Debug, Default, clap::Args)]
@@ -281,6 +285,7 @@ fn bench(args: &BenchArgs) -> Result<(), CliError> {
         crate::bench::BenchOptions {
             quick: args.quick,
             sections: crate::bench::Sections::only(&args.only),
+            equal_error_sizes: (!args.equal_error_sizes.is_empty()).then(|| args.equal_error_sizes.clone()),
         },
         |p| eprintln!("{p}"),
     )?;
