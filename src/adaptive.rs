@@ -477,12 +477,7 @@ fn chain_features(
             let end = if at_end == 0.0 { cp[0] } else { cp[last] };
             let a = dir.length_squared();
             let center = (end - s).dot(dir) / a;
-            end_peaks[end_count] = peak(
-                center,
-                (s + dir * center - end).length_squared(),
-                a,
-                eps,
-            );
+            end_peaks[end_count] = peak(center, (s + dir * center - end).length_squared(), a, eps);
             end_count += 1;
             // A ray through the end closer than eps: the falloff's flat top ends where the end point is eps away.
             if moving.d2 < eps * eps {
@@ -1208,14 +1203,20 @@ mod tests {
         // h^2 + (s - s*)^2 there.
         let mut state = 0x2545_f491_u64;
         let mut uniform = move || {
-            state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
             (state >> 11) as f64 / (1u64 << 53) as f64
         };
         for round in 0..4000 {
             let n = 1 + round % MAX_PEAKS;
             let mut found: Vec<Peak> = (0..n)
                 .map(|_| {
-                    let center = if uniform() < 0.2 { 0.5 } else { 1.6 * uniform() - 0.3 };
+                    let center = if uniform() < 0.2 {
+                        0.5
+                    } else {
+                        1.6 * uniform() - 0.3
+                    };
                     let width = 10f64.powf(-4.0 * uniform());
                     peak(center, width * width, 1.0, 0.0)
                 })
@@ -1231,8 +1232,11 @@ mod tests {
                 let x = k as f64 / 200.0;
                 let density = |p: &Peak| p.width * p.width + (x - p.center).powi(2);
                 let best = original.iter().map(density).fold(f64::INFINITY, f64::min);
-                let owner = found.iter().position(|p| p.lo <= x && x <= p.hi && p.lo < p.hi);
-                let owner = owner.map(|i| original.iter().find(|p| p.width == found[i].width).unwrap());
+                let owner = found
+                    .iter()
+                    .position(|p| p.lo <= x && x <= p.hi && p.lo < p.hi);
+                let owner =
+                    owner.map(|i| original.iter().find(|p| p.width == found[i].width).unwrap());
                 let got = density(owner.expect("every point has an owner"));
                 assert!(
                     got <= best * (1.0 + 1e-9) + 1e-15,

@@ -1083,7 +1083,10 @@ mod tests {
             ..report
         };
         let table = only.table();
-        assert!(table.contains("speedup") && table.contains("6.00x"), "{table}");
+        assert!(
+            table.contains("speedup") && table.contains("6.00x"),
+            "{table}"
+        );
         for absent in ["paper FPS", "deformation", "viewer frame", "--quick"] {
             assert!(!table.contains(absent), "{absent}: {table}");
         }

@@ -285,7 +285,8 @@ fn bench(args: &BenchArgs) -> Result<(), CliError> {
         crate::bench::BenchOptions {
             quick: args.quick,
             sections: crate::bench::Sections::only(&args.only),
-            equal_error_sizes: (!args.equal_error_sizes.is_empty()).then(|| args.equal_error_sizes.clone()),
+            equal_error_sizes: (!args.equal_error_sizes.is_empty())
+                .then(|| args.equal_error_sizes.clone()),
         },
         |p| eprintln!("{p}"),
     )?;

@@ -315,7 +315,13 @@ fn bench_checks_its_json_path_before_running() {
 
 #[test]
 fn bench_refuses_an_equal_error_size_out_of_range_naming_the_flag() {
-    let o = run(&["bench", "--only", "equal-error", "--equal-error-sizes", "256,8"]);
+    let o = run(&[
+        "bench",
+        "--only",
+        "equal-error",
+        "--equal-error-sizes",
+        "256,8",
+    ]);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(
         stderr(&o).contains("--equal-error-sizes") && stderr(&o).contains("'8'"),
