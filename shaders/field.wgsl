@@ -476,6 +476,10 @@ fn smooth_features(ray: Ray) -> Peaks {
     return out;
 }
 
+// GAUSS as a variable: indexing a constant array with a variable makes naga copy the whole array into a
+// temporary at every access (52 floats a node), which lavapipe pays in full; a private variable is copied once.
+var<private> GAUSS_NODES: array<vec2<f32>, 26> = GAUSS;
+
 // The first pair of the Gauss-Legendre rule of `order` nodes in GAUSS. Twin of adaptive::GAUSS_START.
 fn gauss_start(order: u32) -> u32 {
     switch order {
@@ -506,7 +510,7 @@ fn gauss_pairs() -> vec2<u32> {
 fn gauss_pair(p: Peak, a: f32, b: f32, k: u32) -> vec4<f32> {
     let c = 0.5 * (a + b);
     let r = 0.5 * (b - a);
-    let xw = GAUSS[k];
+    let xw = GAUSS_NODES[k];
     let ec = exp(c);
     let ex = exp(r * xw.x);
     let hi = ec * ex;
@@ -531,48 +535,6 @@ fn gauss_legendre(ray: Ray, p: Peak, a: f32, b: f32) -> f32 {
     return sum;
 }
 
-// The cuts of a piece in u, sorted: its ends, for a source closer than eps the ends of the falloff's flat top,
-// and the kinks (in s) inside the piece. Twin of cuts.
-struct Cuts {
-    at: array<f32, 12>,  // 4 + MAX_KINKS
-    count: u32,
-}
-
-fn piece_cuts(p: Peak, u0: f32, u1: f32, kinks: array<f32, 8>, kink_count: u32) -> Cuts {
-    var out: Cuts;
-    out.at[0] = u0;
-    out.count = 1u;
-    var inner: array<f32, 10>;  // 2 + MAX_KINKS
-    var n = 0u;
-    if p.flat > 0.0 {
-        let kf = stable_asinh(p.flat / p.width);
-        inner[0] = -kf;
-        inner[1] = kf;
-        n = 2u;
-    }
-    for (var i = 0u; i < kink_count; i++) {
-        inner[n] = stable_asinh((kinks[i] - p.center) / p.width);
-        n++;
-    }
-    // Those inside (u0, u1), in order (insertion sort).
-    for (var i = 0u; i < n; i++) {
-        let u = inner[i];
-        if !(u > u0 && u < u1) {
-            continue;
-        }
-        var j = out.count;
-        while j > 1u && out.at[j - 1u] > u {
-            out.at[j] = out.at[j - 1u];
-            j--;
-        }
-        out.at[j] = u;
-        out.count++;
-    }
-    out.at[out.count] = u1;
-    out.count++;
-    return out;
-}
-
 // A point's, a line's or a torus's term of B over its pieces. Twin of integrate_term.
 fn integrate_smooth_term(kind: u32, index: u32, s_point: vec3<f32>, e_point: vec3<f32>) -> f32 {
     let coefficient = smooth_coefficient(kind, index);
@@ -581,7 +543,6 @@ fn integrate_smooth_term(kind: u32, index: u32, s_point: vec3<f32>, e_point: vec
     }
     let ray = Ray(s_point, e_point - s_point, kind, index);
     let found = smooth_features(ray);
-    var no_kinks: array<f32, 8>;
     var sum = 0.0;
     for (var k = 0u; k < found.count; k++) {
         let p = found.peaks[k];
@@ -590,10 +551,17 @@ fn integrate_smooth_term(kind: u32, index: u32, s_point: vec3<f32>, e_point: vec
         if u1 <= u0 {
             continue;
         }
-        let cut = piece_cuts(p, u0, u1, no_kinks, 0u);
-        for (var j = 0u; j + 1u < cut.count; j++) {
-            let a = cut.at[j];
-            let b = cut.at[j + 1u];
+        // The piece's cuts (twin of cuts, with no kinks): only the ends of the falloff's flat top, -kf and kf,
+        // so [u0, u1] falls into at most three parts. No array: lavapipe keeps an array written with a variable
+        // index in memory, and sorting one cost more than the pieces' integration.
+        let flat = p.flat > 0.0;
+        let kf = select(0.0, stable_asinh(p.flat / p.width), flat);
+        for (var j = 0u; j < select(1u, 3u, flat); j++) {
+            let a = select(clamp(select(kf, -kf, j == 1u), u0, u1), u0, j == 0u);
+            let b = select(clamp(select(kf, -kf, j == 0u), u0, u1), u1, j == 2u || !flat);
+            if b <= a {
+                continue;
+            }
             let panels = u32(clamp(ceil((b - a) / U_PANEL), 1.0, f32(MAX_GAUSS_PANELS)));
             let width = (b - a) / f32(panels);
             for (var i = 0u; i < panels; i++) {
@@ -752,12 +720,17 @@ fn model_crossing(ray: Ray, a: ChainSample, b: ChainSample) -> vec2<f32> {
     }
     let disc = max(c1 * c1 - 4.0 * c2 * c0, 0.0);
     let q = -0.5 * (c1 + select(-1.0, 1.0, c1 >= 0.0) * sqrt(disc));
-    let roots = array<f32, 3>(q / c2, c0 / q, a.t + (b.t - a.t) * fa / (fa - fb));
-    for (var i = 0u; i < 3u; i++) {
-        let t = roots[i];
-        if abs(t) < 1e30 && t >= a.t && t <= b.t {
-            return vec2<f32>(1.0, t);
-        }
+    // The first root inside, of q / c2, c0 / q and the secant's (no array: lavapipe would keep it in memory).
+    let roots = vec3<f32>(q / c2, c0 / q, a.t + (b.t - a.t) * fa / (fa - fb));
+    let inside = (abs(roots) < vec3<f32>(1e30)) & (roots >= vec3<f32>(a.t)) & (roots <= vec3<f32>(b.t));
+    if inside.x {
+        return vec2<f32>(1.0, roots.x);
+    }
+    if inside.y {
+        return vec2<f32>(1.0, roots.y);
+    }
+    if inside.z {
+        return vec2<f32>(1.0, roots.z);
     }
     return vec2<f32>(0.0);
 }
@@ -935,6 +908,11 @@ fn curve_features(ray: Ray) -> CurveFeatures {
         end_t = end_t.yx;
         end_at = end_at.yx;
     }
+    // The nearest point moving at each end's normal plane, sampled once up front rather than where the scan's
+    // loop reaches the plane: a heavy call inside that loop's branches weighs on every interval on lavapipe
+    // (about 5 % of the curve pass, measured).
+    let end_moving0 = chain_sample(ray, end_t.x, true);
+    let end_moving1 = chain_sample(ray, end_t.y, true);
     let step = 1.0 / f32(SCAN);
     var minima: Minima;
     minima.count = 0u;
@@ -968,7 +946,10 @@ fn curve_features(ray: Ray) -> CurveFeatures {
                 if !(t > before.t && t <= after.t) || (before.param != at_end && after.param != at_end) {
                     continue;
                 }
-                let moving = chain_sample(ray, t, true);
+                var moving = end_moving0;
+                if e == 1u {
+                    moving = end_moving1;
+                }
                 end_sample = moving;
                 var at_rest = moving;
                 at_rest.velocity = vec3<f32>(0.0);
@@ -1118,23 +1099,85 @@ fn nearest_on_chain_from(c: CurveSource, p: vec3<f32>, segment: ptr<function, u3
     return vec2<f32>((f32(best_j) + best.x) / f32(c.segment_count), best.y);
 }
 
-// A curve's integrand in s at t clamped to the piece, f = w / max(eps, d) zeta(t) (before the coefficient),
-// the nearest point solved on the piece's segment (*segment).
-fn curve_f(ray: Ray, p: Peak, t_in: f32, segment: ptr<function, u32>) -> f32 {
-    let t = clamp(t_in, p.lo, p.hi);
-    let c = curves[ray.index];
-    let n = nearest_on_chain_from(c, ray.start + ray.dir * t, segment);
-    return wseries(c, n.x) * falloff(n.y, params.epsilon) * zeta_at(t);
+// Newton steps that carry a piece's nearest point from one node to the next.
+const TRACK_NEWTON: u32 = 2u;
+// A node keeps Newton's nearest point where the last step moved it less than this along its segment.
+const TRACK_SETTLED: f32 = 1e-4;
+
+// The nearest point carried along a piece of a curve's ray, node to node in order along it: its segment
+// (NO_SEGMENT before the piece's first node), its parameter u on that segment, and du/dt there.
+struct Track {
+    segment: u32,
+    u: f32,
+    rate: f32,
+    t: f32,
 }
 
-// Gauss-Legendre on [a, b] in u of a curve's term, node c - r x before c + r x. Twin of gauss_legendre.
-fn curve_gauss_legendre(ray: Ray, p: Peak, a: f32, b: f32, segment: ptr<function, u32>) -> f32 {
+// The rate du/dt of a nearest point at u on segment s: from the stationarity (C(u) - L(t)) . C'(u) = 0, C'(u) . dir
+// over its u derivative; 0 at the segment's ends or where the derivative is not positive.
+fn track_rate(s: CurveSegment, u: f32, off: vec3<f32>, dir: vec3<f32>) -> f32 {
+    let d1 = 2.0 * s.c2 * u + s.c1;
+    let dg = dot(d1, d1) + 2.0 * dot(off, s.c2);
+    return select(0.0, dot(d1, dir) / dg, u > 0.0 && u < 1.0 && dg > 0.0);
+}
+
+// The nearest point of the chain to the ray's point at t, (param, d), carried from the track's last node: the
+// track's segment, its u predicted by du/dt and then TRACK_NEWTON Newton steps on the stationarity. Between a
+// piece's cuts the nearest point neither jumps nor passes a joint, so this follows it. Where Newton has not
+// settled, the segment's stationarity is not a minimum, the point reaches a joint, or the piece has just
+// begun, it is solved in closed form (nearest_on_chain_from). Leaves the track at this node.
+fn track_nearest(c: CurveSource, ray: Ray, t: f32, track: ptr<function, Track>) -> vec2<f32> {
+    let p = ray.start + ray.dir * t;
+    let k = c.segment_count;
+    let j = (*track).segment;
+    if j < k {
+        let s = segments[c.first_segment + j];
+        var u = clamp((*track).u + (*track).rate * (t - (*track).t), 0.0, 1.0);
+        var step = 0.0;
+        var convex = true;
+        for (var i = 0u; i < TRACK_NEWTON; i++) {
+            let d1 = 2.0 * s.c2 * u + s.c1;
+            let off = segment_at(s, u) - p;
+            let dg = dot(d1, d1) + 2.0 * dot(off, s.c2);
+            convex = convex && dg > 0.0;
+            let next = select(u, clamp(u - dot(off, d1) / dg, 0.0, 1.0), dg > 0.0);
+            step = next - u;
+            u = next;
+        }
+        let at_joint = (u == 0.0 && j > 0u) || (u == 1.0 && j + 1u < k);
+        if convex && abs(step) <= TRACK_SETTLED && !at_joint {
+            let off = segment_at(s, u) - p;
+            *track = Track(j, u, track_rate(s, u, off, ray.dir), t);
+            return vec2<f32>((f32(j) + u) / f32(k), length(off));
+        }
+    }
+    var segment = j;
+    let n = nearest_on_chain_from(c, p, &segment);
+    let s = segments[c.first_segment + segment];
+    let u = clamp(n.x * f32(k) - f32(segment), 0.0, 1.0);
+    *track = Track(segment, u, track_rate(s, u, segment_at(s, u) - p, ray.dir), t);
+    return n;
+}
+
+// Gauss-Legendre on [a, b] in u of a curve's term: f = w / max(eps, d) zeta(t) (before the coefficient) at
+// each node, t clamped to the piece. The nodes go in order along the ray (c - r x from the outermost in, then
+// c + r x from the innermost out), so that each carries the nearest point on from the last (track_nearest).
+// Twin of gauss_legendre.
+fn curve_gauss_legendre(ray: Ray, p: Peak, a: f32, b: f32, track: ptr<function, Track>) -> f32 {
     let pairs = gauss_pairs();
+    let half = pairs.y - pairs.x;
+    let c = curves[ray.index];
+    let mid = 0.5 * (a + b);
+    let r = 0.5 * (b - a);
+    let ec = exp(mid);
     var sum = 0.0;
-    for (var k = pairs.x; k < pairs.y; k++) {
-        let n = gauss_pair(p, a, b, k);
-        sum += n.y * curve_f(ray, p, n.x, segment);
-        sum += n.w * curve_f(ray, p, n.z, segment);
+    for (var i = 0u; i < 2u * half; i++) {
+        let left = i < half;
+        let xw = GAUSS_NODES[select(pairs.x + i - half, pairs.y - 1u - i, left)];
+        let e = ec * exp(select(r * xw.x, -r * xw.x, left));
+        let t = clamp(p.center + p.width * 0.5 * (e - 1.0 / e), p.lo, p.hi);
+        let n = track_nearest(c, ray, t, track);
+        sum += xw.y * r * p.width * 0.5 * (e + 1.0 / e) * wseries(c, n.x) * falloff(n.y, params.epsilon) * zeta_at(t);
     }
     return sum;
 }
@@ -1155,16 +1198,31 @@ fn integrate_curve_term(index: u32, s_point: vec3<f32>, e_point: vec3<f32>) -> f
         if u1 <= u0 {
             continue;
         }
-        let cut = piece_cuts(p, u0, u1, features.kinks, features.kink_count);
-        for (var j = 0u; j + 1u < cut.count; j++) {
-            let a = cut.at[j];
-            let b = cut.at[j + 1u];
+        // The piece cut in order at the kinks inside it and, closer than eps, at the ends of the falloff's flat
+        // top, -kf and kf (twin of cuts): each part ends at the least cut past its start, so that no array is
+        // written (see integrate_smooth_term).
+        let kf = select(F32_MAX, stable_asinh(p.flat / p.width), p.flat > 0.0);
+        var b = u0;
+        while b < u1 {
+            let a = b;
+            b = u1;
+            for (var m = 0u; m < features.kink_count; m++) {
+                let u = stable_asinh((features.kinks[m] - p.center) / p.width);
+                if u > a {
+                    b = min(b, u);
+                }
+            }
+            if -kf > a {
+                b = min(b, -kf);
+            } else if kf > a {
+                b = min(b, kf);
+            }
             let panels = u32(clamp(ceil((b - a) / U_PANEL), 1.0, f32(MAX_GAUSS_PANELS)));
             let width = (b - a) / f32(panels);
-            var segment = NO_SEGMENT;
+            var track = Track(NO_SEGMENT, 0.0, 0.0, 0.0);
             for (var i = 0u; i < panels; i++) {
                 let pa = a + width * f32(i);
-                sum += curve_gauss_legendre(ray, p, pa, pa + width, &segment);
+                sum += curve_gauss_legendre(ray, p, pa, pa + width, &track);
             }
         }
     }
