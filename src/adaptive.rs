@@ -52,7 +52,11 @@
 //! evaluations of the chain).
 //!
 //! `shaders/field.wgsl` is the f32 twin of this file: `integrate_adaptive` for points, lines and tori and
-//! `integrate_adaptive_curves` for curves, dispatched apart (`gpu::field_pass::plan_chunks`).
+//! `integrate_adaptive_curves` for curves, dispatched apart (`gpu::field_pass::plan_chunks`). One difference:
+//! along a curve's piece the shader visits the Gauss nodes in order along the ray and carries each nearest point
+//! on from the last node's (its rate du/dt, then two Newton steps on the segment), solving the cubic in closed
+//! form only where a piece begins or Newton has not settled; this twin solves every node in closed form. Both
+//! find the same nearest point, to f32 rounding there, and the tests hold the GPU to this twin.
 
 use std::cell::Cell;
 
