@@ -1124,8 +1124,9 @@ fn track_rate(s: CurveSegment, u: f32, off: vec3<f32>, dir: vec3<f32>) -> f32 {
 // The nearest point of the chain to the ray's point at t, (param, d), carried from the track's last node: the
 // track's segment, its u predicted by du/dt and then TRACK_NEWTON Newton steps on the stationarity. Between a
 // piece's cuts the nearest point neither jumps nor passes a joint, so this follows it. Where Newton has not
-// settled, the segment's stationarity is not a minimum, the point reaches a joint, or the piece has just
-// begun, it is solved in closed form (nearest_on_chain_from). Leaves the track at this node.
+// settled, the segment's stationarity is not a minimum, or the piece has just begun, it is solved in closed
+// form (nearest_on_chain_from); so too where the point reaches a joint, which the cuts at joint planes already
+// exclude (a safety net against a missed cut). Leaves the track at this node.
 fn track_nearest(c: CurveSource, ray: Ray, t: f32, track: ptr<function, Track>) -> vec2<f32> {
     let p = ray.start + ray.dir * t;
     let k = c.segment_count;
