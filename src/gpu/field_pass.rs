@@ -161,11 +161,15 @@ fn curve_iterations(segments: u32) -> u64 {
     1 + 12 * segments as u64
 }
 
+/// Newton steps a Gauss node of a curve's piece takes from the last node's nearest point (`TRACK_NEWTON` in the
+/// shader) before it falls back, if it must, to solving the cubic.
+const TRACK_NEWTON: u64 = 2;
+
 /// Loop iterations of a curve's term in the adaptive integrator at most, `iterations` those of one evaluation of
-/// its distance: each evaluation may first solve the piece's segment alone, then the whole chain
-/// (`nearest_on_chain_from` in the shader), in an outer loop of its own.
+/// its distance: each evaluation may take Newton's steps from the last node (`track_nearest` in the shader), then
+/// solve the piece's segment alone, then the whole chain (`nearest_on_chain_from`), in an outer loop of its own.
 fn adaptive_curve_iterations(iterations: u64) -> u64 {
-    CURVE_EVALUATIONS * (iterations + curve_iterations(1) + 1)
+    CURVE_EVALUATIONS * (TRACK_NEWTON + iterations + curve_iterations(1) + 1)
 }
 
 /// The pipelines: simpson's, the adaptive integrator's for points, lines and tori, and for curves.
@@ -723,6 +727,15 @@ mod tests {
     use super::*;
     use crate::field::{Curve, Point, Torus};
     use glam::DVec3;
+
+    #[test]
+    fn the_newton_steps_counted_are_the_shaders() {
+        let declared = format!("const TRACK_NEWTON: u32 = {TRACK_NEWTON}u;");
+        assert!(
+            crate::gpu::shaders::FIELD_PASS.contains(&declared),
+            "field.wgsl declares {declared}"
+        );
+    }
 
     /// A scene of `points` points, one torus and curves of the given segment counts.
     fn scene(points: usize, curves: &[usize], integrator: Integrator) -> Packed {
