@@ -20,10 +20,10 @@ struct FieldParams {
     torus_count: u32,
     curve_count: u32,
     integrator: u32,    // 0: simpson, 1: adaptive
-    pad0: f32,
+    term_tolerance: f32, // adaptive: the error allowed on each term's part of B (the tolerance over the sources)
     jitter: u32,        // simpson: 1 for the randomly shifted rectangle rule
     seed: u32,
-    gauss_order: u32,   // adaptive: Gauss-Legendre nodes per panel for points, lines and tori (6, 8, 10, 12, 16)
+    gauss_order: u32,   // adaptive: n of the Gauss-Kronrod pair (n and 2n + 1 nodes; adaptive::kronrod_order)
 }
 
 @group(0) @binding(0) var<storage, read> params: FieldParams;
@@ -198,38 +198,64 @@ const MAX_WIDTH: f32 = 4.0;
 const MIN_AXIS_WIDTH: f32 = 1e-4;
 const U_PANEL: f32 = 4.0;
 const MAX_GAUSS_PANELS: u32 = 4u;
+const MAX_DEPTH: u32 = 10u;
+const MAX_REFINEMENTS: u32 = 32u;
 const RING_NEWTON: u32 = 6u;
 const RING_STEP: f32 = 0.125;
 
-// Gauss-Legendre on [-1, 1], 6, 8, 10, 12 and 16 nodes: (positive node, weight), each rule's pairs in turn.
-// Twin of adaptive::GAUSS.
-const GAUSS: array<vec2<f32>, 26> = array<vec2<f32>, 26>(
-    vec2<f32>(0.238619186, 0.467913935),  // 6
-    vec2<f32>(0.661209386, 0.360761573),  // 6
-    vec2<f32>(0.932469514, 0.171324492),  // 6
-    vec2<f32>(0.183434642, 0.362683783),  // 8
-    vec2<f32>(0.525532410, 0.313706646),  // 8
-    vec2<f32>(0.796666477, 0.222381034),  // 8
-    vec2<f32>(0.960289856, 0.101228536),  // 8
-    vec2<f32>(0.148874339, 0.295524225),  // 10
-    vec2<f32>(0.433395394, 0.269266719),  // 10
-    vec2<f32>(0.679409568, 0.219086363),  // 10
-    vec2<f32>(0.865063367, 0.149451349),  // 10
-    vec2<f32>(0.973906529, 0.066671344),  // 10
-    vec2<f32>(0.125233409, 0.249147046),  // 12
-    vec2<f32>(0.367831499, 0.233492537),  // 12
-    vec2<f32>(0.587317954, 0.203167427),  // 12
-    vec2<f32>(0.769902674, 0.160078329),  // 12
-    vec2<f32>(0.904117256, 0.106939326),  // 12
-    vec2<f32>(0.981560634, 0.047175336),  // 12
-    vec2<f32>(0.095012510, 0.189450610),  // 16
-    vec2<f32>(0.281603551, 0.182603415),  // 16
-    vec2<f32>(0.458016778, 0.169156519),  // 16
-    vec2<f32>(0.617876244, 0.149595989),  // 16
-    vec2<f32>(0.755404408, 0.124628971),  // 16
-    vec2<f32>(0.865631202, 0.095158512),  // 16
-    vec2<f32>(0.944575023, 0.062253524),  // 16
-    vec2<f32>(0.989400935, 0.027152459),  // 16
+// Gauss-Kronrod pairs on [-1, 1] for n = 3, 4, 5, 6, 7, 8 and 10: each rule's n + 1 rows in turn, (node x >= 0,
+// Kronrod weight, Gauss weight), the first at x = 0. Twin of adaptive::KRONROD.
+const KRONROD: array<vec3<f32>, 50> = array<vec3<f32>, 50>(
+    vec3<f32>(0.000000000, 0.450916539, 0.888888889),  // 3
+    vec3<f32>(0.434243749, 0.401397415, 0.000000000),  // 3
+    vec3<f32>(0.774596669, 0.268488090, 0.555555556),  // 3
+    vec3<f32>(0.960491269, 0.104656226, 0.000000000),  // 3
+    vec3<f32>(0.000000000, 0.346442982, 0.000000000),  // 4
+    vec3<f32>(0.339981044, 0.326949190, 0.652145155),  // 4
+    vec3<f32>(0.640286217, 0.266798340, 0.000000000),  // 4
+    vec3<f32>(0.861136312, 0.170053605, 0.347854845),  // 4
+    vec3<f32>(0.976560251, 0.062977374, 0.000000000),  // 4
+    vec3<f32>(0.000000000, 0.282987418, 0.568888889),  // 5
+    vec3<f32>(0.279630413, 0.272849802, 0.000000000),  // 5
+    vec3<f32>(0.538469310, 0.241040339, 0.478628670),  // 5
+    vec3<f32>(0.754166727, 0.186800797, 0.000000000),  // 5
+    vec3<f32>(0.906179846, 0.115233317, 0.236926885),  // 5
+    vec3<f32>(0.984085360, 0.042582037, 0.000000000),  // 5
+    vec3<f32>(0.000000000, 0.241072580, 0.000000000),  // 6
+    vec3<f32>(0.238619186, 0.233770864, 0.467913935),  // 6
+    vec3<f32>(0.463118212, 0.213209652, 0.000000000),  // 6
+    vec3<f32>(0.661209386, 0.181071994, 0.360761573),  // 6
+    vec3<f32>(0.821373341, 0.137320605, 0.000000000),  // 6
+    vec3<f32>(0.932469514, 0.083694440, 0.171324492),  // 6
+    vec3<f32>(0.988703203, 0.030396154, 0.000000000),  // 6
+    vec3<f32>(0.000000000, 0.209482141, 0.417959184),  // 7
+    vec3<f32>(0.207784955, 0.204432940, 0.000000000),  // 7
+    vec3<f32>(0.405845151, 0.190350578, 0.381830051),  // 7
+    vec3<f32>(0.586087235, 0.169004727, 0.000000000),  // 7
+    vec3<f32>(0.741531186, 0.140653260, 0.279705391),  // 7
+    vec3<f32>(0.864864423, 0.104790010, 0.000000000),  // 7
+    vec3<f32>(0.949107912, 0.063092093, 0.129484966),  // 7
+    vec3<f32>(0.991455371, 0.022935322, 0.000000000),  // 7
+    vec3<f32>(0.000000000, 0.184446406, 0.000000000),  // 8
+    vec3<f32>(0.183434642, 0.181400025, 0.362683783),  // 8
+    vec3<f32>(0.360701098, 0.172070609, 0.000000000),  // 8
+    vec3<f32>(0.525532410, 0.156652606, 0.313706646),  // 8
+    vec3<f32>(0.672354071, 0.136263109, 0.000000000),  // 8
+    vec3<f32>(0.796666477, 0.111646371, 0.222381034),  // 8
+    vec3<f32>(0.894120907, 0.082482299, 0.000000000),  // 8
+    vec3<f32>(0.960289856, 0.049439395, 0.101228536),  // 8
+    vec3<f32>(0.993379876, 0.017822383, 0.000000000),  // 8
+    vec3<f32>(0.000000000, 0.149445554, 0.000000000),  // 10
+    vec3<f32>(0.148874339, 0.147739105, 0.295524225),  // 10
+    vec3<f32>(0.294392863, 0.142775939, 0.000000000),  // 10
+    vec3<f32>(0.433395394, 0.134709217, 0.269266719),  // 10
+    vec3<f32>(0.562757135, 0.123491976, 0.000000000),  // 10
+    vec3<f32>(0.679409568, 0.109387159, 0.219086363),  // 10
+    vec3<f32>(0.780817727, 0.093125455, 0.000000000),  // 10
+    vec3<f32>(0.865063367, 0.075039675, 0.149451349),  // 10
+    vec3<f32>(0.930157491, 0.054755897, 0.000000000),  // 10
+    vec3<f32>(0.973906529, 0.032558162, 0.066671344),  // 10
+    vec3<f32>(0.995657163, 0.011694639, 0.000000000),  // 10
 );
 
 // A feature and the piece [lo, hi] of the ray it owns: center s* and width h in s, and flat, the half-length of
@@ -476,18 +502,20 @@ fn smooth_features(ray: Ray) -> Peaks {
     return out;
 }
 
-// GAUSS as a variable: indexing a constant array with a variable makes naga copy the whole array into a
-// temporary at every access (52 floats a node), which lavapipe pays in full; a private variable is copied once.
-var<private> GAUSS_NODES: array<vec2<f32>, 26> = GAUSS;
+// KRONROD as a variable: indexing a constant array with a variable makes naga copy the whole array into a
+// temporary at every access, which lavapipe pays in full; a private variable is copied once.
+var<private> KRONROD_NODES: array<vec3<f32>, 50> = KRONROD;
 
-// The first pair of the Gauss-Legendre rule of `order` nodes in GAUSS. Twin of adaptive::GAUSS_START.
-fn gauss_start(order: u32) -> u32 {
+// The first row of the Gauss-Kronrod pair of `order` in KRONROD. Twin of adaptive::KRONROD_START.
+fn kronrod_start(order: u32) -> u32 {
     switch order {
-        case 6u: { return 0u; }
-        case 8u: { return 3u; }
-        case 10u: { return 7u; }
-        case 12u: { return 12u; }
-        default: { return 18u; }
+        case 3u: { return 0u; }
+        case 4u: { return 4u; }
+        case 5u: { return 9u; }
+        case 6u: { return 15u; }
+        case 7u: { return 22u; }
+        case 8u: { return 30u; }
+        default: { return 39u; }
     }
 }
 
@@ -498,41 +526,86 @@ fn smooth_f(ray: Ray, p: Peak, t_in: f32) -> f32 {
     return falloff(d, params.epsilon) * zeta_at(t);
 }
 
-// The Gauss-Legendre pairs of the rule of params.gauss_order nodes: [first, last) in GAUSS.
-fn gauss_pairs() -> vec2<u32> {
-    let first = gauss_start(params.gauss_order);
-    return vec2<u32>(first, first + select(8u, params.gauss_order / 2u, first < 18u));
+// Node i of the 2n + 1 of the pair on [a, b] in u, in order along the ray (the outermost on the left first):
+// (u's offset factor x with its sign, Kronrod weight, Gauss weight).
+fn kronrod_node(i: u32) -> vec3<f32> {
+    let n = params.gauss_order;
+    let first = kronrod_start(n);
+    if i < n {
+        let row = KRONROD_NODES[first + n - i];
+        return vec3<f32>(-row.x, row.y, row.z);
+    }
+    return KRONROD_NODES[first + i - n];
 }
 
-// The k-th pair of Gauss-Legendre nodes on [a, b] in u, mapped to s by p's map: (s, weight) of the node
-// c - r x and of c + r x, the weights with ds/du = h cosh(u) and the panel's half width r. A pair's
-// exponentials are exp(c) / exp(r x) and exp(c) exp(r x): one exp a pair (and one for c), no sinh or cosh.
-fn gauss_pair(p: Peak, a: f32, b: f32, k: u32) -> vec4<f32> {
+// s at u by p's map, s* + h sinh(u), clamped to the piece, and ds/du = h cosh(u): one exp.
+fn map_node(p: Peak, u: f32) -> vec2<f32> {
+    let e = exp(u);
+    return vec2<f32>(clamp(p.center + p.width * 0.5 * (e - 1.0 / e), p.lo, p.hi), p.width * 0.5 * (e + 1.0 / e));
+}
+
+// The Kronrod and Gauss values on [a, b] in u of a point's, a line's or a torus's term. Twin of kronrod.
+fn smooth_kronrod(ray: Ray, p: Peak, a: f32, b: f32) -> vec2<f32> {
     let c = 0.5 * (a + b);
     let r = 0.5 * (b - a);
-    let xw = GAUSS_NODES[k];
-    let ec = exp(c);
-    let ex = exp(r * xw.x);
-    let hi = ec * ex;
-    let lo = ec / ex;
-    let w = xw.y * r * p.width;
-    return vec4<f32>(
-        p.center + p.width * 0.5 * (lo - 1.0 / lo),
-        w * 0.5 * (lo + 1.0 / lo),
-        p.center + p.width * 0.5 * (hi - 1.0 / hi),
-        w * 0.5 * (hi + 1.0 / hi),
-    );
+    var sum = vec2<f32>(0.0);
+    for (var i = 0u; i <= 2u * params.gauss_order; i++) {
+        let node = kronrod_node(i);
+        let m = map_node(p, c + r * node.x);
+        sum += node.yz * (m.y * smooth_f(ray, p, m.x));
+    }
+    return r * sum;
 }
 
-// Gauss-Legendre on [a, b] in u of a point's, a line's or a torus's term. Twin of gauss_legendre.
-fn gauss_legendre(ray: Ray, p: Peak, a: f32, b: f32) -> f32 {
-    let pairs = gauss_pairs();
+// Whether a part's Kronrod and Gauss values kg are close enough for its share of the allowance (per unit of u),
+// or close to f32's rounding of the value, below which f32 cannot tell. Twin of integrate_panel's test.
+fn settled(kg: vec2<f32>, allowance: f32, width: f32) -> bool {
+    return abs(kg.x - kg.y) <= max(allowance * width, 4e-6 * abs(kg.x));
+}
+
+// The next part of a dyadic bisection after an accepted one (twin of integrate_panel): (at, level) on.
+fn next_part(at: u32, level: u32) -> vec2<u32> {
+    let end = 1u << MAX_DEPTH;
+    let next = at + (end >> level);
+    var up = level;
+    while up > 0u && (next & ((end >> (up - 1u)) - 1u)) == 0u {
+        up -= 1u;
+    }
+    return vec2<u32>(next, up);
+}
+
+// A point's, a line's or a torus's term on the panel [a, b] in u, refined where the pair disagrees. Twin of
+// integrate_panel.
+fn smooth_panel(ray: Ray, p: Peak, a: f32, b: f32, allowance: f32, refinements: ptr<function, u32>) -> f32 {
+    let end = 1u << MAX_DEPTH;
+    var at = 0u;
+    var level = 0u;
     var sum = 0.0;
-    for (var k = pairs.x; k < pairs.y; k++) {
-        let n = gauss_pair(p, a, b, k);
-        sum += n.y * smooth_f(ray, p, n.x) + n.w * smooth_f(ray, p, n.z);
+    while at < end {
+        let x0 = a + (b - a) * (f32(at) / f32(end));
+        let x1 = a + (b - a) * (f32(at + (end >> level)) / f32(end));
+        let kg = smooth_kronrod(ray, p, x0, x1);
+        if settled(kg, allowance, x1 - x0) || level == MAX_DEPTH || *refinements == 0u {
+            sum += kg.x;
+            let next = next_part(at, level);
+            at = next.x;
+            level = next.y;
+        } else {
+            *refinements -= 1u;
+            level++;
+        }
     }
     return sum;
+}
+
+// The u length of a term's pieces, over which its tolerance is shared.
+fn pieces_length(found: Peaks) -> f32 {
+    var length = 0.0;
+    for (var k = 0u; k < found.count; k++) {
+        let p = found.peaks[k];
+        length += max(stable_asinh((p.hi - p.center) / p.width) - stable_asinh((p.lo - p.center) / p.width), 0.0);
+    }
+    return length;
 }
 
 // A point's, a line's or a torus's term of B over its pieces. Twin of integrate_term.
@@ -543,6 +616,8 @@ fn integrate_smooth_term(kind: u32, index: u32, s_point: vec3<f32>, e_point: vec
     }
     let ray = Ray(s_point, e_point - s_point, kind, index);
     let found = smooth_features(ray);
+    let allowance = params.term_tolerance / (abs(coefficient) * max(pieces_length(found), 1e-30));
+    var refinements = MAX_REFINEMENTS;
     var sum = 0.0;
     for (var k = 0u; k < found.count; k++) {
         let p = found.peaks[k];
@@ -567,7 +642,7 @@ fn integrate_smooth_term(kind: u32, index: u32, s_point: vec3<f32>, e_point: vec
             let width = (b - a) / f32(panels);
             for (var i = 0u; i < panels; i++) {
                 let pa = a + width * f32(i);
-                sum += gauss_legendre(ray, p, pa, pa + width);
+                sum += smooth_panel(ray, p, pa, pa + width, allowance, &refinements);
             }
         }
     }
@@ -603,6 +678,8 @@ fn integrate_adaptive(@builtin(global_invocation_id) id: vec3<u32>) {
 // -- Curves: Gauss-Legendre in u between the chain's kinks.
 
 const JUMP: f32 = 0.1;
+const PARAM_JUMP: f32 = 0.05;
+const END_SNAP: f32 = 1e-4;
 const KINK_ROUNDS: u32 = 4u;
 const KINK_BRACKET: f32 = 1e-3;
 const KINK_PROBE: f32 = 0.05;
@@ -620,6 +697,7 @@ struct ChainSample {
     slope: f32,      // d(d^2)/dt
     velocity: vec3<f32>,
     curvature: f32,  // d^2(d^2)/dt^2, -F32_MAX where the velocity is unknown
+    rate: f32,       // the rate of the chain parameter along the ray (0 where the velocity is)
 }
 
 // Twin of ChainSample::at: the nearest point, its velocity along the ray from the stationarity
@@ -637,18 +715,20 @@ fn chain_sample(ray: Ray, t: f32, moving: bool) -> ChainSample {
     let d1 = 2.0 * seg.c2 * local + seg.c1;
     let denominator = dot(d1, d1) - dot(p - point, 2.0 * seg.c2);
     var velocity = vec3<f32>(0.0);
+    var rate = 0.0;
     var known = 1.0;
     var curvature = 2.0 * dot(ray.dir, ray.dir);
     if moving || (local > 0.0 && local < 1.0) {
         if denominator > 0.0 {
-            velocity = d1 * (dot(d1, ray.dir) / denominator);
+            rate = dot(d1, ray.dir) / denominator;
+            velocity = d1 * rate;
             curvature = 2.0 * dot(ray.dir, ray.dir - velocity);
         } else {
             known = 0.0;
             curvature = -F32_MAX;
         }
     }
-    return ChainSample(t, n.x, n.y * n.y, known, point, 2.0 * dot(p - point, ray.dir), velocity, curvature);
+    return ChainSample(t, n.x, n.y * n.y, known, point, 2.0 * dot(p - point, ray.dir), velocity, curvature, rate / f32(k));
 }
 
 // Where the nearest point would be at t had it moved on smoothly from x. Twin of ChainSample::predict.
@@ -677,8 +757,8 @@ fn chain_newton(x: ChainSample, lo: f32, hi: f32) -> f32 {
     return clamp(t, lo, hi);
 }
 
-// How far the nearest point lands at b from its smooth motion from a, relative to the distance (at least eps).
-// Twin of miss.
+// How far the nearest point lands at b from its smooth motion from a, relative to the distance (at least eps),
+// or its chain parameter from its rate's, relative to PARAM_JUMP. Twin of miss.
 fn miss(a: ChainSample, b: ChainSample) -> f32 {
     if b.t <= a.t {
         return 0.0;
@@ -687,7 +767,10 @@ fn miss(a: ChainSample, b: ChainSample) -> f32 {
         return F32_MAX;
     }
     let glide = (a.velocity + b.velocity) * (0.5 * (b.t - a.t));
-    return min(length(b.point - a.point - glide) / max(sqrt(min(a.d2, b.d2)), max(params.epsilon, 1e-30)), F32_MAX);
+    let spatial = length(b.point - a.point - glide) / max(sqrt(min(a.d2, b.d2)), max(params.epsilon, 1e-30));
+    let param = abs(b.param - a.param - 0.5 * (a.rate + b.rate) * (b.t - a.t)) / PARAM_JUMP;
+    let m = max(spatial, JUMP * param);
+    return select(F32_MAX, m, m < F32_MAX);
 }
 
 // The ray's crossing of the bisector plane of a and b, clamped to [lo, hi]. Twin of bisector.
@@ -833,6 +916,60 @@ fn search_jumps(ray: Ray, a: ChainSample, b: ChainSample, kinks: ptr<function, K
     return vec4<f32>(a1.t, a1.param, b1.t, b1.param);
 }
 
+// Twin of curve::Segment::start_tangent and end_tangent: the direction in which a segment leaves its start or
+// arrives at its end, the second derivative's where the speed vanishes there.
+fn start_tangent(s: CurveSegment) -> vec3<f32> {
+    return select(s.c2, s.c1, dot(s.c1, s.c1) > DEGENERATE * dot(s.c2, s.c2));
+}
+
+fn end_tangent(s: CurveSegment) -> vec3<f32> {
+    let d1 = 2.0 * s.c2 + s.c1;
+    return select(-s.c2, d1, dot(d1, d1) > DEGENERATE * dot(s.c2, s.c2));
+}
+
+// Twin of curve::tangent_into and tangent_out_of: past one segment of zero length.
+fn tangent_into(c: CurveSource, j: u32) -> vec3<f32> {
+    let t = end_tangent(segments[c.first_segment + j - 1u]);
+    if all(t == vec3<f32>(0.0)) && j >= 2u {
+        return end_tangent(segments[c.first_segment + j - 2u]);
+    }
+    return t;
+}
+
+fn tangent_out_of(c: CurveSource, j: u32) -> vec3<f32> {
+    let t = start_tangent(segments[c.first_segment + j]);
+    if all(t == vec3<f32>(0.0)) && j + 1u < c.segment_count {
+        return start_tangent(segments[c.first_segment + j + 1u]);
+    }
+    return t;
+}
+
+const DEGENERATE: f32 = 1e-10;
+
+// The cuts where the nearest point crosses a knot of the W series between two samples x and y, (t, param), with
+// no jump between them: the parameter's linear interpolation, then one Newton step on a sample there. Twin of
+// knot_cuts.
+fn knot_cuts(ray: Ray, x: vec2<f32>, y: vec2<f32>, kinks: ptr<function, Kinks>) {
+    let n = curves[ray.index].weight_count;
+    if n < 4u || x.y == y.y || y.x <= x.x {
+        return;
+    }
+    let spans = f32(n - 2u);
+    for (var i = 1u; i < n - 2u; i++) {
+        let knot = f32(i) / spans;
+        if (x.y - knot) * (y.y - knot) > 0.0 {
+            continue;
+        }
+        let guess = clamp(x.x + (y.x - x.x) * (knot - x.y) / (y.y - x.y), x.x, y.x);
+        let m = chain_sample(ray, guess, false);
+        var t = m.t;
+        if m.rate != 0.0 {
+            t = m.t + (knot - m.param) / m.rate;
+        }
+        push_kink(kinks, select(m.t, clamp(t, x.x, y.x), abs(t) < 1e30));
+    }
+}
+
 // The cuts at the chain's joints between two samples x and y, (t, param), with no jump between them: where the
 // nearest point passes a joint, the joint's normal plane (two at a corner) where the samples lie on either side
 // of the joint. Twin of joint_cuts.
@@ -843,11 +980,9 @@ fn joint_cuts(ray: Ray, x: vec2<f32>, y: vec2<f32>, kinks: ptr<function, Kinks>)
         if (x.y - pj) * (y.y - pj) > 0.0 {
             continue;
         }
-        let into = segments[c.first_segment + j - 1u];
-        let out_of = segments[c.first_segment + j];
-        let joint = out_of.c0;
-        let t_in = 2.0 * into.c2 + into.c1;
-        let t_out = out_of.c1;
+        let joint = segments[c.first_segment + j].c0;
+        let t_in = tangent_into(c, j);
+        let t_out = tangent_out_of(c, j);
         let cr = cross(t_in, t_out);
         let corner = dot(cr, cr) > 1e-12 * dot(t_in, t_in) * dot(t_out, t_out);
         for (var plane = 0u; plane < select(1u, 2u, corner); plane++) {
@@ -899,9 +1034,10 @@ fn curve_features(ray: Ray) -> CurveFeatures {
     let c = curves[ray.index];
     let first = segments[c.first_segment];
     let last = segments[c.first_segment + c.segment_count - 1u];
-    let last_tangent = 2.0 * last.c2 + last.c1;
+    let first_tangent = tangent_out_of(c, 0u);
+    let last_tangent = tangent_into(c, c.segment_count);
     var end_t = vec2<f32>(
-        dot(first.c0 - ray.start, first.c1) / dot(ray.dir, first.c1),
+        dot(first.c0 - ray.start, first_tangent) / dot(ray.dir, first_tangent),
         dot(last.c2 + last.c1 + last.c0 - ray.start, last_tangent) / dot(ray.dir, last_tangent),
     );
     var end_at = vec2<f32>(0.0, 1.0);
@@ -944,7 +1080,7 @@ fn curve_features(ray: Ray) -> CurveFeatures {
             for (; e < 2u; e++) {
                 let t = end_t[e];
                 let at_end = end_at[e];
-                if !(t > before.t && t <= after.t) || (before.param != at_end && after.param != at_end) {
+                if !(t > before.t && t <= after.t) || (abs(before.param - at_end) > END_SNAP && abs(after.param - at_end) > END_SNAP) {
                     continue;
                 }
                 var moving = end_moving0;
@@ -954,10 +1090,11 @@ fn curve_features(ray: Ray) -> CurveFeatures {
                 end_sample = moving;
                 var at_rest = moving;
                 at_rest.velocity = vec3<f32>(0.0);
+                at_rest.rate = 0.0;
                 at_rest.curvature = 2.0 * dot(ray.dir, ray.dir);
                 right = moving;
                 next_left = at_rest;
-                if left.param == at_end {
+                if abs(left.param - at_end) <= END_SNAP {
                     right = at_rest;
                     next_left = moving;
                 }
@@ -997,6 +1134,7 @@ fn curve_features(ray: Ray) -> CurveFeatures {
                 for (var q = 0u; q < 2u; q++) {
                     joint_cuts(ray, select(calm, bracket.xy, q == 1u), select(bracket.xy, bracket.zw, q == 1u), &kinks);
                 }
+                knot_cuts(ray, calm, bracket.xy, &kinks);
                 calm = bracket.zw;
             }
             if cut < 0.0 {
@@ -1006,6 +1144,7 @@ fn curve_features(ray: Ray) -> CurveFeatures {
         }
         // The stretch since the last jump.
         joint_cuts(ray, calm, vec2<f32>(after.t, after.param), &kinks);
+        knot_cuts(ray, calm, vec2<f32>(after.t, after.param), &kinks);
         g_before_before = before.d2;
         before = after;
     }
@@ -1161,25 +1300,42 @@ fn track_nearest(c: CurveSource, ray: Ray, t: f32, track: ptr<function, Track>) 
     return n;
 }
 
-// Gauss-Legendre on [a, b] in u of a curve's term: f = w / max(eps, d) zeta(t) (before the coefficient) at
-// each node, t clamped to the piece. The nodes go in order along the ray (c - r x from the outermost in, then
-// c + r x from the innermost out), so that each carries the nearest point on from the last (track_nearest).
-// Twin of gauss_legendre.
-fn curve_gauss_legendre(ray: Ray, p: Peak, a: f32, b: f32, track: ptr<function, Track>) -> f32 {
-    let pairs = gauss_pairs();
-    let half = pairs.y - pairs.x;
+// The Kronrod and Gauss values on [a, b] in u of a curve's term: f = w / max(eps, d) zeta(t) (before the
+// coefficient) at each node, t clamped to the piece. The nodes go in order along the ray, so that each carries
+// the nearest point on from the last (track_nearest). Twin of kronrod.
+fn curve_kronrod(ray: Ray, p: Peak, a: f32, b: f32, track: ptr<function, Track>) -> vec2<f32> {
     let c = curves[ray.index];
     let mid = 0.5 * (a + b);
     let r = 0.5 * (b - a);
-    let ec = exp(mid);
+    var sum = vec2<f32>(0.0);
+    for (var i = 0u; i <= 2u * params.gauss_order; i++) {
+        let node = kronrod_node(i);
+        let m = map_node(p, mid + r * node.x);
+        let n = track_nearest(c, ray, m.x, track);
+        sum += node.yz * (m.y * wseries(c, n.x) * falloff(n.y, params.epsilon) * zeta_at(m.x));
+    }
+    return r * sum;
+}
+
+// A curve's term on the panel [a, b] in u, refined where the pair disagrees. Twin of integrate_panel.
+fn curve_panel(ray: Ray, p: Peak, a: f32, b: f32, allowance: f32, refinements: ptr<function, u32>, track: ptr<function, Track>) -> f32 {
+    let end = 1u << MAX_DEPTH;
+    var at = 0u;
+    var level = 0u;
     var sum = 0.0;
-    for (var i = 0u; i < 2u * half; i++) {
-        let left = i < half;
-        let xw = GAUSS_NODES[select(pairs.x + i - half, pairs.y - 1u - i, left)];
-        let e = ec * exp(select(r * xw.x, -r * xw.x, left));
-        let t = clamp(p.center + p.width * 0.5 * (e - 1.0 / e), p.lo, p.hi);
-        let n = track_nearest(c, ray, t, track);
-        sum += xw.y * r * p.width * 0.5 * (e + 1.0 / e) * wseries(c, n.x) * falloff(n.y, params.epsilon) * zeta_at(t);
+    while at < end {
+        let x0 = a + (b - a) * (f32(at) / f32(end));
+        let x1 = a + (b - a) * (f32(at + (end >> level)) / f32(end));
+        let kg = curve_kronrod(ray, p, x0, x1, track);
+        if settled(kg, allowance, x1 - x0) || level == MAX_DEPTH || *refinements == 0u {
+            sum += kg.x;
+            let next = next_part(at, level);
+            at = next.x;
+            level = next.y;
+        } else {
+            *refinements -= 1u;
+            level++;
+        }
     }
     return sum;
 }
@@ -1192,6 +1348,8 @@ fn integrate_curve_term(index: u32, s_point: vec3<f32>, e_point: vec3<f32>) -> f
     }
     let ray = Ray(s_point, e_point - s_point, 3u, index);
     let features = curve_features(ray);
+    let allowance = params.term_tolerance / (abs(coefficient) * max(pieces_length(features.found), 1e-30));
+    var refinements = MAX_REFINEMENTS;
     var sum = 0.0;
     for (var k = 0u; k < features.found.count; k++) {
         let p = features.found.peaks[k];
@@ -1224,7 +1382,7 @@ fn integrate_curve_term(index: u32, s_point: vec3<f32>, e_point: vec3<f32>) -> f
             var track = Track(NO_SEGMENT, 0.0, 0.0, 0.0);
             for (var i = 0u; i < panels; i++) {
                 let pa = a + width * f32(i);
-                sum += curve_gauss_legendre(ray, p, pa, pa + width, &track);
+                sum += curve_panel(ray, p, pa, pa + width, allowance, &refinements, &track);
             }
         }
     }

@@ -70,6 +70,8 @@ pub const SCAN: u32 = 6;
 /// A chain's nearest point jumps between two samples where it lands farther than this many times the distance
 /// from where a smooth motion would have taken it.
 pub const JUMP: f64 = 0.1;
+/// Or where its chain parameter lands farther than this from where its rate would have taken it (`miss`).
+pub const PARAM_JUMP: f64 = 0.05;
 /// Most rounds of the kink search, each one or two probes. (Two are not enough: a kink misplaced by 5e-3 where W
 /// steps across it costs 5e-4 on a ray of the mixed scene.)
 pub const KINK_ROUNDS: u32 = 4;
@@ -82,74 +84,146 @@ pub const MAX_KINKS: usize = 8;
 /// The longest stretch of u one Gauss-Legendre rule covers.
 pub const U_PANEL: f64 = 4.0;
 /// Most Gauss-Legendre panels on one cut of a piece.
-pub const MAX_GAUSS_PANELS: u32 = 4;
+pub const MAX_GAUSS_PANELS: u32 = 8;
 
-/// Gauss-Legendre rules on [-1, 1] for 6, 8, 10, 12 and 16 nodes: the positive nodes with their weights, the
-/// rule of `n` nodes starting at `GAUSS_START[k]` (`GAUSS_ORDERS[k] = n`). The WGSL twin holds the same table.
-pub const GAUSS_ORDERS: [u32; 5] = [6, 8, 10, 12, 16];
-pub const GAUSS_START: [usize; 5] = [0, 3, 7, 12, 18];
-// The published 17 significant digits, kept as published even where f64 rounds the last one.
+/// Gauss-Kronrod pairs on [-1, 1]: the Gauss-Legendre rule of `n` nodes and the Kronrod rule of `2n + 1` nodes
+/// that contains it, for `n` in `KRONROD_ORDERS`. Rule `k` is `n + 1` rows from `KRONROD_START[k]`: each a node
+/// `x >= 0` (the first is 0) with its Kronrod weight and its Gauss weight (0 where `x` is a Kronrod node only). The
+/// difference of the two rules on an interval bounds the error of the Kronrod value there, which the integrator
+/// refines until it is within its share of the tolerance (`integrate_panel`). Computed to 60 digits (the
+/// Stieltjes polynomial's roots, then the weights from the moments) and printed to 17; `tests` below check that
+/// the Kronrod rule of `n` is exact to degree `3n + 1` and the Gauss rule to `2n - 1`. The WGSL twin holds the
+/// same table.
+pub const KRONROD_ORDERS: [u32; 7] = [3, 4, 5, 6, 7, 8, 10];
+pub const KRONROD_START: [usize; 7] = [0, 4, 9, 15, 22, 30, 39];
 #[allow(clippy::excessive_precision)]
-pub const GAUSS: [(f64, f64); 26] = [
-    (0.23861918608319693, 0.46791393457269126), // 6
-    (0.66120938646626459, 0.36076157304813861), // 6
-    (0.93246951420315205, 0.17132449237917050), // 6
-    (0.18343464249564978, 0.36268378337836199), // 8
-    (0.52553240991632899, 0.31370664587788738), // 8
-    (0.79666647741362684, 0.22238103445337445), // 8
-    (0.96028985649753629, 0.10122853629037679), // 8
-    (0.14887433898163122, 0.29552422471475293), // 10
-    (0.43339539412924716, 0.26926671930999624), // 10
-    (0.67940956829902444, 0.21908636251598218), // 10
-    (0.86506336668898454, 0.14945134915058053), // 10
-    (0.97390652851717174, 0.06667134430868371), // 10
-    (0.12523340851146894, 0.24914704581340288), // 12
-    (0.36783149899818018, 0.23349253653835458), // 12
-    (0.58731795428661748, 0.20316742672306584), // 12
-    (0.76990267419430469, 0.16007832854334633), // 12
-    (0.90411725637047480, 0.10693932599531818), // 12
-    (0.98156063424671924, 0.04717533638650846), // 12
-    (0.09501250983763744, 0.18945061045506847), // 16
-    (0.28160355077925892, 0.18260341504492361), // 16
-    (0.45801677765722737, 0.16915651939500242), // 16
-    (0.61787624440264377, 0.14959598881657682), // 16
-    (0.75540440835500300, 0.12462897125553395), // 16
-    (0.86563120238783176, 0.09515851168249290), // 16
-    (0.94457502307323260, 0.06225352393864778), // 16
-    (0.98940093499164994, 0.02715245941175185), // 16
+pub const KRONROD: [(f64, f64, f64); 50] = [
+    (0.0, 0.45091653865847414, 0.88888888888888889), // 3
+    (0.43424374934680256, 0.40139741477596222, 0.0), // 3
+    (0.77459666924148338, 0.26848808986833344, 0.55555555555555556), // 3
+    (0.96049126870802028, 0.10465622602646727, 0.0), // 3
+    (0.0, 0.34644298189013636, 0.0), // 4
+    (0.33998104358485626, 0.32694918960145163, 0.65214515486254614), // 4
+    (0.64028621749630998, 0.26679834045228445, 0.0), // 4
+    (0.86113631159405258, 0.17005360533572273, 0.34785484513745386), // 4
+    (0.97656025073757311, 0.062977373665473015, 0.0), // 4
+    (0.0, 0.28298741785749121, 0.56888888888888889), // 5
+    (0.27963041316178319, 0.27284980191255892, 0.0), // 5
+    (0.53846931010568309, 0.24104033922864759, 0.47862867049936647), // 5
+    (0.75416672657084922, 0.18680079655649266, 0.0), // 5
+    (0.90617984593866399, 0.11523331662247339, 0.23692688505618909), // 5
+    (0.98408536009484246, 0.042582036751081833, 0.0), // 5
+    (0.0, 0.24107258017346476, 0.0), // 6
+    (0.23861918608319691, 0.23377086411699441, 0.46791393457269105), // 6
+    (0.46311821247530461, 0.21320965227196228, 0.0), // 6
+    (0.66120938646626451, 0.18107199432313762, 0.36076157304813861), // 6
+    (0.82137334086502794, 0.13732060463444692, 0.0), // 6
+    (0.93246951420315203, 0.083694440446906626, 0.17132449237917035), // 6
+    (0.98870320261267886, 0.030396154119819769, 0.0), // 6
+    (0.0, 0.20948214108472783, 0.41795918367346939), // 7
+    (0.20778495500789847, 0.20443294007529889, 0.0), // 7
+    (0.40584515137739717, 0.19035057806478541, 0.38183005050511894), // 7
+    (0.58608723546769113, 0.1690047266392679, 0.0), // 7
+    (0.74153118559939444, 0.14065325971552592, 0.27970539148927667), // 7
+    (0.86486442335976907, 0.10479001032225018, 0.0), // 7
+    (0.94910791234275852, 0.063092092629978553, 0.12948496616886969), // 7
+    (0.99145537112081264, 0.022935322010529225, 0.0), // 7
+    (0.0, 0.18444640574469164, 0.0), // 8
+    (0.1834346424956498, 0.18140002506803464, 0.36268378337836198), // 8
+    (0.36070109792813196, 0.17207060855521131, 0.0), // 8
+    (0.52553240991632899, 0.1566526061681884, 0.31370664587788729), // 8
+    (0.67235407094515868, 0.13626310925517222, 0.0), // 8
+    (0.79666647741362674, 0.11164637082683961, 0.22238103445337447), // 8
+    (0.89412090684745642, 0.082482298931358331, 0.0), // 8
+    (0.96028985649753623, 0.049439395002139309, 0.10122853629037626), // 8
+    (0.99337987588171616, 0.017822383320710355, 0.0), // 8
+    (0.0, 0.14944555400291691, 0.0), // 10
+    (0.14887433898163121, 0.14773910490133849, 0.29552422471475287), // 10
+    (0.2943928627014602, 0.14277593857706008, 0.0), // 10
+    (0.43339539412924719, 0.13470921731147333, 0.26926671930999636), // 10
+    (0.56275713466860468, 0.12349197626206585, 0.0), // 10
+    (0.67940956829902441, 0.10938715880229764, 0.21908636251598204), // 10
+    (0.7808177265864169, 0.093125454583697606, 0.0), // 10
+    (0.86506336668898451, 0.075039674810919953, 0.14945134915058059), // 10
+    (0.93015749135570823, 0.054755896574351996, 0.0), // 10
+    (0.97390652851717172, 0.032558162307964727, 0.066671344308688138), // 10
+    (0.99565716302580808, 0.011694638867371874, 0.0), // 10
 ];
 
-/// The Gauss-Legendre order for the scene's tolerance on B: more nodes for a finer tolerance. B is scale free
-/// (coefficient over distance), and so is this choice. Measured on the shipped scenes and on rays through a
-/// ring, its hole and its axis, each order's largest error stays under its tolerance: 6 nodes 1e-4, 8 nodes 5e-6,
-/// 10 nodes 2e-6, 12 and 16 nodes 1e-6 and below (`tests` below, and `energywave bench`).
-pub fn gauss_order(tolerance: f64) -> u32 {
+/// The Gauss-Kronrod pair for the scene's tolerance on B: a higher order for a finer tolerance, so that smooth
+/// pieces pass the error test without refinement. B is scale free (coefficient over distance), and so is this
+/// choice.
+pub fn kronrod_order(tolerance: f64) -> u32 {
     match tolerance {
-        t if t >= 1e-3 => 6,
-        t if t >= 1e-4 => 8,
-        t if t >= 1e-5 => 10,
-        t if t >= 1e-6 => 12,
-        _ => 16,
+        t if t >= 1e-3 => 4,
+        t if t >= 1e-4 => 5,
+        t if t >= 1e-5 => 6,
+        t if t >= 1e-6 => 7,
+        t if t >= 1e-7 => 8,
+        _ => 10,
     }
 }
 
-/// Index of `order` in `GAUSS_ORDERS` (the last for anything else).
-pub fn gauss_index(order: u32) -> usize {
-    GAUSS_ORDERS
+/// Index of `order` in `KRONROD_ORDERS` (the last for anything else).
+pub fn kronrod_index(order: u32) -> usize {
+    KRONROD_ORDERS
         .iter()
         .position(|&n| n == order)
-        .unwrap_or(GAUSS_ORDERS.len() - 1)
+        .unwrap_or(KRONROD_ORDERS.len() - 1)
 }
 
-/// `n`-node Gauss-Legendre on `[a, b]`.
-fn gauss_legendre(g: &impl Fn(f64) -> f64, a: f64, b: f64, order: u32) -> f64 {
-    let k = gauss_index(order);
+/// The Kronrod and the Gauss value of `g` on `[a, b]` with the pair of `order`.
+fn kronrod(g: &impl Fn(f64) -> f64, a: f64, b: f64, order: u32) -> (f64, f64) {
+    let k = kronrod_index(order);
     let (c, r) = (0.5 * (a + b), 0.5 * (b - a));
-    let pairs = &GAUSS[GAUSS_START[k]..GAUSS_START[k] + GAUSS_ORDERS[k] as usize / 2];
-    r * pairs
-        .iter()
-        .map(|&(x, w)| w * (g(c - r * x) + g(c + r * x)))
-        .sum::<f64>()
+    let rows = &KRONROD[KRONROD_START[k]..=KRONROD_START[k] + KRONROD_ORDERS[k] as usize];
+    let centre = g(c);
+    let (mut kronrod, mut gauss) = (rows[0].1 * centre, rows[0].2 * centre);
+    for &(x, wk, wg) in &rows[1..] {
+        let pair = g(c - r * x) + g(c + r * x);
+        kronrod += wk * pair;
+        gauss += wg * pair;
+    }
+    (r * kronrod, r * gauss)
+}
+
+/// Levels of bisection of a panel at most: its smallest part is `2^-MAX_DEPTH` of it.
+pub const MAX_DEPTH: u32 = 10;
+/// Parts a term may refine beyond its panels at most (each refinement spends two more rules).
+pub const MAX_REFINEMENTS: u32 = 32;
+
+/// `g` on `[a, b]`, refined where its Gauss and Kronrod values differ by more than `allowance` per unit of
+/// length: the parts of a dyadic bisection of `[a, b]`, visited in order (without a stack: after a part is
+/// accepted the next starts where it ended, as large as its position allows), each accepted with its Kronrod
+/// value once within its share of the allowance, at `MAX_DEPTH`, or once the term's `refinements` are spent.
+fn integrate_panel(
+    g: &impl Fn(f64) -> f64,
+    (a, b): (f64, f64),
+    order: u32,
+    allowance: f64,
+    refinements: &mut u32,
+) -> f64 {
+    let end = 1u32 << MAX_DEPTH;
+    let (mut at, mut level, mut sum) = (0u32, 0u32, 0.0);
+    while at < end {
+        let size = end >> level;
+        let x0 = a + (b - a) * (at as f64 / end as f64);
+        let x1 = a + (b - a) * ((at + size) as f64 / end as f64);
+        let (k, gauss) = kronrod(g, x0, x1, order);
+        if (k - gauss).abs() <= allowance * (x1 - x0) || level == MAX_DEPTH || *refinements == 0 {
+            if std::env::var("KDEBUG2").is_ok() { let (w, _) = crate::integrate::simpson_refined(|x| g(x0 + (x1 - x0) * x) * (x1 - x0), 4096, 1e-12, 30); eprintln!("    block [{x0:.4}, {x1:.4}] k {k:.9e} g {gauss:.9e} true {w:.9e} err {:.2e} allow {:.2e}", k - w, allowance * (x1 - x0)); }
+            sum += k;
+            at += size;
+            // Up while this part ended its parent.
+            while level > 0 && at & ((end >> (level - 1)) - 1) == 0 {
+                level -= 1;
+            }
+        } else {
+            *refinements -= 1;
+            level += 1;
+        }
+    }
+    sum
 }
 
 /// One source's term along a ray: `(d^2, f)` at a point, f with coefficient and W series, before zeta.
@@ -440,14 +514,16 @@ fn chain_features(
     let step = 1.0 / k as f64;
     let cp = &c.control_points;
     let last = cp.len() - 1;
+    let segments = (cp.len() - 1) / 2;
     let mut ends = [
-        (cp[0], cp[1] - cp[0], 0.0),
-        (cp[last], cp[last] - cp[last - 1], 1.0),
+        (cp[0], curve::tangent_out_of(cp, 0), 0.0),
+        (cp[last], curve::tangent_into(cp, segments), 1.0),
     ]
     .map(|(end, tangent, at_end)| ((end - s).dot(tangent) / dir.dot(tangent), at_end));
     if ends[1].0 < ends[0].0 {
         ends.swap(0, 1);
     }
+    if std::env::var("KDEBUG").is_ok() { eprintln!("ends {ends:?}"); }
     let mut end_peaks = [peak(0.0, 0.0, 0.0, eps); 2];
     let mut end_count = 0;
     let mut minima = Minima::default();
@@ -463,16 +539,17 @@ fn chain_features(
         for &(t, at_end) in &ends {
             // Half open, so that a crossing on a sample is cut once.
             let inside = t > before.t && t <= after.t;
-            if !inside || (before.param != at_end && after.param != at_end) {
+            if !inside || (!at(&before, at_end) && !at(&after, at_end)) {
                 continue;
             }
             let moving = ChainSample::at(c, s, dir, t, true);
             let at_rest = ChainSample {
                 velocity: DVec3::ZERO,
+                rate: 0.0,
                 curvature: 2.0 * dir.length_squared(),
                 ..moving
             };
-            let (x, y) = if left.param == at_end {
+            let (x, y) = if at(&left, at_end) {
                 (at_rest, moving)
             } else {
                 (moving, at_rest)
@@ -500,15 +577,18 @@ fn chain_features(
             }
             if let Some((a1, b1)) = search_jumps(&sample, (s, dir), left, x, eps, kinks) {
                 joint_cuts(cp, (s, dir), [&calm, &a1, &b1], kinks);
+                knot_cuts(&sample, c.weights.len(), &calm, &a1, kinks);
                 calm = b1;
             }
             left = y;
         }
         if let Some((a1, b1)) = search_jumps(&sample, (s, dir), left, after, eps, kinks) {
             joint_cuts(cp, (s, dir), [&calm, &a1, &b1], kinks);
+            knot_cuts(&sample, c.weights.len(), &calm, &a1, kinks);
             calm = b1;
         }
         joint_cuts(cp, (s, dir), [&calm, &after, &after], kinks);
+        knot_cuts(&sample, c.weights.len(), &calm, &after, kinks);
         g_before_before = before.d2;
         before = after;
     }
@@ -536,6 +616,48 @@ fn with_ends(found: [Peak; 2], count: usize, ends: &[Peak]) -> ([Peak; MAX_PEAKS
     (out, n)
 }
 
+/// Whether a sample's nearest point is at the chain's end `at_end` (0 or 1). Where the chain's speed vanishes at
+/// that end (two coincident control points), the stationary cubic has a double root there and the solver's
+/// parameter is off by up to the square root of the rounding: within `END_SNAP` counts.
+fn at(x: &ChainSample, at_end: f64) -> bool {
+    (x.param - at_end).abs() <= END_SNAP
+}
+
+/// How close to an end of the chain (in its parameter) a nearest point counts as at it (`at`).
+pub const END_SNAP: f64 = 1e-4;
+
+/// The cuts where a chain's nearest point crosses a knot of the W series between samples `x` and `y` with no
+/// jump between them: there Sw is continuous with its slope but its curvature steps (a quadratic B-spline), so
+/// the integrand is smooth on either side only, and a rule across it converges slowly and misjudges its own
+/// error. Each crossing is placed by the parameter's linear interpolation, then one Newton step on a sample
+/// there (its parameter and rate).
+fn knot_cuts(
+    sample: &impl Fn(f64) -> ChainSample,
+    weights: usize,
+    x: &ChainSample,
+    y: &ChainSample,
+    kinks: &mut Kinks,
+) {
+    if weights < 4 || x.param == y.param || y.t <= x.t {
+        return;
+    }
+    let spans = (weights - 2) as f64;
+    for i in 1..weights - 2 {
+        let knot = i as f64 / spans;
+        if (x.param - knot) * (y.param - knot) > 0.0 {
+            continue;
+        }
+        let guess = x.t + (y.t - x.t) * (knot - x.param) / (y.param - x.param);
+        let m = sample(guess.clamp(x.t, y.t));
+        let t = if m.rate != 0.0 {
+            m.t + (knot - m.param) / m.rate
+        } else {
+            m.t
+        };
+        kinks.push(if t.is_finite() { t.clamp(x.t, y.t) } else { m.t });
+    }
+}
+
 /// The cuts at a chain's joints between samples in order along the ray: from the start of a stretch with no
 /// jump to a jump's bracket `[a, b]`, then inside the bracket (where the nearest point may have passed a joint
 /// as well as jumped). Where its nearest point passes a joint, the chain's curvature changes (it is smooth only
@@ -557,7 +679,7 @@ fn joint_cuts(
                 continue;
             }
             let joint = cp[2 * j];
-            let (t_in, t_out) = (joint - cp[2 * j - 1], cp[2 * j + 1] - joint);
+            let (t_in, t_out) = (curve::tangent_into(cp, j), curve::tangent_out_of(cp, j));
             let corner = t_in.cross(t_out).length_squared()
                 > 1e-12 * t_in.length_squared() * t_out.length_squared();
             let planes = [t_out, t_in];
@@ -625,6 +747,8 @@ struct ChainSample {
     point: DVec3,
     /// Zero where unknown.
     velocity: DVec3,
+    /// The rate of the chain parameter along the ray (zero where the velocity is).
+    rate: f64,
     /// Whether the velocity is known (it is infinite at a center of curvature).
     known: bool,
     /// The first and second derivatives of `d^2` along the ray (the second `-inf` where the velocity is
@@ -642,13 +766,15 @@ impl ChainSample {
         let n = curve::nearest_on_chain(&c.control_points, p);
         let (point, d1, d2, clamped) = curve::chain_frame(&c.control_points, n.t);
         let denominator = d1.length_squared() - (p - point).dot(d2);
-        let (velocity, known) = if clamped && !moving {
-            (DVec3::ZERO, true)
+        let segments = ((c.control_points.len() - 1) / 2) as f64;
+        let (rate, known) = if clamped && !moving {
+            (0.0, true)
         } else if denominator > 0.0 {
-            (d1 * (d1.dot(dir) / denominator), true)
+            (d1.dot(dir) / denominator, true)
         } else {
-            (DVec3::ZERO, false)
+            (0.0, false)
         };
+        let velocity = d1 * rate;
         // The nearest point moves along the chain, perpendicular to p - point: d^2's slope is that of the
         // distance to a fixed point, 2 (p - point) . dir; its curvature 2 dir . (dir - velocity).
         ChainSample {
@@ -657,6 +783,7 @@ impl ChainSample {
             d2: n.distance * n.distance,
             point,
             velocity,
+            rate: rate / segments,
             known,
             slope: 2.0 * (p - point).dot(dir),
             curvature: if known {
@@ -702,7 +829,11 @@ impl ChainSample {
 
 /// How far the nearest point of a chain lands between two samples from where it would be had it moved smoothly
 /// (the trapezoid rule on its velocity), relative to the distance (at least eps: closer, the falloff is flat and
-/// a jump there is only W's): over `JUMP`, it jumped (or its velocity is unknown, infinite).
+/// a jump there is only W's), or its chain parameter from where its rate would have taken it, relative to
+/// `PARAM_JUMP`: over `JUMP`, it jumped (or its velocity is unknown, infinite). The parameter catches a jump
+/// between points close together but far apart along the chain (W steps there, and a piece's nearest point
+/// must stay on one segment): across a joint where a segment of zero length or one with a vanishing speed sits,
+/// the point barely moves while its parameter does.
 fn miss(a: &ChainSample, b: &ChainSample, eps: f64) -> f64 {
     if b.t <= a.t {
         return 0.0;
@@ -713,6 +844,8 @@ fn miss(a: &ChainSample, b: &ChainSample, eps: f64) -> f64 {
     let moved = b.point - a.point;
     let smooth = (a.velocity + b.velocity) * (0.5 * (b.t - a.t));
     let miss = (moved - smooth).length() / a.d2.min(b.d2).sqrt().max(eps).max(1e-30);
+    let param = (b.param - a.param - 0.5 * (a.rate + b.rate) * (b.t - a.t)).abs() / PARAM_JUMP;
+    let miss = miss.max(JUMP * param);
     if miss.is_finite() { miss } else { f64::MAX }
 }
 
@@ -811,6 +944,7 @@ fn find_kink(
     }
     let kink = model_crossing(s, dir, &a, &b)
         .unwrap_or_else(|| bisector(s, dir, a.point, b.point, a.t, b.t));
+    if std::env::var("KDEBUG").is_ok() { eprintln!("find_kink: bracket [{} {}] params {} {} kink {}", a.t, b.t, a.param, b.param, kink); }
     (kink, a, b)
 }
 
@@ -946,8 +1080,10 @@ fn cuts(p: &Peak, u0: f64, u1: f64, kinks: &[f64]) -> ([f64; MAX_CUTS], usize) {
     (out, n + 1)
 }
 
-/// One term's integral over its pieces, to the scene's tolerance.
-fn integrate_term(term: Term, s: DVec3, e: DVec3, settings: &Integration) -> f64 {
+/// One term's integral over its pieces, within `tolerance` on B: each piece is cut at its kinks, each cut into
+/// panels of at most `U_PANEL` in u, and each panel refined where its Gauss and Kronrod values differ
+/// (`integrate_panel`), the tolerance shared out along u.
+fn integrate_term(term: Term, s: DVec3, e: DVec3, settings: &Integration, tolerance: f64) -> f64 {
     let c = term.coefficient();
     if c == 0.0 {
         return 0.0;
@@ -959,16 +1095,22 @@ fn integrate_term(term: Term, s: DVec3, e: DVec3, settings: &Integration) -> f64
     let segment = Cell::new(None);
     let f = |t: f64| {
         let mut on = segment.get();
-        let (d, w) = term.distance_on_piece(s + dir * t, &mut on);
+        let (d, w) = if std::env::var("NOTRACK").is_ok() { term.distance(s + dir * t) } else { term.distance_on_piece(s + dir * t, &mut on) };
         segment.set(on);
         w * falloff(d, settings.epsilon) * zeta(t, settings.alpha, settings.beta)
     };
-    let order = gauss_order(settings.tolerance);
+    let order = kronrod_order(settings.tolerance);
     let kinks = &found.kinks[..found.kink_count];
-    let mut sum = 0.0;
-    for p in &found.peaks[..found.count] {
+    let pieces = found.peaks[..found.count].iter().map(|p| {
         let u0 = ((p.lo - p.center) / p.width).asinh();
         let u1 = ((p.hi - p.center) / p.width).asinh();
+        (p, u0, u1)
+    });
+    let length: f64 = pieces.clone().map(|(_, u0, u1)| (u1 - u0).max(0.0)).sum();
+    let allowance = tolerance / (c.abs() * length.max(1e-300));
+    let mut refinements = MAX_REFINEMENTS;
+    let mut sum = 0.0;
+    for (p, u0, u1) in pieces {
         if u1 <= u0 {
             continue;
         }
@@ -985,17 +1127,21 @@ fn integrate_term(term: Term, s: DVec3, e: DVec3, settings: &Integration) -> f64
                 .ceil()
                 .clamp(1.0, MAX_GAUSS_PANELS as f64) as u32;
             let width = (b - a) / panels as f64;
+            let before = sum;
             for i in 0..panels {
                 let pa = a + width * i as f64;
-                sum += gauss_legendre(&g, pa, pa + width, order);
+                sum += integrate_panel(&g, (pa, pa + width), order, allowance, &mut refinements);
             }
+            if std::env::var("KDEBUG").is_ok() { eprintln!("  piece u [{a:.4}, {b:.4}]: {:.6e} refinements left {refinements}", c * (sum - before)); }
         }
     }
     c * sum
 }
 
-/// The brightness B of the segment from `s` to `e` by the adaptive integrator.
+/// The brightness B of the segment from `s` to `e` by the adaptive integrator: every term within an equal share
+/// of the tolerance.
 pub fn brightness(sources: &Sources, settings: &Integration, s: DVec3, e: DVec3) -> f64 {
+    let share = settings.tolerance / sources.len().max(1) as f64;
     let terms = sources
         .points
         .iter()
@@ -1003,7 +1149,7 @@ pub fn brightness(sources: &Sources, settings: &Integration, s: DVec3, e: DVec3)
         .chain(sources.lines.iter().map(Term::Line))
         .chain(sources.tori.iter().map(Term::Torus))
         .chain(sources.curves.iter().map(Term::Curve));
-    terms.map(|t| integrate_term(t, s, e, settings)).sum()
+    terms.map(|t| integrate_term(t, s, e, settings, share)).sum()
 }
 
 #[cfg(test)]
@@ -1093,22 +1239,22 @@ mod tests {
     }
 
     #[test]
-    fn every_gauss_rule_integrates_polynomials_of_degree_2n_minus_1_exactly() {
-        for (k, &n) in GAUSS_ORDERS.iter().enumerate() {
-            assert_eq!(gauss_index(n), k);
-            for degree in 0..2 * n {
-                let got = gauss_legendre(&|x: f64| x.powi(degree as i32), -1.0, 1.0, n);
-                // The integral of x^k over [-1, 1]: 2 / (k + 1) for even k, 0 for odd.
-                let want = if degree % 2 == 0 {
-                    2.0 / (degree as f64 + 1.0)
-                } else {
-                    0.0
-                };
-                assert!(
-                    (got - want).abs() < 1e-14,
-                    "{n} nodes, x^{degree}: {got} vs {want}"
-                );
+    fn every_kronrod_pair_integrates_polynomials_to_its_degree_exactly() {
+        // The Kronrod rule of 2n + 1 nodes is exact to degree 3n + 1, its Gauss rule of n nodes to 2n - 1, and
+        // the Gauss rule is not exact at degree 2n: the integral of x^k over [-1, 1] is 2 / (k + 1) for even k.
+        let moment = |k: u32| if k % 2 == 0 { 2.0 / (k as f64 + 1.0) } else { 0.0 };
+        for (k, &n) in KRONROD_ORDERS.iter().enumerate() {
+            assert_eq!(kronrod_index(n), k);
+            for degree in 0..=3 * n + 1 {
+                let (kronrod, gauss) = kronrod(&|x: f64| x.powi(degree as i32), -1.0, 1.0, n);
+                let want = moment(degree);
+                assert!((kronrod - want).abs() < 1e-14, "K{}, x^{degree}: {kronrod} vs {want}", 2 * n + 1);
+                if degree < 2 * n {
+                    assert!((gauss - want).abs() < 1e-14, "G{n}, x^{degree}: {gauss} vs {want}");
+                }
             }
+            let (_, gauss) = kronrod(&|x: f64| x.powi(2 * n as i32), -1.0, 1.0, n);
+            assert!((gauss - moment(2 * n)).abs() > 1e-6, "G{n} is not exact at degree {}", 2 * n);
         }
     }
 
@@ -1320,5 +1466,40 @@ mod tests {
             DVec3::new(-1.5744, 1.3317, -6.2100),
         ));
         assert_within_each_tolerance(&sources, &rays, &[1e-3, 1e-4, 1e-5]);
+    }
+}
+
+/// Scratch diagnostics (not committed).
+pub fn diagnose(c: &crate::field::Curve, settings: &Integration, s: DVec3, e: DVec3) {
+    let term = Term::Curve(c);
+    let found = features(term, s, e, SCAN, settings.epsilon);
+    let dir = e - s;
+    let f = |t: f64| {
+        let (d, w) = term.distance(s + dir * t);
+        w * falloff(d, settings.epsilon) * zeta(t, settings.alpha, settings.beta)
+    };
+    println!("kinks {:?}", &found.kinks[..found.kink_count]);
+    let order = kronrod_order(settings.tolerance);
+    for p in &found.peaks[..found.count] {
+        println!("peak {p:?}");
+        let u0 = ((p.lo - p.center) / p.width).asinh();
+        let u1 = ((p.hi - p.center) / p.width).asinh();
+        if u1 <= u0 { continue; }
+        let g = |u: f64| {
+            let t = (p.center + p.width * u.sinh()).clamp(p.lo, p.hi);
+            f(t) * p.width * u.cosh()
+        };
+        let (cut, n) = cuts(p, u0, u1, &found.kinks[..found.kink_count]);
+        for w in cut[..n].windows(2) {
+            let (a, b) = (w[0], w[1]);
+            let panels = ((b - a) / U_PANEL).ceil().clamp(1.0, MAX_GAUSS_PANELS as f64) as u32;
+            let width = (b - a) / panels as f64;
+            let mut got = 0.0;
+            let mut rf = MAX_REFINEMENTS; for i in 0..panels { let pa = a + width * i as f64; got += integrate_panel(&g, (pa, pa + width), order, 1e-4 / (c.coefficient * 8.0), &mut rf); } println!("  refinements used {}", MAX_REFINEMENTS - rf);
+            let (ta, tb) = (p.center + p.width * a.sinh(), p.center + p.width * b.sinh());
+            let (want, _) = crate::integrate::simpson_refined(|x| f(ta + (tb - ta) * x) * (tb - ta), 4096, 1e-10, 30);
+            let g16: f64 = (0..panels*8).map(|i| { let w8 = (b-a)/(panels*8) as f64; kronrod(&g, a + w8 * i as f64, a + w8 * (i+1) as f64, 10).0}).sum();
+            println!("  u [{a:.4}, {b:.4}] t [{ta:.5}, {tb:.5}] panels {panels}: got {:.3e} want {:.9e} fine16 {:.3e}", c.coefficient*(got - want), c.coefficient*want, c.coefficient*(g16-want));
+        }
     }
 }

@@ -110,7 +110,7 @@ fn rust_mirrors_match_the_wgsl_layouts() {
         "FieldParams",
         size_of::<FieldParams>(),
         fields!(FieldParams: center, size, right, resolution, up, divisions, eye, nu, alpha, beta, epsilon,
-            point_count, line_count, torus_count, curve_count, integrator, pad0, jitter, seed, gauss_order),
+            point_count, line_count, torus_count, curve_count, integrator, term_tolerance, jitter, seed, gauss_order),
     );
     check_struct(
         &field,

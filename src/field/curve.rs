@@ -84,6 +84,64 @@ impl Segment {
     }
 }
 
+impl Segment {
+    /// The direction in which the segment leaves its start: `C'(0) = c1`, or where that vanishes (the first two
+    /// control points coincide, and `C(t) ~ c0 + c2 t^2`) the second derivative's direction, `c2`. Zero only for a
+    /// segment of zero length.
+    pub fn start_tangent(&self) -> DVec3 {
+        if self.c1.length_squared() > DEGENERATE * self.c2.length_squared() {
+            self.c1
+        } else {
+            self.c2
+        }
+    }
+
+    /// The direction in which the segment arrives at its end: `C'(1) = 2 c2 + c1`, or where that vanishes (the
+    /// last two control points coincide) `-c2`.
+    pub fn end_tangent(&self) -> DVec3 {
+        let d1 = 2.0 * self.c2 + self.c1;
+        if d1.length_squared() > DEGENERATE * self.c2.length_squared() {
+            d1
+        } else {
+            -self.c2
+        }
+    }
+}
+
+/// A first derivative this much smaller (squared) than the second counts as zero: the segment's speed vanishes
+/// there, and its direction is the second derivative's. The same in f32 and in f64, so that both twins cut alike.
+pub const DEGENERATE: f64 = 1e-10;
+
+/// The tangent with which a chain arrives at its joint `j` (the start of segment `j`) from segment `j - 1`, or
+/// from `j - 2` where `j - 1` has zero length; zero where neither has a direction.
+pub fn tangent_into(control_points: &[DVec3], j: usize) -> DVec3 {
+    let segment = |i: usize| {
+        let b = &control_points[2 * i..2 * i + 3];
+        Segment::from_bezier(b[0], b[1], b[2])
+    };
+    let t = segment(j - 1).end_tangent();
+    if t == DVec3::ZERO && j >= 2 {
+        segment(j - 2).end_tangent()
+    } else {
+        t
+    }
+}
+
+/// The tangent with which a chain leaves its joint `j` (or its start, `j = 0`) on segment `j`, or on `j + 1`
+/// where `j` has zero length; zero where neither has a direction.
+pub fn tangent_out_of(control_points: &[DVec3], j: usize) -> DVec3 {
+    let segment = |i: usize| {
+        let b = &control_points[2 * i..2 * i + 3];
+        Segment::from_bezier(b[0], b[1], b[2])
+    };
+    let t = segment(j).start_tangent();
+    if t == DVec3::ZERO && j + 1 < segment_count(control_points) {
+        segment(j + 1).start_tangent()
+    } else {
+        t
+    }
+}
+
 /// Two Newton steps on the cubic `k`, keeping the start when a step misbehaves.
 fn polish(k: [f64; 4], mut t: f64) -> f64 {
     for _ in 0..2 {

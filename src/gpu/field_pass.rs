@@ -37,10 +37,10 @@ pub mod gpu_data {
         pub torus_count: u32, // 84
         pub curve_count: u32, // 88
         pub integrator: u32,  // 92: 0 simpson, 1 adaptive
-        pub pad0: f32,        // 96
+        pub term_tolerance: f32, // 96
         pub jitter: u32,      // 100
         pub seed: u32,        // 104
-        pub gauss_order: u32, // 108: adaptive: Gauss-Legendre nodes (adaptive::gauss_order)
+        pub gauss_order: u32, // 108: adaptive: n of the Gauss-Kronrod pair (adaptive::kronrod_order)
     }
     const _: () = assert!(size_of::<FieldParams>() == 112);
 
@@ -139,22 +139,37 @@ struct Packed {
 /// Loop iterations one invocation may spend: Mesa's llvmpipe and lavapipe stop all loops of an invocation after
 /// 65535 iterations in all (silently); this leaves room for the estimate's slack.
 const ITERATION_BUDGET: u64 = 30_000;
+/// Rules the adaptive integrator applies to one term at most: `MAX_GAUSS_PANELS` panels on each of `cuts` parts
+/// of its pieces, and two more for each of its `MAX_REFINEMENTS` refinements; each rule evaluates the term at the
+/// `2n + 1` nodes of the Kronrod rule, at most 21.
+const fn rules(cuts: u64) -> u64 {
+    use crate::adaptive::{MAX_GAUSS_PANELS, MAX_REFINEMENTS};
+    cuts * MAX_GAUSS_PANELS as u64 + 2 * MAX_REFINEMENTS as u64
+}
+/// Loop iterations of one rule of the pair of `order`: its `2n + 1` nodes, the rule's own loop, and the
+/// bisection's walk up after it.
+const fn rule_iterations(order: u32) -> u64 {
+    2 * order as u64 + 2 + crate::adaptive::MAX_DEPTH as u64
+}
 /// Evaluations of a curve's distance the adaptive integrator spends on its term at most (each a loop over its
 /// segments): the scan, the samples at its ends, the kink search's probes, the Newton steps of its closest
-/// approaches, and Gauss-Legendre on every cut (at most `MAX_PEAKS` pieces, two closest approaches and two ends,
-/// each cut at its flat top's ends, and the kinks), `MAX_GAUSS_PANELS` rules of 16 nodes each.
-const CURVE_EVALUATIONS: u64 = {
-    use crate::adaptive::{KINK_ROUNDS, MAX_GAUSS_PANELS, MAX_KINKS, MAX_PEAKS, PEAK_NEWTON, SCAN};
+/// approaches, a sample for each knot cut, and the rules on every cut (at most `MAX_PEAKS` pieces, two closest
+/// approaches and two ends, each cut at its flat top's ends, and the kinks).
+const fn curve_evaluations(order: u32) -> u64 {
+    use crate::adaptive::{KINK_ROUNDS, MAX_KINKS, MAX_PEAKS, PEAK_NEWTON, SCAN};
     let cuts = 3 * MAX_PEAKS as u64 + MAX_KINKS as u64;
     (SCAN as u64 + 1)
         + 2
         + 2 * KINK_ROUNDS as u64 * MAX_KINKS as u64
         + 2 * PEAK_NEWTON as u64
-        + cuts * MAX_GAUSS_PANELS as u64 * 16
-};
+        + MAX_KINKS as u64
+        + rules(cuts) * rule_iterations(order)
+}
 /// Loop iterations of a point's, a line's or a torus's term at most: Newton on the ring, then three pieces of
-/// three cuts, each of at most `MAX_GAUSS_PANELS` rules of 8 pairs.
-const SMOOTH_ITERATIONS: u64 = 20 + 3 * 3 * crate::adaptive::MAX_GAUSS_PANELS as u64 * 8;
+/// three cuts, each of its rules a loop over its nodes, and the bisection's walk up after each.
+const fn smooth_iterations(order: u32) -> u64 {
+    20 + rules(3 * 3) * rule_iterations(order)
+}
 
 /// Loop iterations of one evaluation of a source's distance (a curve loops over its segments and roots).
 fn curve_iterations(segments: u32) -> u64 {
@@ -168,8 +183,8 @@ const TRACK_NEWTON: u64 = 2;
 /// Loop iterations of a curve's term in the adaptive integrator at most, `iterations` those of one evaluation of
 /// its distance: each evaluation may take Newton's steps from the last node (`track_nearest` in the shader), then
 /// solve the piece's segment alone, then the whole chain (`nearest_on_chain_from`), in an outer loop of its own.
-fn adaptive_curve_iterations(iterations: u64) -> u64 {
-    CURVE_EVALUATIONS * (TRACK_NEWTON + iterations + curve_iterations(1) + 1)
+fn adaptive_curve_iterations(order: u32, iterations: u64) -> u64 {
+    curve_evaluations(order) * (TRACK_NEWTON + iterations + curve_iterations(1) + 1)
 }
 
 /// The pipelines: simpson's, the adaptive integrator's for points, lines and tori, and for curves.
@@ -202,11 +217,11 @@ fn plan_chunks(p: &Packed) -> Vec<Chunk> {
     }
     // Adaptive: ranges of terms, the points, lines and tori first, then the curves, each on its pipeline.
     let costs = (0..smooth)
-        .map(|_| (SMOOTH_ITERATIONS, ADAPTIVE_SMOOTH))
+        .map(|_| (smooth_iterations(p.params.gauss_order), ADAPTIVE_SMOOTH))
         .chain(
             curves
                 .iter()
-                .map(|&c| (adaptive_curve_iterations(c), ADAPTIVE_CURVES)),
+                .map(|&c| (adaptive_curve_iterations(p.params.gauss_order, c), ADAPTIVE_CURVES)),
         );
     let mut chunks = Vec::new();
     let (mut first, mut cost, mut pipeline) = (0u32, 0u64, ADAPTIVE_SMOOTH);
@@ -254,10 +269,10 @@ fn pack(scene: &Scene, billboard: &Billboard) -> Packed {
                 Integrator::Simpson => 0,
                 Integrator::Adaptive => 1,
             },
-            pad0: 0.0,
+            term_tolerance: (i.tolerance / s.len().max(1) as f64) as f32,
             jitter: i.jitter.is_some() as u32,
             seed: i.jitter.unwrap_or(0),
-            gauss_order: crate::adaptive::gauss_order(i.tolerance),
+            gauss_order: crate::adaptive::kronrod_order(i.tolerance),
         },
         points: (s.points.iter())
             .map(|p| PointSource {
@@ -797,7 +812,7 @@ mod tests {
             if c.pipeline == ADAPTIVE_CURVES && c.count > 1 {
                 let cost: u64 = (c.first..last)
                     .map(|t| p.curves[(t - 3) as usize].segment_count)
-                    .map(|k| adaptive_curve_iterations(curve_iterations(k)))
+                    .map(|k| adaptive_curve_iterations(p.params.gauss_order, curve_iterations(k)))
                     .sum();
                 assert!(cost <= ITERATION_BUDGET, "{c:?} costs {cost}");
             }
