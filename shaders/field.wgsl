@@ -1333,6 +1333,9 @@ fn curve_panel(ray: Ray, p: Peak, a: f32, b: f32, allowance: f32, refinements: p
             at = next.x;
             level = next.y;
         } else {
+            // Back to the part's start: the nearest point is solved afresh there rather than carried back over
+            // the whole part, where Newton could settle on another stationary point.
+            (*track).segment = NO_SEGMENT;
             *refinements -= 1u;
             level++;
         }
