@@ -680,7 +680,7 @@ fn integrate_adaptive(@builtin(global_invocation_id) id: vec3<u32>) {
 const JUMP: f32 = 0.1;
 const PARAM_JUMP: f32 = 0.05;
 const END_SNAP: f32 = 1e-4;
-const KINK_ROUNDS: u32 = 4u;
+const KINK_ROUNDS: u32 = 12u;
 const KINK_BRACKET: f32 = 1e-3;
 const KINK_PROBE: f32 = 0.05;
 const MAX_KINKS: u32 = 8u;
@@ -1243,6 +1243,8 @@ fn nearest_on_chain_from(c: CurveSource, p: vec3<f32>, segment: ptr<function, u3
 const TRACK_NEWTON: u32 = 2u;
 // A node keeps Newton's nearest point where the last step moved it less than this along its segment.
 const TRACK_SETTLED: f32 = 1e-4;
+// The longest way along its segment (in u) a nearest point is carried from the last node.
+const TRACK_REACH: f32 = 0.05;
 
 // The nearest point carried along a piece of a curve's ray, node to node in order along it: its segment
 // (NO_SEGMENT before the piece's first node), its parameter u on that segment, and du/dt there.
@@ -1271,7 +1273,10 @@ fn track_nearest(c: CurveSource, ray: Ray, t: f32, track: ptr<function, Track>) 
     let p = ray.start + ray.dir * t;
     let k = c.segment_count;
     let j = (*track).segment;
-    if j < k {
+    // Carried only over a short way along the segment: where the nearest point races (near a center of
+    // curvature) a long prediction can lead Newton to another stationary point.
+    let reach = abs((*track).rate * (t - (*track).t));
+    if j < k && reach <= TRACK_REACH {
         let s = segments[c.first_segment + j];
         var u = clamp((*track).u + (*track).rate * (t - (*track).t), 0.0, 1.0);
         var step = 0.0;

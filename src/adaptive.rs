@@ -74,7 +74,7 @@ pub const JUMP: f64 = 0.1;
 pub const PARAM_JUMP: f64 = 0.05;
 /// Most rounds of the kink search, each one or two probes. (Two are not enough: a kink misplaced by 5e-3 where W
 /// steps across it costs 5e-4 on a ray of the mixed scene.)
-pub const KINK_ROUNDS: u32 = 4;
+pub const KINK_ROUNDS: u32 = 12;
 /// The kink search stops when its bracket is this short (in t, the ray being 1 long).
 pub const KINK_BRACKET: f64 = 1e-3;
 /// How far either side of its estimate a round of the kink search probes, relative to the bracket.
@@ -100,53 +100,125 @@ pub const KRONROD_START: [usize; 7] = [0, 4, 9, 15, 22, 30, 39];
 pub const KRONROD: [(f64, f64, f64); 50] = [
     (0.0, 0.45091653865847414, 0.88888888888888889), // 3
     (0.43424374934680256, 0.40139741477596222, 0.0), // 3
-    (0.77459666924148338, 0.26848808986833344, 0.55555555555555556), // 3
+    (
+        0.77459666924148338,
+        0.26848808986833344,
+        0.55555555555555556,
+    ), // 3
     (0.96049126870802028, 0.10465622602646727, 0.0), // 3
-    (0.0, 0.34644298189013636, 0.0), // 4
-    (0.33998104358485626, 0.32694918960145163, 0.65214515486254614), // 4
+    (0.0, 0.34644298189013636, 0.0),                 // 4
+    (
+        0.33998104358485626,
+        0.32694918960145163,
+        0.65214515486254614,
+    ), // 4
     (0.64028621749630998, 0.26679834045228445, 0.0), // 4
-    (0.86113631159405258, 0.17005360533572273, 0.34785484513745386), // 4
+    (
+        0.86113631159405258,
+        0.17005360533572273,
+        0.34785484513745386,
+    ), // 4
     (0.97656025073757311, 0.062977373665473015, 0.0), // 4
     (0.0, 0.28298741785749121, 0.56888888888888889), // 5
     (0.27963041316178319, 0.27284980191255892, 0.0), // 5
-    (0.53846931010568309, 0.24104033922864759, 0.47862867049936647), // 5
+    (
+        0.53846931010568309,
+        0.24104033922864759,
+        0.47862867049936647,
+    ), // 5
     (0.75416672657084922, 0.18680079655649266, 0.0), // 5
-    (0.90617984593866399, 0.11523331662247339, 0.23692688505618909), // 5
+    (
+        0.90617984593866399,
+        0.11523331662247339,
+        0.23692688505618909,
+    ), // 5
     (0.98408536009484246, 0.042582036751081833, 0.0), // 5
-    (0.0, 0.24107258017346476, 0.0), // 6
-    (0.23861918608319691, 0.23377086411699441, 0.46791393457269105), // 6
+    (0.0, 0.24107258017346476, 0.0),                 // 6
+    (
+        0.23861918608319691,
+        0.23377086411699441,
+        0.46791393457269105,
+    ), // 6
     (0.46311821247530461, 0.21320965227196228, 0.0), // 6
-    (0.66120938646626451, 0.18107199432313762, 0.36076157304813861), // 6
+    (
+        0.66120938646626451,
+        0.18107199432313762,
+        0.36076157304813861,
+    ), // 6
     (0.82137334086502794, 0.13732060463444692, 0.0), // 6
-    (0.93246951420315203, 0.083694440446906626, 0.17132449237917035), // 6
+    (
+        0.93246951420315203,
+        0.083694440446906626,
+        0.17132449237917035,
+    ), // 6
     (0.98870320261267886, 0.030396154119819769, 0.0), // 6
     (0.0, 0.20948214108472783, 0.41795918367346939), // 7
     (0.20778495500789847, 0.20443294007529889, 0.0), // 7
-    (0.40584515137739717, 0.19035057806478541, 0.38183005050511894), // 7
-    (0.58608723546769113, 0.1690047266392679, 0.0), // 7
-    (0.74153118559939444, 0.14065325971552592, 0.27970539148927667), // 7
+    (
+        0.40584515137739717,
+        0.19035057806478541,
+        0.38183005050511894,
+    ), // 7
+    (0.58608723546769113, 0.1690047266392679, 0.0),  // 7
+    (
+        0.74153118559939444,
+        0.14065325971552592,
+        0.27970539148927667,
+    ), // 7
     (0.86486442335976907, 0.10479001032225018, 0.0), // 7
-    (0.94910791234275852, 0.063092092629978553, 0.12948496616886969), // 7
+    (
+        0.94910791234275852,
+        0.063092092629978553,
+        0.12948496616886969,
+    ), // 7
     (0.99145537112081264, 0.022935322010529225, 0.0), // 7
-    (0.0, 0.18444640574469164, 0.0), // 8
+    (0.0, 0.18444640574469164, 0.0),                 // 8
     (0.1834346424956498, 0.18140002506803464, 0.36268378337836198), // 8
     (0.36070109792813196, 0.17207060855521131, 0.0), // 8
     (0.52553240991632899, 0.1566526061681884, 0.31370664587788729), // 8
     (0.67235407094515868, 0.13626310925517222, 0.0), // 8
-    (0.79666647741362674, 0.11164637082683961, 0.22238103445337447), // 8
+    (
+        0.79666647741362674,
+        0.11164637082683961,
+        0.22238103445337447,
+    ), // 8
     (0.89412090684745642, 0.082482298931358331, 0.0), // 8
-    (0.96028985649753623, 0.049439395002139309, 0.10122853629037626), // 8
+    (
+        0.96028985649753623,
+        0.049439395002139309,
+        0.10122853629037626,
+    ), // 8
     (0.99337987588171616, 0.017822383320710355, 0.0), // 8
-    (0.0, 0.14944555400291691, 0.0), // 10
-    (0.14887433898163121, 0.14773910490133849, 0.29552422471475287), // 10
-    (0.2943928627014602, 0.14277593857706008, 0.0), // 10
-    (0.43339539412924719, 0.13470921731147333, 0.26926671930999636), // 10
+    (0.0, 0.14944555400291691, 0.0),                 // 10
+    (
+        0.14887433898163121,
+        0.14773910490133849,
+        0.29552422471475287,
+    ), // 10
+    (0.2943928627014602, 0.14277593857706008, 0.0),  // 10
+    (
+        0.43339539412924719,
+        0.13470921731147333,
+        0.26926671930999636,
+    ), // 10
     (0.56275713466860468, 0.12349197626206585, 0.0), // 10
-    (0.67940956829902441, 0.10938715880229764, 0.21908636251598204), // 10
+    (
+        0.67940956829902441,
+        0.10938715880229764,
+        0.21908636251598204,
+    ), // 10
     (0.7808177265864169, 0.093125454583697606, 0.0), // 10
-    (0.86506336668898451, 0.075039674810919953, 0.14945134915058059), // 10
+    (
+        0.86506336668898451,
+        0.075039674810919953,
+        0.14945134915058059,
+    ), // 10
     (0.93015749135570823, 0.054755896574351996, 0.0), // 10
-    (0.97390652851717172, 0.032558162307964727, 0.066671344308688138), // 10
+    (
+        0.97390652851717172,
+        0.032558162307964727,
+        0.066671344308688138,
+    ), // 10
     (0.99565716302580808, 0.011694638867371874, 0.0), // 10
 ];
 
@@ -211,7 +283,6 @@ fn integrate_panel(
         let x1 = a + (b - a) * ((at + size) as f64 / end as f64);
         let (k, gauss) = kronrod(g, x0, x1, order);
         if (k - gauss).abs() <= allowance * (x1 - x0) || level == MAX_DEPTH || *refinements == 0 {
-            if std::env::var("KDEBUG2").is_ok() { let (w, _) = crate::integrate::simpson_refined(|x| g(x0 + (x1 - x0) * x) * (x1 - x0), 4096, 1e-12, 30); eprintln!("    block [{x0:.4}, {x1:.4}] k {k:.9e} g {gauss:.9e} true {w:.9e} err {:.2e} allow {:.2e}", k - w, allowance * (x1 - x0)); }
             sum += k;
             at += size;
             // Up while this part ended its parent.
@@ -523,7 +594,6 @@ fn chain_features(
     if ends[1].0 < ends[0].0 {
         ends.swap(0, 1);
     }
-    if std::env::var("KDEBUG").is_ok() { eprintln!("ends {ends:?}"); }
     let mut end_peaks = [peak(0.0, 0.0, 0.0, eps); 2];
     let mut end_count = 0;
     let mut minima = Minima::default();
@@ -654,7 +724,11 @@ fn knot_cuts(
         } else {
             m.t
         };
-        kinks.push(if t.is_finite() { t.clamp(x.t, y.t) } else { m.t });
+        kinks.push(if t.is_finite() {
+            t.clamp(x.t, y.t)
+        } else {
+            m.t
+        });
     }
 }
 
@@ -944,7 +1018,6 @@ fn find_kink(
     }
     let kink = model_crossing(s, dir, &a, &b)
         .unwrap_or_else(|| bisector(s, dir, a.point, b.point, a.t, b.t));
-    if std::env::var("KDEBUG").is_ok() { eprintln!("find_kink: bracket [{} {}] params {} {} kink {}", a.t, b.t, a.param, b.param, kink); }
     (kink, a, b)
 }
 
@@ -1095,7 +1168,7 @@ fn integrate_term(term: Term, s: DVec3, e: DVec3, settings: &Integration, tolera
     let segment = Cell::new(None);
     let f = |t: f64| {
         let mut on = segment.get();
-        let (d, w) = if std::env::var("NOTRACK").is_ok() { term.distance(s + dir * t) } else { term.distance_on_piece(s + dir * t, &mut on) };
+        let (d, w) = term.distance_on_piece(s + dir * t, &mut on);
         segment.set(on);
         w * falloff(d, settings.epsilon) * zeta(t, settings.alpha, settings.beta)
     };
@@ -1127,12 +1200,10 @@ fn integrate_term(term: Term, s: DVec3, e: DVec3, settings: &Integration, tolera
                 .ceil()
                 .clamp(1.0, MAX_GAUSS_PANELS as f64) as u32;
             let width = (b - a) / panels as f64;
-            let before = sum;
             for i in 0..panels {
                 let pa = a + width * i as f64;
                 sum += integrate_panel(&g, (pa, pa + width), order, allowance, &mut refinements);
             }
-            if std::env::var("KDEBUG").is_ok() { eprintln!("  piece u [{a:.4}, {b:.4}]: {:.6e} refinements left {refinements}", c * (sum - before)); }
         }
     }
     c * sum
@@ -1149,7 +1220,9 @@ pub fn brightness(sources: &Sources, settings: &Integration, s: DVec3, e: DVec3)
         .chain(sources.lines.iter().map(Term::Line))
         .chain(sources.tori.iter().map(Term::Torus))
         .chain(sources.curves.iter().map(Term::Curve));
-    terms.map(|t| integrate_term(t, s, e, settings, share)).sum()
+    terms
+        .map(|t| integrate_term(t, s, e, settings, share))
+        .sum()
 }
 
 #[cfg(test)]
@@ -1242,19 +1315,36 @@ mod tests {
     fn every_kronrod_pair_integrates_polynomials_to_its_degree_exactly() {
         // The Kronrod rule of 2n + 1 nodes is exact to degree 3n + 1, its Gauss rule of n nodes to 2n - 1, and
         // the Gauss rule is not exact at degree 2n: the integral of x^k over [-1, 1] is 2 / (k + 1) for even k.
-        let moment = |k: u32| if k % 2 == 0 { 2.0 / (k as f64 + 1.0) } else { 0.0 };
+        let moment = |k: u32| {
+            if k % 2 == 0 {
+                2.0 / (k as f64 + 1.0)
+            } else {
+                0.0
+            }
+        };
         for (k, &n) in KRONROD_ORDERS.iter().enumerate() {
             assert_eq!(kronrod_index(n), k);
             for degree in 0..=3 * n + 1 {
                 let (kronrod, gauss) = kronrod(&|x: f64| x.powi(degree as i32), -1.0, 1.0, n);
                 let want = moment(degree);
-                assert!((kronrod - want).abs() < 1e-14, "K{}, x^{degree}: {kronrod} vs {want}", 2 * n + 1);
+                assert!(
+                    (kronrod - want).abs() < 1e-14,
+                    "K{}, x^{degree}: {kronrod} vs {want}",
+                    2 * n + 1
+                );
                 if degree < 2 * n {
-                    assert!((gauss - want).abs() < 1e-14, "G{n}, x^{degree}: {gauss} vs {want}");
+                    assert!(
+                        (gauss - want).abs() < 1e-14,
+                        "G{n}, x^{degree}: {gauss} vs {want}"
+                    );
                 }
             }
             let (_, gauss) = kronrod(&|x: f64| x.powi(2 * n as i32), -1.0, 1.0, n);
-            assert!((gauss - moment(2 * n)).abs() > 1e-6, "G{n} is not exact at degree {}", 2 * n);
+            assert!(
+                (gauss - moment(2 * n)).abs() > 1e-6,
+                "G{n} is not exact at degree {}",
+                2 * n
+            );
         }
     }
 
@@ -1466,40 +1556,5 @@ mod tests {
             DVec3::new(-1.5744, 1.3317, -6.2100),
         ));
         assert_within_each_tolerance(&sources, &rays, &[1e-3, 1e-4, 1e-5]);
-    }
-}
-
-/// Scratch diagnostics (not committed).
-pub fn diagnose(c: &crate::field::Curve, settings: &Integration, s: DVec3, e: DVec3) {
-    let term = Term::Curve(c);
-    let found = features(term, s, e, SCAN, settings.epsilon);
-    let dir = e - s;
-    let f = |t: f64| {
-        let (d, w) = term.distance(s + dir * t);
-        w * falloff(d, settings.epsilon) * zeta(t, settings.alpha, settings.beta)
-    };
-    println!("kinks {:?}", &found.kinks[..found.kink_count]);
-    let order = kronrod_order(settings.tolerance);
-    for p in &found.peaks[..found.count] {
-        println!("peak {p:?}");
-        let u0 = ((p.lo - p.center) / p.width).asinh();
-        let u1 = ((p.hi - p.center) / p.width).asinh();
-        if u1 <= u0 { continue; }
-        let g = |u: f64| {
-            let t = (p.center + p.width * u.sinh()).clamp(p.lo, p.hi);
-            f(t) * p.width * u.cosh()
-        };
-        let (cut, n) = cuts(p, u0, u1, &found.kinks[..found.kink_count]);
-        for w in cut[..n].windows(2) {
-            let (a, b) = (w[0], w[1]);
-            let panels = ((b - a) / U_PANEL).ceil().clamp(1.0, MAX_GAUSS_PANELS as f64) as u32;
-            let width = (b - a) / panels as f64;
-            let mut got = 0.0;
-            let mut rf = MAX_REFINEMENTS; for i in 0..panels { let pa = a + width * i as f64; got += integrate_panel(&g, (pa, pa + width), order, 1e-4 / (c.coefficient * 8.0), &mut rf); } println!("  refinements used {}", MAX_REFINEMENTS - rf);
-            let (ta, tb) = (p.center + p.width * a.sinh(), p.center + p.width * b.sinh());
-            let (want, _) = crate::integrate::simpson_refined(|x| f(ta + (tb - ta) * x) * (tb - ta), 4096, 1e-10, 30);
-            let g16: f64 = (0..panels*8).map(|i| { let w8 = (b-a)/(panels*8) as f64; kronrod(&g, a + w8 * i as f64, a + w8 * (i+1) as f64, 10).0}).sum();
-            println!("  u [{a:.4}, {b:.4}] t [{ta:.5}, {tb:.5}] panels {panels}: got {:.3e} want {:.9e} fine16 {:.3e}", c.coefficient*(got - want), c.coefficient*want, c.coefficient*(g16-want));
-        }
     }
 }

@@ -21,25 +21,25 @@ pub mod gpu_data {
     #[repr(C)]
     #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
     pub struct FieldParams {
-        pub center: [f32; 3], // 0
-        pub size: f32,        // 12
-        pub right: [f32; 3],  // 16
-        pub resolution: u32,  // 28
-        pub up: [f32; 3],     // 32
-        pub divisions: u32,   // 44
-        pub eye: [f32; 3],    // 48
-        pub nu: f32,          // 60
-        pub alpha: f32,       // 64
-        pub beta: f32,        // 68
-        pub epsilon: f32,     // 72
-        pub point_count: u32, // 76
-        pub line_count: u32,  // 80
-        pub torus_count: u32, // 84
-        pub curve_count: u32, // 88
-        pub integrator: u32,  // 92: 0 simpson, 1 adaptive
+        pub center: [f32; 3],    // 0
+        pub size: f32,           // 12
+        pub right: [f32; 3],     // 16
+        pub resolution: u32,     // 28
+        pub up: [f32; 3],        // 32
+        pub divisions: u32,      // 44
+        pub eye: [f32; 3],       // 48
+        pub nu: f32,             // 60
+        pub alpha: f32,          // 64
+        pub beta: f32,           // 68
+        pub epsilon: f32,        // 72
+        pub point_count: u32,    // 76
+        pub line_count: u32,     // 80
+        pub torus_count: u32,    // 84
+        pub curve_count: u32,    // 88
+        pub integrator: u32,     // 92: 0 simpson, 1 adaptive
         pub term_tolerance: f32, // 96
-        pub jitter: u32,      // 100
-        pub seed: u32,        // 104
+        pub jitter: u32,         // 100
+        pub seed: u32,           // 104
         pub gauss_order: u32, // 108: adaptive: n of the Gauss-Kronrod pair (adaptive::kronrod_order)
     }
     const _: () = assert!(size_of::<FieldParams>() == 112);
@@ -218,11 +218,12 @@ fn plan_chunks(p: &Packed) -> Vec<Chunk> {
     // Adaptive: ranges of terms, the points, lines and tori first, then the curves, each on its pipeline.
     let costs = (0..smooth)
         .map(|_| (smooth_iterations(p.params.gauss_order), ADAPTIVE_SMOOTH))
-        .chain(
-            curves
-                .iter()
-                .map(|&c| (adaptive_curve_iterations(p.params.gauss_order, c), ADAPTIVE_CURVES)),
-        );
+        .chain(curves.iter().map(|&c| {
+            (
+                adaptive_curve_iterations(p.params.gauss_order, c),
+                ADAPTIVE_CURVES,
+            )
+        }));
     let mut chunks = Vec::new();
     let (mut first, mut cost, mut pipeline) = (0u32, 0u64, ADAPTIVE_SMOOTH);
     for (t, (c, kind)) in costs.enumerate() {
