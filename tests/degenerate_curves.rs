@@ -132,6 +132,35 @@ fn the_papers_w_series_is_within_the_tolerance_of_the_converged_reference_on_the
 }
 
 #[test]
+fn every_shipped_scene_is_within_the_tolerance_of_the_converged_reference_on_the_cpu() {
+    // On B unclamped, where B > 1 still shows as color, against the integrator's own tolerance (not 1/255).
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes");
+    let mut checked = 0;
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_none_or(|e| e != "toml") {
+            continue;
+        }
+        let mut scene = Scene::load(&path).unwrap();
+        scene.billboard.resolution = 24;
+        scene.integration.integrator = Integrator::Adaptive;
+        scene.integration.jitter = None;
+        let want = converged_reference(&scene, 1).0;
+        let bb = scene.place_billboard(1.0);
+        let got = reference::render_brightness(&scene, &bb).values;
+        let (e, i, j) = worst(&got, &want, 24);
+        let tolerance = scene.integration.tolerance;
+        assert!(
+            e <= tolerance + 2e-7,
+            "{}: {e:.3e} at texel ({i}, {j}), tolerance {tolerance:e}",
+            path.display()
+        );
+        checked += 1;
+    }
+    assert!(checked >= 15, "{checked} scenes");
+}
+
+#[test]
 fn degenerate_curves_on_the_gpu_are_within_the_tolerance_of_the_converged_reference() {
     let mut gpu = HeadlessRenderer::new().expect("a GPU adapter (lavapipe in CI)");
     for (name, points) in degenerate_curves() {
