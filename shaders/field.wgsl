@@ -199,7 +199,7 @@ const MIN_AXIS_WIDTH: f32 = 1e-4;
 const U_PANEL: f32 = 4.0;
 const MAX_GAUSS_PANELS: u32 = 4u;
 const MAX_DEPTH: u32 = 10u;
-const MAX_REFINEMENTS: u32 = 32u;
+const MAX_REFINEMENTS: u32 = 8u;
 const RING_NEWTON: u32 = 6u;
 const RING_STEP: f32 = 0.125;
 
@@ -680,8 +680,11 @@ fn integrate_adaptive(@builtin(global_invocation_id) id: vec3<u32>) {
 const JUMP: f32 = 0.1;
 const PARAM_JUMP: f32 = 0.05;
 const END_SNAP: f32 = 1e-4;
+const CUT_MERGE: f32 = 1e-6;
+const SINGULAR_MERGE: f32 = 1e-3;
+const SWITCH_ROUNDS: u32 = 24u;
 const KINK_ROUNDS: u32 = 12u;
-const KINK_BRACKET: f32 = 1e-3;
+const KINK_BRACKET: f32 = 1e-5;
 const KINK_PROBE: f32 = 0.05;
 const MAX_KINKS: u32 = 8u;
 const PEAK_NEWTON: u32 = 2u;
@@ -698,6 +701,7 @@ struct ChainSample {
     velocity: vec3<f32>,
     curvature: f32,  // d^2(d^2)/dt^2, -F32_MAX where the velocity is unknown
     rate: f32,       // the rate of the chain parameter along the ray (0 where the velocity is)
+    at_joint: bool,  // the nearest point is an end or a joint of the chain (within END_SNAP)
 }
 
 // Twin of ChainSample::at: the nearest point, its velocity along the ray from the stationarity
@@ -728,7 +732,8 @@ fn chain_sample(ray: Ray, t: f32, moving: bool) -> ChainSample {
             curvature = -F32_MAX;
         }
     }
-    return ChainSample(t, n.x, n.y * n.y, known, point, 2.0 * dot(p - point, ray.dir), velocity, curvature, rate / f32(k));
+    let at_joint = abs(x - round(x)) <= END_SNAP * f32(k);
+    return ChainSample(t, n.x, n.y * n.y, known, point, 2.0 * dot(p - point, ray.dir), velocity, curvature, rate / f32(k), at_joint);
 }
 
 // Where the nearest point would be at t had it moved on smoothly from x. Twin of ChainSample::predict.
@@ -768,7 +773,7 @@ fn miss(a: ChainSample, b: ChainSample) -> f32 {
     }
     let glide = (a.velocity + b.velocity) * (0.5 * (b.t - a.t));
     let spatial = length(b.point - a.point - glide) / max(sqrt(min(a.d2, b.d2)), max(params.epsilon, 1e-30));
-    let param = abs(b.param - a.param - 0.5 * (a.rate + b.rate) * (b.t - a.t)) / PARAM_JUMP;
+    let param = select(abs(b.param - a.param - 0.5 * (a.rate + b.rate) * (b.t - a.t)) / PARAM_JUMP, 0.0, a.at_joint || b.at_joint);
     let m = max(spatial, JUMP * param);
     return select(F32_MAX, m, m < F32_MAX);
 }
@@ -871,14 +876,17 @@ fn find_kink(ray: Ray, a: ptr<function, ChainSample>, b: ptr<function, ChainSamp
 }
 
 // The kinks of a chain along the ray, at most MAX_KINKS (more are dropped). Twin of Kinks.
+// Bit k of singular: the nearest point leaves a point at rest there, or jumps (see Kinks).
 struct Kinks {
     at: array<f32, 8>,  // MAX_KINKS
     count: u32,
+    singular: u32,
 }
 
-fn push_kink(kinks: ptr<function, Kinks>, t: f32) {
+fn push_kink(kinks: ptr<function, Kinks>, t: f32, singular: bool) {
     if (*kinks).count < MAX_KINKS {
         (*kinks).at[(*kinks).count] = t;
+        (*kinks).singular |= select(0u, 1u, singular) << (*kinks).count;
         (*kinks).count++;
     }
 }
@@ -904,7 +912,7 @@ fn search_jumps(ray: Ray, a: ChainSample, b: ChainSample, kinks: ptr<function, K
             }
             continue;
         }
-        push_kink(kinks, find_kink(ray, &x, &y));
+        push_kink(kinks, find_kink(ray, &x, &y), false);
         if round == 0u {
             a1 = x;
             b1 = y;
@@ -927,21 +935,23 @@ fn end_tangent(s: CurveSegment) -> vec3<f32> {
     return select(-s.c2, d1, dot(d1, d1) > DEGENERATE * dot(s.c2, s.c2));
 }
 
-// Twin of curve::tangent_into and tangent_out_of: past one segment of zero length.
-fn tangent_into(c: CurveSource, j: u32) -> vec3<f32> {
-    let t = end_tangent(segments[c.first_segment + j - 1u]);
-    if all(t == vec3<f32>(0.0)) && j >= 2u {
-        return end_tangent(segments[c.first_segment + j - 2u]);
+// Twin of curve::tangent_into and tangent_out_of: past one segment of zero length; w is 1 where that segment's
+// speed vanishes there (Segment::ends_at_rest, starts_at_rest).
+fn tangent_into(c: CurveSource, j: u32) -> vec4<f32> {
+    var s = segments[c.first_segment + j - 1u];
+    if all(end_tangent(s) == vec3<f32>(0.0)) && j >= 2u {
+        s = segments[c.first_segment + j - 2u];
     }
-    return t;
+    let d1 = 2.0 * s.c2 + s.c1;
+    return vec4<f32>(end_tangent(s), select(0.0, 1.0, dot(d1, d1) <= DEGENERATE * dot(s.c2, s.c2)));
 }
 
-fn tangent_out_of(c: CurveSource, j: u32) -> vec3<f32> {
-    let t = start_tangent(segments[c.first_segment + j]);
-    if all(t == vec3<f32>(0.0)) && j + 1u < c.segment_count {
-        return start_tangent(segments[c.first_segment + j + 1u]);
+fn tangent_out_of(c: CurveSource, j: u32) -> vec4<f32> {
+    var s = segments[c.first_segment + j];
+    if all(start_tangent(s) == vec3<f32>(0.0)) && j + 1u < c.segment_count {
+        s = segments[c.first_segment + j + 1u];
     }
-    return t;
+    return vec4<f32>(start_tangent(s), select(0.0, 1.0, dot(s.c1, s.c1) <= DEGENERATE * dot(s.c2, s.c2)));
 }
 
 const DEGENERATE: f32 = 1e-10;
@@ -966,7 +976,7 @@ fn knot_cuts(ray: Ray, x: vec2<f32>, y: vec2<f32>, kinks: ptr<function, Kinks>) 
         if m.rate != 0.0 {
             t = m.t + (knot - m.param) / m.rate;
         }
-        push_kink(kinks, select(m.t, clamp(t, x.x, y.x), abs(t) < 1e30));
+        push_kink(kinks, select(m.t, clamp(t, x.x, y.x), abs(t) < 1e30), false);
     }
 }
 
@@ -981,15 +991,18 @@ fn joint_cuts(ray: Ray, x: vec2<f32>, y: vec2<f32>, kinks: ptr<function, Kinks>)
             continue;
         }
         let joint = segments[c.first_segment + j].c0;
-        let t_in = tangent_into(c, j);
-        let t_out = tangent_out_of(c, j);
+        let into = tangent_into(c, j);
+        let out_of = tangent_out_of(c, j);
+        let t_in = into.xyz;
+        let t_out = out_of.xyz;
         let cr = cross(t_in, t_out);
         let corner = dot(cr, cr) > 1e-12 * dot(t_in, t_in) * dot(t_out, t_out);
         for (var plane = 0u; plane < select(1u, 2u, corner); plane++) {
             let tangent = select(t_out, t_in, plane == 1u);
+            let rest = select(out_of.w > 0.0 || (!corner && into.w > 0.0), into.w > 0.0, plane == 1u);
             let t = dot(joint - ray.start, tangent) / dot(ray.dir, tangent);
             if t > x.x && t <= y.x {
-                push_kink(kinks, t);
+                push_kink(kinks, t, rest);
             }
         }
     }
@@ -1026,6 +1039,7 @@ struct CurveFeatures {
     found: Peaks,
     kinks: array<f32, 8>,  // MAX_KINKS
     kink_count: u32,
+    kink_singular: u32,
 }
 
 // Twin of chain_features and chain_peaks: one pass over the scan's intervals, each split at the normal planes
@@ -1037,13 +1051,16 @@ fn curve_features(ray: Ray) -> CurveFeatures {
     let first_tangent = tangent_out_of(c, 0u);
     let last_tangent = tangent_into(c, c.segment_count);
     var end_t = vec2<f32>(
-        dot(first.c0 - ray.start, first_tangent) / dot(ray.dir, first_tangent),
-        dot(last.c2 + last.c1 + last.c0 - ray.start, last_tangent) / dot(ray.dir, last_tangent),
+        dot(first.c0 - ray.start, first_tangent.xyz) / dot(ray.dir, first_tangent.xyz),
+        dot(last.c2 + last.c1 + last.c0 - ray.start, last_tangent.xyz) / dot(ray.dir, last_tangent.xyz),
     );
     var end_at = vec2<f32>(0.0, 1.0);
+    // Whether the chain is at rest at each end (its normal plane is then a singular cut).
+    var end_rest = vec2<f32>(first_tangent.w, last_tangent.w);
     if end_t.y < end_t.x {
         end_t = end_t.yx;
         end_at = end_at.yx;
+        end_rest = end_rest.yx;
     }
     // The nearest point moving at each end's normal plane, sampled once up front rather than where the scan's
     // loop reaches the plane: a heavy call inside that loop's branches weighs on every interval on lavapipe
@@ -1055,6 +1072,7 @@ fn curve_features(ray: Ray) -> CurveFeatures {
     minima.count = 0u;
     var kinks: Kinks;
     kinks.count = 0u;
+    kinks.singular = 0u;
     // The ends' peaks, where the ray crosses their normal planes (with_ends).
     var ends: array<Peak, 2>;
     var end_count = 0u;
@@ -1103,7 +1121,7 @@ fn curve_features(ray: Ray) -> CurveFeatures {
                 break;
             }
             if cut >= 0.0 {
-                push_kink(&kinks, cut);
+                push_kink(&kinks, cut, end_rest[e - 1u] > 0.0);
                 var end = first.c0;
                 if end_at[e - 1u] == 1.0 {
                     end = last.c2 + last.c1 + last.c0;
@@ -1123,7 +1141,7 @@ fn curve_features(ray: Ray) -> CurveFeatures {
                     for (var r = 0u; r < 2u; r++) {
                         let t = (-b + select(-root, root, r == 1u)) / a;
                         if t > 0.0 && t < 1.0 {
-                            push_kink(&kinks, t);
+                            push_kink(&kinks, t, false);
                         }
                     }
                 }
@@ -1199,6 +1217,7 @@ fn curve_features(ray: Ray) -> CurveFeatures {
     out.found = found;
     out.kinks = kinks.at;
     out.kink_count = kinks.count;
+    out.kink_singular = kinks.singular;
     return out;
 }
 
@@ -1253,6 +1272,7 @@ struct Track {
     u: f32,
     rate: f32,
     t: f32,
+    whole: bool,  // solve every node on the whole chain (a part whose ends lie on different segments)
 }
 
 // The rate du/dt of a nearest point at u on segment s: from the stationarity (C(u) - L(t)) . C'(u) = 0, C'(u) . dir
@@ -1276,6 +1296,10 @@ fn track_nearest(c: CurveSource, ray: Ray, t: f32, track: ptr<function, Track>) 
     // Carried only over a short way along the segment: where the nearest point races (near a center of
     // curvature) a long prediction can lead Newton to another stationary point.
     let reach = abs((*track).rate * (t - (*track).t));
+    if (*track).whole {
+        var segment = NO_SEGMENT;
+        return nearest_on_chain_from(c, p, &segment);
+    }
     if j < k && reach <= TRACK_REACH {
         let s = segments[c.first_segment + j];
         var u = clamp((*track).u + (*track).rate * (t - (*track).t), 0.0, 1.0);
@@ -1293,7 +1317,7 @@ fn track_nearest(c: CurveSource, ray: Ray, t: f32, track: ptr<function, Track>) 
         let at_joint = (u == 0.0 && j > 0u) || (u == 1.0 && j + 1u < k);
         if convex && abs(step) <= TRACK_SETTLED && !at_joint {
             let off = segment_at(s, u) - p;
-            *track = Track(j, u, track_rate(s, u, off, ray.dir), t);
+            *track = Track(j, u, track_rate(s, u, off, ray.dir), t, false);
             return vec2<f32>((f32(j) + u) / f32(k), length(off));
         }
     }
@@ -1301,29 +1325,44 @@ fn track_nearest(c: CurveSource, ray: Ray, t: f32, track: ptr<function, Track>) 
     let n = nearest_on_chain_from(c, p, &segment);
     let s = segments[c.first_segment + segment];
     let u = clamp(n.x * f32(k) - f32(segment), 0.0, 1.0);
-    *track = Track(segment, u, track_rate(s, u, segment_at(s, u) - p, ray.dir), t);
+    *track = Track(segment, u, track_rate(s, u, segment_at(s, u) - p, ray.dir), t, false);
     return n;
 }
 
 // The Kronrod and Gauss values on [a, b] in u of a curve's term: f = w / max(eps, d) zeta(t) (before the
 // coefficient) at each node, t clamped to the piece. The nodes go in order along the ray, so that each carries
 // the nearest point on from the last (track_nearest). Twin of kronrod.
-fn curve_kronrod(ray: Ray, p: Peak, a: f32, b: f32, track: ptr<function, Track>) -> vec2<f32> {
+fn curve_kronrod(ray: Ray, p: Peak, a: f32, b: f32, panel: vec2<f32>, singular: vec2<bool>, track: ptr<function, Track>) -> vec2<f32> {
     let c = curves[ray.index];
     let mid = 0.5 * (a + b);
     let r = 0.5 * (b - a);
     var sum = vec2<f32>(0.0);
     for (var i = 0u; i <= 2u * params.gauss_order; i++) {
         let node = kronrod_node(i);
-        let m = map_node(p, mid + r * node.x);
+        let toward = toward_singular(mid + r * node.x, panel, singular);
+        let m = map_node(p, toward.x);
         let n = track_nearest(c, ray, m.x, track);
-        sum += node.yz * (m.y * wseries(c, n.x) * falloff(n.y, params.epsilon) * zeta_at(m.x));
+        sum += node.yz * (toward.y * m.y * wseries(c, n.x) * falloff(n.y, params.epsilon) * zeta_at(m.x));
     }
     return r * sum;
 }
 
+// Twin of toward_singular: u at v on the panel [a, b] with the nodes drawn toward its singular ends, and du/dv.
+fn toward_singular(v: f32, panel: vec2<f32>, singular: vec2<bool>) -> vec2<f32> {
+    let x = (v - panel.x) / (panel.y - panel.x);
+    var phi = vec2<f32>(x, 1.0);
+    if singular.x && singular.y {
+        phi = vec2<f32>(x * x * (3.0 - 2.0 * x), 6.0 * x * (1.0 - x));
+    } else if singular.x {
+        phi = vec2<f32>(x * x, 2.0 * x);
+    } else if singular.y {
+        phi = vec2<f32>(x * (2.0 - x), 2.0 - 2.0 * x);
+    }
+    return vec2<f32>(panel.x + (panel.y - panel.x) * phi.x, phi.y);
+}
+
 // A curve's term on the panel [a, b] in u, refined where the pair disagrees. Twin of integrate_panel.
-fn curve_panel(ray: Ray, p: Peak, a: f32, b: f32, allowance: f32, refinements: ptr<function, u32>, track: ptr<function, Track>) -> f32 {
+fn curve_panel(ray: Ray, p: Peak, a: f32, b: f32, singular: vec2<bool>, allowance: f32, refinements: ptr<function, u32>, track: ptr<function, Track>) -> f32 {
     let end = 1u << MAX_DEPTH;
     var at = 0u;
     var level = 0u;
@@ -1331,7 +1370,7 @@ fn curve_panel(ray: Ray, p: Peak, a: f32, b: f32, allowance: f32, refinements: p
     while at < end {
         let x0 = a + (b - a) * (f32(at) / f32(end));
         let x1 = a + (b - a) * (f32(at + (end >> level)) / f32(end));
-        let kg = curve_kronrod(ray, p, x0, x1, track);
+        let kg = curve_kronrod(ray, p, x0, x1, vec2<f32>(a, b), singular, track);
         if settled(kg, allowance, x1 - x0) || level == MAX_DEPTH || *refinements == 0u {
             sum += kg.x;
             let next = next_part(at, level);
@@ -1348,6 +1387,17 @@ fn curve_panel(ray: Ray, p: Peak, a: f32, b: f32, allowance: f32, refinements: p
     return sum;
 }
 
+// Twin of curve::nearest_segment_index: the segment of the chain's nearest point to the ray's point at u of
+// p's map, NO_SEGMENT where that point is a joint.
+fn nearest_segment_index(c: CurveSource, ray: Ray, p: Peak, u: f32) -> u32 {
+    var segment = NO_SEGMENT;
+    let n = nearest_on_chain_from(c, ray.start + ray.dir * map_node(p, u).x, &segment);
+    let local = n.x * f32(c.segment_count) - f32(segment);
+    // The chain parameter's f32 rounding: a joint's local parameter comes back within a few ulps of 0 or 1.
+    let at_joint = (local <= 1e-5 && segment > 0u) || (local >= 1.0 - 1e-5 && segment + 1u < c.segment_count);
+    return select(segment, NO_SEGMENT, at_joint);
+}
+
 // A curve's term of B over its pieces, each cut at its kinks. Twin of integrate_term.
 fn integrate_curve_term(index: u32, s_point: vec3<f32>, e_point: vec3<f32>) -> f32 {
     let coefficient = curves[index].coefficient;
@@ -1355,6 +1405,7 @@ fn integrate_curve_term(index: u32, s_point: vec3<f32>, e_point: vec3<f32>) -> f
         return 0.0;
     }
     let ray = Ray(s_point, e_point - s_point, 3u, index);
+    let c = curves[index];
     let features = curve_features(ray);
     let allowance = params.term_tolerance / (abs(coefficient) * max(pieces_length(features.found), 1e-30));
     var refinements = MAX_REFINEMENTS;
@@ -1370,27 +1421,97 @@ fn integrate_curve_term(index: u32, s_point: vec3<f32>, e_point: vec3<f32>) -> f
         // top, -kf and kf (twin of cuts): each part ends at the least cut past its start, so that no array is
         // written (see integrate_smooth_term).
         let kf = select(F32_MAX, stable_asinh(p.flat / p.width), p.flat > 0.0);
+        // Ordinary kinks within SINGULAR_MERGE of a singular one are dropped (twin of cuts): bit m of kept.
+        var kept = 0u;
+        for (var m = 0u; m < features.kink_count; m++) {
+            let um = stable_asinh((features.kinks[m] - p.center) / p.width);
+            var shadowed = false;
+            for (var q = 0u; q < features.kink_count; q++) {
+                let uq = stable_asinh((features.kinks[q] - p.center) / p.width);
+                shadowed = shadowed || (((features.kink_singular >> q) & 1u) == 1u && abs(uq - um) <= SINGULAR_MERGE);
+            }
+            if ((features.kink_singular >> m) & 1u) == 1u || !shadowed {
+                kept |= 1u << m;
+            }
+        }
+        // Cuts within CUT_MERGE of the first of a cluster are one: at its first singular cut if any, singular if
+        // any is (twin of cuts' merging). start: the cluster's first cut.
+        var singular_b = false;
+        for (var m = 0u; m < features.kink_count; m++) {
+            let u = stable_asinh((features.kinks[m] - p.center) / p.width);
+            singular_b = singular_b || (u > u0 && u <= u0 + CUT_MERGE && ((features.kink_singular >> m) & 1u) == 1u);
+        }
         var b = u0;
+        var start = u0;
         while b < u1 {
             let a = b;
-            b = u1;
+            let singular_a = singular_b;
+            var next = u1;
             for (var m = 0u; m < features.kink_count; m++) {
                 let u = stable_asinh((features.kinks[m] - p.center) / p.width);
-                if u > a {
-                    b = min(b, u);
+                if u > start + CUT_MERGE && u < u1 && ((kept >> m) & 1u) == 1u {
+                    next = min(next, u);
                 }
             }
-            if -kf > a {
-                b = min(b, -kf);
-            } else if kf > a {
-                b = min(b, kf);
+            if -kf > start + CUT_MERGE && -kf < u1 {
+                next = min(next, -kf);
+            } else if kf > start + CUT_MERGE && kf < u1 {
+                next = min(next, kf);
             }
-            let panels = u32(clamp(ceil((b - a) / U_PANEL), 1.0, f32(MAX_GAUSS_PANELS)));
-            let width = (b - a) / f32(panels);
-            var track = Track(NO_SEGMENT, 0.0, 0.0, 0.0);
-            for (var i = 0u; i < panels; i++) {
-                let pa = a + width * f32(i);
-                sum += curve_panel(ray, p, pa, pa + width, allowance, &refinements, &track);
+            start = next;
+            b = next;
+            singular_b = false;
+            var first_singular = F32_MAX;
+            for (var m = 0u; m < features.kink_count; m++) {
+                let u = stable_asinh((features.kinks[m] - p.center) / p.width);
+                if u >= next && u <= next + CUT_MERGE && u < u1 && ((features.kink_singular >> m) & 1u) == 1u {
+                    singular_b = true;
+                    first_singular = min(first_singular, u);
+                }
+            }
+            if singular_b {
+                b = first_singular;
+            }
+            if u1 - next <= CUT_MERGE {
+                b = u1;
+            }
+            // The safety net behind the cuts (twin of split_at_switch): a part whose ends' nearest points lie on
+            // different segments holds a missed jump; it is split where the segment changes, found by bisection,
+            // and both sides are solved on the whole chain at every node. So is a part that begins or ends at rest,
+            // where the nodes crowd toward the cut.
+            let ends = vec2<u32>(nearest_segment_index(c, ray, p, a), nearest_segment_index(c, ray, p, b));
+            let switched = ends.x != NO_SEGMENT && ends.y != NO_SEGMENT && ends.x != ends.y;
+            var split = b;
+            if switched {
+                var lo = a;
+                var hi = b;
+                for (var r = 0u; r < SWITCH_ROUNDS; r++) {
+                    let mid = 0.5 * (lo + hi);
+                    if nearest_segment_index(c, ray, p, mid) == ends.x {
+                        lo = mid;
+                    } else {
+                        hi = mid;
+                    }
+                }
+                split = 0.5 * (lo + hi);
+            }
+            for (var part = 0u; part < select(1u, 2u, switched); part++) {
+                let pa0 = select(a, split, part == 1u);
+                let pb0 = select(split, b, part == 1u || !switched);
+                let first = part == 0u;
+                let last = part == 1u || !switched;
+                // In f32 the bisection can end on a part's end, leaving the other part empty.
+                if pb0 <= pa0 {
+                    continue;
+                }
+                let panels = u32(clamp(ceil((pb0 - pa0) / U_PANEL), 1.0, f32(MAX_GAUSS_PANELS)));
+                let width = (pb0 - pa0) / f32(panels);
+                var track = Track(NO_SEGMENT, 0.0, 0.0, 0.0, switched || singular_a || singular_b);
+                for (var i = 0u; i < panels; i++) {
+                    let pa = pa0 + width * f32(i);
+                    let singular = vec2<bool>(singular_a && first && i == 0u, singular_b && last && i + 1u == panels);
+                    sum += curve_panel(ray, p, pa, pa + width, singular, allowance, &refinements, &track);
+                }
             }
         }
     }

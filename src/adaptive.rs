@@ -76,7 +76,7 @@ pub const PARAM_JUMP: f64 = 0.05;
 /// steps across it costs 5e-4 on a ray of the mixed scene.)
 pub const KINK_ROUNDS: u32 = 12;
 /// The kink search stops when its bracket is this short (in t, the ray being 1 long).
-pub const KINK_BRACKET: f64 = 1e-3;
+pub const KINK_BRACKET: f64 = 1e-5;
 /// How far either side of its estimate a round of the kink search probes, relative to the bracket.
 pub const KINK_PROBE: f64 = 0.05;
 /// Most kinks cut on one curve's ray.
@@ -259,10 +259,14 @@ fn kronrod(g: &impl Fn(f64) -> f64, a: f64, b: f64, order: u32) -> (f64, f64) {
     (r * kronrod, r * gauss)
 }
 
+/// A part's rules agreeing within this share of its value count as agreeing, whatever the allowance: the f64
+/// rounding of a sum of nodes (the f32 twin's is `4e-6`).
+pub const ROUNDING: f64 = 1e-13;
+
 /// Levels of bisection of a panel at most: its smallest part is `2^-MAX_DEPTH` of it.
 pub const MAX_DEPTH: u32 = 10;
 /// Parts a term may refine beyond its panels at most (each refinement spends two more rules).
-pub const MAX_REFINEMENTS: u32 = 32;
+pub const MAX_REFINEMENTS: u32 = 8;
 
 /// `g` on `[a, b]`, refined where its Gauss and Kronrod values differ by more than `allowance` per unit of
 /// length: the parts of a dyadic bisection of `[a, b]`, visited in order (without a stack: after a part is
@@ -282,7 +286,8 @@ fn integrate_panel(
         let x0 = a + (b - a) * (at as f64 / end as f64);
         let x1 = a + (b - a) * ((at + size) as f64 / end as f64);
         let (k, gauss) = kronrod(g, x0, x1, order);
-        if (k - gauss).abs() <= allowance * (x1 - x0) || level == MAX_DEPTH || *refinements == 0 {
+        let settled = (k - gauss).abs() <= (allowance * (x1 - x0)).max(ROUNDING * k.abs());
+        if settled || level == MAX_DEPTH || *refinements == 0 {
             sum += k;
             at += size;
             // Up while this part ended its parent.
@@ -328,6 +333,14 @@ impl Term<'_> {
                 (n.distance, wseries::evaluate(&s.weights, n.t))
             }
             _ => self.distance(p),
+        }
+    }
+
+    /// The segment of a chain's nearest point to `p` (`None` at a joint, and for the other kinds).
+    fn segment_at(&self, p: DVec3) -> Option<usize> {
+        match self {
+            Term::Curve(s) => curve::nearest_segment_index(&s.control_points, p),
+            _ => None,
         }
     }
 
@@ -488,16 +501,14 @@ pub const MAX_PEAKS: usize = 4;
 struct Features {
     peaks: [Peak; MAX_PEAKS],
     count: usize,
-    kinks: [f64; MAX_KINKS],
-    kink_count: usize,
+    kinks: Kinks,
 }
 
 /// The features of a term along `s -> e` (at most `MAX_PEAKS`), sorted along the ray, each owning its piece.
 fn features(term: Term, s: DVec3, e: DVec3, scan: u32, eps: f64) -> Features {
     let dir = e - s;
     let mut out = [peak(0.0, 0.0, 0.0, eps); MAX_PEAKS];
-    let mut kinks = [0.0; MAX_KINKS];
-    let mut kink_count = 0;
+    let mut kinks = Kinks::default();
     let count = match term {
         Term::Point(p) => {
             let a = dir.length_squared();
@@ -544,11 +555,8 @@ fn features(term: Term, s: DVec3, e: DVec3, scan: u32, eps: f64) -> Features {
             count
         }
         Term::Curve(c) => {
-            let mut found_kinks = Kinks::default();
-            let (found, count) = chain_features(c, s, dir, scan, eps, &mut found_kinks);
+            let (found, count) = chain_features(c, s, dir, scan, eps, &mut kinks);
             out[..count].copy_from_slice(&found[..count]);
-            kinks = found_kinks.at;
-            kink_count = found_kinks.count;
             count
         }
     };
@@ -557,7 +565,6 @@ fn features(term: Term, s: DVec3, e: DVec3, scan: u32, eps: f64) -> Features {
         peaks: out,
         count,
         kinks,
-        kink_count,
     }
 }
 
@@ -590,7 +597,9 @@ fn chain_features(
         (cp[0], curve::tangent_out_of(cp, 0), 0.0),
         (cp[last], curve::tangent_into(cp, segments), 1.0),
     ]
-    .map(|(end, tangent, at_end)| ((end - s).dot(tangent) / dir.dot(tangent), at_end));
+    .map(|(end, (tangent, rest), at_end)| {
+        ((end - s).dot(tangent) / dir.dot(tangent), at_end, rest)
+    });
     if ends[1].0 < ends[0].0 {
         ends.swap(0, 1);
     }
@@ -606,7 +615,7 @@ fn chain_features(
         // since the last jump, which the joints' cuts look at.
         let mut left = before;
         let mut calm = before;
-        for &(t, at_end) in &ends {
+        for &(t, at_end, rest) in &ends {
             // Half open, so that a crossing on a sample is cut once.
             let inside = t > before.t && t <= after.t;
             if !inside || (!at(&before, at_end) && !at(&after, at_end)) {
@@ -624,7 +633,7 @@ fn chain_features(
             } else {
                 (moving, at_rest)
             };
-            kinks.push(t);
+            kinks.push_cut(t, rest);
             let end = if at_end == 0.0 { cp[0] } else { cp[last] };
             let a = dir.length_squared();
             let center = (end - s).dot(dir) / a;
@@ -753,31 +762,43 @@ fn joint_cuts(
                 continue;
             }
             let joint = cp[2 * j];
-            let (t_in, t_out) = (curve::tangent_into(cp, j), curve::tangent_out_of(cp, j));
+            let ((t_in, in_rest), (t_out, out_rest)) =
+                (curve::tangent_into(cp, j), curve::tangent_out_of(cp, j));
             let corner = t_in.cross(t_out).length_squared()
                 > 1e-12 * t_in.length_squared() * t_out.length_squared();
-            let planes = [t_out, t_in];
-            for tangent in &planes[..1 + corner as usize] {
-                let t = (joint - s).dot(*tangent) / dir.dot(*tangent);
+            // At a corner each plane is singular where its own side starts at rest; at a smooth joint the one
+            // plane is where either side does.
+            let planes = [(t_out, out_rest || (!corner && in_rest)), (t_in, in_rest)];
+            for &(tangent, rest) in &planes[..1 + corner as usize] {
+                let t = (joint - s).dot(tangent) / dir.dot(tangent);
                 if t > x.t && t <= y.t {
-                    kinks.push(t);
+                    kinks.push_cut(t, rest);
                 }
             }
         }
     }
 }
 
-/// The kinks of a chain along the ray (in t), at most `MAX_KINKS` (more are dropped).
+/// The kinks of a chain along the ray (in t), at most `MAX_KINKS` (more are dropped), and which of them are
+/// singular: bit `k` of `singular` where the nearest point leaves a point of the chain whose speed vanishes (an
+/// end or a joint where two control points coincide), so that its parameter moves like the square root of the
+/// distance along the ray from the cut: the integrand's slope is unbounded there, on one side.
 #[derive(Clone, Copy, Debug, Default)]
 struct Kinks {
     at: [f64; MAX_KINKS],
     count: usize,
+    singular: u32,
 }
 
 impl Kinks {
     fn push(&mut self, t: f64) {
+        self.push_cut(t, false);
+    }
+
+    fn push_cut(&mut self, t: f64, singular: bool) {
         if self.count < MAX_KINKS {
             self.at[self.count] = t;
+            self.singular |= (singular as u32) << self.count;
             self.count += 1;
         }
     }
@@ -823,6 +844,9 @@ struct ChainSample {
     velocity: DVec3,
     /// The rate of the chain parameter along the ray (zero where the velocity is).
     rate: f64,
+    /// Whether the nearest point is an end or a joint of the chain (within `END_SNAP` of its parameter), where
+    /// the rate says little of where the parameter goes next (`miss`).
+    at_joint: bool,
     /// Whether the velocity is known (it is infinite at a center of curvature).
     known: bool,
     /// The first and second derivatives of `d^2` along the ray (the second `-inf` where the velocity is
@@ -849,6 +873,8 @@ impl ChainSample {
             (0.0, false)
         };
         let velocity = d1 * rate;
+        let x = n.t * segments;
+        let at_joint = (x - x.round()).abs() <= END_SNAP * segments;
         // The nearest point moves along the chain, perpendicular to p - point: d^2's slope is that of the
         // distance to a fixed point, 2 (p - point) . dir; its curvature 2 dir . (dir - velocity).
         ChainSample {
@@ -858,6 +884,7 @@ impl ChainSample {
             point,
             velocity,
             rate: rate / segments,
+            at_joint,
             known,
             slope: 2.0 * (p - point).dot(dir),
             curvature: if known {
@@ -918,7 +945,11 @@ fn miss(a: &ChainSample, b: &ChainSample, eps: f64) -> f64 {
     let moved = b.point - a.point;
     let smooth = (a.velocity + b.velocity) * (0.5 * (b.t - a.t));
     let miss = (moved - smooth).length() / a.d2.min(b.d2).sqrt().max(eps).max(1e-30);
-    let param = (b.param - a.param - 0.5 * (a.rate + b.rate) * (b.t - a.t)).abs() / PARAM_JUMP;
+    let param = if a.at_joint || b.at_joint {
+        0.0
+    } else {
+        (b.param - a.param - 0.5 * (a.rate + b.rate) * (b.t - a.t)).abs() / PARAM_JUMP
+    };
     let miss = miss.max(JUMP * param);
     if miss.is_finite() { miss } else { f64::MAX }
 }
@@ -1128,29 +1159,114 @@ fn chain_peaks(
 /// Most cuts of a piece in u: its ends, the flat top's two ends and the kinks.
 const MAX_CUTS: usize = 4 + MAX_KINKS;
 
-/// The cuts of a piece in u, sorted: its ends, for a source closer than eps the ends of the falloff's flat top,
-/// and the kinks (in s) inside the piece.
-fn cuts(p: &Peak, u0: f64, u1: f64, kinks: &[f64]) -> ([f64; MAX_CUTS], usize) {
-    let mut out = [u1; MAX_CUTS];
-    out[0] = u0;
+/// The cuts of a piece in u, sorted, each with whether it is singular (`Kinks`): its ends, for a source closer
+/// than eps the ends of the falloff's flat top, and the kinks (in s) inside the piece.
+fn cuts(p: &Peak, u0: f64, u1: f64, kinks: &Kinks) -> ([(f64, bool); MAX_CUTS], usize) {
+    let mut out = [(u1, false); MAX_CUTS];
+    out[0] = (u0, false);
     let mut n = 1;
-    let mut add = |u: f64| {
+    let mut add = |u: f64, singular: bool| {
         if u > u0 && u < u1 {
-            out[n] = u;
+            out[n] = (u, singular);
             n += 1;
         }
     };
     if p.flat > 0.0 {
         let k = (p.flat / p.width).asinh();
-        add(-k);
-        add(k);
+        add(-k, false);
+        add(k, false);
     }
-    for &kink in kinks {
-        add(((kink - p.center) / p.width).asinh());
+    let u: [f64; MAX_KINKS] = kinks.at.map(|kink| ((kink - p.center) / p.width).asinh());
+    let singular = |k: usize| kinks.singular >> k & 1 == 1;
+    for k in 0..kinks.count {
+        // An ordinary cut this close to a singular one is dropped: the jump search finds false jumps where a
+        // nearest point leaves a point at rest (its speed grows like a square root), and a part starting there
+        // would lose the singular end's map.
+        let shadowed = !singular(k)
+            && (0..kinks.count).any(|m| singular(m) && (u[m] - u[k]).abs() <= SINGULAR_MERGE);
+        if !shadowed {
+            add(u[k], singular(k));
+        }
     }
-    out[..n].sort_by(f64::total_cmp);
-    out[n] = u1;
-    (out, n + 1)
+    out[..n].sort_by(|x, y| x.0.total_cmp(&y.0));
+    out[n] = (u1, false);
+    // Cuts within CUT_MERGE of the first of a cluster are one: at its first singular cut if any (the piece's
+    // start stays put), singular if any is, the piece's end taking the place of a cluster it falls into. A sliver
+    // between them would spend the term's refinements, and hide a singular cut behind an ordinary one.
+    let (mut kept, mut start) = (1, out[0].0);
+    for k in 1..=n {
+        let (u, singular) = out[k];
+        if u - start > CUT_MERGE {
+            out[kept] = out[k];
+            (kept, start) = (kept + 1, u);
+        } else if k == n {
+            if kept == 1 {
+                kept = 2;
+            }
+            out[kept - 1].0 = u;
+        } else {
+            if singular && !out[kept - 1].1 && kept > 1 {
+                out[kept - 1].0 = u;
+            }
+            out[kept - 1].1 |= singular;
+        }
+    }
+    (out, kept)
+}
+
+/// Cuts of a piece closer than this in u are merged (`cuts`).
+pub const CUT_MERGE: f64 = 1e-6;
+/// Ordinary cuts closer than this in u to a singular one are dropped (`cuts`).
+pub const SINGULAR_MERGE: f64 = 1e-3;
+
+/// Bisection rounds that find where a part's nearest segment changes (`split_at_switch`).
+pub const SWITCH_ROUNDS: u32 = 24;
+
+/// The part `[a, b]` (in u) split where the chain's nearest segment changes, `segment(u)` (`None` at a joint),
+/// where the segments at its ends are known and differ: a jump the kink search missed. Found by bisection to
+/// `2^-SWITCH_ROUNDS` of the part, so that the step the jump puts in the integrand is a cut. One part where the
+/// ends agree or either is a joint.
+fn split_at_switch(
+    segment: impl Fn(f64) -> Option<usize>,
+    (a, b): (f64, f64),
+) -> ([(f64, f64); 2], usize) {
+    match (segment(a), segment(b)) {
+        (Some(x), Some(y)) if x != y => {
+            let (mut lo, mut hi) = (a, b);
+            for _ in 0..SWITCH_ROUNDS {
+                let mid = 0.5 * (lo + hi);
+                if segment(mid) == Some(x) {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            let m = 0.5 * (lo + hi);
+            ([(a, m), (m, b)], 2)
+        }
+        _ => ([(a, b); 2], 1),
+    }
+}
+
+/// `g` on `[a, b]` with the nodes drawn toward an end where the integrand behaves like the square root of the
+/// distance from it (`singular_a`, `singular_b`): `u = a + (b - a) phi(x)` with `phi(x) = x^2` toward a,
+/// `1 - (1 - x)^2` toward b, `3 x^2 - 2 x^3` toward both, whose slope vanishes at the singular end, so that
+/// `sqrt(u - a)` is smooth in x. The function of x on [a, b] to integrate instead, and whether it is mapped.
+fn toward_singular(
+    g: &impl Fn(f64) -> f64,
+    (a, b): (f64, f64),
+    (singular_a, singular_b): (bool, bool),
+) -> impl Fn(f64) -> f64 {
+    move |v: f64| {
+        let x = (v - a) / (b - a);
+        let (phi, slope) = match (singular_a, singular_b) {
+            (false, false) => (x, 1.0),
+            (true, false) => (x * x, 2.0 * x),
+            (false, true) => (x * (2.0 - x), 2.0 - 2.0 * x),
+            (true, true) => (x * x * (3.0 - 2.0 * x), 6.0 * x * (1.0 - x)),
+        };
+        g(a + (b - a) * phi) * slope
+    }
 }
 
 /// One term's integral over its pieces, within `tolerance` on B: each piece is cut at its kinks, each cut into
@@ -1165,15 +1281,23 @@ fn integrate_term(term: Term, s: DVec3, e: DVec3, settings: &Integration, tolera
     let dir = e - s;
     // A chain's nearest point stays on one segment between cuts, or passes a joint continuously: each cut
     // piece starts with a whole-chain search, at its first node, and then solves that segment only.
+    // A safety net behind the cuts: where the nearest points at a part's two ends lie on different segments, a
+    // jump was missed (the kink search can lose a branch that starts at rest), and the part is split where the
+    // segment changes and solved on the whole chain at every node (`split_at_switch`).
     let segment = Cell::new(None);
+    let tracking = Cell::new(true);
     let f = |t: f64| {
-        let mut on = segment.get();
-        let (d, w) = term.distance_on_piece(s + dir * t, &mut on);
-        segment.set(on);
+        let (d, w) = if tracking.get() {
+            let mut on = segment.get();
+            let found = term.distance_on_piece(s + dir * t, &mut on);
+            segment.set(on);
+            found
+        } else {
+            term.distance(s + dir * t)
+        };
         w * falloff(d, settings.epsilon) * zeta(t, settings.alpha, settings.beta)
     };
     let order = kronrod_order(settings.tolerance);
-    let kinks = &found.kinks[..found.kink_count];
     let pieces = found.peaks[..found.count].iter().map(|p| {
         let u0 = ((p.lo - p.center) / p.width).asinh();
         let u1 = ((p.hi - p.center) / p.width).asinh();
@@ -1192,17 +1316,36 @@ fn integrate_term(term: Term, s: DVec3, e: DVec3, settings: &Integration, tolera
             let t = (p.center + p.width * u.sinh()).clamp(p.lo, p.hi);
             f(t) * p.width * u.cosh()
         };
-        let (cut, n) = cuts(p, u0, u1, kinks);
+        let (cut, n) = cuts(p, u0, u1, &found.kinks);
         for w in cut[..n].windows(2) {
-            let (a, b) = (w[0], w[1]);
+            let ((a, singular_a), (b, singular_b)) = (w[0], w[1]);
             segment.set(None);
-            let panels = ((b - a) / U_PANEL)
-                .ceil()
-                .clamp(1.0, MAX_GAUSS_PANELS as f64) as u32;
-            let width = (b - a) / panels as f64;
-            for i in 0..panels {
-                let pa = a + width * i as f64;
-                sum += integrate_panel(&g, (pa, pa + width), order, allowance, &mut refinements);
+            let at = |u: f64| s + dir * (p.center + p.width * f64::sinh(u)).clamp(p.lo, p.hi);
+            let (parts, count) = split_at_switch(|u| term.segment_at(at(u)), (a, b));
+            // A part that begins or ends at rest is solved on the whole chain too: its nodes crowd toward the
+            // cut, which the shader's tracking of the nearest point does not follow reliably.
+            tracking.set(count == 1 && !singular_a && !singular_b);
+            for (k, &(a, b)) in parts[..count].iter().enumerate() {
+                if b <= a {
+                    continue;
+                }
+                let (singular_a, singular_b) = (singular_a && k == 0, singular_b && k + 1 == count);
+                let panels = ((b - a) / U_PANEL)
+                    .ceil()
+                    .clamp(1.0, MAX_GAUSS_PANELS as f64) as u32;
+                let width = (b - a) / panels as f64;
+                for i in 0..panels {
+                    let pa = a + width * i as f64;
+                    let ends = (singular_a && i == 0, singular_b && i + 1 == panels);
+                    let mapped = toward_singular(&g, (pa, pa + width), ends);
+                    sum += integrate_panel(
+                        &mapped,
+                        (pa, pa + width),
+                        order,
+                        allowance,
+                        &mut refinements,
+                    );
+                }
             }
         }
     }
@@ -1416,7 +1559,7 @@ mod tests {
         let (y, z) = (0.3, 0.2);
         let (s, e) = (DVec3::new(-3.0, y, z), DVec3::new(3.0, y, z));
         let found = features(Term::Curve(&c), s, e, SCAN, 0.01);
-        let kinks = &found.kinks[..found.kink_count];
+        let kinks = &found.kinks.at[..found.kinks.count];
         let near = |t: f64, within: f64| kinks.iter().any(|&k| (k - t).abs() < within);
         assert!(near(0.5, 1e-5), "the medial crossing: {kinks:?}");
         // The ends' normal planes: x + 2 y = -1 and x - 2 y = 1, at x = -1 - 2 y and 1 + 2 y.
@@ -1430,9 +1573,9 @@ mod tests {
         let (s, e) = (DVec3::new(-3.0, 3.0, z), DVec3::new(3.0, 3.0, z));
         let found = features(Term::Curve(&c), s, e, SCAN, 0.01);
         assert!(
-            found.kink_count <= 2,
+            found.kinks.count <= 2,
             "{:?}",
-            &found.kinks[..found.kink_count]
+            &found.kinks.at[..found.kinks.count]
         );
     }
 

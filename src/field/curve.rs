@@ -112,34 +112,45 @@ impl Segment {
 /// there, and its direction is the second derivative's. The same in f32 and in f64, so that both twins cut alike.
 pub const DEGENERATE: f64 = 1e-10;
 
-/// The tangent with which a chain arrives at its joint `j` (the start of segment `j`) from segment `j - 1`, or
-/// from `j - 2` where `j - 1` has zero length; zero where neither has a direction.
-pub fn tangent_into(control_points: &[DVec3], j: usize) -> DVec3 {
-    let segment = |i: usize| {
-        let b = &control_points[2 * i..2 * i + 3];
-        Segment::from_bezier(b[0], b[1], b[2])
-    };
-    let t = segment(j - 1).end_tangent();
-    if t == DVec3::ZERO && j >= 2 {
-        segment(j - 2).end_tangent()
-    } else {
-        t
+impl Segment {
+    /// Whether the segment's speed vanishes at its start (its first two control points coincide): there the
+    /// nearest point's parameter moves like the square root of the distance it has left the start by.
+    pub fn starts_at_rest(&self) -> bool {
+        self.c1.length_squared() <= DEGENERATE * self.c2.length_squared()
+    }
+
+    /// Whether the segment's speed vanishes at its end (its last two control points coincide).
+    pub fn ends_at_rest(&self) -> bool {
+        let d1 = 2.0 * self.c2 + self.c1;
+        d1.length_squared() <= DEGENERATE * self.c2.length_squared()
     }
 }
 
-/// The tangent with which a chain leaves its joint `j` (or its start, `j = 0`) on segment `j`, or on `j + 1`
-/// where `j` has zero length; zero where neither has a direction.
-pub fn tangent_out_of(control_points: &[DVec3], j: usize) -> DVec3 {
-    let segment = |i: usize| {
-        let b = &control_points[2 * i..2 * i + 3];
-        Segment::from_bezier(b[0], b[1], b[2])
-    };
-    let t = segment(j).start_tangent();
-    if t == DVec3::ZERO && j + 1 < segment_count(control_points) {
-        segment(j + 1).start_tangent()
-    } else {
-        t
+/// Segment `j` of a chain.
+fn segment(control_points: &[DVec3], j: usize) -> Segment {
+    let b = &control_points[2 * j..2 * j + 3];
+    Segment::from_bezier(b[0], b[1], b[2])
+}
+
+/// The tangent with which a chain arrives at its joint `j` (the start of segment `j`; `j = k` for its end)
+/// from segment `j - 1`, or from `j - 2` where `j - 1` has zero length (zero where neither has a direction),
+/// and whether that segment arrives at rest.
+pub fn tangent_into(control_points: &[DVec3], j: usize) -> (DVec3, bool) {
+    let mut s = segment(control_points, j - 1);
+    if s.end_tangent() == DVec3::ZERO && j >= 2 {
+        s = segment(control_points, j - 2);
     }
+    (s.end_tangent(), s.ends_at_rest())
+}
+
+/// The tangent with which a chain leaves its joint `j` (or its start, `j = 0`) on segment `j`, or on `j + 1`
+/// where `j` has zero length (zero where neither has a direction), and whether that segment leaves at rest.
+pub fn tangent_out_of(control_points: &[DVec3], j: usize) -> (DVec3, bool) {
+    let mut s = segment(control_points, j);
+    if s.start_tangent() == DVec3::ZERO && j + 1 < segment_count(control_points) {
+        s = segment(control_points, j + 1);
+    }
+    (s.start_tangent(), s.starts_at_rest())
 }
 
 /// Two Newton steps on the cubic `k`, keeping the start when a step misbehaves.
@@ -199,6 +210,15 @@ pub fn nearest_on_chain_from(
     let (j, n) = nearest_segment(control_points, 0..k, p);
     *segment = Some(j);
     chain_nearest(control_points, j, n)
+}
+
+/// The segment of a chain whose point is nearest to `p`, or `None` where that point is a joint (shared by two
+/// segments).
+pub fn nearest_segment_index(control_points: &[DVec3], p: DVec3) -> Option<usize> {
+    let k = segment_count(control_points);
+    let (j, n) = nearest_segment(control_points, 0..k, p);
+    let at_joint = (n.t == 0.0 && j > 0) || (n.t == 1.0 && j + 1 < k);
+    (!at_joint).then_some(j)
 }
 
 /// The number of segments of a chain of `2k + 1` control points.
