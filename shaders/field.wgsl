@@ -199,7 +199,7 @@ const MIN_AXIS_WIDTH: f32 = 1e-4;
 const U_PANEL: f32 = 4.0;
 const MAX_GAUSS_PANELS: u32 = 4u;
 const MAX_DEPTH: u32 = 10u;
-const MAX_REFINEMENTS: u32 = 8u;
+const MAX_REFINEMENTS: u32 = 24u;
 const RING_NEWTON: u32 = 6u;
 const RING_STEP: f32 = 0.125;
 
@@ -617,7 +617,7 @@ fn integrate_smooth_term(kind: u32, index: u32, s_point: vec3<f32>, e_point: vec
     let ray = Ray(s_point, e_point - s_point, kind, index);
     let found = smooth_features(ray);
     let allowance = params.term_tolerance / (abs(coefficient) * max(pieces_length(found), 1e-30));
-    var refinements = MAX_REFINEMENTS;
+    var refinements = select(8u, MAX_REFINEMENTS, params.gauss_order > 5u);
     var sum = 0.0;
     for (var k = 0u; k < found.count; k++) {
         let p = found.peaks[k];
@@ -1408,7 +1408,7 @@ fn integrate_curve_term(index: u32, s_point: vec3<f32>, e_point: vec3<f32>) -> f
     let c = curves[index];
     let features = curve_features(ray);
     let allowance = params.term_tolerance / (abs(coefficient) * max(pieces_length(features.found), 1e-30));
-    var refinements = MAX_REFINEMENTS;
+    var refinements = select(8u, MAX_REFINEMENTS, params.gauss_order > 5u);
     var sum = 0.0;
     for (var k = 0u; k < features.found.count; k++) {
         let p = features.found.peaks[k];

@@ -266,7 +266,14 @@ pub const ROUNDING: f64 = 1e-13;
 /// Levels of bisection of a panel at most: its smallest part is `2^-MAX_DEPTH` of it.
 pub const MAX_DEPTH: u32 = 10;
 /// Parts a term may refine beyond its panels at most (each refinement spends two more rules).
-pub const MAX_REFINEMENTS: u32 = 8;
+pub const MAX_REFINEMENTS: u32 = 24;
+
+/// The refinements a term may spend with the pair of `order`: 8 at the default tolerance and coarser (lavapipe
+/// stops a shader invocation after 65535 loop iterations, and a term's parts solved on the whole chain cost the
+/// most), `MAX_REFINEMENTS` for a finer one.
+pub fn refinement_budget(order: u32) -> u32 {
+    if order <= 5 { 8 } else { MAX_REFINEMENTS }
+}
 
 /// `g` on `[a, b]`, refined where its Gauss and Kronrod values differ by more than `allowance` per unit of
 /// length: the parts of a dyadic bisection of `[a, b]`, visited in order (without a stack: after a part is
@@ -1305,7 +1312,7 @@ fn integrate_term(term: Term, s: DVec3, e: DVec3, settings: &Integration, tolera
     });
     let length: f64 = pieces.clone().map(|(_, u0, u1)| (u1 - u0).max(0.0)).sum();
     let allowance = tolerance / (c.abs() * length.max(1e-300));
-    let mut refinements = MAX_REFINEMENTS;
+    let mut refinements = refinement_budget(order);
     let mut sum = 0.0;
     for (p, u0, u1) in pieces {
         if u1 <= u0 {
