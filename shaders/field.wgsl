@@ -683,6 +683,7 @@ const END_SNAP: f32 = 1e-4;
 const CUT_MERGE: f32 = 1e-6;
 const SINGULAR_MERGE: f32 = 1e-3;
 const SWITCH_ROUNDS: u32 = 24u;
+const SWITCH_INSET: f32 = 1e-3;
 const KINK_ROUNDS: u32 = 12u;
 const KINK_BRACKET: f32 = 1e-5;
 const KINK_PROBE: f32 = 0.05;
@@ -954,7 +955,6 @@ fn tangent_out_of(c: CurveSource, j: u32) -> vec4<f32> {
     return vec4<f32>(start_tangent(s), select(0.0, 1.0, dot(s.c1, s.c1) <= DEGENERATE * dot(s.c2, s.c2)));
 }
 
-const DEGENERATE: f32 = 1e-10;
 
 // The cuts where the nearest point crosses a knot of the W series between two samples x and y, (t, param), with
 // no jump between them: the parameter's linear interpolation, then one Newton step on a sample there. Twin of
@@ -1479,12 +1479,13 @@ fn integrate_curve_term(index: u32, s_point: vec3<f32>, e_point: vec3<f32>) -> f
             // different segments holds a missed jump; it is split where the segment changes, found by bisection,
             // and both sides are solved on the whole chain at every node. So is a part that begins or ends at rest,
             // where the nodes crowd toward the cut.
-            let ends = vec2<u32>(nearest_segment_index(c, ray, p, a), nearest_segment_index(c, ray, p, b));
-            let switched = ends.x != NO_SEGMENT && ends.y != NO_SEGMENT && ends.x != ends.y;
+            let inset = SWITCH_INSET * (b - a);
+            let ends = vec2<u32>(nearest_segment_index(c, ray, p, a + inset), nearest_segment_index(c, ray, p, b - inset));
+            let switched = ends.x != ends.y;
             var split = b;
             if switched {
-                var lo = a;
-                var hi = b;
+                var lo = a + inset;
+                var hi = b - inset;
                 for (var r = 0u; r < SWITCH_ROUNDS; r++) {
                     let mid = 0.5 * (lo + hi);
                     if nearest_segment_index(c, ray, p, mid) == ends.x {

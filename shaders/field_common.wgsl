@@ -161,7 +161,17 @@ fn polish(k: vec4<f32>, t0: f32) -> f32 {
 
 // Nearest point of a segment to p: (t, distance). Candidates are both end points and the real roots of
 // C'(t).(C(t) - P) = 0 in [-0.5, 1.5], raw and polished, clamped to [0, 1]. Twin of Segment::nearest.
-fn nearest_on_segment(s: CurveSegment, p: vec3<f32>) -> vec2<f32> {
+fn nearest_on_segment(segment: CurveSegment, p: vec3<f32>) -> vec2<f32> {
+    // A segment at rest at its end (its last two control points coincide) is solved from that end: there the
+    // stationary cubic has a double root, which f32 finds only to the square root of its rounding (W off by
+    // 1e-4 along the stretch where the nearest point leaves the end); from the other side it is a simple root.
+    var s = segment;
+    let d1 = 2.0 * segment.c2 + segment.c1;
+    let scale = DEGENERATE * dot(segment.c2, segment.c2);
+    let flip = dot(d1, d1) <= scale && dot(segment.c1, segment.c1) > scale;
+    if flip {
+        s = CurveSegment(segment.c2, 0.0, -d1, 0.0, segment.c2 + segment.c1 + segment.c0, 0.0);
+    }
     let d = s.c0 - p;
     let k = vec4<f32>(
         2.0 * dot(s.c2, s.c2),
@@ -192,8 +202,11 @@ fn nearest_on_segment(s: CurveSegment, p: vec3<f32>) -> vec2<f32> {
             }
         }
     }
-    return best;
+    return select(best, vec2<f32>(1.0 - best.x, best.y), flip);
 }
+
+// A first derivative this much smaller (squared) than the second counts as zero (curve::DEGENERATE).
+const DEGENERATE: f32 = 1e-10;
 
 // Knot u_i of the clamped uniform quadratic knot vector for n >= 3 weights. Twin of wseries::knot.
 fn wseries_knot(n: u32, i: u32) -> f32 {

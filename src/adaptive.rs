@@ -34,29 +34,41 @@
 //! **Kinks of a curve.** A chain's distance along a ray is smooth except where its nearest point jumps (the ray
 //! crosses the chain's medial surface: a kink in d, a step in W), stops at or leaves an end of the chain (the
 //! end's normal plane: a jump in d's second derivative) or passes a joint (the joint's normal plane, where the
-//! curvature changes). Ends and joints are cut in closed form where the scan shows the nearest point there;
-//! jumps are found from the scan too: the nearest point's velocity predicts where it should land, a miss of more
-//! than `JUMP` times the distance is a jump, and `find_kink` brackets it where the two branches' models cross.
-//! Joints are looked for on each stretch between jumps and inside each jump's bracket: a nearest point can jump
-//! onto a segment and then pass a joint within one interval of the scan.
+//! curvature changes); W adds the places where the nearest point crosses one of its knots (its curvature steps
+//! there). Ends and joints are cut in closed form where the scan shows the nearest point there; knots by one
+//! Newton step on the nearest point's parameter (`knot_cuts`); jumps are found from the scan too: the nearest
+//! point's velocity predicts where it and its chain parameter should land, a miss of more than `JUMP` times the
+//! distance (or `PARAM_JUMP` in the parameter) is a jump, and `find_kink` brackets it where the two branches'
+//! models cross. Joints are looked for on each stretch between jumps and inside each jump's bracket: a nearest
+//! point can jump onto a segment and then pass a joint within one interval of the scan.
+//!
+//! **Degenerate curves.** Where a segment's speed vanishes at an end (two coincident control points) the end's
+//! or the joint's normal plane is taken normal to the second derivative (`curve::tangent_out_of`), and the
+//! nearest point's parameter moves like the square root of the distance along the ray from it: the integrand's
+//! slope is unbounded on that side of the cut. Such a cut is singular (`Kinks`), and the part beside it is
+//! integrated in `x` with `u = a + (b - a) x^2` (`toward_singular`), which makes it smooth again.
 //!
 //! **One segment a piece.** Between its cuts a chain's nearest point neither jumps nor passes a joint, so it
 //! stays on one segment: a piece's first node searches the whole chain, the others solve only that segment's
 //! cubic (`curve::nearest_on_chain_from`, which falls back to the whole chain where the segment's nearest point
-//! sits at a joint). On the two-segment Bezier scene that takes the curve pass from about 490 to 420 ms at 256.
+//! sits at a joint). A safety net behind the cuts: where the nearest segments just inside a part's two ends
+//! differ, a jump was missed, and the part is split where the segment changes (`split_at_switch`) and solved on
+//! the whole chain.
 //!
-//! **Rule.** Between its cuts each piece is analytic in u, and Gauss-Legendre with `gauss_order(tolerance)` nodes
-//! (6 to 16) on each `U_PANEL` of u converges geometrically; the order grows as the tolerance shrinks (measured:
-//! on the papers' torus, 10 nodes are within 2e-7 of the converged f64 value in every texel, with about 19
-//! evaluations of the torus a ray against Simpson's 201; on the papers' Bezier scene, within 7e-6 with about 38
-//! evaluations of the chain).
+//! **Rule and error control.** Each part is integrated in panels of at most `U_PANEL` in u by a Gauss-Kronrod
+//! pair (`kronrod_order(tolerance)`: n from 4 to 10, Gauss with n nodes inside Kronrod with 2n + 1). A panel is
+//! bisected (`integrate_panel`, without a stack) where the two rules differ by more than its share of the
+//! tolerance, which is split evenly between the sources and along each term's u, with `refinement_budget`
+//! refinements a term at most. The difference of the two rules bounds the Kronrod value's error where the
+//! integrand is smooth on the panel; the cuts above are what make it so.
 //!
 //! `shaders/field.wgsl` is the f32 twin of this file: `integrate_adaptive` for points, lines and tori and
-//! `integrate_adaptive_curves` for curves, dispatched apart (`gpu::field_pass::plan_chunks`). One difference:
-//! along a curve's piece the shader visits the Gauss nodes in order along the ray and carries each nearest point
-//! on from the last node's (its rate du/dt, then two Newton steps on the segment), solving the cubic in closed
-//! form only where a piece begins or Newton has not settled; this twin solves every node in closed form. Both
-//! find the same nearest point, to f32 rounding there, and the tests hold the GPU to this twin.
+//! `integrate_adaptive_curves` for curves, dispatched apart (`gpu::field_pass::plan_chunks`). Differences: along
+//! a curve's part the shader visits the nodes in order along the ray and carries each nearest point on from the
+//! last node's (its rate du/dt, then two Newton steps on the segment, over at most `TRACK_REACH` of it), solving
+//! the cubic in closed form only where a part begins or Newton has not settled; this twin solves every node in
+//! closed form. Both find the same nearest point, to f32 rounding there. And in f32 two rules agreeing within
+//! 4e-6 of their value count as agreeing (`ROUNDING` here is 1e-13). The tests hold the GPU to this twin.
 
 use std::cell::Cell;
 
@@ -1228,21 +1240,26 @@ pub const SINGULAR_MERGE: f64 = 1e-3;
 
 /// Bisection rounds that find where a part's nearest segment changes (`split_at_switch`).
 pub const SWITCH_ROUNDS: u32 = 24;
+/// How far inside a part (a share of its length) `split_at_switch` looks at its ends' segments.
+pub const SWITCH_INSET: f64 = 1e-3;
 
 /// The part `[a, b]` (in u) split where the chain's nearest segment changes, `segment(u)` (`None` at a joint),
-/// where the segments at its ends are known and differ: a jump the kink search missed. Found by bisection to
-/// `2^-SWITCH_ROUNDS` of the part, so that the step the jump puts in the integrand is a cut. One part where the
-/// ends agree or either is a joint.
+/// where the segments just inside its ends differ (a joint at one end and a segment at the other counts): a
+/// jump the kink search missed, or a joint it passes without its plane's cut. Found by bisection to
+/// `2^-SWITCH_ROUNDS` of the part, so that the step a jump puts in the integrand is a cut. One part where the
+/// ends agree.
 fn split_at_switch(
     segment: impl Fn(f64) -> Option<usize>,
     (a, b): (f64, f64),
 ) -> ([(f64, f64); 2], usize) {
-    match (segment(a), segment(b)) {
-        (Some(x), Some(y)) if x != y => {
-            let (mut lo, mut hi) = (a, b);
+    // Looked at just inside the part: at a cut that is a jump, the nearest point may be on either branch.
+    let inset = SWITCH_INSET * (b - a);
+    match (segment(a + inset), segment(b - inset)) {
+        (x, y) if x != y => {
+            let (mut lo, mut hi) = (a + inset, b - inset);
             for _ in 0..SWITCH_ROUNDS {
                 let mid = 0.5 * (lo + hi);
-                if segment(mid) == Some(x) {
+                if segment(mid) == x {
                     lo = mid;
                 } else {
                     hi = mid;

@@ -60,6 +60,26 @@ impl Segment {
     /// A (nearly) straight segment has a vanishing cubic term; `cubic::solve_cubic` then solves the
     /// lower-degree equation.
     pub fn nearest(&self, p: DVec3) -> Nearest {
+        // A segment at rest at its end (its last two control points coincide) is solved from that end: there the
+        // stationary cubic has a double root, found only to the square root of the rounding; from the other side
+        // it is a simple root. The shader's twin needs this in f32; this one does it alike.
+        if self.ends_at_rest() && !self.starts_at_rest() {
+            let reversed = Segment {
+                c2: self.c2,
+                c1: -(2.0 * self.c2 + self.c1),
+                c0: self.c2 + self.c1 + self.c0,
+            };
+            let n = reversed.nearest_from_start(p);
+            return Nearest {
+                t: 1.0 - n.t,
+                distance: n.distance,
+            };
+        }
+        self.nearest_from_start(p)
+    }
+
+    /// `nearest`, solved as the segment stands.
+    fn nearest_from_start(&self, p: DVec3) -> Nearest {
         let k = self.stationary_cubic(p);
         let mut best = Nearest {
             t: 0.0,
