@@ -55,9 +55,10 @@ fn falloff(d: f32, eps: f32) -> f32 {
 
 // Distance from p to the line through m along the unit direction d (thesis 3.3).
 fn line_distance(p: vec3<f32>, m: vec3<f32>, d: vec3<f32>) -> f32 {
+    // The part of p - m across the line, not the difference of squares, which rounding ruins close to the
+    // line far from m. Twin of field::line_distance.
     let q = p - m;
-    let along = dot(q, d);
-    return sqrt(max(dot(q, q) - along * along, 0.0));
+    return length(q - d * dot(q, d));
 }
 
 // Distance from p to the major circle of a torus (thesis 3.7 in the torus's own frame).

@@ -4,8 +4,9 @@
 //! Runs on whatever adapter `GpuContext::new` picks: lavapipe in CI (`WGPU_BACKEND=vulkan`), Mesa's GL
 //! elsewhere. Without any adapter these tests fail: they never pass vacuously.
 //!
-//! Tolerance of B (f32 on the GPU against f64): |B_gpu - B_cpu| <= 1e-3 max(|B_cpu|, 0.01) for every
-//! texel, grazing ones included. Measured on lavapipe: at most 3.1e-5 relative on the shipped scenes and 3.4e-5 on
+//! Tolerance of B (f32 on the GPU against f64): |B_gpu - B_cpu| <= 1.5e-4 max(|B_cpu|, 0.01) for every
+//! texel, grazing ones included: a few times what is measured, so that a shared bug is not all a mistyped
+//! constant could hide behind. Measured on lavapipe: at most 3.1e-5 relative on the shipped scenes and 3.4e-5 on
 //! the grazing rays; on an NVIDIA H200, 4.8e-5 and 1.9e-5. (Before a chain's ends were features of the adaptive
 //! integrator, a ray along a straight curve was 1.2e-3 off on the H200: its f32 and f64 twins each missed the
 //! fall past the curve's ends, by different amounts.)
@@ -21,7 +22,7 @@ use energywave::reference;
 use energywave::scene::Scene;
 use glam::DVec3;
 
-const RELATIVE_TOLERANCE: f64 = 1e-3;
+const RELATIVE_TOLERANCE: f64 = 1.5e-4;
 
 /// One renderer shared by the tests of this file (devices are costly on a software rasteriser).
 fn gpu() -> MutexGuard<'static, HeadlessRenderer> {
