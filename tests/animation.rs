@@ -36,8 +36,11 @@ fn the_preset_pulse_is_eq_5_1_at_every_frame() {
         scene.sources.curves[0].coefficient, 8.0,
         "the thesis's b = 8.0"
     );
+    // The loop starts 46 frames into the thesis's run and repeats every 92 frames: the preset's frame
+    // (t - 46) mod 92 is the thesis's frame t, and its frame 0 shows the pulse halfway along the curve.
+    let thesis_frame = |t: f64| scene.at_frame((t - 46.0).rem_euclid(92.0));
     for t in [0u32, 1, 7, 12, 25, 38, 50, 63, 75, 91] {
-        let w = &scene.at_frame(t as f64).sources.curves[0].weights;
+        let w = &thesis_frame(t as f64).sources.curves[0].weights;
         assert_eq!(w.len(), 7);
         for (i, &wi) in w.iter().enumerate() {
             let want = eq_5_1(t as f64, i);
@@ -49,16 +52,21 @@ fn the_preset_pulse_is_eq_5_1_at_every_frame() {
     }
     // Spot values worked by hand: at t = 25, w_0 has theta = pi: (1 + 0.8) / 1.5 > 1, clamped to 1;
     // w_1 has theta = 18 pi / 25; w_4 (theta < 0) is 0.
-    let w = scene.at_frame(25.0).sources.curves[0].weights.clone();
+    let w = thesis_frame(25.0).sources.curves[0].weights.clone();
     assert_eq!(w[0], 1.0);
     assert!((w[1] - (-(18.0 * PI / 25.0).cos() + 0.8) / 1.5).abs() < 1e-12);
     assert_eq!(w[4], 0.0);
     // The pulse travels: the brightest weight moves from the start to the end of the curve.
     let argmax = |t: f64| {
-        let w = scene.at_frame(t).sources.curves[0].weights.clone();
+        let w = thesis_frame(t).sources.curves[0].weights.clone();
         (0..w.len()).max_by(|&a, &b| w[a].total_cmp(&w[b])).unwrap()
     };
     assert!(argmax(25.0) < argmax(50.0) && argmax(50.0) < argmax(67.0));
+    // Seamless: frame 92 would be frame 0.
+    assert_eq!(
+        scene.at_frame(92.0).sources.curves[0].weights,
+        scene.at_frame(0.0).sources.curves[0].weights
+    );
     // The base scene (a still render) keeps the thesis's initial state, all weights 1.
     assert!(scene.sources.curves[0].weights.is_empty());
 }
@@ -369,6 +377,29 @@ fn malformed_animations_are_refused_with_place_and_field() {
                 && msg.contains(field)
                 && msg.contains(phrase),
             "expected line {line}, field {field}, {phrase:?}; got: {msg}\n--- in ---\n{text}"
+        );
+    }
+}
+
+#[test]
+fn every_shipped_scene_shows_its_effect_on_its_first_frame() {
+    // A still render of an animated scene is its frame 0, and the viewer opens on it: the pulse preset's loop
+    // once began with every weight at 0, a black picture.
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes");
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_none_or(|e| e != "toml") {
+            continue;
+        }
+        let mut scene = Scene::load(&path).unwrap().at_frame(0.0);
+        scene.billboard.resolution = 16;
+        let bb = scene.place_billboard(1.0);
+        let b = energywave::reference::render_brightness(&scene, &bb).values;
+        let lit = b.iter().filter(|&&v| v > 0.2).count();
+        assert!(
+            lit >= 8,
+            "{}: frame 0 shows {lit} of 256 texels over B = 0.2",
+            path.display()
         );
     }
 }
