@@ -171,6 +171,20 @@ fn each_malformed_kind_gets_its_own_error() {
             2,
             "array of length 3",
         ),
+        // Finite, but so far out that distances overflow: named as that, at the eye, and nothing else (the
+        // target, 1e308 away, is not "the same as the eye").
+        (
+            "[camera]\neye = [1e308, 1e308, 1e308]\n[[points]]\nposition = [0, 0, 0]\ncoefficient = 1\n",
+            "camera.eye",
+            2,
+            "too far out",
+        ),
+        (
+            "[[curves]]\ncontrol_points = [[0, 0, 0], [1, 2e16, 0], [2, 0, 0]]\ncoefficient = 1\n",
+            "curves[0].control_points[1]",
+            2,
+            "limited to",
+        ),
         (
             "[camera]\nfov = 40\n",
             "camera.fov",
@@ -339,6 +353,11 @@ fn each_malformed_kind_gets_its_own_error() {
             assert!(msg.contains(&format!("bad.toml:{line}:")), "{msg}");
         }
     }
+    // An eye too far out is that one problem, not also a target "equal to the eye".
+    let (err, msg) = invalid(
+        "[camera]\neye = [1e308, 1e308, 1e308]\n[[points]]\nposition = [0, 0, 0]\ncoefficient = 1\n",
+    );
+    assert_eq!(err.problems().len(), 1, "{msg}");
 }
 
 #[test]

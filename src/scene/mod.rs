@@ -29,6 +29,9 @@ pub const DEFAULT_SCENE_NAME: &str = "<embedded default scene>";
 pub const MAX_RESOLUTION: u32 = 16384;
 /// Largest Simpson division count a scene may ask for.
 pub const MAX_DIVISIONS: u32 = 1 << 20;
+/// The largest world coordinate of any point of a scene (`camera.eye`, a source's position, ...): squared
+/// distances between such points stay well inside f32 (about 3.4e38).
+pub const MAX_COORDINATE: f64 = 1e15;
 
 /// Where the billboard goes; `None` fields are placed automatically (`geometry::place_billboard`).
 #[derive(Clone, Debug, PartialEq)]
@@ -279,6 +282,22 @@ impl Checker<'_, '_> {
         }
     }
 
+    /// A point in world space: finite, and within `MAX_COORDINATE` of the origin in every coordinate, beyond which
+    /// the distances between points overflow (the GPU squares them in 32-bit floats).
+    fn position(&mut self, path: &FieldPath, a: [f64; 3]) -> DVec3 {
+        let v = self.vector(path, a);
+        if a.iter().any(|x| x.abs() > MAX_COORDINATE) && v.is_finite() {
+            self.fail(
+                path,
+                format!(
+                    "{a:?} is too far out: coordinates are limited to +-{MAX_COORDINATE:e} world units, beyond which distances overflow"
+                ),
+            );
+            return DVec3::ZERO;
+        }
+        v
+    }
+
     /// A non-zero vector, normalised.
     fn direction(&mut self, path: &FieldPath, a: [f64; 3]) -> DVec3 {
         let d = self.vector(path, a);
@@ -324,9 +343,10 @@ fn validate(file: &SceneFile, locator: &Locator<'_>, problems: &mut Vec<Problem>
     let cam_path = root.key("camera");
     let cam = file.camera.as_ref();
     let get = |f: fn(&file::CameraFile) -> Option<[f64; 3]>| cam.and_then(f);
-    let eye = get(|c| c.eye).map_or(defaults_camera.eye, |a| c.vector(&cam_path.key("eye"), a));
+    let problems_before = c.problems.len();
+    let eye = get(|c| c.eye).map_or(defaults_camera.eye, |a| c.position(&cam_path.key("eye"), a));
     let target = get(|c| c.target).map_or(defaults_camera.target, |a| {
-        c.vector(&cam_path.key("target"), a)
+        c.position(&cam_path.key("target"), a)
     });
     let up = get(|c| c.up).map_or(defaults_camera.up, |a| c.vector(&cam_path.key("up"), a));
     let fov_y = cam
@@ -340,7 +360,9 @@ fn validate(file: &SceneFile, locator: &Locator<'_>, problems: &mut Vec<Problem>
                 "the vertical field of view is in degrees, between 0 and 180 (exclusive)",
             )
         });
-    if (target - eye).length() <= 1e-9 * (1.0 + eye.length()) {
+    if c.problems.len() > problems_before {
+        // An eye or target already refused: how they relate says nothing more.
+    } else if (target - eye).length() <= 1e-9 * (1.0 + eye.length()) {
         c.fail(
             &cam_path.key("target"),
             "the target must differ from the eye (the camera looks from eye toward target)",
@@ -365,7 +387,7 @@ fn validate(file: &SceneFile, locator: &Locator<'_>, problems: &mut Vec<Problem>
     let bb = file.billboard.as_ref();
     let center = bb
         .and_then(|b| b.center)
-        .map(|a| c.vector(&bb_path.key("center"), a));
+        .map(|a| c.position(&bb_path.key("center"), a));
     let size = bb.and_then(|b| b.size).map(|x| {
         c.in_open_range(
             &bb_path.key("size"),
@@ -490,7 +512,7 @@ fn validate(file: &SceneFile, locator: &Locator<'_>, problems: &mut Vec<Problem>
     let mut sources = Sources::default();
     for (i, p) in file.points.iter().enumerate() {
         let path = root.key("points").index(i);
-        let position = c.vector(&path.key("position"), p.position);
+        let position = c.position(&path.key("position"), p.position);
         c.finite(&path.key("coefficient"), p.coefficient);
         sources.points.push(Point {
             position,
@@ -499,7 +521,7 @@ fn validate(file: &SceneFile, locator: &Locator<'_>, problems: &mut Vec<Problem>
     }
     for (i, l) in file.lines.iter().enumerate() {
         let path = root.key("lines").index(i);
-        let point = c.vector(&path.key("point"), l.point);
+        let point = c.position(&path.key("point"), l.point);
         let direction = c.direction(&path.key("direction"), l.direction);
         c.finite(&path.key("coefficient"), l.coefficient);
         sources.lines.push(Line {
@@ -510,7 +532,7 @@ fn validate(file: &SceneFile, locator: &Locator<'_>, problems: &mut Vec<Problem>
     }
     for (i, t) in file.tori.iter().enumerate() {
         let path = root.key("tori").index(i);
-        let center = c.vector(&path.key("center"), t.center);
+        let center = c.position(&path.key("center"), t.center);
         let axis = c.direction(&path.key("axis"), t.axis);
         c.in_open_range(
             &path.key("major_radius"),
@@ -537,7 +559,7 @@ fn validate(file: &SceneFile, locator: &Locator<'_>, problems: &mut Vec<Problem>
             );
         }
         let control_points = (curve.control_points.iter().enumerate())
-            .map(|(j, &p)| c.vector(&path.key("control_points").index(j), p))
+            .map(|(j, &p)| c.position(&path.key("control_points").index(j), p))
             .collect();
         c.finite(&path.key("coefficient"), curve.coefficient);
         let weights = match &curve.weights {
