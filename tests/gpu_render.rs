@@ -516,3 +516,58 @@ fn field_memory_is_w_squared() {
         (48, 48, wgpu::TextureFormat::R32Float)
     );
 }
+
+#[test]
+fn a_point_source_shines_where_a_hand_projection_puts_it() {
+    // An absolute orientation check, on the CPU reference and on the GPU: a mirrored, flipped or transposed
+    // image fails it. Eye on +z looking at the origin, y up, 40 degrees vertical: a point at depth 10 and
+    // (x, y) = (2, 1.2) is at x_ndc = 2 / (10 tan 20 deg * 96 / 64) = 0.366, y_ndc = 1.2 / (10 tan 20 deg) = 0.330,
+    // so at pixel ((x_ndc + 1) / 2 * 96, (1 - y_ndc) / 2 * 64) = (65.6, 21.4): right of center and above it.
+    let mut scene = single_point(0.05, [0.0; 3], [1.0; 3]);
+    scene.sources.points[0].position = DVec3::new(2.0, 1.2, 0.0);
+    scene.camera = Camera {
+        eye: DVec3::new(0.0, 0.0, 10.0),
+        target: DVec3::ZERO,
+        up: DVec3::Y,
+        fov_y_degrees: 40.0,
+    };
+    scene.billboard.resolution = 128;
+    let (w, h) = (96u32, 64u32);
+    let tan = 20f64.to_radians().tan();
+    let (x_ndc, y_ndc) = (2.0 / (10.0 * tan * w as f64 / h as f64), 1.2 / (10.0 * tan));
+    let want = (
+        (x_ndc + 1.0) / 2.0 * w as f64,
+        (1.0 - y_ndc) / 2.0 * h as f64,
+    );
+    assert!(
+        (want.0 - 65.6).abs() < 0.1 && (want.1 - 21.4).abs() < 0.1,
+        "{want:?}"
+    );
+    let brightest = |lum: &dyn Fn(usize) -> f64| {
+        let k = (0..(w * h) as usize)
+            .max_by(|&a, &b| lum(a).total_cmp(&lum(b)))
+            .unwrap();
+        ((k as u32 % w) as f64 + 0.5, (k as u32 / w) as f64 + 0.5)
+    };
+    let bb = scene.place_billboard(w as f64 / h as f64);
+    let texture = reference::render_brightness(&scene, &bb);
+    let cpu = reference::compose_frame(&scene, &bb, &texture, w, h, false);
+    let gpu_frame = gpu().render(&scene, w, h, false).unwrap();
+    for (who, at) in [
+        ("CPU", brightest(&|k| cpu[k][..3].iter().sum::<f64>())),
+        (
+            "GPU",
+            brightest(&|k| {
+                gpu_frame.pixels[k][..3]
+                    .iter()
+                    .map(|&c| c as f64)
+                    .sum::<f64>()
+            }),
+        ),
+    ] {
+        assert!(
+            (at.0 - want.0).abs() <= 1.5 && (at.1 - want.1).abs() <= 1.5,
+            "{who}: brightest pixel at {at:?}, the projection says {want:?}"
+        );
+    }
+}

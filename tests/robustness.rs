@@ -1,11 +1,12 @@
 //! Degenerate but valid geometry gives defined, finite results on the CPU reference and on the GPU, and random
-//! valid scenes never produce a non-finite brightness.
+//! valid scenes never produce a non-finite brightness with any integrator, on either, and survive a save and load.
 
 use std::sync::{Mutex, MutexGuard, OnceLock};
 
 use energywave::field::{Curve, Line, Point, Sources, Torus};
 use energywave::geometry::Camera;
 use energywave::gpu::HeadlessRenderer;
+use energywave::integrate::Integrator;
 use energywave::reference;
 use energywave::scene::Scene;
 use glam::DVec3;
@@ -376,8 +377,9 @@ fn sources() -> impl Strategy<Value = Sources> {
 proptest! {
     #![proptest_config(ProptestConfig { cases: 200, failure_persistence: None, ..ProptestConfig::default() })]
 
-    /// Random valid scenes (any sources, any camera, any valid settings) never give a non-finite B on the CPU
-    /// reference, and the scene survives a save and load.
+    /// Random valid scenes (any sources, any camera, any valid settings) survive a save and load unchanged, and
+    /// never give a non-finite B with any integrator (simpson, jittered simpson, adaptive), on the CPU reference
+    /// or on the GPU.
     #[test]
     fn random_valid_scenes_give_finite_brightness(
         sources in sources(),
@@ -389,18 +391,27 @@ proptest! {
         beta in 0.01..10.0f64,
         epsilon in 1e-6..1.0f64,
         half_n in 1u32..12,
+        tolerance in 1e-8..0.09f64,
+        seed in 0u32..1000,
     ) {
         prop_assume!((eye - target).length() > 1e-3);
         prop_assume!(DVec3::Y.cross((target - eye).normalize()).length() > 1e-3);
         let mut s = scene(camera(eye, target), sources);
         s.camera.fov_y_degrees = fov;
         s.billboard.resolution = 6;
-        s.integration = energywave::integrate::Integration { divisions: 2 * half_n, nu, alpha, beta, epsilon, ..Default::default() };
-        let text = s.to_toml();
-        let loaded = Scene::parse(&text, std::path::Path::new("random.toml")).map_err(|e| TestCaseError::fail(e.to_string()))?;
-        let bb = loaded.place_billboard(1.3);
-        prop_assert!(bb.center.is_finite() && bb.size.is_finite() && bb.size > 0.0);
-        let b = reference::render_brightness(&loaded, &bb);
-        prop_assert!(b.values.iter().all(|x| x.is_finite()), "{:?}", b.values);
+        s.integration = energywave::integrate::Integration { divisions: 2 * half_n, nu, alpha, beta, epsilon, tolerance, ..Default::default() };
+        for (integrator, jitter) in [(Integrator::Simpson, None), (Integrator::Simpson, Some(seed)), (Integrator::Adaptive, None)] {
+            s.integration.integrator = integrator;
+            s.integration.jitter = jitter;
+            let text = s.to_toml();
+            let loaded = Scene::parse(&text, std::path::Path::new("random.toml")).map_err(|e| TestCaseError::fail(e.to_string()))?;
+            prop_assert_eq!(&loaded, &s, "the scene changed in a save and load:\n{}", text);
+            let bb = loaded.place_billboard(1.3);
+            prop_assert!(bb.center.is_finite() && bb.size.is_finite() && bb.size > 0.0);
+            let b = reference::render_brightness(&loaded, &bb);
+            prop_assert!(b.values.iter().all(|x| x.is_finite()), "{:?} CPU: {:?}", integrator, b.values);
+            let g = gpu().brightness(&loaded, &bb).map_err(|e| TestCaseError::fail(e.to_string()))?;
+            prop_assert!(g.iter().all(|x| x.is_finite()), "{:?} GPU: {:?}", integrator, g);
+        }
     }
 }

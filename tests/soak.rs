@@ -137,6 +137,14 @@ fn thousands_of_frames_of_random_edits() {
             }
         }
         v.frame().unwrap_or_else(|e| panic!("frame {frame}: {e}"));
+        // The field itself, every frame: the picture's clamp would hide a NaN or an infinity in B.
+        let field = v
+            .field_values()
+            .unwrap_or_else(|e| panic!("frame {frame}: {e}"));
+        assert!(
+            field.iter().all(|b| b.is_finite()),
+            "frame {frame}: a non-finite value in the field texture"
+        );
         if frame == FRAMES / 4 {
             baseline = rss();
         }

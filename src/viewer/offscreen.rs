@@ -198,6 +198,24 @@ impl OffscreenViewer {
         }
     }
 
+    /// The brightness texture B the viewport shows now, read back (W x W, rows from the top): B itself, before
+    /// the blend's clamp, where a non-finite value would hide in a clamped pixel.
+    pub fn field_values(&mut self) -> Result<Vec<f32>, GpuError> {
+        let ctx = &self.gpu.ctx;
+        match self
+            .gpu
+            .renderer
+            .callback_resources
+            .get::<ViewportGpu>()
+            .and_then(|vp| vp.field_texture())
+        {
+            Some(t) => Ok(bytemuck::cast_slice(&ctx.read_texture(t, 4)?).to_vec()),
+            None => Err(GpuError::Validation(
+                "the field has not been rendered".into(),
+            )),
+        }
+    }
+
     /// How many times the field has been integrated.
     pub fn field_renders(&self) -> u64 {
         self.app.report().field_renders

@@ -85,6 +85,11 @@ pub struct ViewportGpu {
 }
 
 impl ViewportGpu {
+    /// The brightness texture the viewport shows now (after its first frame).
+    pub fn field_texture(&self) -> Option<&wgpu::Texture> {
+        self.scene_renderer.field().texture()
+    }
+
     /// Pipelines for a frame of `target_format` (egui's); `report` is shared with the UI.
     pub fn new(
         device: &wgpu::Device,
