@@ -685,7 +685,7 @@ const SINGULAR_MERGE: f32 = 1e-3;
 const SWITCH_ROUNDS: u32 = 24u;
 const SWITCH_INSET: f32 = 1e-3;
 const KINK_ROUNDS: u32 = 12u;
-const KINK_BRACKET: f32 = 1e-5;
+const KINK_BRACKET: f32 = 1e-3;
 const KINK_PROBE: f32 = 0.05;
 const MAX_KINKS: u32 = 8u;
 const PEAK_NEWTON: u32 = 2u;
@@ -840,7 +840,7 @@ fn find_kink(ray: Ray, a: ptr<function, ChainSample>, b: ptr<function, ChainSamp
     var last_moved = 0i;
     var stale = false;
     for (var round = 0u; round < KINK_ROUNDS; round++) {
-        if (*b).t - (*a).t <= KINK_BRACKET {
+        if (*b).t - (*a).t <= select(1e-5, KINK_BRACKET, params.gauss_order <= 5u) {
             break;
         }
         var guess = 0.5 * ((*a).t + (*b).t);

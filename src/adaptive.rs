@@ -88,7 +88,13 @@ pub const PARAM_JUMP: f64 = 0.05;
 /// steps across it costs 5e-4 on a ray of the mixed scene.)
 pub const KINK_ROUNDS: u32 = 12;
 /// The kink search stops when its bracket is this short (in t, the ray being 1 long).
-pub const KINK_BRACKET: f64 = 1e-5;
+pub const KINK_BRACKET: f64 = 1e-3;
+
+/// How short the kink search's bracket gets with the pair of `order`: `KINK_BRACKET` at the default tolerance
+/// and coarser, 1e-5 for a finer one (a W step misplaced by 1e-3 costs about 3e-5 on the seven-weight preset).
+pub fn kink_bracket(order: u32) -> f64 {
+    if order <= 5 { KINK_BRACKET } else { 1e-5 }
+}
 /// How far either side of its estimate a round of the kink search probes, relative to the bracket.
 pub const KINK_PROBE: f64 = 0.05;
 /// Most kinks cut on one curve's ray.
@@ -524,7 +530,7 @@ struct Features {
 }
 
 /// The features of a term along `s -> e` (at most `MAX_PEAKS`), sorted along the ray, each owning its piece.
-fn features(term: Term, s: DVec3, e: DVec3, scan: u32, eps: f64) -> Features {
+fn features(term: Term, s: DVec3, e: DVec3, scan: u32, eps: f64, bracket: f64) -> Features {
     let dir = e - s;
     let mut out = [peak(0.0, 0.0, 0.0, eps); MAX_PEAKS];
     let mut kinks = Kinks::default();
@@ -574,7 +580,7 @@ fn features(term: Term, s: DVec3, e: DVec3, scan: u32, eps: f64) -> Features {
             count
         }
         Term::Curve(c) => {
-            let (found, count) = chain_features(c, s, dir, scan, eps, &mut kinks);
+            let (found, count) = chain_features(c, s, dir, (scan, eps, bracket), &mut kinks);
             out[..count].copy_from_slice(&found[..count]);
             count
         }
@@ -602,8 +608,7 @@ fn chain_features(
     c: &crate::field::Curve,
     s: DVec3,
     dir: DVec3,
-    scan: u32,
-    eps: f64,
+    (scan, eps, bracket): (u32, f64, f64),
     kinks: &mut Kinks,
 ) -> ([Peak; MAX_PEAKS], usize) {
     let sample = |t: f64| ChainSample::at(c, s, dir, t, false);
@@ -673,14 +678,16 @@ fn chain_features(
                     }
                 }
             }
-            if let Some((a1, b1)) = search_jumps(&sample, (s, dir), left, x, eps, kinks) {
+            if let Some((a1, b1)) = search_jumps(&sample, (s, dir), left, x, (eps, bracket), kinks)
+            {
                 joint_cuts(cp, (s, dir), [&calm, &a1, &b1], kinks);
                 knot_cuts(&sample, c.weights.len(), &calm, &a1, kinks);
                 calm = b1;
             }
             left = y;
         }
-        if let Some((a1, b1)) = search_jumps(&sample, (s, dir), left, after, eps, kinks) {
+        if let Some((a1, b1)) = search_jumps(&sample, (s, dir), left, after, (eps, bracket), kinks)
+        {
             joint_cuts(cp, (s, dir), [&calm, &a1, &b1], kinks);
             knot_cuts(&sample, c.weights.len(), &calm, &a1, kinks);
             calm = b1;
@@ -832,18 +839,18 @@ fn search_jumps(
     ray: (DVec3, DVec3),
     a: ChainSample,
     b: ChainSample,
-    eps: f64,
+    (eps, bracket): (f64, f64),
     kinks: &mut Kinks,
 ) -> Option<(ChainSample, ChainSample)> {
     if miss(&a, &b, eps) <= JUMP {
         return None;
     }
-    let (kink, a1, b1) = find_kink(sample, ray, a, b);
+    let (kink, a1, b1) = find_kink(sample, ray, a, b, bracket);
     kinks.push(kink);
     if miss(&a1, &b1, eps) > JUMP {
         for (x, y) in [(a, a1), (b1, b)] {
             if miss(&x, &y, eps) > JUMP {
-                kinks.push(find_kink(sample, ray, x, y).0);
+                kinks.push(find_kink(sample, ray, x, y, bracket).0);
             }
         }
     }
@@ -1023,18 +1030,19 @@ fn model_crossing(s: DVec3, dir: DVec3, a: &ChainSample, b: &ChainSample) -> Opt
 /// a step. Each round estimates it where the branches' models cross (`model_crossing`, else the bisector plane
 /// of the two nearest points, else the middle where one end has not moved for two rounds) and probes either side
 /// of the estimate; a probe belongs to the end whose predicted point is nearer its own. The rounds stop when the
-/// bracket is shorter than `KINK_BRACKET`; the kink is the last estimate. Returns it and the final bracket.
+/// bracket is shorter than `bracket` (`kink_bracket`); the kink is the last estimate. Returns it and the final bracket.
 fn find_kink(
     sample: &impl Fn(f64) -> ChainSample,
     (s, dir): (DVec3, DVec3),
     mut a: ChainSample,
     mut b: ChainSample,
+    bracket: f64,
 ) -> (f64, ChainSample, ChainSample) {
     // Which end the last round moved (+1 b, -1 a, 0 both), to catch a stale end.
     let mut last_moved = 0i32;
     let mut stale = false;
     for _ in 0..KINK_ROUNDS {
-        if b.t - a.t <= KINK_BRACKET {
+        if b.t - a.t <= bracket {
             break;
         }
         let guess = if stale {
@@ -1301,7 +1309,8 @@ fn integrate_term(term: Term, s: DVec3, e: DVec3, settings: &Integration, tolera
     if c == 0.0 {
         return 0.0;
     }
-    let found = features(term, s, e, SCAN, settings.epsilon);
+    let order = kronrod_order(settings.tolerance);
+    let found = features(term, s, e, SCAN, settings.epsilon, kink_bracket(order));
     let dir = e - s;
     // A chain's nearest point stays on one segment between cuts, or passes a joint continuously: each cut
     // piece starts with a whole-chain search, at its first node, and then solves that segment only.
@@ -1321,7 +1330,6 @@ fn integrate_term(term: Term, s: DVec3, e: DVec3, settings: &Integration, tolera
         };
         w * falloff(d, settings.epsilon) * zeta(t, settings.alpha, settings.beta)
     };
-    let order = kronrod_order(settings.tolerance);
     let pieces = found.peaks[..found.count].iter().map(|p| {
         let u0 = ((p.lo - p.center) / p.width).asinh();
         let u1 = ((p.hi - p.center) / p.width).asinh();
@@ -1468,7 +1476,14 @@ mod tests {
         };
         let (s, e) = (DVec3::new(0.02, 0.001, 0.0), DVec3::new(0.02, 0.001, -10.0));
         // Two ring passes and, between them, the axis.
-        let found = features(Term::Torus(&sources.tori[0]), s, e, SCAN, 0.01);
+        let found = features(
+            Term::Torus(&sources.tori[0]),
+            s,
+            e,
+            SCAN,
+            0.01,
+            KINK_BRACKET,
+        );
         let (p, count) = (found.peaks, found.count);
         assert_eq!(count, 3);
         assert!((p[0].center - 0.4).abs() < 2e-3 && (p[2].center - 0.6).abs() < 2e-3);
@@ -1582,7 +1597,7 @@ mod tests {
         let c = arch();
         let (y, z) = (0.3, 0.2);
         let (s, e) = (DVec3::new(-3.0, y, z), DVec3::new(3.0, y, z));
-        let found = features(Term::Curve(&c), s, e, SCAN, 0.01);
+        let found = features(Term::Curve(&c), s, e, SCAN, 0.01, KINK_BRACKET);
         let kinks = &found.kinks.at[..found.kinks.count];
         let near = |t: f64, within: f64| kinks.iter().any(|&k| (k - t).abs() < within);
         assert!(near(0.5, 1e-5), "the medial crossing: {kinks:?}");
@@ -1595,7 +1610,7 @@ mod tests {
         }
         // Far above the arch the nearest point moves smoothly: no kink but the ends'.
         let (s, e) = (DVec3::new(-3.0, 3.0, z), DVec3::new(3.0, 3.0, z));
-        let found = features(Term::Curve(&c), s, e, SCAN, 0.01);
+        let found = features(Term::Curve(&c), s, e, SCAN, 0.01, KINK_BRACKET);
         assert!(
             found.kinks.count <= 2,
             "{:?}",
