@@ -436,18 +436,24 @@ fn the_animated_preset_plays_steps_scrubs_loops_and_edits_while_paused() {
     let mut h = harness(pulse_scene());
     assert_eq!(h.state().playback.frame, 0);
     assert!(!repaints_continuously(&h), "paused: no continuous repaint");
-    // Frame 0 of eq. 5.1 has every weight 0: nothing glows. At frame 40 the pulse is mid-curve.
-    let dark = viewport_pixels(&mut h);
+    // The preset's loop starts 46 frames into eq. 5.1's run: frame 0 has the pulse halfway along the curve,
+    // frame 40 (the thesis's 86) near its end, so the two pictures differ.
+    let halfway = viewport_pixels(&mut h);
     h.get_by_role_and_label(Role::Slider, "frame")
         .set_value_accesskit(40.0);
     h.run();
     assert_eq!(h.state().playback.frame, 40);
-    let lit = viewport_pixels(&mut h);
-    assert!(mean_abs_difference(&dark, &lit) > 5.0, "the pulse shows");
-    // What is drawn is the scene at that frame: eq. 5.1 for w_2 at frame 40, theta = 26 pi / 25.
+    let near_end = viewport_pixels(&mut h);
+    assert!(
+        mean_abs_difference(&halfway, &near_end) > 5.0,
+        "the pulse moves"
+    );
+    // What is drawn is the scene at that frame: eq. 5.1 at the thesis's frame 86, w_6 with
+    // theta = (86 - 42) pi / 25 and w_2 past its lit span (theta > 2 pi), 0.
     let w = h.state().frame_scene().sources.curves[0].weights.clone();
-    let theta = 26.0 * std::f64::consts::PI / 25.0;
-    assert!((w[2] - ((-theta.cos() + 0.8) / 1.5).min(1.0)).abs() < 1e-12);
+    let theta = 44.0 * std::f64::consts::PI / 25.0;
+    assert!((w[6] - ((-theta.cos() + 0.8) / 1.5).clamp(0.0, 1.0)).abs() < 1e-12);
+    assert_eq!(w[2], 0.0);
 
     // Step forward and back.
     h.get_by_label("Step >").click();
