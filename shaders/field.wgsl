@@ -186,7 +186,7 @@ fn integrate(@builtin(global_invocation_id) id: vec3<u32>) {
 
 // ---- The adaptive integrator (twin of src/adaptive.rs): source by source, the ray shared into pieces around
 // the term's features (closest approaches, a torus's axis), each mapped by s = s* + h sinh(u). Two entry points:
-// integrate_adaptive (points, lines and tori: Gauss-Legendre in u) and integrate_adaptive_curves (adaptive
+// integrate_adaptive (points, lines and tori: Gauss-Kronrod pairs in u) and integrate_adaptive_curves (adaptive
 // Simpson in u). They are dispatched separately and add into the texture: apart, neither carries the other's
 // code, which on CPU drivers costs even where it never runs.
 
@@ -197,7 +197,7 @@ const SCAN: u32 = 6u;
 const MAX_WIDTH: f32 = 4.0;
 const MIN_AXIS_WIDTH: f32 = 1e-4;
 const U_PANEL: f32 = 4.0;
-const MAX_GAUSS_PANELS: u32 = 4u;
+const MAX_GAUSS_PANELS: u32 = 8u;
 const MAX_DEPTH: u32 = 10u;
 const MAX_REFINEMENTS: u32 = 24u;
 const RING_NEWTON: u32 = 6u;
@@ -371,7 +371,7 @@ fn zeta_at(t: f32) -> f32 {
     return params.alpha / ((t + params.beta) * (t + params.beta));
 }
 
-// -- Points, lines and tori: Gauss-Legendre in u.
+// -- Points, lines and tori: Gauss-Kronrod pairs in u.
 
 // A point's, a line's or a torus's distance from p.
 fn smooth_distance(kind: u32, index: u32, p: vec3<f32>) -> f32 {

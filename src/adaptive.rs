@@ -99,9 +99,9 @@ pub fn kink_bracket(order: u32) -> f64 {
 pub const KINK_PROBE: f64 = 0.05;
 /// Most kinks cut on one curve's ray.
 pub const MAX_KINKS: usize = 8;
-/// The longest stretch of u one Gauss-Legendre rule covers.
+/// The longest stretch of u one panel (one Gauss-Kronrod pair before refinement) covers.
 pub const U_PANEL: f64 = 4.0;
-/// Most Gauss-Legendre panels on one cut of a piece.
+/// Most panels on one cut of a piece. The WGSL twin holds the same constant (a test checks it).
 pub const MAX_GAUSS_PANELS: u32 = 8;
 
 /// Gauss-Kronrod pairs on [-1, 1]: the Gauss-Legendre rule of `n` nodes and the Kronrod rule of `2n + 1` nodes

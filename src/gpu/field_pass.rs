@@ -753,6 +753,63 @@ mod tests {
         );
     }
 
+    /// The value the field module declares for `const NAME: TYPE = VALUE;`, as f64.
+    fn shader_constant(name: &str) -> f64 {
+        let source = crate::gpu::shaders::field_module_source();
+        let start = format!("const {name}: ");
+        let line = source
+            .lines()
+            .find(|l| l.trim_start().starts_with(&start))
+            .unwrap_or_else(|| panic!("the field module declares {name}"));
+        let value = line
+            .split('=')
+            .nth(1)
+            .expect("a value")
+            .trim()
+            .trim_end_matches(';');
+        value
+            .trim_end_matches('u')
+            .parse()
+            .unwrap_or_else(|e| panic!("{name} = {value}: {e}"))
+    }
+
+    #[test]
+    fn the_adaptive_integrators_constants_are_the_same_in_both_twins() {
+        // Mirrored by hand between src/adaptive.rs (and field::curve) and the shader: a mismatch makes the twins
+        // integrate differently where the tests may not look (8 panels on the CPU against 4 on the GPU went
+        // unnoticed once).
+        use crate::adaptive as a;
+        let shared: &[(&str, f64)] = &[
+            ("SCAN", a::SCAN as f64),
+            ("JUMP", a::JUMP),
+            ("PARAM_JUMP", a::PARAM_JUMP),
+            ("END_SNAP", a::END_SNAP),
+            ("KINK_ROUNDS", a::KINK_ROUNDS as f64),
+            ("KINK_BRACKET", a::KINK_BRACKET),
+            ("KINK_PROBE", a::KINK_PROBE),
+            ("MAX_KINKS", a::MAX_KINKS as f64),
+            ("U_PANEL", a::U_PANEL),
+            ("MAX_GAUSS_PANELS", a::MAX_GAUSS_PANELS as f64),
+            ("MAX_DEPTH", a::MAX_DEPTH as f64),
+            ("MAX_REFINEMENTS", a::MAX_REFINEMENTS as f64),
+            ("MAX_PEAKS", a::MAX_PEAKS as f64),
+            ("PEAK_NEWTON", a::PEAK_NEWTON as f64),
+            ("PEAK_SETTLED", a::PEAK_SETTLED),
+            ("CUT_MERGE", a::CUT_MERGE),
+            ("SINGULAR_MERGE", a::SINGULAR_MERGE),
+            ("SWITCH_ROUNDS", a::SWITCH_ROUNDS as f64),
+            ("SWITCH_INSET", a::SWITCH_INSET),
+            ("DEGENERATE", crate::field::curve::DEGENERATE),
+        ];
+        for &(name, want) in shared {
+            let got = shader_constant(name);
+            assert!(
+                (got - want).abs() <= 1e-7 * want.abs(),
+                "{name}: the shader declares {got}, the f64 twin {want}"
+            );
+        }
+    }
+
     /// A scene of `points` points, one torus and curves of the given segment counts.
     fn scene(points: usize, curves: &[usize], integrator: Integrator) -> Packed {
         let mut s = Scene::default_scene();
@@ -801,7 +858,7 @@ mod tests {
         check_cover(&p, 6);
         for c in &p.chunks {
             let last = c.first + c.count;
-            // Points and the torus (terms 0..3) on the Gauss-Legendre pipeline, curves on their own.
+            // Points and the torus (terms 0..3) on the smooth terms' pipeline, curves on their own.
             let want = if last <= 3 {
                 ADAPTIVE_SMOOTH
             } else {
