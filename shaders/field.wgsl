@@ -1406,6 +1406,15 @@ fn integrate_curve_term(index: u32, s_point: vec3<f32>, e_point: vec3<f32>) -> f
     }
     let ray = Ray(s_point, e_point - s_point, 3u, index);
     let c = curves[index];
+    // A chain with a segment at rest at an end (or of zero length) is solved on the whole chain at every node:
+    // the tracking of the nearest point along one segment loses it there.
+    var degenerate = false;
+    for (var j = 0u; j < c.segment_count; j++) {
+        let s = segments[c.first_segment + j];
+        let d1 = 2.0 * s.c2 + s.c1;
+        let scale = DEGENERATE * dot(s.c2, s.c2);
+        degenerate = degenerate || dot(s.c1, s.c1) <= scale || dot(d1, d1) <= scale;
+    }
     let features = curve_features(ray);
     let allowance = params.term_tolerance / (abs(coefficient) * max(pieces_length(features.found), 1e-30));
     var refinements = select(8u, MAX_REFINEMENTS, params.gauss_order > 5u);
@@ -1507,7 +1516,7 @@ fn integrate_curve_term(index: u32, s_point: vec3<f32>, e_point: vec3<f32>) -> f
                 }
                 let panels = u32(clamp(ceil((pb0 - pa0) / U_PANEL), 1.0, f32(MAX_GAUSS_PANELS)));
                 let width = (pb0 - pa0) / f32(panels);
-                var track = Track(NO_SEGMENT, 0.0, 0.0, 0.0, switched || singular_a || singular_b);
+                var track = Track(NO_SEGMENT, 0.0, 0.0, 0.0, switched || singular_a || singular_b || degenerate);
                 for (var i = 0u; i < panels; i++) {
                     let pa = pa0 + width * f32(i);
                     let singular = vec2<bool>(singular_a && first && i == 0u, singular_b && last && i + 1u == panels);

@@ -1319,6 +1319,9 @@ fn integrate_term(term: Term, s: DVec3, e: DVec3, settings: &Integration, tolera
     // segment changes and solved on the whole chain at every node (`split_at_switch`).
     let segment = Cell::new(None);
     let tracking = Cell::new(true);
+    // So is every part of a chain with a segment at rest at an end (`curve::is_degenerate`): the shader's
+    // tracking loses the nearest point there.
+    let degenerate = matches!(term, Term::Curve(c) if curve::is_degenerate(&c.control_points));
     let f = |t: f64| {
         let (d, w) = if tracking.get() {
             let mut on = segment.get();
@@ -1356,7 +1359,7 @@ fn integrate_term(term: Term, s: DVec3, e: DVec3, settings: &Integration, tolera
             let (parts, count) = split_at_switch(|u| term.segment_at(at(u)), (a, b));
             // A part that begins or ends at rest is solved on the whole chain too: its nodes crowd toward the
             // cut, which the shader's tracking of the nearest point does not follow reliably.
-            tracking.set(count == 1 && !singular_a && !singular_b);
+            tracking.set(count == 1 && !singular_a && !singular_b && !degenerate);
             for (k, &(a, b)) in parts[..count].iter().enumerate() {
                 if b <= a {
                     continue;

@@ -146,6 +146,16 @@ impl Segment {
     }
 }
 
+/// Whether a chain has a segment at rest at an end (two coincident control points), a segment of zero length
+/// included: there the nearest point's parameter moves like a square root, which the adaptive integrator's
+/// tracking along one segment does not follow, so such a chain is solved on the whole chain at every node.
+pub fn is_degenerate(control_points: &[DVec3]) -> bool {
+    (0..segment_count(control_points)).any(|j| {
+        let s = segment(control_points, j);
+        s.starts_at_rest() || s.ends_at_rest()
+    })
+}
+
 /// Segment `j` of a chain.
 fn segment(control_points: &[DVec3], j: usize) -> Segment {
     let b = &control_points[2 * j..2 * j + 3];
