@@ -928,12 +928,11 @@ fn search_jumps(ray: Ray, a: ChainSample, b: ChainSample, kinks: ptr<function, K
 // Twin of curve::Segment::start_tangent and end_tangent: the direction in which a segment leaves its start or
 // arrives at its end, the second derivative's where the speed vanishes there.
 fn start_tangent(s: CurveSegment) -> vec3<f32> {
-    return select(s.c2, s.c1, dot(s.c1, s.c1) > DEGENERATE * dot(s.c2, s.c2));
+    return select(s.c1, s.c2, starts_at_rest(s));
 }
 
 fn end_tangent(s: CurveSegment) -> vec3<f32> {
-    let d1 = 2.0 * s.c2 + s.c1;
-    return select(-s.c2, d1, dot(d1, d1) > DEGENERATE * dot(s.c2, s.c2));
+    return select(2.0 * s.c2 + s.c1, -s.c2, ends_at_rest(s));
 }
 
 // Twin of curve::tangent_into and tangent_out_of: past one segment of zero length; w is 1 where that segment's
@@ -943,8 +942,7 @@ fn tangent_into(c: CurveSource, j: u32) -> vec4<f32> {
     if all(end_tangent(s) == vec3<f32>(0.0)) && j >= 2u {
         s = segments[c.first_segment + j - 2u];
     }
-    let d1 = 2.0 * s.c2 + s.c1;
-    return vec4<f32>(end_tangent(s), select(0.0, 1.0, dot(d1, d1) <= DEGENERATE * dot(s.c2, s.c2)));
+    return vec4<f32>(end_tangent(s), select(0.0, 1.0, ends_at_rest(s)));
 }
 
 fn tangent_out_of(c: CurveSource, j: u32) -> vec4<f32> {
@@ -952,7 +950,7 @@ fn tangent_out_of(c: CurveSource, j: u32) -> vec4<f32> {
     if all(start_tangent(s) == vec3<f32>(0.0)) && j + 1u < c.segment_count {
         s = segments[c.first_segment + j + 1u];
     }
-    return vec4<f32>(start_tangent(s), select(0.0, 1.0, dot(s.c1, s.c1) <= DEGENERATE * dot(s.c2, s.c2)));
+    return vec4<f32>(start_tangent(s), select(0.0, 1.0, starts_at_rest(s)));
 }
 
 
@@ -1411,9 +1409,7 @@ fn integrate_curve_term(index: u32, s_point: vec3<f32>, e_point: vec3<f32>) -> f
     var degenerate = false;
     for (var j = 0u; j < c.segment_count; j++) {
         let s = segments[c.first_segment + j];
-        let d1 = 2.0 * s.c2 + s.c1;
-        let scale = DEGENERATE * dot(s.c2, s.c2);
-        degenerate = degenerate || dot(s.c1, s.c1) <= scale || dot(d1, d1) <= scale;
+        degenerate = degenerate || starts_at_rest(s) || ends_at_rest(s);
     }
     let features = curve_features(ray);
     let allowance = params.term_tolerance / (abs(coefficient) * max(pieces_length(features.found), 1e-30));

@@ -167,10 +167,9 @@ fn nearest_on_segment(segment: CurveSegment, p: vec3<f32>) -> vec2<f32> {
     // stationary cubic has a double root, which f32 finds only to the square root of its rounding (W off by
     // 1e-4 along the stretch where the nearest point leaves the end); from the other side it is a simple root.
     var s = segment;
-    let d1 = 2.0 * segment.c2 + segment.c1;
-    let scale = DEGENERATE * dot(segment.c2, segment.c2);
-    let flip = dot(d1, d1) <= scale && dot(segment.c1, segment.c1) > scale;
+    let flip = ends_at_rest(segment) && !starts_at_rest(segment);
     if flip {
+        let d1 = 2.0 * segment.c2 + segment.c1;
         s = CurveSegment(segment.c2, 0.0, -d1, 0.0, segment.c2 + segment.c1 + segment.c0, 0.0);
     }
     let d = s.c0 - p;
@@ -208,6 +207,19 @@ fn nearest_on_segment(segment: CurveSegment, p: vec3<f32>) -> vec2<f32> {
 
 // A first derivative this much smaller (squared) than the second counts as zero (curve::DEGENERATE).
 const DEGENERATE: f32 = 1e-10;
+
+// Whether a segment's speed vanishes at its start (its first two control points coincide). Twin of
+// curve::Segment::starts_at_rest.
+fn starts_at_rest(s: CurveSegment) -> bool {
+    return dot(s.c1, s.c1) <= DEGENERATE * dot(s.c2, s.c2);
+}
+
+// Whether a segment's speed vanishes at its end (its last two control points coincide). Twin of
+// curve::Segment::ends_at_rest.
+fn ends_at_rest(s: CurveSegment) -> bool {
+    let d1 = 2.0 * s.c2 + s.c1;
+    return dot(d1, d1) <= DEGENERATE * dot(s.c2, s.c2);
+}
 
 // Knot u_i of the clamped uniform quadratic knot vector for n >= 3 weights. Twin of wseries::knot.
 fn wseries_knot(n: u32, i: u32) -> f32 {

@@ -109,21 +109,20 @@ impl Segment {
     /// control points coincide, and `C(t) ~ c0 + c2 t^2`) the second derivative's direction, `c2`. Zero only for a
     /// segment of zero length.
     pub fn start_tangent(&self) -> DVec3 {
-        if self.c1.length_squared() > DEGENERATE * self.c2.length_squared() {
-            self.c1
-        } else {
+        if self.starts_at_rest() {
             self.c2
+        } else {
+            self.c1
         }
     }
 
     /// The direction in which the segment arrives at its end: `C'(1) = 2 c2 + c1`, or where that vanishes (the
     /// last two control points coincide) `-c2`.
     pub fn end_tangent(&self) -> DVec3 {
-        let d1 = 2.0 * self.c2 + self.c1;
-        if d1.length_squared() > DEGENERATE * self.c2.length_squared() {
-            d1
-        } else {
+        if self.ends_at_rest() {
             -self.c2
+        } else {
+            2.0 * self.c2 + self.c1
         }
     }
 }
