@@ -563,6 +563,13 @@ fn settled(kg: vec2<f32>, allowance: f32, width: f32) -> bool {
     return abs(kg.x - kg.y) <= max(allowance * width, 4e-6 * abs(kg.x));
 }
 
+// The part at `at` of size 2^-level (in units of 2^-MAX_DEPTH) of the panel [a, b]: its ends in u. Shared by
+// both passes' bisection walks (smooth_panel, curve_panel), which differ only in their rule.
+fn part_bounds(a: f32, b: f32, at: u32, level: u32) -> vec2<f32> {
+    let end = f32(1u << MAX_DEPTH);
+    return vec2<f32>(a + (b - a) * (f32(at) / end), a + (b - a) * (f32(at + ((1u << MAX_DEPTH) >> level)) / end));
+}
+
 // The next part of a dyadic bisection after an accepted one (twin of integrate_panel): (at, level) on.
 fn next_part(at: u32, level: u32) -> vec2<u32> {
     let end = 1u << MAX_DEPTH;
@@ -582,10 +589,9 @@ fn smooth_panel(ray: Ray, p: Peak, a: f32, b: f32, allowance: f32, refinements: 
     var level = 0u;
     var sum = 0.0;
     while at < end {
-        let x0 = a + (b - a) * (f32(at) / f32(end));
-        let x1 = a + (b - a) * (f32(at + (end >> level)) / f32(end));
-        let kg = smooth_kronrod(ray, p, x0, x1);
-        if settled(kg, allowance, x1 - x0) || level == MAX_DEPTH || *refinements == 0u {
+        let x = part_bounds(a, b, at, level);
+        let kg = smooth_kronrod(ray, p, x.x, x.y);
+        if settled(kg, allowance, x.y - x.x) || level == MAX_DEPTH || *refinements == 0u {
             sum += kg.x;
             let next = next_part(at, level);
             at = next.x;
@@ -1366,10 +1372,9 @@ fn curve_panel(ray: Ray, p: Peak, a: f32, b: f32, singular: vec2<bool>, allowanc
     var level = 0u;
     var sum = 0.0;
     while at < end {
-        let x0 = a + (b - a) * (f32(at) / f32(end));
-        let x1 = a + (b - a) * (f32(at + (end >> level)) / f32(end));
-        let kg = curve_kronrod(ray, p, x0, x1, vec2<f32>(a, b), singular, track);
-        if settled(kg, allowance, x1 - x0) || level == MAX_DEPTH || *refinements == 0u {
+        let x = part_bounds(a, b, at, level);
+        let kg = curve_kronrod(ray, p, x.x, x.y, vec2<f32>(a, b), singular, track);
+        if settled(kg, allowance, x.y - x.x) || level == MAX_DEPTH || *refinements == 0u {
             sum += kg.x;
             let next = next_part(at, level);
             at = next.x;
