@@ -12,7 +12,6 @@ use std::time::Instant;
 use glam::DVec3;
 use serde::Serialize;
 
-use crate::geometry::ray_end;
 use crate::gpu::{FieldRenderer, GpuContext, GpuError, map_read};
 use crate::integrate::{self, Integrator};
 use crate::scene::Scene;
@@ -293,6 +292,8 @@ pub fn converged_reference(scene: &Scene, stride: u32) -> (Vec<f64>, ReferenceSt
     let s = scene;
     let w = s.billboard.resolution;
     let billboard = s.place_billboard(1.0);
+    let reach = s.ray_reach(&billboard);
+    let plane = (billboard.center - s.camera.eye).dot(-billboard.normal);
     let texels: Vec<(u32, u32)> = (0..w)
         .step_by(stride as usize)
         .flat_map(|j| (0..w).step_by(stride as usize).map(move |i| (i, j)))
@@ -305,12 +306,19 @@ pub fn converged_reference(scene: &Scene, stride: u32) -> (Vec<f64>, ReferenceSt
             let (s, billboard) = (&s, &billboard);
             scope.spawn(move || {
                 for (&(i, j), o) in ts.iter().zip(os) {
+                    // In the scene's own terms, not the integrators' normalised s: sigma is the depth past
+                    // the billboard in decay lengths, zeta(sigma) = alpha / (sigma + beta)^2, and the ray
+                    // ends at sigma = reach.stretch.
                     let p = billboard.texel_center(i, j, w);
-                    let e = ray_end(p, s.camera.eye, s.integration.nu);
                     let i = &s.integration;
+                    let per_depth = (p - s.camera.eye) / plane;
+                    let span = reach.stretch;
                     let f = |t: f64| {
-                        s.sources.psi(p + (e - p) * t, i.epsilon)
-                            * integrate::zeta(t, i.alpha, i.beta)
+                        let sigma = t * span;
+                        s.sources
+                            .psi(p + per_depth * (sigma * i.decay_length), i.epsilon)
+                            * integrate::zeta(sigma, i.alpha, i.beta)
+                            * span
                     };
                     *o = integrate::simpson_refined(
                         f,

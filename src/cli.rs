@@ -394,7 +394,7 @@ fn render(args: &RenderArgs) -> Result<(), CliError> {
         .map_or(DEFAULT_SCENE_NAME.to_owned(), |p| p.display().to_string());
     if args.verbose {
         eprintln!(
-            "{name}: {} sources; billboard {}x{} texels, center {:.4}, side {:.4}; integrator {} (n = {}, tolerance {:e}), nu = {}; backend {:?}",
+            "{name}: {} sources; billboard {}x{} texels, center {:.4}, side {:.4}; integrator {} (n = {}, tolerance {:e}), decay length {:.4} (rays span {:.3} of it); backend {:?}",
             scene.sources.len(),
             scene.billboard.resolution,
             scene.billboard.resolution,
@@ -403,7 +403,8 @@ fn render(args: &RenderArgs) -> Result<(), CliError> {
             scene.integration.integrator.name(),
             scene.integration.divisions,
             scene.integration.tolerance,
-            scene.integration.nu,
+            scene.integration.decay_length,
+            scene.ray_reach(&billboard).stretch,
             args.backend,
         );
     }

@@ -142,6 +142,17 @@ pub fn ray_end(s: DVec3, eye: DVec3, nu: f64) -> DVec3 {
 /// billboard is sized to the effect rather than to the whole view.
 const GLOW_REACH: f64 = 3.0;
 
+/// The effect as the camera sees it: the center of the sources' bounding box, and the radius of its sphere
+/// padded by 5 % of the eye's distance to that center (the padding keeps the automatic billboard off the
+/// sources themselves, where their glow peaks). Without sources: the camera's target and the padding alone.
+fn effect_sphere(camera: &Camera, sources: &Sources) -> (DVec3, f64) {
+    let (c, radius) = match sources.bounds() {
+        Some((lo, hi)) => ((lo + hi) * 0.5, (hi - lo).length() * 0.5),
+        None => (camera.target, 0.0),
+    };
+    (c, radius + 0.05 * (c - camera.eye).length())
+}
+
 /// Places the billboard for `camera` and a frame of `aspect` (width / height).
 ///
 /// `center` and `size` fix it where the scene gives them. Otherwise (automatic placement) the billboard is
@@ -157,15 +168,10 @@ pub fn place_billboard(
 ) -> Billboard {
     let frame = camera.frame();
     let view_distance = (camera.target - camera.eye).length();
-    let (c, radius) = match sources.bounds() {
-        Some((lo, hi)) => ((lo + hi) * 0.5, (hi - lo).length() * 0.5),
-        None => (camera.target, 0.0),
-    };
+    let (c, extent) = effect_sphere(camera, sources);
     let to_c = c - camera.eye;
     let depth = to_c.dot(frame.forward);
     let lateral = (to_c - frame.forward * depth).length();
-    // A small pad keeps the plane off the sources themselves (their glow peaks there).
-    let extent = radius + 0.05 * to_c.length();
     let min_plane = 1e-3 * view_distance;
     let plane = (depth - extent).max(0.05 * extent).max(min_plane);
 
@@ -181,6 +187,59 @@ pub fn place_billboard(
         2.0 * half_view.min(half_effect)
     });
     Billboard::facing(center, size, camera.eye, camera.up)
+}
+
+/// The most decay lengths a ray may span (a bound against overflow; real scenes stay near 1).
+const MAX_STRETCH: f64 = 1e6;
+
+/// How far one frame's rays reach and how their decay is scaled, for a decay measured in scene units.
+///
+/// The decay runs on `sigma`, the depth past the billboard plane (along its normal) in units of the scene's
+/// decay length D: `zeta = alpha / (sigma + beta)^2`, the same function of a point in space whatever the
+/// camera. Every ray runs from its texel S to `sigma_end = max(1, far / D)`, `far` the depth of the far side
+/// of the sources' padded sphere (`effect_sphere`), so that it always reaches past every source. In the
+/// method's normalised `s = sigma / sigma_end` (METHOD.md section 3) this is `E = V + nu (S - V)` with
+/// `nu = 1 + sigma_end D / p` (p the eye-to-plane distance) and the decay `(alpha / sigma_end) /
+/// (s + beta / sigma_end)^2`: the integrators run unchanged on `Integration::on_ray(stretch)`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Reach {
+    /// `E = V + nu (S - V)` for every texel of the frame.
+    pub nu: f64,
+    /// `sigma_end`: how many decay lengths the rays span, at least 1.
+    pub stretch: f64,
+}
+
+/// The reach of every texel's ray through `billboard` seen from `camera` (see `Reach`).
+pub fn ray_reach(
+    camera: &Camera,
+    sources: &Sources,
+    billboard: &Billboard,
+    decay_length: f64,
+) -> Reach {
+    let inward = -billboard.normal;
+    let plane = (billboard.center - camera.eye).dot(inward);
+    let (c, extent) = effect_sphere(camera, sources);
+    let far = (c - camera.eye).dot(inward) + extent - plane;
+    let stretch = (far / decay_length).clamp(1.0, MAX_STRETCH);
+    let stretch = if stretch.is_finite() { stretch } else { 1.0 };
+    Reach {
+        nu: 1.0 + stretch * decay_length / plane,
+        stretch,
+    }
+}
+
+/// The papers' decay length for a scene seen from `camera`: `E = V + nu (S - V)` puts the end of the ray
+/// `(nu - 1) p` behind a billboard `p` away from the eye, so the decay length that renders the scene exactly
+/// as the papers do at this camera is `(nu - 1) p`. Scene files without a decay length get it from their
+/// own camera this way.
+pub fn papers_decay_length(
+    camera: &Camera,
+    sources: &Sources,
+    billboard_center: Option<DVec3>,
+    nu: f64,
+) -> f64 {
+    let b = place_billboard(camera, sources, billboard_center, Some(1.0), 1.0);
+    (nu - 1.0) * (b.center - camera.eye).length()
 }
 
 #[cfg(test)]

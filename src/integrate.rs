@@ -26,7 +26,8 @@ impl Integrator {
     }
 }
 
-/// The integration settings of a scene (the papers use `alpha = beta = 1`, `nu = 2`, `n = 200`).
+/// The integration settings of a scene (the papers use `alpha = beta = 1`, `nu = 2`, `n = 200`; their nu sets
+/// the decay length `(nu - 1) p` for a billboard `p` from the eye, `geometry::papers_decay_length`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Integration {
     pub integrator: Integrator,
@@ -37,13 +38,19 @@ pub struct Integration {
     /// Random sample placement for the `simpson` integrator, with this seed: each texel's n samples are
     /// shifted by a random fraction of a step, which turns banding into fine noise and is unbiased.
     pub jitter: Option<u32>,
-    /// How far the segment reaches: `E = V + nu (S - V)`, nu > 1.
-    pub nu: f64,
+    /// The depth past the billboard, in scene units, over which the decay `zeta = alpha / (sigma + beta)^2`
+    /// runs from sigma = 0 to 1; rays reach at least this far and past the far side of the effect
+    /// (`geometry::ray_reach`). Fixed in space, so the look holds as the camera moves.
+    pub decay_length: f64,
     pub alpha: f64,
     pub beta: f64,
     /// The distance clamp of every source's `1 / max(eps, d)`.
     pub epsilon: f64,
 }
+
+/// The decay length of settings built in code (scene files derive theirs from their camera): the papers'
+/// nu = 2 at a billboard 10 units from the eye.
+pub const DEFAULT_DECAY_LENGTH: f64 = 10.0;
 
 /// The adaptive integrator's default tolerance: well under the 1/255 step of an 8-bit image.
 pub const DEFAULT_TOLERANCE: f64 = 1e-4;
@@ -55,10 +62,23 @@ impl Default for Integration {
             divisions: 200,
             tolerance: DEFAULT_TOLERANCE,
             jitter: None,
-            nu: 2.0,
+            decay_length: DEFAULT_DECAY_LENGTH,
             alpha: 1.0,
             beta: 1.0,
             epsilon: 0.01,
+        }
+    }
+}
+
+impl Integration {
+    /// The settings the integrators see on a ray that spans `stretch` decay lengths, integrated over the
+    /// method's s in [0, 1] (`geometry::Reach`): `alpha / (sigma + beta)^2` with `sigma = stretch s` and
+    /// `d sigma = stretch ds` is `(alpha / stretch) / (s + beta / stretch)^2`.
+    pub fn on_ray(&self, stretch: f64) -> Integration {
+        Integration {
+            alpha: self.alpha / stretch,
+            beta: self.beta / stretch,
+            ..self.clone()
         }
     }
 }

@@ -6,7 +6,7 @@
 use glam::DVec3;
 
 use crate::compose::{blend, blend_transparent, sample_bilinear};
-use crate::geometry::{Billboard, ray_end};
+use crate::geometry::{Billboard, Reach, ray_end};
 use crate::integrate::{brightness, jitter_offset};
 use crate::scene::Scene;
 
@@ -20,10 +20,11 @@ pub struct BrightnessTexture {
 /// Integrates B for every texel of `billboard` (METHOD.md section 3).
 pub fn render_brightness(scene: &Scene, billboard: &Billboard) -> BrightnessTexture {
     let w = scene.billboard.resolution;
+    let reach = scene.ray_reach(billboard);
     let mut values = vec![0.0; (w as usize) * (w as usize)];
     for_each_row(&mut values, w as usize, |j, row| {
         for (i, out) in row.iter_mut().enumerate() {
-            *out = texel_brightness(scene, billboard, i as u32, j as u32);
+            *out = texel_brightness_on(scene, billboard, reach, i as u32, j as u32);
         }
     });
     BrightnessTexture {
@@ -72,14 +73,20 @@ pub fn compose_frame(
 
 /// B of a single texel, for tests that probe one ray.
 pub fn texel_brightness(scene: &Scene, billboard: &Billboard, i: u32, j: u32) -> f64 {
+    texel_brightness_on(scene, billboard, scene.ray_reach(billboard), i, j)
+}
+
+/// B of texel `(i, j)` with the frame's `reach` already known.
+fn texel_brightness_on(scene: &Scene, billboard: &Billboard, reach: Reach, i: u32, j: u32) -> f64 {
     let w = scene.billboard.resolution;
     let s: DVec3 = billboard.texel_center(i, j, w);
-    let e = ray_end(s, scene.camera.eye, scene.integration.nu);
+    let e = ray_end(s, scene.camera.eye, reach.nu);
     let xi = scene
         .integration
         .jitter
         .map_or(0.5, |seed| jitter_offset(seed, i, j, w));
-    brightness(&scene.sources, &scene.integration, s, e, xi)
+    let settings = scene.integration.on_ray(reach.stretch);
+    brightness(&scene.sources, &settings, s, e, xi)
 }
 
 /// Runs `f(row_index, row)` over the rows of `data` (rows of `width` items) on every core.

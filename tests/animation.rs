@@ -149,7 +149,7 @@ parameter = "colors.energy"
 keys = [{ frame = 0, value = [1, 0, 0] }, { frame = 20, value = [0, 0, 1] }]
 
 [[animation.tracks]]
-parameter = "integration.nu"
+parameter = "integration.decay_length"
 keys = [{ frame = 0, value = 2.0 }, { frame = 40, value = 4.0 }]
 "#;
 
@@ -183,7 +183,7 @@ fn keys_interpolate_linearly_and_hold_at_the_ends() {
     assert_eq!(cp(7.0), [1.5, 2.5, -3.0]);
     assert_eq!(cp(20.0), [2.0, 3.0, -4.0]);
     assert_eq!(scene.at_frame(5.0).colors.energy, [0.75, 0.0, 0.25]);
-    assert_eq!(scene.at_frame(10.0).integration.nu, 2.5);
+    assert_eq!(scene.at_frame(10.0).integration.decay_length, 2.5);
     // Unkeyed values and the base scene are untouched.
     assert_eq!(scene.at_frame(5.0).sources.curves[0].coefficient, 2.0);
     assert_eq!(scene.sources.points[0].coefficient, 1.0);
@@ -231,7 +231,7 @@ fn pulses_and_keys_follow_their_sources_when_sources_are_removed() {
         [
             "curves[0].control_points[1]",
             "colors.energy",
-            "integration.nu",
+            "integration.decay_length",
             "points[0].position"
         ]
     );
@@ -246,6 +246,44 @@ fn pulses_and_keys_follow_their_sources_when_sources_are_removed() {
     t.set_key(0.0, Value::Vector([9.0, 9.0, 9.0]));
     assert_eq!(t.keys.len(), 2);
     assert_eq!(t.value_at(2.5), Some(Value::Vector([5.0, 5.5, 6.0])));
+}
+
+/// Older files key the papers' nu: each key becomes the decay length that nu gives at the file's camera, so
+/// the animation plays as it did there, and it is saved in decay lengths.
+#[test]
+fn a_keyed_nu_becomes_the_decay_length_it_gives_at_the_files_camera() {
+    const BASE: &str =
+        "[camera]\neye = [1, 2, 9]\n[[points]]\nposition = [0, 0, 0]\ncoefficient = 1\n";
+    let keyed = Scene::parse(
+        &format!(
+            "{BASE}[[animation.tracks]]\nparameter = \"integration.nu\"\nkeys = [{{ frame = 0, value = 3.0 }}, {{ frame = 10, value = 5.0 }}]\n"
+        ),
+        Path::new("keyed.toml"),
+    )
+    .unwrap();
+    let still = |nu: f64| {
+        Scene::parse(
+            &format!("{BASE}[integration]\nnu = {nu}\n"),
+            Path::new("still.toml"),
+        )
+        .unwrap()
+        .integration
+        .decay_length
+    };
+    for (frame, nu) in [(0.0, 3.0), (5.0, 4.0), (10.0, 5.0), (20.0, 5.0)] {
+        let got = keyed.at_frame(frame).integration.decay_length;
+        assert!(
+            (got - still(nu)).abs() < 1e-12 * got,
+            "frame {frame}: {got} vs {}",
+            still(nu)
+        );
+    }
+    let text = keyed.to_toml();
+    assert!(
+        text.contains("\"integration.decay_length\"") && !text.contains("nu"),
+        "{text}"
+    );
+    assert_eq!(Scene::parse(&text, Path::new("saved.toml")).unwrap(), keyed);
 }
 
 /// Each malformed animation: (text, the field named, its line, a phrase of the explanation).
@@ -341,6 +379,21 @@ fn malformed_animations_are_refused_with_place_and_field() {
             "animation.tracks[0].keys[0].value",
             8,
             "nu must be greater than 1",
+        ),
+        (
+            track("integration.decay_length", "[{ frame = 0, value = 0.0 }]"),
+            "animation.tracks[0].keys[0].value",
+            8,
+            "decay_length must be positive",
+        ),
+        (
+            format!(
+                "[integration]\ndecay_length = 5.0\n{}",
+                track("integration.nu", "[{ frame = 0, value = 3.0 }]")
+            ),
+            "animation.tracks[0].parameter",
+            9,
+            "key integration.decay_length",
         ),
         (
             format!("{CURVE}[curves.pulse]\nwidth = 0\n"),

@@ -217,11 +217,12 @@ fn a_line_along_the_view_axis_gives_the_closed_form_with_zeta_at_work() {
         }],
         ..Sources::default()
     };
+    // The closed form is the papers' ray, E = V + 2 (S - V): a decay length of one eye-to-billboard distance.
     scene.integration = Integration {
         alpha: 1.0,
         beta: 1.0,
-        nu: 2.0,
         epsilon: 0.01,
+        decay_length: 1.0,
         ..Integration::default()
     };
     let bb = scene.place_billboard(1.0);

@@ -238,7 +238,6 @@ fn brightness_applies_zeta_and_the_coefficient() {
     let settings = Integration {
         integrator: Integrator::Simpson,
         divisions: 2000,
-        nu: 2.0,
         alpha: beta * beta,
         beta,
         epsilon: 1e-9,

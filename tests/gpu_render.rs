@@ -110,10 +110,15 @@ fn gpu_matches_the_cpu_reference_on_grazing_rays() {
     let bb = scene.place_billboard(1.0);
     scene.billboard.center = Some(bb.center);
     scene.billboard.size = Some(bb.size);
+    // A decay length well past the sources placed below, so that the rays span exactly one (`Reach`)
+    // whatever their bounds: the samples stay where they are aimed.
+    scene.integration.decay_length = 60.0;
+    let reach = scene.ray_reach(&bb);
+    assert_eq!(reach.stretch, 1.0);
     let n = scene.integration.divisions as f64;
     let ray = |i: u32, j: u32, s: f64| {
         let start = bb.texel_center(i, j, w);
-        let end = ray_end(start, scene.camera.eye, scene.integration.nu);
+        let end = ray_end(start, scene.camera.eye, reach.nu);
         start + (end - start) * s
     };
     let on_sample = ray(5, 7, 20.0 / n);
@@ -163,6 +168,11 @@ fn gpu_matches_the_cpu_reference_on_grazing_rays() {
             },
         ],
     };
+    assert_eq!(
+        scene.ray_reach(&bb),
+        reach,
+        "the sources moved the rays' end"
+    );
     scene.integration.epsilon = 1e-3;
     // The papers' integrator first: uniform samples.
     scene.integration.integrator = Integrator::Simpson;
@@ -190,7 +200,7 @@ fn gpu_matches_the_cpu_reference_on_grazing_rays() {
     let adaptive = reference::texel_brightness(&scene, &bb, 11, 3);
     let mut converged = scene.clone();
     converged.integration.integrator = Integrator::Simpson;
-    converged.integration.divisions = 1 << 16;
+    converged.integration.divisions = 1 << 20;
     let converged = reference::texel_brightness(&converged, &bb, 11, 3);
     let simpson = cpu.values[(3 * w + 11) as usize];
     assert!(

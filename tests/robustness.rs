@@ -248,7 +248,7 @@ fn degenerate_geometry_is_finite_on_cpu_and_gpu() {
     }
 }
 
-/// The default scene scaled by `k` (camera, sources and epsilon together).
+/// The default scene scaled by `k` (camera, sources, epsilon and the decay length together).
 fn scaled(k: f64) -> Scene {
     let mut s = Scene::default_scene();
     s.billboard.resolution = 20;
@@ -256,6 +256,7 @@ fn scaled(k: f64) -> Scene {
     s.camera.eye *= k;
     s.camera.target *= k;
     s.integration.epsilon *= k;
+    s.integration.decay_length *= k;
     for c in &mut s.sources.curves {
         c.control_points.iter_mut().for_each(|p| *p *= k);
         c.coefficient *= k;
@@ -270,7 +271,7 @@ fn scaled(k: f64) -> Scene {
 
 #[test]
 fn huge_and_tiny_scales_give_the_same_picture() {
-    // The method is scale invariant when the coefficients and epsilon scale with the scene (B ~ coefficient /
+    // The method is scale invariant when the coefficients, epsilon and the decay length scale with the scene (B ~ coefficient /
     // distance): 1e-3 and 1e3 world units must give the picture of scale 1, on the CPU and on the GPU.
     let reference_b = {
         let s = scaled(1.0);
@@ -386,7 +387,7 @@ proptest! {
         eye in vec3(30.0),
         target in vec3(5.0),
         fov in 1.0..170.0f64,
-        nu in 1.01..6.0f64,
+        decay_length in 0.05..60.0f64,
         alpha in 0.01..10.0f64,
         beta in 0.01..10.0f64,
         epsilon in 1e-6..1.0f64,
@@ -399,7 +400,7 @@ proptest! {
         let mut s = scene(camera(eye, target), sources);
         s.camera.fov_y_degrees = fov;
         s.billboard.resolution = 6;
-        s.integration = energywave::integrate::Integration { divisions: 2 * half_n, nu, alpha, beta, epsilon, tolerance, ..Default::default() };
+        s.integration = energywave::integrate::Integration { divisions: 2 * half_n, decay_length, alpha, beta, epsilon, tolerance, ..Default::default() };
         for (integrator, jitter) in [(Integrator::Simpson, None), (Integrator::Simpson, Some(seed)), (Integrator::Adaptive, None)] {
             s.integration.integrator = integrator;
             s.integration.jitter = jitter;

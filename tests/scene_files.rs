@@ -5,6 +5,16 @@ use std::path::{Path, PathBuf};
 
 use energywave::scene::{Scene, SceneError};
 
+/// The decay length the papers' `nu` gives `scene` at its own camera.
+fn papers_decay_length(scene: &Scene, nu: f64) -> f64 {
+    energywave::geometry::papers_decay_length(
+        &scene.camera,
+        &scene.sources,
+        scene.billboard.center,
+        nu,
+    )
+}
+
 fn scenes_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes")
 }
@@ -100,10 +110,8 @@ fn presets_hold_the_papers_settings() {
         "divisions_curve_b4.0.toml",
     ] {
         let s = load(name);
-        assert_eq!(
-            (s.integration.alpha, s.integration.beta, s.integration.nu),
-            (1.0, 1.0, 2.0)
-        );
+        assert_eq!((s.integration.alpha, s.integration.beta), (1.0, 1.0));
+        assert_eq!(s.integration.decay_length, papers_decay_length(&s, 2.0));
     }
 }
 
@@ -126,10 +134,11 @@ fn defaults_fill_every_section_but_the_sources() {
     )
     .unwrap();
     assert_eq!(s.integration.divisions, 200);
-    assert_eq!(
-        (s.integration.alpha, s.integration.beta, s.integration.nu),
-        (1.0, 1.0, 2.0)
-    );
+    assert_eq!((s.integration.alpha, s.integration.beta), (1.0, 1.0));
+    // The papers' nu = 2 at the file's own camera (the default eye, a billboard in front of the point).
+    assert_eq!(s.integration.decay_length, papers_decay_length(&s, 2.0));
+    let eye_to_plane = (s.place_billboard(1.0).center - s.camera.eye).length();
+    assert!((s.integration.decay_length - eye_to_plane).abs() < 1e-12);
     assert_eq!(s.billboard.resolution, 256);
     assert!(s.billboard.center.is_none() && s.billboard.size.is_none());
     // Directions are normalised on load.
@@ -234,6 +243,18 @@ fn each_malformed_kind_gets_its_own_error() {
             "integration.nu",
             2,
             "greater than 1",
+        ),
+        (
+            "[integration]\ndecay_length = 0\n",
+            "integration.decay_length",
+            2,
+            "must be positive",
+        ),
+        (
+            "[integration]\nnu = 2.0\ndecay_length = 4.0\n",
+            "integration.decay_length",
+            3,
+            "not both",
         ),
         (
             "[integration]\nbeta = 0\n",

@@ -119,7 +119,7 @@ fn thousands_of_frames_of_random_edits() {
                 s.integration.divisions = 2 * (1 + rng.below(24)) as u32;
                 s.billboard.resolution = 8 + rng.below(32) as u32;
                 s.integration.epsilon = rng.range(1e-4, 0.1);
-                s.integration.nu = rng.range(1.1, 4.0);
+                s.integration.decay_length = rng.range(0.5, 40.0);
             }
             8 => s.colors.energy = [rng.unit(), rng.unit(), rng.unit()],
             9 => energywave::viewer::navigation::orbit(

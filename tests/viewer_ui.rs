@@ -208,10 +208,10 @@ fn invalid_entries_are_refused() {
         .set_value_accesskit(-3.0);
     h.run();
     assert!(h.state().scene().sources.tori[0].major_radius > 0.0);
-    h.get_by_role_and_label(Role::SpinButton, "\u{3bd} (ray reach)")
-        .set_value_accesskit(0.5);
+    h.get_by_role_and_label(Role::SpinButton, "decay length")
+        .set_value_accesskit(0.0);
     h.run();
-    assert!(h.state().scene().integration.nu > 1.0);
+    assert!(h.state().scene().integration.decay_length > 0.0);
     h.get_by_role_and_label(Role::SpinButton, "\u{3b5} (clamp)")
         .set_value_accesskit(0.0);
     h.run();

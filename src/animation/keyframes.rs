@@ -122,14 +122,14 @@ pub enum Parameter {
     ControlPoint(usize, usize),
     /// `curves[i].weights[j]`
     Weight(usize, usize),
-    /// `integration.nu`, `integration.alpha`, `integration.beta`, `integration.epsilon`
+    /// `integration.decay_length`, `integration.alpha`, `integration.beta`, `integration.epsilon`
     Integration(IntegrationSetting),
 }
 
 /// The integration settings that can be keyed (the division count is an integer and cannot).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum IntegrationSetting {
-    Nu,
+    DecayLength,
     Alpha,
     Beta,
     Epsilon,
@@ -138,18 +138,10 @@ pub enum IntegrationSetting {
 impl IntegrationSetting {
     pub fn key(self) -> &'static str {
         match self {
-            IntegrationSetting::Nu => "nu",
+            IntegrationSetting::DecayLength => "decay_length",
             IntegrationSetting::Alpha => "alpha",
             IntegrationSetting::Beta => "beta",
             IntegrationSetting::Epsilon => "epsilon",
-        }
-    }
-
-    /// The smallest value the setting may take: nu above 1, the others above 0.
-    pub fn lower_bound(self) -> f64 {
-        match self {
-            IntegrationSetting::Nu => 1.0,
-            _ => 0.0,
         }
     }
 }
@@ -158,7 +150,7 @@ impl IntegrationSetting {
 pub const PARAMETER_FORMS: &str = "colors.energy, colors.background, points[i].position, points[i].coefficient, \
 lines[i].point, lines[i].direction, lines[i].coefficient, tori[i].center, tori[i].axis, tori[i].major_radius, \
 tori[i].coefficient, curves[i].control_points[j], curves[i].coefficient, curves[i].weights[j], \
-integration.nu, integration.alpha, integration.beta, integration.epsilon";
+integration.decay_length, integration.alpha, integration.beta, integration.epsilon";
 
 /// Splits `name[3]` into `("name", Some(3))`, `name` into `("name", None)`.
 fn indexed(part: &str) -> Option<(&str, Option<usize>)> {
@@ -193,7 +185,7 @@ impl Parameter {
             [("colors", None), ("background", None)] => Parameter::BackgroundColor,
             [("integration", None), (name, None)] => Parameter::Integration(
                 [
-                    IntegrationSetting::Nu,
+                    IntegrationSetting::DecayLength,
                     IntegrationSetting::Alpha,
                     IntegrationSetting::Beta,
                     IntegrationSetting::Epsilon,
@@ -290,7 +282,7 @@ impl Parameter {
             Parameter::ControlPoint(i, j) => v(*s.curves.get(i)?.control_points.get(j)?),
             Parameter::Weight(i, j) => Value::Number(*s.curves.get(i)?.weights.get(j)?),
             Parameter::Integration(k) => Value::Number(match k {
-                IntegrationSetting::Nu => scene.integration.nu,
+                IntegrationSetting::DecayLength => scene.integration.decay_length,
                 IntegrationSetting::Alpha => scene.integration.alpha,
                 IntegrationSetting::Beta => scene.integration.beta,
                 IntegrationSetting::Epsilon => scene.integration.epsilon,
@@ -363,13 +355,14 @@ impl Parameter {
             (Parameter::Integration(k), Value::Number(x)) => {
                 let i = &mut scene.integration;
                 let slot = match k {
-                    IntegrationSetting::Nu => &mut i.nu,
+                    IntegrationSetting::DecayLength => &mut i.decay_length,
                     IntegrationSetting::Alpha => &mut i.alpha,
                     IntegrationSetting::Beta => &mut i.beta,
                     IntegrationSetting::Epsilon => &mut i.epsilon,
                 };
-                // Interpolating between valid keys stays valid; this only guards against rounding.
-                *slot = x.max(k.lower_bound() + 1e-9);
+                // Every keyable setting is positive. Interpolating between valid keys stays valid; this only
+                // guards against rounding.
+                *slot = x.max(1e-9);
             }
             (Parameter::Weight(i, j), Value::Number(x)) => {
                 if let Some(slot) = s.curves.get_mut(*i).and_then(|c| c.weights.get_mut(*j)) {

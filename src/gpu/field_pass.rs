@@ -248,7 +248,8 @@ fn v3(v: glam::DVec3) -> [f32; 3] {
 
 fn pack(scene: &Scene, billboard: &Billboard) -> Packed {
     let s = &scene.sources;
-    let i = &scene.integration;
+    let reach = scene.ray_reach(billboard);
+    let i = &scene.integration.on_ray(reach.stretch);
     let mut packed = Packed {
         params: FieldParams {
             center: v3(billboard.center),
@@ -258,7 +259,7 @@ fn pack(scene: &Scene, billboard: &Billboard) -> Packed {
             up: v3(billboard.up),
             divisions: i.divisions,
             eye: v3(scene.camera.eye),
-            nu: i.nu as f32,
+            nu: reach.nu as f32,
             alpha: i.alpha as f32,
             beta: i.beta as f32,
             epsilon: i.epsilon as f32,

@@ -91,9 +91,34 @@ pub(super) fn validate(
     let anim = file.animation.as_ref();
     let anim_path = root.key("animation");
     let mut tracks: Vec<Track> = Vec::new();
+    // The decay length per unit of nu - 1: the eye-to-billboard distance at the file's camera.
+    let per_nu = crate::geometry::papers_decay_length(
+        &scene.camera,
+        &scene.sources,
+        scene.billboard.center,
+        2.0,
+    );
     for (i, t) in anim.map_or(&[][..], |a| &a.tracks).iter().enumerate() {
         let path = anim_path.key("tracks").index(i);
-        let parameter = match Parameter::parse(&t.parameter) {
+        // The papers' nu, keyed: each key becomes the decay length it gives at this file's camera.
+        let legacy_nu = t.parameter.trim() == "integration.nu";
+        if legacy_nu
+            && file
+                .integration
+                .as_ref()
+                .is_some_and(|i| i.decay_length.is_some())
+        {
+            c.fail(
+                &path.key("parameter"),
+                "integration.nu only derives the decay length, and this file gives one: key integration.decay_length",
+            );
+            continue;
+        }
+        let parameter = match Parameter::parse(if legacy_nu {
+            "integration.decay_length"
+        } else {
+            &t.parameter
+        }) {
             Ok(p) => p,
             Err(e) => {
                 c.fail(&path.key("parameter"), e);
@@ -148,6 +173,12 @@ pub(super) fn validate(
             }
             let value_path = key_path.key("value");
             let value = match (&key.value, base) {
+                (file::ValueFile::Number(nu), Value::Number(_)) if legacy_nu => {
+                    if *nu <= 1.0 {
+                        c.fail(&value_path, format!("{nu}: nu must be greater than 1"));
+                    }
+                    Value::Number((nu - 1.0) * per_nu)
+                }
                 (file::ValueFile::Number(x), Value::Number(_)) => Value::Number(*x),
                 (file::ValueFile::Vector(v), Value::Vector(_)) if v.len() == 3 => {
                     Value::Vector([v[0], v[1], v[2]])
@@ -224,11 +255,8 @@ fn check_value(c: &mut Checker<'_, '_>, path: &FieldPath, parameter: &Parameter,
         (Parameter::MajorRadius(_), Value::Number(x)) if x <= 0.0 => {
             c.fail(path, format!("{x}: the major radius R must be positive"));
         }
-        (Parameter::Integration(k), Value::Number(x)) if x <= k.lower_bound() => {
-            c.fail(
-                path,
-                format!("{x}: {} must be greater than {}", k.key(), k.lower_bound()),
-            );
+        (Parameter::Integration(k), Value::Number(x)) if x <= 0.0 => {
+            c.fail(path, format!("{x}: {} must be positive", k.key()));
         }
         (Parameter::Weight(..), Value::Number(x)) if x < 0.0 => {
             c.fail(path, format!("{x}: weights must be at least 0"));

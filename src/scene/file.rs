@@ -64,7 +64,10 @@ pub(crate) struct IntegrationFile {
     pub jitter: Option<bool>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub seed: Option<u32>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub nu: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub decay_length: Option<f64>,
     pub alpha: Option<f64>,
     pub beta: Option<f64>,
     pub epsilon: Option<f64>,

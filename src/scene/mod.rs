@@ -33,6 +33,9 @@ pub const MAX_DIVISIONS: u32 = 1 << 20;
 /// distances between such points stay well inside f32 (about 3.4e38).
 pub const MAX_COORDINATE: f64 = 1e15;
 
+/// The papers' nu (`E = V + nu (S - V)`), from which a file without a decay length derives one.
+pub const PAPERS_NU: f64 = 2.0;
+
 /// Where the billboard goes; `None` fields are placed automatically (`geometry::place_billboard`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct BillboardSettings {
@@ -194,7 +197,8 @@ impl Scene {
                 tolerance: Some(self.integration.tolerance),
                 jitter: Some(self.integration.jitter.is_some()),
                 seed: self.integration.jitter,
-                nu: Some(self.integration.nu),
+                nu: None,
+                decay_length: Some(self.integration.decay_length),
                 alpha: Some(self.integration.alpha),
                 beta: Some(self.integration.beta),
                 epsilon: Some(self.integration.epsilon),
@@ -246,6 +250,16 @@ impl Scene {
             self.billboard.center,
             self.billboard.size,
             aspect,
+        )
+    }
+
+    /// How far the rays through `billboard` reach, with the decay fixed in scene units (`geometry::Reach`).
+    pub fn ray_reach(&self, billboard: &Billboard) -> geometry::Reach {
+        geometry::ray_reach(
+            &self.camera,
+            &self.sources,
+            billboard,
+            self.integration.decay_length,
         )
     }
 }
@@ -468,8 +482,23 @@ fn validate(file: &SceneFile, locator: &Locator<'_>, problems: &mut Vec<Problem>
         );
     }
     let jitter = jitter.then(|| seed.unwrap_or(0));
-    let nu = int.and_then(|i| i.nu).map_or(defaults.nu, |x| {
+    let nu = int.and_then(|i| i.nu).map_or(PAPERS_NU, |x| {
         c.in_open_range(&int_path.key("nu"), x, 1.0, f64::INFINITY, "nu must be greater than 1 (E = V + nu (S - V) lies behind the billboard; the papers use 2)")
+    });
+    let decay_length = int.and_then(|i| i.decay_length).map(|x| {
+        if int.is_some_and(|i| i.nu.is_some()) {
+            c.fail(
+                &int_path.key("decay_length"),
+                "give decay_length or nu, not both: nu only derives the decay length, (nu - 1) times the eye-to-billboard distance at this file's camera",
+            );
+        }
+        c.in_open_range(
+            &int_path.key("decay_length"),
+            x,
+            0.0,
+            MAX_COORDINATE,
+            "the decay length is a distance in scene units and must be positive (files without it get (nu - 1) times the eye-to-billboard distance)",
+        )
     });
     let alpha = int.and_then(|i| i.alpha).map_or(defaults.alpha, |x| {
         c.in_open_range(
@@ -590,6 +619,19 @@ fn validate(file: &SceneFile, locator: &Locator<'_>, problems: &mut Vec<Problem>
         });
     }
 
+    // Without a decay length, the papers' nu at this file's own camera: the scene renders as they would here,
+    // and keeps that look wherever the camera goes.
+    let decay_length = decay_length.unwrap_or_else(|| {
+        let d = geometry::papers_decay_length(&camera, &sources, center, nu);
+        if !(d > 0.0 && d.is_finite()) && c.problems.is_empty() {
+            c.fail(
+                &int_path,
+                format!("the decay length derived from the camera, (nu - 1) times the eye-to-billboard distance, is {d}: set decay_length"),
+            );
+        }
+        d
+    });
+
     Scene {
         camera,
         billboard: BillboardSettings {
@@ -602,7 +644,7 @@ fn validate(file: &SceneFile, locator: &Locator<'_>, problems: &mut Vec<Problem>
             divisions,
             tolerance,
             jitter,
-            nu,
+            decay_length,
             alpha,
             beta,
             epsilon,

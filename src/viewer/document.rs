@@ -297,15 +297,18 @@ mod tests {
         assert_eq!(doc.scene.integration.divisions, 64);
         assert!(doc.disk_error.as_deref().unwrap().contains("live.toml"));
         // With unsaved edits, a change on disk waits for the user.
-        doc.scene.integration.nu = 3.0;
+        doc.scene.integration.decay_length = 3.0;
         scene.integration.divisions = 32;
         write_later(&path, &scene.to_toml());
         assert!(matches!(doc.check_disk(), Some(DiskChange::Conflict)));
-        assert_eq!(doc.scene.integration.nu, 3.0);
+        assert_eq!(doc.scene.integration.decay_length, 3.0);
         doc.accept_reload();
         assert_eq!(
-            (doc.scene.integration.divisions, doc.scene.integration.nu),
-            (32, 2.0)
+            (
+                doc.scene.integration.divisions,
+                doc.scene.integration.decay_length
+            ),
+            (32, scene.integration.decay_length)
         );
     }
 

@@ -125,12 +125,15 @@ mod tests {
         scene.camera.eye.x += 3.0;
         assert!(!h.commit(&scene));
         assert!(!h.can_undo());
-        scene.integration.nu = 3.0;
+        scene.integration.decay_length = 3.0;
         assert!(h.commit(&scene));
         scene.camera.eye.y += 1.0;
         let eye = scene.camera.eye;
         assert!(h.undo(&mut scene));
-        assert_eq!(scene.integration.nu, 2.0);
+        assert_eq!(
+            scene.integration.decay_length,
+            Scene::default_scene().integration.decay_length
+        );
         assert_eq!(scene.camera.eye, eye);
     }
 }

@@ -272,10 +272,18 @@ fn render_section(ui: &mut Ui, app: &mut ViewerApp) {
                             }
                         }
                     }
+                    let step = 0.005 * i.decay_length;
                     labelled(
                         ui,
-                        "\u{3bd} (ray reach)",
-                        DragValue::new(&mut i.nu).range(1.01..=50.0).speed(0.01),
+                        "decay length",
+                        DragValue::new(&mut i.decay_length)
+                            .range(1e-3..=1e6)
+                            .speed(step),
+                    )
+                    .on_hover_text(
+                        "The depth past the billboard, in scene units, over which \u{3b6} falls from \
+                         \u{3b1}/\u{3b2}\u{b2} to \u{3b1}/(1+\u{3b2})\u{b2}. Fixed in space: the look \
+                         holds as the camera moves",
                     );
                     ui.end_row();
                     labelled(
