@@ -44,6 +44,12 @@ struct Chunk {
     count: u32,
     accumulate: u32,  // 0: the first dispatch writes, else adds to what the texel holds
     pipeline: u32,    // the entry point that runs it (read on the CPU only)
+    row_offset: u32,  // the first texel row of the dispatch: a band of rows (the viewer refines in bands)
+}
+
+// The texel an invocation integrates: its dispatch covers a band of rows from chunk.row_offset.
+fn texel_of(gid: vec3<u32>) -> vec2<u32> {
+    return vec2<u32>(gid.x, gid.y + chunk.row_offset);
 }
 
 @group(0) @binding(8) var<storage, read> chunk: Chunk;
@@ -148,7 +154,8 @@ fn jitter_offset(id: vec2<u32>) -> f32 {
 // The papers' integrator: Simpson's rule over k = 0..=n (3.33, corrected to end at s = 1), or with jitter the
 // randomly shifted rectangle rule (1 / n) sum f((k + xi) / n), unbiased, its error noise instead of bands.
 @compute @workgroup_size(8, 8)
-fn integrate(@builtin(global_invocation_id) id: vec3<u32>) {
+fn integrate(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let id = texel_of(gid);
     let w = params.resolution;
     if id.x >= w || id.y >= w {
         return;
@@ -656,7 +663,8 @@ fn integrate_smooth_term(kind: u32, index: u32, s_point: vec3<f32>, e_point: vec
 }
 
 @compute @workgroup_size(8, 8)
-fn integrate_adaptive(@builtin(global_invocation_id) id: vec3<u32>) {
+fn integrate_adaptive(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let id = texel_of(gid);
     let w = params.resolution;
     if id.x >= w || id.y >= w {
         return;
@@ -1530,7 +1538,8 @@ fn integrate_curve_term(index: u32, s_point: vec3<f32>, e_point: vec3<f32>) -> f
 }
 
 @compute @workgroup_size(8, 8)
-fn integrate_adaptive_curves(@builtin(global_invocation_id) id: vec3<u32>) {
+fn integrate_adaptive_curves(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let id = texel_of(gid);
     let w = params.resolution;
     if id.x >= w || id.y >= w {
         return;

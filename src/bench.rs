@@ -222,8 +222,20 @@ pub struct ViewerFrameRow {
     pub scene: String,
     /// Nothing changes: the field is not integrated again.
     pub idle: Timing,
-    /// The camera orbits a little every frame: the field is integrated every frame.
+    /// The camera orbits a little every frame, as the viewer draws it: a coarse field while moving
+    /// (`viewer::progressive`).
     pub orbiting: Timing,
+    /// The side of the coarse field the viewer chose while orbiting (the full field's side if none).
+    pub orbiting_resolution: u32,
+    /// The same orbit with the whole field integrated every frame (progressive refinement off): the baseline.
+    pub orbiting_full_field: Timing,
+    /// A control point of the curve dragged a little every frame, as the viewer draws it.
+    pub dragging: Timing,
+    pub dragging_resolution: u32,
+    /// From the last moving frame to the full-quality picture: milliseconds, frames, and the longest of them.
+    pub refine_ms: f64,
+    pub refine_frames: u32,
+    pub refine_longest_frame_ms: f64,
 }
 
 /// The error of a brightness texture against the converged reference, on B clamped to [0, 1] (what the blend
@@ -662,37 +674,88 @@ pub fn run(options: BenchOptions, mut progress: impl FnMut(&str)) -> Result<Repo
     })
 }
 
-/// Whole viewer frames at 1280 x 720 on the default scene: idle, and orbiting (the field integrated every frame).
+/// Whole viewer frames at 1280 x 720 on the default scene: idle (settled), orbiting and dragging a control point
+/// as the viewer draws them (a coarse field while moving), orbiting with the whole field every frame, and the
+/// time from the last move to the full picture.
 fn viewer_frames(
     options: &BenchOptions,
     progress: &mut impl FnMut(&str),
 ) -> Result<ViewerFrameRow, GpuError> {
     progress("viewer: 1280 x 720, default scene");
     let mut viewer = OffscreenViewer::new(Document::new(Scene::default_scene(), None), 1280, 720)?;
+    let timed = |viewer: &mut OffscreenViewer| -> Result<f64, GpuError> {
+        let t = Instant::now();
+        viewer.frame()?;
+        Ok(t.elapsed().as_secs_f64() * 1e3)
+    };
+    // Until the picture is whole and nothing asks for another frame.
+    let settle = |viewer: &mut OffscreenViewer| -> Result<(f64, u32, f64), GpuError> {
+        let (start, mut frames, mut longest) = (Instant::now(), 0, 0.0f64);
+        while viewer.app.report().averaging() && frames < 1000 {
+            longest = longest.max(timed(viewer)?);
+            frames += 1;
+        }
+        Ok((start.elapsed().as_secs_f64() * 1e3, frames, longest))
+    };
     let start = Instant::now();
     let mut rounds = 0;
     while rounds < options.warmup() || warming(start, rounds) {
         viewer.frame()?;
         rounds += 1;
     }
-    let (mut idle, mut orbiting) = (Vec::new(), Vec::new());
-    for _ in 0..options.frames() {
-        let t = Instant::now();
-        viewer.frame()?;
-        idle.push(t.elapsed().as_secs_f64() * 1e3);
-        crate::viewer::navigation::orbit(&mut viewer.app.doc.scene.camera, 0.01, 0.0);
-        let renders = viewer.field_renders();
-        let t = Instant::now();
-        viewer.frame()?;
-        orbiting.push(t.elapsed().as_secs_f64() * 1e3);
-        debug_assert_eq!(viewer.field_renders(), renders + 1);
+    settle(&mut viewer)?;
+    let frames = options.frames().max(3);
+    let mut idle = Vec::new();
+    for _ in 0..frames {
+        idle.push(timed(&mut viewer)?);
     }
+    // A gesture: several frames in a row, each moving the view, timed once the frame budget has adapted.
+    let gesture = |viewer: &mut OffscreenViewer,
+                   step: &dyn Fn(&mut Scene)|
+     -> Result<(Vec<f64>, u32), GpuError> {
+        let (mut ms, mut resolution) = (Vec::new(), 0);
+        for k in 0..frames + 4 {
+            step(&mut viewer.app.doc.scene);
+            let t = timed(viewer)?;
+            if k >= 4 {
+                ms.push(t);
+                resolution = (viewer.app.report().preview)
+                    .unwrap_or(viewer.app.doc.scene.billboard.resolution);
+            }
+        }
+        Ok((ms, resolution))
+    };
+    let orbit = |s: &mut Scene| crate::viewer::navigation::orbit(&mut s.camera, 0.01, 0.0);
+    let (orbiting, orbiting_resolution) = gesture(&mut viewer, &orbit)?;
+    let (refine_ms, refine_frames, refine_longest_frame_ms) = settle(&mut viewer)?;
+    let drag = |s: &mut Scene| {
+        if let Some(p) = s
+            .sources
+            .curves
+            .first_mut()
+            .and_then(|c| c.control_points.get_mut(1))
+        {
+            p.y += 0.01;
+        }
+    };
+    let (dragging, dragging_resolution) = gesture(&mut viewer, &drag)?;
+    settle(&mut viewer)?;
+    viewer.app.progressive = false;
+    let (orbiting_full_field, _) = gesture(&mut viewer, &orbit)?;
+    viewer.app.progressive = true;
     Ok(ViewerFrameRow {
         width: 1280,
         height: 720,
         scene: "default".into(),
         idle: Timing::of(idle),
         orbiting: Timing::of(orbiting),
+        orbiting_resolution,
+        orbiting_full_field: Timing::of(orbiting_full_field),
+        dragging: Timing::of(dragging),
+        dragging_resolution,
+        refine_ms,
+        refine_frames,
+        refine_longest_frame_ms,
     })
 }
 
@@ -877,14 +940,26 @@ impl Report {
         if let Some(v) = &self.viewer {
             let _ = writeln!(
                 s,
-                "\nviewer frame {}x{} ({} scene, UI + viewport, wall): idle {:.1} ms ({:.1} FPS), orbiting (field integrated every frame) {:.1} ms ({:.1} FPS)",
+                "\nviewer frame {}x{} ({} scene, UI + viewport, wall): idle {:.1} ms ({:.1} FPS); orbiting {:.1} ms ({:.1} FPS, {:.2}x idle, field {}^2 while moving); dragging a control point {:.1} ms ({:.1} FPS, {:.2}x idle, field {}^2); orbiting with the whole field every frame {:.1} ms ({:.1} FPS, {:.2}x idle); full picture {:.0} ms after the last move ({} frames, longest {:.1} ms)",
                 v.width,
                 v.height,
                 v.scene,
                 v.idle.median_ms,
                 v.idle.fps(),
                 v.orbiting.median_ms,
-                v.orbiting.fps()
+                v.orbiting.fps(),
+                v.orbiting.median_ms / v.idle.median_ms,
+                v.orbiting_resolution,
+                v.dragging.median_ms,
+                v.dragging.fps(),
+                v.dragging.median_ms / v.idle.median_ms,
+                v.dragging_resolution,
+                v.orbiting_full_field.median_ms,
+                v.orbiting_full_field.fps(),
+                v.orbiting_full_field.median_ms / v.idle.median_ms,
+                v.refine_ms,
+                v.refine_frames,
+                v.refine_longest_frame_ms,
             );
         }
         if !self.equal_error.is_empty() {
@@ -1031,6 +1106,13 @@ mod tests {
                 scene: "default".into(),
                 idle: Timing::of(vec![16.0]),
                 orbiting: Timing::of(vec![40.0]),
+                orbiting_resolution: 48,
+                orbiting_full_field: Timing::of(vec![200.0]),
+                dragging: Timing::of(vec![41.0]),
+                dragging_resolution: 48,
+                refine_ms: 450.0,
+                refine_frames: 8,
+                refine_longest_frame_ms: 60.0,
             }),
             equal_error: vec![EqualErrorRow {
                 scene: "mixed".into(),

@@ -116,7 +116,7 @@ fn rust_mirrors_match_the_wgsl_layouts() {
         &field,
         "Chunk",
         size_of::<Chunk>(),
-        fields!(Chunk: first, count, accumulate, pipeline),
+        fields!(Chunk: first, count, accumulate, pipeline, row_offset),
     );
     check_struct(
         &field,

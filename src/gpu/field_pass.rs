@@ -52,8 +52,9 @@ pub mod gpu_data {
         pub count: u32,      // 4
         pub accumulate: u32, // 8
         pub pipeline: u32, // 12: which of `FieldRenderer`'s pipelines runs it (read on the CPU only)
+        pub row_offset: u32, // 16: the first texel row of its band
     }
-    const _: () = assert!(size_of::<Chunk>() == 16);
+    const _: () = assert!(size_of::<Chunk>() == 20);
 
     /// `PointSource` in `shaders/field_common.wgsl`.
     #[repr(C)]
@@ -120,6 +121,17 @@ use gpu_data::*;
 /// Bytes of GPU memory the field pass's texture takes at resolution `w` (r32float).
 pub fn field_texture_bytes(w: u32) -> u64 {
     w as u64 * w as u64 * 4
+}
+
+/// What the field texture of a scene and billboard depends on (equal inputs give equal textures): compare the
+/// inputs of two frames to tell whether the field changed between them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FieldInputs(Packed);
+
+impl FieldInputs {
+    pub fn of(scene: &Scene, billboard: &Billboard) -> Self {
+        FieldInputs(pack(scene, billboard))
+    }
 }
 
 /// Everything the field pass reads, packed for upload; equal packs give equal textures.
@@ -199,6 +211,7 @@ fn plan_chunks(p: &Packed) -> Vec<Chunk> {
         count,
         accumulate: (k > 0) as u32,
         pipeline,
+        row_offset: 0,
     };
     let smooth = p.params.point_count + p.params.line_count + p.params.torus_count;
     let curves: Vec<u64> = p
@@ -387,7 +400,13 @@ pub struct FieldRenderer {
     texture: Option<(wgpu::Texture, wgpu::TextureView)>,
     bind_group: Option<wgpu::BindGroup>,
     uploaded: Option<Packed>,
-    pending: bool,
+    /// Rows per band of the next upload's dispatches (0: the whole texture in one band).
+    band_rows: u32,
+    /// The uploaded texture's bands: how many, their height, and the next one to dispatch (all dispatched:
+    /// nothing pending).
+    bands: u32,
+    band_height: u32,
+    next_band: u32,
     dispatches: u64,
     /// The mean of the jittered frames rendered since the scene last changed.
     average: FrameAverage,
@@ -508,7 +527,10 @@ impl FieldRenderer {
             texture: None,
             bind_group: None,
             uploaded: None,
-            pending: false,
+            band_rows: 0,
+            bands: 0,
+            band_height: 0,
+            next_band: 0,
             dispatches: 0,
             average: FrameAverage::new(device),
             average_frames: 1,
@@ -569,7 +591,7 @@ impl FieldRenderer {
             }
             // The next frame of the average: new offsets, nothing else changes.
             checked(device, || self.prepare_average_frame(device, queue))?;
-            self.pending = true;
+            self.next_band = 0;
             return Ok(true);
         }
         checked(device, || {
@@ -586,15 +608,28 @@ impl FieldRenderer {
                 rebind |= buffer.write(device, queue, bytes);
             }
             queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&packed.params));
-            let needed = packed.chunks.len() as u64 * self.chunk_stride;
+            // Every band dispatches every chunk over its rows: entry `band * chunks + k`.
+            self.band_height = match self.band_rows {
+                0 => w,
+                rows => rows.min(w),
+            };
+            self.bands = w.div_ceil(self.band_height);
+            let entries = packed.chunks.len() * self.bands as usize;
+            let needed = entries as u64 * self.chunk_stride;
             if self.chunks.size() < needed {
-                self.chunks = chunk_buffer(device, self.chunk_stride, packed.chunks.len());
+                self.chunks = chunk_buffer(device, self.chunk_stride, entries);
                 rebind = true;
             }
             let mut bytes = vec![0u8; needed as usize];
-            for (k, c) in packed.chunks.iter().enumerate() {
-                let at = k * self.chunk_stride as usize;
-                bytes[at..at + size_of::<Chunk>()].copy_from_slice(bytemuck::bytes_of(c));
+            for band in 0..self.bands {
+                for (k, c) in packed.chunks.iter().enumerate() {
+                    let entry = Chunk {
+                        row_offset: band * self.band_height,
+                        ..*c
+                    };
+                    let at = (band as usize * packed.chunks.len() + k) * self.chunk_stride as usize;
+                    bytes[at..at + size_of::<Chunk>()].copy_from_slice(bytemuck::bytes_of(&entry));
+                }
             }
             queue.write_buffer(&self.chunks, 0, &bytes);
             if self.texture.as_ref().is_none_or(|(t, _)| t.width() != w) {
@@ -620,7 +655,7 @@ impl FieldRenderer {
         if self.averaging() {
             checked(device, || self.prepare_average_frame(device, queue))?;
         }
-        self.pending = true;
+        self.next_band = 0;
         Ok(true)
     }
 
@@ -671,29 +706,77 @@ impl FieldRenderer {
         encoder: &mut wgpu::CommandEncoder,
         timestamps: Option<wgpu::ComputePassTimestampWrites<'_>>,
     ) -> bool {
+        let recorded = self.pending();
+        self.encode_bands(encoder, u32::MAX, timestamps);
+        recorded
+    }
+
+    /// Records the dispatches of up to `bands` of the pending bands (`set_band_rows`), in order; returns true
+    /// when the texture is complete after them (nothing pending). The texture is counted as rendered, and a
+    /// jittered frame folded into the mean, with its last band.
+    pub fn encode_bands(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        bands: u32,
+        timestamps: Option<wgpu::ComputePassTimestampWrites<'_>>,
+    ) -> bool {
         let (Some(bind_group), Some(packed)) = (&self.bind_group, &self.uploaded) else {
             return false;
         };
-        if !self.pending {
-            return false;
+        if !self.pending() {
+            return true;
         }
         let w = packed.params.resolution;
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("energywave.field.pass"),
             timestamp_writes: timestamps,
         });
-        for (k, c) in packed.chunks.iter().enumerate() {
-            pass.set_pipeline(&self.pipelines[c.pipeline as usize]);
-            pass.set_bind_group(0, bind_group, &[(k as u64 * self.chunk_stride) as u32]);
-            pass.dispatch_workgroups(w.div_ceil(8), w.div_ceil(8), 1);
+        let last = self.next_band.saturating_add(bands).min(self.bands);
+        for band in self.next_band..last {
+            let rows = self.band_height.min(w - band * self.band_height);
+            for (k, c) in packed.chunks.iter().enumerate() {
+                let entry = band as usize * packed.chunks.len() + k;
+                pass.set_pipeline(&self.pipelines[c.pipeline as usize]);
+                pass.set_bind_group(0, bind_group, &[(entry as u64 * self.chunk_stride) as u32]);
+                pass.dispatch_workgroups(w.div_ceil(8), rows.div_ceil(8), 1);
+            }
+        }
+        self.next_band = last;
+        if self.pending() {
+            return false;
         }
         if self.averaging() {
             self.average.encode(&mut pass);
             self.averaged += 1;
         }
-        self.pending = false;
         self.dispatches += 1;
         true
+    }
+
+    /// Whether bands of the uploaded scene are still to be dispatched.
+    pub fn pending(&self) -> bool {
+        self.uploaded.is_some() && self.next_band < self.bands
+    }
+
+    /// The height of the bands of the next upload, in rows (rounded up to the shader's 8 x 8 workgroups; 0:
+    /// the whole texture at once, the default). The viewer refines its picture a few bands a frame.
+    pub fn set_band_rows(&mut self, rows: u32) {
+        self.band_rows = rows.div_ceil(8) * 8;
+    }
+
+    /// How many bands the uploaded texture is dispatched in, and how many rows each holds.
+    pub fn band_layout(&self) -> (u32, u32) {
+        (self.bands, self.band_height)
+    }
+
+    /// Whether the texture shows `inputs` completely (uploaded, and every band dispatched).
+    pub fn shows(&self, inputs: &FieldInputs) -> bool {
+        self.uploaded.as_ref() == Some(&inputs.0) && !self.pending()
+    }
+
+    /// Whether `inputs` are the uploaded scene's (complete or not).
+    pub fn holds(&self, inputs: &FieldInputs) -> bool {
+        self.uploaded.as_ref() == Some(&inputs.0)
     }
 
     /// GPU memory the field pass holds now: the texture, the uniform and the storage buffers, in bytes.

@@ -86,11 +86,41 @@ impl SceneRenderer {
         behind: impl FnOnce(&mut wgpu::RenderPass<'_>, [[f32; 4]; 4]),
     ) -> Result<(), GpuError> {
         let [w, h] = targets.size;
+        let billboard = scene.place_billboard(w as f64 / h as f64);
+        self.field.prepare(device, queue, scene, &billboard)?;
+        checked(device, || self.field.encode(encoder))?;
+        let brightness = self.field.view().expect("prepared above").clone();
+        self.compose(
+            device,
+            queue,
+            encoder,
+            scene,
+            targets,
+            transparent,
+            (&brightness, scene.billboard.resolution),
+            behind,
+        )
+    }
+
+    /// Records the rest of a frame over a brightness texture already integrated (`brightness`: its view and
+    /// its side, W or another): the background with whatever `behind` draws over it, then the billboard
+    /// blended over a copy of that.
+    #[allow(clippy::too_many_arguments)]
+    pub fn compose(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &Scene,
+        targets: &FrameTargets,
+        transparent: bool,
+        (brightness, resolution): (&wgpu::TextureView, u32),
+        behind: impl FnOnce(&mut wgpu::RenderPass<'_>, [[f32; 4]; 4]),
+    ) -> Result<(), GpuError> {
+        let [w, h] = targets.size;
         let aspect = w as f64 / h as f64;
         let billboard = scene.place_billboard(aspect);
-        self.field.prepare(device, queue, scene, &billboard)?;
         checked(device, || {
-            self.field.encode(encoder);
             let view_proj = view_projection(&scene.camera, &billboard, aspect)
                 .as_mat4()
                 .to_cols_array_2d();
@@ -128,12 +158,11 @@ impl SceneRenderer {
             let params = billboard_params(
                 &scene.camera,
                 &billboard,
-                scene.billboard.resolution,
+                resolution,
                 scene.colors.energy,
                 aspect,
                 transparent,
             );
-            let brightness = self.field.view().expect("prepared above");
             self.billboard.draw(
                 device,
                 queue,

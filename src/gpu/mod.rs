@@ -9,14 +9,16 @@ mod frame;
 mod frame_average;
 mod headless;
 pub mod shaders;
+mod upsample;
 
 pub use billboard_pass::{BillboardRenderer, billboard_params, view_projection};
 pub use context::{
     GpuContext, GpuError, checked, describe, map_read, read_texture, texture_2d, uniform_buffer,
 };
-pub use field_pass::{FieldRenderer, field_texture_bytes};
+pub use field_pass::{FieldInputs, FieldRenderer, field_texture_bytes};
 pub use frame::{FRAME_FORMAT, FrameTargets, SceneRenderer, f16_to_f32, read_frame};
 pub use headless::{Frame, HeadlessRenderer};
+pub use upsample::Upsample;
 
 /// The Rust mirrors of the WGSL structs, for the layout tests.
 pub mod layout {

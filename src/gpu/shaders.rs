@@ -8,6 +8,9 @@ pub const FIELD_PASS: &str = include_str!("../../shaders/field.wgsl");
 /// The billboard pass.
 pub const BILLBOARD_PASS: &str = include_str!("../../shaders/billboard.wgsl");
 
+/// The smooth upsampling of the viewer's low-resolution preview field.
+pub const UPSAMPLE_PASS: &str = include_str!("../../shaders/upsample.wgsl");
+
 /// The running mean of jittered frames.
 pub const AVERAGE_PASS: &str = include_str!("../../shaders/average.wgsl");
 
@@ -27,6 +30,7 @@ pub fn all_modules() -> Vec<(&'static str, String)> {
         ("field.wgsl (with field_common.wgsl)", field_module_source()),
         ("billboard.wgsl", BILLBOARD_PASS.to_string()),
         ("average.wgsl", AVERAGE_PASS.to_string()),
+        ("upsample.wgsl", UPSAMPLE_PASS.to_string()),
         ("grid.wgsl", GRID_PASS.to_string()),
         ("blit.wgsl", BLIT_PASS.to_string()),
     ]

@@ -68,6 +68,9 @@ pub struct ViewerApp {
     pub show_handles: bool,
     /// With jitter: how many frames the viewport averages while the view is still (1: none).
     pub average_frames: u32,
+    /// While the view moves, show a coarse field sized to the frame budget and refine it once still
+    /// (`progressive`); off: every frame integrates the full field.
+    pub progressive: bool,
     /// Screenshot size relative to the viewport: 1, 2 or 4.
     pub screenshot_scale: u32,
     /// The path typed in the file section.
@@ -137,6 +140,7 @@ impl ViewerApp {
             show_grid: true,
             show_handles: true,
             average_frames: DEFAULT_AVERAGE_FRAMES,
+            progressive: true,
             screenshot_scale: 1,
             adapter,
             max_resolution,
@@ -506,7 +510,15 @@ impl ViewerApp {
                 }
                 Integrator::Simpson => format!("simpson, n = {}", i.divisions),
             };
-            ui.label(format!("billboard {w}\u{d7}{w}, {integrator}"));
+            let moving = match self.report().preview {
+                Some(r) if r < w => format!(" (moving: {r}\u{d7}{r})"),
+                _ => String::new(),
+            };
+            ui.label(format!("billboard {w}\u{d7}{w}{moving}, {integrator}"))
+                .on_hover_text(
+                    "While the view moves, a coarser field sized to hold the frame rate, refined to \
+                     the full one within about a second once it holds still (View: fast preview)",
+                );
             ui.separator();
             ui.label(self.doc.title());
             if let Some((text, is_error)) = &self.notice {
@@ -542,6 +554,7 @@ impl ViewerApp {
                 size: self.viewport_px,
                 show_grid: self.show_grid,
                 average_frames: self.average_frames,
+                progressive: self.progressive,
             }),
         ));
 

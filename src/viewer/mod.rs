@@ -23,6 +23,7 @@ pub mod navigation;
 pub mod offscreen;
 pub mod panel;
 pub mod presenter;
+pub mod progressive;
 pub mod timeline;
 pub mod viewport;
 pub mod window;

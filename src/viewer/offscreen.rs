@@ -177,6 +177,7 @@ impl OffscreenViewer {
             ],
             show_grid: self.app.show_grid,
             average_frames: self.app.average_frames,
+            progressive: false,
         };
         let (device, queue) = (&self.gpu.ctx.device, &self.gpu.ctx.queue);
         match self

@@ -176,6 +176,10 @@ fn view_section(ui: &mut Ui, app: &mut ViewerApp) {
         ui.horizontal(|ui| {
             ui.checkbox(&mut app.show_grid, "grid");
             ui.checkbox(&mut app.show_handles, "handles");
+            ui.checkbox(&mut app.progressive, "fast preview").on_hover_text(
+                "While the view moves, integrate a coarser field that holds the frame rate, and refine \
+                 it to the full one once still; off: the full field every frame",
+            );
             if ui.button("Frame").on_hover_text("F: frame the effect").clicked() {
                 app.frame_effect();
             }

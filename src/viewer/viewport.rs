@@ -3,10 +3,15 @@
 //! through the same code.
 
 use std::sync::{Arc, Mutex};
+use std::time::Instant;
 
 use wgpu::util::DeviceExt;
 
-use crate::gpu::{FRAME_FORMAT, FrameTargets, GpuError, SceneRenderer, read_frame, uniform_buffer};
+use super::progressive::{FrameBudget, PREVIEW_TOLERANCE, Plan, Work};
+use crate::gpu::{
+    FRAME_FORMAT, FieldInputs, FieldRenderer, FrameTargets, GpuError, SceneRenderer, Upsample,
+    checked, read_frame, uniform_buffer,
+};
 use crate::scene::Scene;
 
 /// Format of the offscreen viewport: half floats, so the blend and the grid keep more than 8 bits.
@@ -47,6 +52,9 @@ pub struct ViewportView {
     pub show_grid: bool,
     /// With a jittered integrator: how many frames to average while the scene stays the same (1: none).
     pub average_frames: u32,
+    /// Whether a moving view may show a coarse field while the full one is refined (`progressive`); the
+    /// viewer's screen does, screenshots never.
+    pub progressive: bool,
 }
 
 /// What the GPU side reports back to the UI.
@@ -58,12 +66,14 @@ pub struct ViewportReport {
     pub field_renders: u64,
     /// While jittered frames are averaged: how many the picture holds, and the most it will hold.
     pub averaged: Option<(u32, u32)>,
+    /// The side of the coarse field shown while the view moves, until the full field is whole again.
+    pub preview: Option<u32>,
 }
 
 impl ViewportReport {
-    /// Whether the viewport wants another frame to add to its average.
+    /// Whether the viewport wants another frame: to add to its average, or to refine a coarse picture.
     pub fn averaging(&self) -> bool {
-        self.averaged.is_some_and(|(k, most)| k < most)
+        self.averaged.is_some_and(|(k, most)| k < most) || self.preview.is_some()
     }
 }
 
@@ -82,12 +92,23 @@ pub struct ViewportGpu {
     sampler: wgpu::Sampler,
     targets: Option<(FrameTargets, wgpu::BindGroup)>,
     report: Arc<Mutex<ViewportReport>>,
+    /// The coarse field of a moving view, its upsampling to W x W, and what frames cost.
+    preview: FieldRenderer,
+    upsample: Upsample,
+    budget: FrameBudget,
+    /// The field inputs of the last frame, and whether it showed the coarse field (of the side given).
+    last_inputs: Option<FieldInputs>,
+    showing_preview: Option<u32>,
 }
 
 impl ViewportGpu {
-    /// The brightness texture the viewport shows now (after its first frame).
+    /// The brightness texture the viewport shows now (after its first frame): the upsampled coarse field while
+    /// the view moves, else the full one.
     pub fn field_texture(&self) -> Option<&wgpu::Texture> {
-        self.scene_renderer.field().texture()
+        match self.showing_preview {
+            Some(_) => self.upsample.output().map(|(t, _)| t),
+            None => self.scene_renderer.field().texture(),
+        }
     }
 
     /// Pipelines for a frame of `target_format` (egui's); `report` is shared with the UI.
@@ -255,6 +276,11 @@ impl ViewportGpu {
             sampler,
             targets: None,
             report,
+            preview: FieldRenderer::new(device),
+            upsample: Upsample::new(device),
+            budget: FrameBudget::default(),
+            last_inputs: None,
+            showing_preview: None,
         }
     }
 
@@ -287,7 +313,7 @@ impl ViewportGpu {
             self.targets = Some((targets, bind_group));
         }
         let (targets, bind_group) = self.targets.take().expect("created above");
-        let result = self.record_into(device, queue, encoder, view, &targets);
+        let result = self.record_into(device, queue, encoder, view, &targets, view.progressive);
         self.targets = Some((targets, bind_group));
         result
     }
@@ -299,6 +325,7 @@ impl ViewportGpu {
         encoder: &mut wgpu::CommandEncoder,
         view: &ViewportView,
         targets: &FrameTargets,
+        progressive: bool,
     ) -> Result<(), GpuError> {
         let vertices = if view.show_grid {
             grid_vertices(&view.scene)
@@ -306,6 +333,7 @@ impl ViewportGpu {
             Vec::new()
         };
         self.upload_grid_vertices(device, queue, vertices);
+        let result = self.integrate(device, queue, encoder, view, targets, progressive);
         let grid = (self.grid_count > 0).then_some((
             &self.grid_pipeline,
             &self.grid_bind_group,
@@ -313,34 +341,131 @@ impl ViewportGpu {
             &self.grid_vertices,
             self.grid_count,
         ));
-        self.scene_renderer
-            .field_mut()
-            .set_average_frames(view.average_frames);
-        let result = self.scene_renderer.record(
-            device,
-            queue,
-            encoder,
-            &view.scene,
-            targets,
-            false,
-            |pass, view_proj| {
-                // The grid lies behind the glow, which blends over it.
-                if let Some((pipeline, bind_group, params, vertices, count)) = grid {
-                    // Written before the submit that runs this pass, with the renderer's own projection.
-                    queue.write_buffer(params, 0, bytemuck::bytes_of(&GridParams { view_proj }));
-                    pass.set_pipeline(pipeline);
-                    pass.set_bind_group(0, bind_group, &[]);
-                    pass.set_vertex_buffer(0, vertices.slice(..));
-                    pass.draw(0..count, 0..1);
-                }
-            },
-        );
+        let result = result.and_then(|brightness| {
+            self.scene_renderer.compose(
+                device,
+                queue,
+                encoder,
+                &view.scene,
+                targets,
+                false,
+                (&brightness.0, brightness.1),
+                |pass, view_proj| {
+                    // The grid lies behind the glow, which blends over it.
+                    if let Some((pipeline, bind_group, params, vertices, count)) = grid {
+                        // Written before the submit that runs this pass, with the renderer's own projection.
+                        queue.write_buffer(
+                            params,
+                            0,
+                            bytemuck::bytes_of(&GridParams { view_proj }),
+                        );
+                        pass.set_pipeline(pipeline);
+                        pass.set_bind_group(0, bind_group, &[]);
+                        pass.set_vertex_buffer(0, vertices.slice(..));
+                        pass.draw(0..count, 0..1);
+                    }
+                },
+            )
+        });
         if let Ok(mut r) = self.report.lock() {
             r.error = result.as_ref().err().map(|e| e.to_string());
-            r.field_renders = self.scene_renderer.field().dispatch_count();
+            r.field_renders =
+                self.scene_renderer.field().dispatch_count() + self.preview.dispatch_count();
             r.averaged = self.scene_renderer.field().averaged_frames();
+            r.preview = self.showing_preview;
         }
         result
+    }
+
+    /// Records this frame's field work and returns the view of the W x W brightness to show: the full field
+    /// when it shows the scene (or, with `progressive` off, always: it is integrated whole now), else what the
+    /// frame budget allows (`progressive::FrameBudget::plan`), a coarse field upsampled while the view moves
+    /// and bands of the full one once it holds still.
+    fn integrate(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+        view: &ViewportView,
+        targets: &FrameTargets,
+        progressive: bool,
+    ) -> Result<(wgpu::TextureView, u32), GpuError> {
+        let scene = &view.scene;
+        let [width, height] = targets.size;
+        let billboard = scene.place_billboard(width as f64 / height as f64);
+        let inputs = FieldInputs::of(scene, &billboard);
+        let moved = self.last_inputs.as_ref() != Some(&inputs);
+        self.last_inputs = Some(inputs.clone());
+        let now = Instant::now();
+        if progressive {
+            self.budget.frame_started(now);
+        }
+        let w = scene.billboard.resolution;
+        let texels = w as u64 * w as u64;
+        let main = self.scene_renderer.field_mut();
+        main.set_average_frames(view.average_frames);
+        let plan = if !progressive || main.shows(&inputs) {
+            Plan::Full
+        } else {
+            self.budget.plan(moved, w)
+        };
+        let mut work = Work::Nothing;
+        let mut preview = None;
+        match plan {
+            Plan::Full => {
+                main.set_band_rows(0);
+                main.prepare(device, queue, scene, &billboard)?;
+                if checked(device, || main.encode_timed(encoder, None))? {
+                    work = Work::Full { texels };
+                }
+            }
+            Plan::Preview { resolution } => {
+                // Four texels of the upsampled field to one of the coarse one are smooth under the
+                // billboard's bilinear filter, and cost a sixteenth of upsampling to W at a quarter of it.
+                let upsampled = (4 * resolution).min(w);
+                let mut coarse = scene.clone();
+                coarse.billboard.resolution = resolution;
+                let i = &mut coarse.integration;
+                i.tolerance = i.tolerance.max(PREVIEW_TOLERANCE);
+                self.preview.prepare(device, queue, &coarse, &billboard)?;
+                checked(device, || {
+                    self.preview.encode(encoder);
+                    let (texture, view) = (self.preview.texture(), self.preview.view());
+                    let (texture, view) = (texture.expect("prepared"), view.expect("prepared"));
+                    self.upsample
+                        .encode(device, encoder, texture, view, upsampled);
+                })?;
+                work = Work::Preview {
+                    texels: resolution as u64 * resolution as u64,
+                };
+                preview = Some(resolution);
+            }
+            Plan::Refine { band_rows, bands } => {
+                if !main.holds(&inputs) {
+                    main.set_band_rows(band_rows);
+                    main.prepare(device, queue, scene, &billboard)?;
+                }
+                let (_, height) = main.band_layout();
+                let complete = checked(device, || main.encode_bands(encoder, bands, None))?;
+                work = Work::Full {
+                    texels: (bands * height).min(w) as u64 * w as u64,
+                };
+                // Until the full field is whole, the last coarse one (of these same inputs) stays.
+                if !complete && self.upsample.output().is_some() {
+                    preview = self.showing_preview.or(Some(w));
+                }
+            }
+        }
+        if progressive {
+            self.budget.frame_did(now, work);
+        }
+        self.showing_preview = preview;
+        let shown = match preview {
+            Some(_) => self.upsample.output().map(|(t, v)| (v, t.width())),
+            None => self.scene_renderer.field().view().map(|v| (v, w)),
+        };
+        let (view, side) = shown.expect("a field was integrated above");
+        Ok((view.clone(), side))
     }
 
     /// Uploads the grid's vertices when they changed (they depend only on the scene's extent).
@@ -397,7 +522,7 @@ impl ViewportGpu {
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("energywave.viewport.screenshot"),
         });
-        self.record_into(device, queue, &mut encoder, view, &targets)?;
+        self.record_into(device, queue, &mut encoder, view, &targets, false)?;
         queue.submit([encoder.finish()]);
         read_frame(device, queue, &targets)
     }

@@ -290,6 +290,7 @@ fn save_viewport(
         size: [w.max(1) * scale, h.max(1) * scale],
         show_grid: app.show_grid,
         average_frames: app.average_frames,
+        progressive: false,
     };
     let (device, queue) = (&gpu.ctx.device, &gpu.ctx.queue);
     let vp = gpu

@@ -1,0 +1,140 @@
+//! The smooth upsampling of a low-resolution brightness texture to W x W (`shaders/upsample.wgsl`): the viewer
+//! integrates a coarse field while the view moves and shows it through the same billboard pass as the full
+//! one, upsampled by Catmull-Rom (no blocks, no creases between texels).
+
+use super::context::texture_2d;
+use super::shaders;
+
+/// The pipeline, and the W x W output with its bind group over one source texture.
+pub struct Upsample {
+    pipeline: wgpu::ComputePipeline,
+    layout: wgpu::BindGroupLayout,
+    bound: Option<Bound>,
+}
+
+struct Bound {
+    source: wgpu::Texture,
+    output: wgpu::Texture,
+    view: wgpu::TextureView,
+    bind_group: wgpu::BindGroup,
+}
+
+impl Upsample {
+    pub fn new(device: &wgpu::Device) -> Self {
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("energywave.upsample.shader"),
+            source: wgpu::ShaderSource::Wgsl(shaders::UPSAMPLE_PASS.into()),
+        });
+        let compute = wgpu::ShaderStages::COMPUTE;
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("energywave.upsample.bind_group_layout"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: compute,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 1,
+                    visibility: compute,
+                    ty: wgpu::BindingType::StorageTexture {
+                        access: wgpu::StorageTextureAccess::WriteOnly,
+                        format: wgpu::TextureFormat::R32Float,
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                    },
+                    count: None,
+                },
+            ],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("energywave.upsample.pipeline_layout"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("upsample"),
+            layout: Some(&pipeline_layout),
+            module: &module,
+            entry_point: Some("upsample"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        Self {
+            pipeline,
+            layout,
+            bound: None,
+        }
+    }
+
+    /// Records the upsampling of `source` (its view `source_view`) into the W x W output, `w` = `resolution`.
+    pub fn encode(
+        &mut self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        source: &wgpu::Texture,
+        source_view: &wgpu::TextureView,
+        resolution: u32,
+    ) {
+        let stale = self
+            .bound
+            .as_ref()
+            .is_none_or(|b| &b.source != source || b.output.width() != resolution);
+        if stale {
+            let output = texture_2d(
+                device,
+                "energywave.upsample.output",
+                [resolution, resolution],
+                wgpu::TextureFormat::R32Float,
+                wgpu::TextureUsages::STORAGE_BINDING
+                    | wgpu::TextureUsages::TEXTURE_BINDING
+                    | wgpu::TextureUsages::COPY_SRC,
+            );
+            let view = output.create_view(&Default::default());
+            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("energywave.upsample.bind_group"),
+                layout: &self.layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: wgpu::BindingResource::TextureView(source_view),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: wgpu::BindingResource::TextureView(&view),
+                    },
+                ],
+            });
+            self.bound = Some(Bound {
+                source: source.clone(),
+                output,
+                view,
+                bind_group,
+            });
+        }
+        let b = self.bound.as_ref().expect("bound above");
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("energywave.upsample.pass"),
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &b.bind_group, &[]);
+        pass.dispatch_workgroups(resolution.div_ceil(8), resolution.div_ceil(8), 1);
+    }
+
+    /// The upsampled texture and its view (after the first `encode`).
+    pub fn output(&self) -> Option<(&wgpu::Texture, &wgpu::TextureView)> {
+        self.bound.as_ref().map(|b| (&b.output, &b.view))
+    }
+
+    /// GPU memory held: the output texture, in bytes.
+    pub fn gpu_bytes(&self) -> u64 {
+        self.bound.as_ref().map_or(0, |b| {
+            super::field_pass::field_texture_bytes(b.output.width())
+        })
+    }
+}

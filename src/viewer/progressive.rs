@@ -1,0 +1,267 @@
+//! Progressive refinement: how much field the viewport integrates in a frame. While the field's inputs change
+//! from frame to frame (orbiting, dragging a handle, editing a value), the viewport integrates a coarse field,
+//! its resolution chosen from the measured cost to hold the frame budget, and shows it smoothly upsampled;
+//! once the view holds still it integrates the full field a band of rows at a time and shows it when whole:
+//! exactly the picture a still render gives. Screenshots and exports never see the coarse field.
+//!
+//! The costs come from the frames themselves: the time from one frame's start to the next is the idle cost of
+//! a frame (UI, grid, billboard) plus the field work recorded in it: the full field's cost is linear in its
+//! texels, the coarse one's that per texel plus a fixed part (its dispatch and the upsampling to W x W,
+//! measured).
+
+use std::time::Instant;
+
+/// The looser tolerance of the adaptive integrator on the coarse field (the resolution's error dominates it).
+pub const PREVIEW_TOLERANCE: f64 = 1e-3;
+
+/// Fewest texels a side of the coarse field.
+pub const MIN_PREVIEW: u32 = 16;
+
+/// A moving frame may cost this many times an idle one (the slack the field gets while the view moves).
+pub const MOVING_FACTOR: f64 = 1.3;
+
+/// Field work a refining frame may spend, in milliseconds: the full picture of a scene that takes 300 ms
+/// arrives in about half a second of frames that stay responsive.
+pub const REFINE_MS: f64 = 40.0;
+
+/// The cost of a texel assumed until one is measured, in milliseconds: a CPU rasterizer's on the default scene
+/// (lavapipe on two cores: 4 to 5 us), so that a first gesture on a slow adapter is not a frame of a whole field.
+const ASSUMED_TEXEL_MS: f64 = 4e-3;
+
+/// Frames further apart than this did not run back to back (the viewer was idle): they measure nothing.
+const STALE_MS: f64 = 400.0;
+
+/// The weight of a new measurement in the running estimates.
+const SMOOTHING: f64 = 0.3;
+
+/// What a frame integrated.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Work {
+    /// No field work.
+    Nothing,
+    /// A coarse field of this many texels.
+    Preview { texels: u64 },
+    /// Texels of the full field (a whole field, or bands of it).
+    Full { texels: u64 },
+}
+
+/// What the viewport should integrate this frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Plan {
+    /// The whole field at full quality in this frame (it fits the budget, or nothing is known yet).
+    Full,
+    /// A coarse field of `resolution` texels a side, upsampled.
+    Preview { resolution: u32 },
+    /// The next bands of the full field, `band_rows` rows each, `bands` of them this frame.
+    Refine { band_rows: u32, bands: u32 },
+}
+
+/// The running estimates of what frames cost.
+#[derive(Clone, Debug)]
+pub struct FrameBudget {
+    /// Milliseconds a frame takes without field work, and whether that was measured (else a 60 Hz frame).
+    idle_ms: f64,
+    idle_measured: bool,
+    /// Milliseconds per texel of the full field.
+    full_ms: Option<f64>,
+    /// The fixed milliseconds of a coarse field beyond its texels' share (upsampling, dispatch).
+    preview_overhead_ms: f64,
+    /// The coarse field's side in use (kept while it still fits, so the picture does not shimmer).
+    resolution: Option<u32>,
+    last: Option<(Instant, Work)>,
+}
+
+impl Default for FrameBudget {
+    fn default() -> Self {
+        Self {
+            // A 60 Hz frame until measured.
+            idle_ms: 1000.0 / 60.0,
+            idle_measured: false,
+            full_ms: None,
+            preview_overhead_ms: 0.0,
+            resolution: None,
+            last: None,
+        }
+    }
+}
+
+fn blend(old: Option<f64>, new: f64) -> f64 {
+    old.map_or(new, |o| o + SMOOTHING * (new - o))
+}
+
+impl FrameBudget {
+    /// Starts a frame at `now`: the time since the last frame's start measures what that frame did.
+    pub fn frame_started(&mut self, now: Instant) {
+        let Some((then, work)) = self.last.take() else {
+            return;
+        };
+        let ms = now.duration_since(then).as_secs_f64() * 1e3;
+        if ms > STALE_MS {
+            return;
+        }
+        // The field's share: at least a tenth of the frame, so a noisy idle estimate never makes it free.
+        let field = (ms - self.idle_ms).max(0.1 * ms);
+        match work {
+            Work::Nothing => {
+                self.idle_ms = blend(self.idle_measured.then_some(self.idle_ms), ms);
+                self.idle_measured = true;
+            }
+            // Without a measured idle frame the fixed part cannot be told from it.
+            Work::Preview { .. } if !self.idle_measured => {}
+            Work::Preview { texels } => {
+                let per_texel = self.full_ms.unwrap_or(0.0);
+                let overhead = (field - per_texel * texels as f64).max(0.0);
+                self.preview_overhead_ms = blend(Some(self.preview_overhead_ms), overhead);
+            }
+            Work::Full { texels } => {
+                self.full_ms = Some(blend(self.full_ms, field / texels.max(1) as f64));
+            }
+        }
+    }
+
+    /// Records what the frame started last did.
+    pub fn frame_did(&mut self, now: Instant, work: Work) {
+        self.last = Some((now, work));
+    }
+
+    /// The field's share of a moving frame, in milliseconds.
+    fn moving_budget(&self) -> f64 {
+        (self.idle_ms * (MOVING_FACTOR - 1.0)).max(2.0)
+    }
+
+    /// What to integrate in a frame whose field inputs changed since the last frame (`moved`) or not, for a
+    /// full field of `w` texels a side whose texture does not show the inputs yet.
+    pub fn plan(&mut self, moved: bool, w: u32) -> Plan {
+        let texels = w as f64 * w as f64;
+        if moved {
+            // Small fields and fast machines: the whole field at once.
+            let per_texel = self.full_ms.unwrap_or(ASSUMED_TEXEL_MS);
+            if per_texel * texels <= self.moving_budget() || w <= MIN_PREVIEW {
+                return Plan::Full;
+            }
+            // What the texels may spend once the fixed part is paid (a quarter of the budget at least).
+            let budget = self.moving_budget();
+            let texel_budget = (budget - self.preview_overhead_ms).max(0.25 * budget);
+            let ideal = (texel_budget / per_texel.max(1e-9)).sqrt();
+            // Multiples of 8 (the shader's workgroups), kept while within 20 % of the ideal.
+            let kept = self
+                .resolution
+                .filter(|&r| (r as f64 - ideal).abs() <= 0.2 * ideal);
+            let r = kept.unwrap_or_else(|| ((ideal / 8.0).round() as u32 * 8).max(MIN_PREVIEW));
+            let r = r.clamp(MIN_PREVIEW, w);
+            self.resolution = Some(r);
+            if r >= w {
+                return Plan::Full;
+            }
+            return Plan::Preview { resolution: r };
+        }
+        match self.full_ms {
+            Some(c) if c * texels > REFINE_MS => {
+                let rows = (REFINE_MS / (c * w as f64)).floor().max(8.0) as u32;
+                Plan::Refine {
+                    band_rows: rows.div_ceil(8) * 8,
+                    bands: 1,
+                }
+            }
+            // Within one refining frame's budget (or unmeasured): all of it now.
+            _ => Plan::Full,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::time::Duration;
+
+    /// Feeds `frames` frames of `ms` milliseconds each that did `work`.
+    fn run(b: &mut FrameBudget, start: &mut Instant, frames: u32, ms: f64, work: Work) {
+        for _ in 0..frames {
+            b.frame_started(*start);
+            b.frame_did(*start, work);
+            *start += Duration::from_secs_f64(ms / 1e3);
+        }
+        b.frame_started(*start);
+    }
+
+    #[test]
+    fn a_slow_field_is_previewed_at_the_resolution_that_holds_the_budget() {
+        let mut b = FrameBudget::default();
+        let mut t = Instant::now();
+        // Idle frames of 20 ms; full frames of 256^2 texels at 300 ms (280 of them the field).
+        run(&mut b, &mut t, 5, 20.0, Work::Nothing);
+        run(&mut b, &mut t, 5, 300.0, Work::Full { texels: 65536 });
+        let Plan::Preview { resolution } = b.plan(true, 256) else {
+            panic!("a 280 ms field is previewed while moving");
+        };
+        // A coarse texel costs what a full one does: 6 ms of field at 4.3 us a texel.
+        let field_ms = resolution as f64 * resolution as f64 * 280.0 / 65536.0;
+        assert!(
+            (4.0..8.5).contains(&field_ms) && resolution % 8 == 0,
+            "{resolution}: {field_ms} ms"
+        );
+        // Measured previews at that cost keep the resolution (no shimmer from frame to frame).
+        let texels = resolution as u64 * resolution as u64;
+        run(
+            &mut b,
+            &mut t,
+            10,
+            20.0 + field_ms,
+            Work::Preview { texels },
+        );
+        assert_eq!(b.plan(true, 256), Plan::Preview { resolution });
+        // A fixed 3 ms on top of every coarse field (its upsampling) leaves the texels less.
+        run(
+            &mut b,
+            &mut t,
+            20,
+            23.0 + field_ms,
+            Work::Preview { texels },
+        );
+        let Plan::Preview {
+            resolution: smaller,
+        } = b.plan(true, 256)
+        else {
+            panic!("still previewed");
+        };
+        let field_ms = smaller as f64 * smaller as f64 * 280.0 / 65536.0;
+        assert!(
+            smaller < resolution && field_ms + 3.0 <= 8.5,
+            "{smaller}: {field_ms} ms + 3 ms"
+        );
+        // Still again: the full field in bands of about 40 ms.
+        let Plan::Refine { band_rows, bands } = b.plan(false, 256) else {
+            panic!("a 280 ms field is refined in bands");
+        };
+        let band_ms = band_rows as f64 * 256.0 * 280.0 / 65536.0;
+        assert!(
+            bands == 1 && band_ms <= 1.25 * REFINE_MS,
+            "{band_rows} rows: {band_ms} ms"
+        );
+    }
+
+    #[test]
+    fn a_cheap_field_is_integrated_whole_every_frame() {
+        let mut b = FrameBudget::default();
+        let mut t = Instant::now();
+        // Nothing measured yet: coarse, as if on a CPU rasterizer, until a full field has been timed.
+        assert!(matches!(b.plan(true, 256), Plan::Preview { .. }));
+        assert_eq!(b.plan(false, 256), Plan::Full);
+        assert_eq!(b.plan(true, 32), Plan::Full, "1024 texels fit any frame");
+        run(&mut b, &mut t, 5, 16.7, Work::Nothing);
+        run(&mut b, &mut t, 5, 18.0, Work::Full { texels: 65536 });
+        assert_eq!(b.plan(true, 256), Plan::Full);
+        assert_eq!(b.plan(false, 256), Plan::Full);
+    }
+
+    #[test]
+    fn frames_far_apart_measure_nothing() {
+        let mut b = FrameBudget::default();
+        let mut t = Instant::now();
+        run(&mut b, &mut t, 3, 20.0, Work::Nothing);
+        let idle = b.idle_ms;
+        // An idle viewer redraws every quarter second or less often: those gaps are not frame costs.
+        run(&mut b, &mut t, 3, 900.0, Work::Nothing);
+        assert_eq!(b.idle_ms, idle);
+    }
+}

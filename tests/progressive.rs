@@ -1,0 +1,200 @@
+//! Progressive refinement in the viewer: a coarse field, smoothly upsampled, while the view moves; the full one
+//! in bands once it holds still, ending on exactly the texture a still render gives; screenshots at full
+//! quality whatever the screen shows.
+
+use std::path::Path;
+
+use energywave::gpu::{FieldRenderer, GpuContext, HeadlessRenderer, Upsample, texture_2d};
+use energywave::scene::Scene;
+use energywave::viewer::document::Document;
+use energywave::viewer::navigation;
+use energywave::viewer::offscreen::OffscreenViewer;
+
+/// Runs `upsample` over `values` (n x n, rows from the top) to `w` x `w` and reads the result back.
+fn upsampled(ctx: &GpuContext, values: &[f32], n: u32, w: u32) -> Vec<f32> {
+    let (device, queue) = (&ctx.device, &ctx.queue);
+    let source = texture_2d(
+        device,
+        "test.low",
+        [n, n],
+        wgpu::TextureFormat::R32Float,
+        wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+    );
+    queue.write_texture(
+        source.as_image_copy(),
+        bytemuck::cast_slice(values),
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(4 * n),
+            rows_per_image: Some(n),
+        },
+        source.size(),
+    );
+    let view = source.create_view(&Default::default());
+    let mut upsample = Upsample::new(device);
+    let mut encoder = device.create_command_encoder(&Default::default());
+    upsample.encode(device, &mut encoder, &source, &view, w);
+    ctx.checked(|| queue.submit([encoder.finish()])).unwrap();
+    let (output, _) = upsample.output().unwrap();
+    bytemuck::cast_slice(&ctx.read_texture(output, 4).unwrap()).to_vec()
+}
+
+/// Catmull-Rom reproduces quadratics exactly wherever its 4 x 4 stencil lies inside the texture, takes the
+/// source's values where texel centers coincide, and never goes below 0.
+#[test]
+fn upsampling_is_exact_on_quadratics_and_interpolates() {
+    let ctx = GpuContext::new().expect("a GPU adapter (lavapipe in CI)");
+    let n = 16;
+    // A quadratic in texture coordinates (texel centers at (i + 0.5) / n).
+    let q = |x: f64, y: f64| 0.3 + 0.8 * x - 0.4 * y + 1.1 * x * x - 0.7 * x * y + 0.5 * y * y;
+    let center = |i: u32, size: u32| (i as f64 + 0.5) / size as f64;
+    let values: Vec<f32> = (0..n * n)
+        .map(|k| q(center(k % n, n), center(k / n, n)) as f32)
+        .collect();
+    for w in [48, 64, 100] {
+        let out = upsampled(&ctx, &values, n, w);
+        let mut checked = 0;
+        for j in 0..w {
+            for i in 0..w {
+                // The stencil: source texels floor(x) - 1 ..= floor(x) + 2 along each axis.
+                let at = |i: u32| (i as f64 + 0.5) * n as f64 / w as f64 - 0.5;
+                let inside = |x: f64| x.floor() >= 1.0 && x.floor() + 2.0 <= (n - 1) as f64;
+                if !(inside(at(i)) && inside(at(j))) {
+                    continue;
+                }
+                let want = q(center(i, w), center(j, w));
+                let got = out[(j * w + i) as usize] as f64;
+                assert!(
+                    (got - want).abs() < 2e-6,
+                    "{w}: texel ({i}, {j}) {got} vs {want}"
+                );
+                checked += 1;
+            }
+        }
+        assert!(
+            checked > (w * w / 2) as usize,
+            "{w}: {checked} texels checked"
+        );
+    }
+    // The same size: the identity.
+    assert_eq!(upsampled(&ctx, &values, n, n), values);
+    // A single bright texel: the cubic's lobes beside it are clipped at 0.
+    let mut spike = vec![0.0f32; (n * n) as usize];
+    spike[(8 * n + 8) as usize] = 10.0;
+    let out = upsampled(&ctx, &spike, n, 64);
+    assert!(out.iter().all(|&b| b >= 0.0));
+    assert!(out.iter().any(|&b| b > 5.0));
+}
+
+/// Reads the field texture of `field` after it was encoded whole or band by band.
+fn integrate(ctx: &GpuContext, scene: &Scene, band_rows: u32) -> (Vec<f32>, u32) {
+    let (device, queue) = (&ctx.device, &ctx.queue);
+    let mut field = FieldRenderer::new(device);
+    field.set_band_rows(band_rows);
+    let bb = scene.place_billboard(1.0);
+    assert!(field.prepare(device, queue, scene, &bb).unwrap());
+    let mut frames = 0;
+    loop {
+        let mut encoder = device.create_command_encoder(&Default::default());
+        let done = field.encode_bands(&mut encoder, 1, None);
+        ctx.checked(|| queue.submit([encoder.finish()])).unwrap();
+        frames += 1;
+        if done {
+            break;
+        }
+        assert!(frames < 1000);
+    }
+    assert_eq!(field.dispatch_count(), 1, "one render, however many bands");
+    let texture = field.texture().unwrap();
+    let values = bytemuck::cast_slice(&ctx.read_texture(texture, 4).unwrap()).to_vec();
+    (values, frames)
+}
+
+#[test]
+fn a_field_integrated_in_bands_is_the_field_integrated_at_once() {
+    let ctx = GpuContext::new().expect("a GPU adapter (lavapipe in CI)");
+    for name in ["default.toml", "mixed.toml"] {
+        let mut scene = Scene::load(
+            &Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("assets/scenes")
+                .join(name),
+        )
+        .unwrap();
+        scene.billboard.resolution = 44;
+        let (whole, frames) = integrate(&ctx, &scene, 0);
+        assert_eq!(frames, 1);
+        // 8-row bands (the last of 4 rows), and 16-row bands rounded from 13.
+        for (rows, bands) in [(8, 6), (13, 3)] {
+            let (banded, frames) = integrate(&ctx, &scene, rows);
+            assert_eq!(frames, bands, "{name}: {rows} rows");
+            assert_eq!(banded, whole, "{name}: {rows}-row bands");
+        }
+        assert!(whole.iter().any(|&b| b > 0.1), "{name} shows its effect");
+    }
+}
+
+/// Frames until the viewer stops asking for more (the picture whole), at most 200.
+fn settle(v: &mut OffscreenViewer) -> u32 {
+    for k in 0..200 {
+        v.frame().unwrap();
+        if !v.app.report().averaging() {
+            return k + 1;
+        }
+    }
+    panic!("the viewer still refines after 200 frames");
+}
+
+/// Orbiting the default scene (256 x 256, about 0.3 s a field on lavapipe): a coarse field while moving when the
+/// full one does not fit the frame, a screenshot at full quality meanwhile, and once still exactly the texture
+/// a still render of the final view gives.
+#[test]
+fn the_viewer_previews_while_orbiting_and_ends_on_the_still_picture() {
+    let (width, height) = (640, 400);
+    let mut v = OffscreenViewer::new(Document::new(Scene::default_scene(), None), width, height)
+        .expect("a GPU adapter (lavapipe in CI)");
+    settle(&mut v);
+    let w = v.app.doc.scene.billboard.resolution;
+    // What a full field costs on this adapter (a second render, compiled and warm).
+    let mut headless = HeadlessRenderer::new().unwrap();
+    let mut probe = v.app.frame_scene();
+    headless
+        .brightness(&probe, &probe.place_billboard(1.0))
+        .unwrap();
+    navigation::orbit(&mut probe.camera, 0.3, 0.0);
+    let t = std::time::Instant::now();
+    headless
+        .brightness(&probe, &probe.place_billboard(1.0))
+        .unwrap();
+    let full_ms = t.elapsed().as_secs_f64() * 1e3;
+    let start = std::time::Instant::now();
+    let mut previews = Vec::new();
+    for _ in 0..8 {
+        navigation::orbit(&mut v.app.doc.scene.camera, 0.02, 0.0);
+        v.frame().unwrap();
+        previews.push(v.app.report().preview);
+    }
+    eprintln!(
+        "full field {full_ms:.0} ms; {:.0} ms for 8 moving frames; coarse fields {previews:?}",
+        start.elapsed().as_secs_f64() * 1e3
+    );
+    // Where the full field costs far more than a frame (lavapipe), the moving frames after the first two
+    // (which measure the costs) are coarse; on a fast GPU the field may fit whole every frame.
+    if full_ms > 150.0 {
+        assert!(
+            previews[2..]
+                .iter()
+                .all(|p| p.is_some_and(|r| r < w && r % 8 == 0)),
+            "{previews:?}"
+        );
+    }
+    let moving = v.app.frame_scene();
+    // A screenshot while moving is the full picture (the viewport rendered again for it).
+    let shot = v.viewport_image().unwrap();
+    settle(&mut v);
+    assert_eq!(v.app.report().preview, None);
+    assert_eq!(v.viewport_image().unwrap(), shot);
+    // The texture the viewport ends on is the still render's, bit for bit.
+    let shown = v.field_values().unwrap();
+    let bb = moving.place_billboard(v.app.viewport_px[0] as f64 / v.app.viewport_px[1] as f64);
+    assert_eq!(shown, headless.brightness(&moving, &bb).unwrap());
+}
