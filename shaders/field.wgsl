@@ -27,6 +27,60 @@ struct FieldParams {
 }
 
 @group(0) @binding(0) var<storage, read> params: FieldParams;
+
+// The scene's structure, fixed when a pipeline is specialised to it (gpu::field_pass::Structure sets these
+// pipeline-overridable constants): the compiler then folds the loops and branches they bound, drops the code
+// of the source kinds the scene lacks and unrolls the Gauss-Kronrod rules. GENERIC, the default, reads each
+// from params instead: the generic pipelines serve every scene while a specialised one compiles.
+const GENERIC: u32 = 4294967295u;
+override POINT_COUNT: u32 = 4294967295u;
+override LINE_COUNT: u32 = 4294967295u;
+override TORUS_COUNT: u32 = 4294967295u;
+override CURVE_COUNT: u32 = 4294967295u;
+override GAUSS_ORDER: u32 = 4294967295u;
+override JITTER: u32 = 4294967295u;
+
+fn point_count() -> u32 {
+    if POINT_COUNT == GENERIC {
+        return params.point_count;
+    }
+    return POINT_COUNT;
+}
+
+fn line_count() -> u32 {
+    if LINE_COUNT == GENERIC {
+        return params.line_count;
+    }
+    return LINE_COUNT;
+}
+
+fn torus_count() -> u32 {
+    if TORUS_COUNT == GENERIC {
+        return params.torus_count;
+    }
+    return TORUS_COUNT;
+}
+
+fn curve_count() -> u32 {
+    if CURVE_COUNT == GENERIC {
+        return params.curve_count;
+    }
+    return CURVE_COUNT;
+}
+
+fn gauss_order() -> u32 {
+    if GAUSS_ORDER == GENERIC {
+        return params.gauss_order;
+    }
+    return GAUSS_ORDER;
+}
+
+fn jittered() -> bool {
+    if JITTER == GENERIC {
+        return params.jitter != 0u;
+    }
+    return JITTER != 0u;
+}
 @group(0) @binding(1) var<storage, read> points: array<PointSource>;
 @group(0) @binding(2) var<storage, read> lines: array<LineSource>;
 @group(0) @binding(3) var<storage, read> tori: array<TorusSource>;
@@ -103,19 +157,19 @@ fn curve_field(c: CurveSource, p: vec3<f32>) -> f32 {
 fn psi(p: vec3<f32>) -> f32 {
     let eps = params.epsilon;
     var sum = 0.0;
-    for (var i = 0u; i < params.point_count; i++) {
+    for (var i = 0u; i < point_count(); i++) {
         let s = points[i];
         sum += s.coefficient * falloff(length(p - s.position), eps);
     }
-    for (var i = 0u; i < params.line_count; i++) {
+    for (var i = 0u; i < line_count(); i++) {
         let s = lines[i];
         sum += s.coefficient * falloff(line_distance(p, s.point, s.direction), eps);
     }
-    for (var i = 0u; i < params.torus_count; i++) {
+    for (var i = 0u; i < torus_count(); i++) {
         let s = tori[i];
         sum += s.coefficient * falloff(torus_distance(p, s.center, s.axis, s.major_radius), eps);
     }
-    for (var i = 0u; i < params.curve_count; i++) {
+    for (var i = 0u; i < curve_count(); i++) {
         sum += curve_field(curves[i], p);
     }
     return sum;
@@ -167,7 +221,7 @@ fn integrate(@builtin(global_invocation_id) gid: vec3<u32>) {
     let nf = f32(n);
     let first = chunk.first;
     var b = 0.0;
-    if params.jitter != 0u {
+    if jittered() {
         let xi = jitter_offset(id.xy);
         let last = min(first + chunk.count, n);
         var sum = 0.0;
@@ -536,7 +590,7 @@ fn smooth_f(ray: Ray, p: Peak, t_in: f32) -> f32 {
 // Node i of the 2n + 1 of the pair on [a, b] in u, in order along the ray (the outermost on the left first):
 // (u's offset factor x with its sign, Kronrod weight, Gauss weight).
 fn kronrod_node(i: u32) -> vec3<f32> {
-    let n = params.gauss_order;
+    let n = gauss_order();
     let first = kronrod_start(n);
     if i < n {
         let row = KRONROD_NODES[first + n - i];
@@ -556,7 +610,7 @@ fn smooth_kronrod(ray: Ray, p: Peak, a: f32, b: f32) -> vec2<f32> {
     let c = 0.5 * (a + b);
     let r = 0.5 * (b - a);
     var sum = vec2<f32>(0.0);
-    for (var i = 0u; i <= 2u * params.gauss_order; i++) {
+    for (var i = 0u; i <= 2u * gauss_order(); i++) {
         let node = kronrod_node(i);
         let m = map_node(p, c + r * node.x);
         sum += node.yz * (m.y * smooth_f(ray, p, m.x));
@@ -630,7 +684,7 @@ fn integrate_smooth_term(kind: u32, index: u32, s_point: vec3<f32>, e_point: vec
     let ray = Ray(s_point, e_point - s_point, kind, index);
     let found = smooth_features(ray);
     let allowance = params.term_tolerance / (abs(coefficient) * max(pieces_length(found), 1e-30));
-    var refinements = select(8u, MAX_REFINEMENTS, params.gauss_order > 5u);
+    var refinements = select(8u, MAX_REFINEMENTS, gauss_order() > 5u);
     var sum = 0.0;
     for (var k = 0u; k < found.count; k++) {
         let p = found.peaks[k];
@@ -676,11 +730,11 @@ fn integrate_adaptive(@builtin(global_invocation_id) gid: vec3<u32>) {
     for (var t = chunk.first; t < chunk.first + chunk.count; t++) {
         var index = t;
         var kind = KIND_POINT;
-        if index >= params.point_count {
-            index -= params.point_count;
+        if index >= point_count() {
+            index -= point_count();
             kind = KIND_LINE;
-            if index >= params.line_count {
-                index -= params.line_count;
+            if index >= line_count() {
+                index -= line_count();
                 kind = KIND_TORUS;
             }
         }
@@ -854,7 +908,7 @@ fn find_kink(ray: Ray, a: ptr<function, ChainSample>, b: ptr<function, ChainSamp
     var last_moved = 0i;
     var stale = false;
     for (var round = 0u; round < KINK_ROUNDS; round++) {
-        if (*b).t - (*a).t <= select(1e-5, KINK_BRACKET, params.gauss_order <= 5u) {
+        if (*b).t - (*a).t <= select(1e-5, KINK_BRACKET, gauss_order() <= 5u) {
             break;
         }
         var guess = 0.5 * ((*a).t + (*b).t);
@@ -1349,7 +1403,7 @@ fn curve_kronrod(ray: Ray, p: Peak, a: f32, b: f32, panel: vec2<f32>, singular: 
     let mid = 0.5 * (a + b);
     let r = 0.5 * (b - a);
     var sum = vec2<f32>(0.0);
-    for (var i = 0u; i <= 2u * params.gauss_order; i++) {
+    for (var i = 0u; i <= 2u * gauss_order(); i++) {
         let node = kronrod_node(i);
         let toward = toward_singular(mid + r * node.x, panel, singular);
         let m = map_node(p, toward.x);
@@ -1426,7 +1480,7 @@ fn integrate_curve_term(index: u32, s_point: vec3<f32>, e_point: vec3<f32>) -> f
     }
     let features = curve_features(ray);
     let allowance = params.term_tolerance / (abs(coefficient) * max(pieces_length(features.found), 1e-30));
-    var refinements = select(8u, MAX_REFINEMENTS, params.gauss_order > 5u);
+    var refinements = select(8u, MAX_REFINEMENTS, gauss_order() > 5u);
     var sum = 0.0;
     for (var k = 0u; k < features.found.count; k++) {
         let p = features.found.peaks[k];
@@ -1545,7 +1599,7 @@ fn integrate_adaptive_curves(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let seg = texel_segment(id.xy);
-    let first_curve = params.point_count + params.line_count + params.torus_count;
+    let first_curve = point_count() + line_count() + torus_count();
     var b = 0.0;
     // The range holds curves only (gpu::field_pass::plan_chunks).
     for (var t = chunk.first; t < chunk.first + chunk.count; t++) {

@@ -483,6 +483,12 @@ fn render_frames(
         Backend::Gpu => Some(HeadlessRenderer::new()?),
         Backend::Cpu => None,
     };
+    // Many frames of one structure: its specialised pipelines pay for their compile after a few.
+    if let Some(gpu) = &mut gpu
+        && frames.len() > 4
+    {
+        gpu.set_specialise(crate::gpu::Specialise::Blocking);
+    }
     if args.verbose {
         if let Some(gpu) = &gpu {
             eprintln!("adapter: {}", gpu.ctx.adapter_summary());

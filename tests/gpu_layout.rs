@@ -7,6 +7,12 @@ use energywave::gpu::layout::*;
 use energywave::gpu::shaders;
 
 fn parse_and_validate(name: &str, source: &str) -> naga::Module {
+    parse_and_validate_with(name, source, &[])
+}
+
+/// `parse_and_validate`, the pipeline-overridable constants set to `constants` (the rest at their defaults)
+/// before the SPIR-V is written, as wgpu does when it creates a pipeline.
+fn parse_and_validate_with(name: &str, source: &str, constants: &[(&str, f64)]) -> naga::Module {
     let module = naga::front::wgsl::parse_str(source)
         .unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(source)));
     let info = naga::valid::Validator::new(
@@ -23,10 +29,21 @@ fn parse_and_validate(name: &str, source: &str) -> naga::Module {
             shader_stage: entry.stage,
             entry_point: entry.name.clone(),
         };
+        let mut values = naga::back::PipelineConstants::default();
+        for &(key, value) in constants {
+            values.insert(key.to_owned(), value);
+        }
+        let (processed, processed_info) = naga::back::pipeline_constants::process_overrides(
+            &module,
+            &info,
+            Some((entry.stage, &entry.name)),
+            &values,
+        )
+        .unwrap_or_else(|e| panic!("{name}: {}: overrides: {e}", entry.name));
         let written = std::panic::catch_unwind(|| {
             naga::back::spv::write_vec(
-                &module,
-                &info,
+                &processed,
+                &processed_info,
                 &naga::back::spv::Options::default(),
                 Some(&pipeline),
             )
@@ -47,6 +64,19 @@ fn every_wgsl_module_validates() {
     for (name, source) in modules {
         parse_and_validate(name, &source);
     }
+    // The field pass specialised to a structure (gpu::field_pass::Structure's constants), every kind present.
+    parse_and_validate_with(
+        "field.wgsl specialised",
+        &shaders::field_module_source(),
+        &[
+            ("POINT_COUNT", 2.0),
+            ("LINE_COUNT", 1.0),
+            ("TORUS_COUNT", 1.0),
+            ("CURVE_COUNT", 3.0),
+            ("GAUSS_ORDER", 5.0),
+            ("JITTER", 0.0),
+        ],
+    );
     // Every .wgsl file in shaders/ is part of some module (no file escapes validation).
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders");
     let all: String = shaders::all_modules().into_iter().map(|(_, s)| s).collect();

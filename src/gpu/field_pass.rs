@@ -387,10 +387,188 @@ impl StorageBuffer {
     }
 }
 
+/// The scene's structure a specialised pipeline is compiled for: the values of `shaders/field.wgsl`'s
+/// pipeline-overridable constants (source counts per kind, the Gauss-Kronrod order, jitter). Values (positions,
+/// coefficients, the camera) stay in storage buffers, so editing them never compiles anything.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Structure {
+    /// `FieldParams::integrator`: 0 simpson (whose structure has no Gauss order), 1 adaptive (no jitter).
+    pub integrator: u32,
+    pub points: u32,
+    pub lines: u32,
+    pub tori: u32,
+    pub curves: u32,
+    pub gauss_order: u32,
+    pub jitter: u32,
+}
+
+impl Structure {
+    fn of(params: &FieldParams) -> Self {
+        let simpson = params.integrator == 0;
+        Self {
+            integrator: params.integrator,
+            points: params.point_count,
+            lines: params.line_count,
+            tori: params.torus_count,
+            curves: params.curve_count,
+            gauss_order: if simpson { 0 } else { params.gauss_order },
+            jitter: if simpson { params.jitter } else { 0 },
+        }
+    }
+
+    /// The entry points this structure's integrator dispatches (indices of `Pipelines`).
+    fn entries(&self) -> &'static [usize] {
+        if self.integrator == 0 { &[0] } else { &[1, 2] }
+    }
+
+    /// The structure of `scene` seen through `billboard`.
+    pub fn of_scene(scene: &Scene, billboard: &Billboard) -> Self {
+        Self::of(&pack(scene, billboard).params)
+    }
+
+    fn constants(&self) -> [(&'static str, f64); 6] {
+        [
+            ("POINT_COUNT", self.points as f64),
+            ("LINE_COUNT", self.lines as f64),
+            ("TORUS_COUNT", self.tori as f64),
+            ("CURVE_COUNT", self.curves as f64),
+            ("GAUSS_ORDER", self.gauss_order as f64),
+            ("JITTER", self.jitter as f64),
+        ]
+    }
+}
+
+/// When the field pass uses pipelines specialised to the scene's structure.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Specialise {
+    /// Never: the generic pipelines only (the default: a single still render would spend more on the compile,
+    /// about 0.3 s on lavapipe, than it saves).
+    #[default]
+    Off,
+    /// Compile a structure's pipelines on a thread of their own the first time it is drawn, and use the generic
+    /// ones until they are ready: no frame waits on a compile (the viewer).
+    Background,
+    /// Compile them before the first dispatch that needs them (renders and exports of many frames).
+    Blocking,
+}
+
+/// The three entry points (simpson, adaptive smooth sources, adaptive curves), indexed by `Chunk::pipeline`.
+const ENTRIES: [&str; 3] = [
+    "integrate",
+    "integrate_adaptive",
+    "integrate_adaptive_curves",
+];
+type Pipelines = [wgpu::ComputePipeline; 3];
+/// A structure's specialised pipelines: only its integrator's entry points.
+type SpecialisedSet = [Option<wgpu::ComputePipeline>; 3];
+
+fn build_pipeline(
+    device: &wgpu::Device,
+    module: &wgpu::ShaderModule,
+    layout: &wgpu::PipelineLayout,
+    entry: &str,
+    constants: &[(&str, f64)],
+) -> wgpu::ComputePipeline {
+    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(entry),
+        layout: Some(layout),
+        module,
+        entry_point: Some(entry),
+        compilation_options: wgpu::PipelineCompilationOptions {
+            constants,
+            ..Default::default()
+        },
+        cache: None,
+    })
+}
+
+/// The generic pipelines of every entry point.
+fn build_pipelines(
+    device: &wgpu::Device,
+    module: &wgpu::ShaderModule,
+    layout: &wgpu::PipelineLayout,
+) -> Pipelines {
+    ENTRIES.map(|entry| build_pipeline(device, module, layout, entry, &[]))
+}
+
+/// The pipelines of `structure`'s entry points, specialised to it.
+fn build_specialised(
+    device: &wgpu::Device,
+    module: &wgpu::ShaderModule,
+    layout: &wgpu::PipelineLayout,
+    structure: Structure,
+) -> SpecialisedSet {
+    let constants = structure.constants();
+    let mut set: SpecialisedSet = Default::default();
+    for &k in structure.entries() {
+        set[k] = Some(build_pipeline(
+            device, module, layout, ENTRIES[k], &constants,
+        ));
+    }
+    set
+}
+
+/// Where a compile's thread leaves its pipelines and how long they took (milliseconds).
+type CompileSlot = std::sync::Arc<std::sync::Mutex<Option<(SpecialisedSet, f64)>>>;
+
+/// Most structures whose specialised pipelines are kept (the least recently drawn go first): a compiled
+/// pipeline holds the driver's machine code, and an editing session may pass through many structures.
+const KEPT_STRUCTURES: usize = 4;
+
+/// The specialised pipelines: those ready (most recently drawn first), and the one compile under way.
+#[derive(Default)]
+struct SpecialisedPipelines {
+    ready: Vec<(Structure, std::sync::Arc<SpecialisedSet>)>,
+    /// One compile at a time, on its own thread: a burst of structure changes compiles only what is still
+    /// drawn when the compile before it has finished.
+    compiling: Option<(Structure, CompileSlot)>,
+    /// Milliseconds each structure took to compile, in the order they finished.
+    compile_ms: Vec<(Structure, f64)>,
+}
+
+impl SpecialisedPipelines {
+    /// The pipelines of `structure` if ready, marked as the most recently drawn.
+    fn take(&mut self, structure: &Structure) -> Option<std::sync::Arc<SpecialisedSet>> {
+        let k = self.ready.iter().position(|(s, _)| s == structure)?;
+        let entry = self.ready.remove(k);
+        let p = entry.1.clone();
+        self.ready.insert(0, entry);
+        Some(p)
+    }
+
+    fn keep(
+        &mut self,
+        structure: Structure,
+        set: SpecialisedSet,
+        ms: f64,
+    ) -> std::sync::Arc<SpecialisedSet> {
+        let p = std::sync::Arc::new(set);
+        self.ready.insert(0, (structure, p.clone()));
+        self.ready.truncate(KEPT_STRUCTURES);
+        self.compile_ms.push((structure, ms));
+        p
+    }
+
+    /// Collects the compile under way if it has finished.
+    fn collect(&mut self) {
+        let done = (self.compiling.as_ref())
+            .and_then(|(_, slot)| slot.lock().ok().and_then(|mut slot| slot.take()));
+        if let Some((set, ms)) = done {
+            let (structure, _) = self.compiling.take().expect("a compile was under way");
+            self.keep(structure, set, ms);
+        }
+    }
+}
+
 /// The field pass: its pipelines (one per integrator) and the GPU copies of one scene's data.
 pub struct FieldRenderer {
     /// `integrate` (simpson) and `integrate_adaptive`, indexed by `FieldParams::integrator`.
-    pipelines: [wgpu::ComputePipeline; 3],
+    pipelines: Pipelines,
+    module: wgpu::ShaderModule,
+    pipeline_layout: wgpu::PipelineLayout,
+    specialise: Specialise,
+    specialised: SpecialisedPipelines,
+    device: wgpu::Device,
     layout: wgpu::BindGroupLayout,
     params: wgpu::Buffer,
     /// The chunks, one per `chunk_stride` bytes (bound with a dynamic offset).
@@ -485,21 +663,7 @@ impl FieldRenderer {
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-        let pipelines = [
-            "integrate",
-            "integrate_adaptive",
-            "integrate_adaptive_curves",
-        ]
-        .map(|entry| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: Some(&pipeline_layout),
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-        });
+        let pipelines = build_pipelines(device, &module, &pipeline_layout);
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("energywave.field.params"),
             size: size_of::<FieldParams>() as u64,
@@ -519,6 +683,11 @@ impl FieldRenderer {
             .max(size_of::<Chunk>() as u64);
         Self {
             pipelines,
+            module,
+            pipeline_layout,
+            specialise: Specialise::default(),
+            specialised: SpecialisedPipelines::default(),
+            device: device.clone(),
             layout,
             params,
             chunks: chunk_buffer(device, chunk_stride, 1),
@@ -727,6 +896,19 @@ impl FieldRenderer {
             return true;
         }
         let w = packed.params.resolution;
+        let specialised = Self::specialised_for(
+            &mut self.specialised,
+            self.specialise,
+            &self.device,
+            &self.module,
+            &self.pipeline_layout,
+            Structure::of(&packed.params),
+        );
+        let pipeline = |k: usize| {
+            (specialised.as_ref())
+                .and_then(|set| set[k].as_ref())
+                .unwrap_or(&self.pipelines[k])
+        };
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("energywave.field.pass"),
             timestamp_writes: timestamps,
@@ -736,7 +918,7 @@ impl FieldRenderer {
             let rows = self.band_height.min(w - band * self.band_height);
             for (k, c) in packed.chunks.iter().enumerate() {
                 let entry = band as usize * packed.chunks.len() + k;
-                pass.set_pipeline(&self.pipelines[c.pipeline as usize]);
+                pass.set_pipeline(pipeline(c.pipeline as usize));
                 pass.set_bind_group(0, bind_group, &[(entry as u64 * self.chunk_stride) as u32]);
                 pass.dispatch_workgroups(w.div_ceil(8), rows.div_ceil(8), 1);
             }
@@ -751,6 +933,74 @@ impl FieldRenderer {
         }
         self.dispatches += 1;
         true
+    }
+
+    /// The pipelines specialised to `structure` if they are ready: compiled now (`Blocking`), or their compile
+    /// started on a thread of its own if it is not under way yet (`Background`, which returns `None` until it
+    /// has finished).
+    fn specialised_for(
+        cache: &mut SpecialisedPipelines,
+        mode: Specialise,
+        device: &wgpu::Device,
+        module: &wgpu::ShaderModule,
+        layout: &wgpu::PipelineLayout,
+        structure: Structure,
+    ) -> Option<std::sync::Arc<SpecialisedSet>> {
+        if mode == Specialise::Off {
+            return None;
+        }
+        cache.collect();
+        if let Some(p) = cache.take(&structure) {
+            return Some(p);
+        }
+        match mode {
+            Specialise::Off => None,
+            Specialise::Blocking => {
+                let start = std::time::Instant::now();
+                let set = build_specialised(device, module, layout, structure);
+                Some(cache.keep(structure, set, start.elapsed().as_secs_f64() * 1e3))
+            }
+            Specialise::Background => {
+                if cache.compiling.is_none() {
+                    let slot = CompileSlot::default();
+                    let (device, module, layout) = (device.clone(), module.clone(), layout.clone());
+                    let out = slot.clone();
+                    let spawned = std::thread::Builder::new()
+                        .name("energywave field compile".into())
+                        .spawn(move || {
+                            let start = std::time::Instant::now();
+                            let p = build_specialised(&device, &module, &layout, structure);
+                            if let Ok(mut slot) = out.lock() {
+                                *slot = Some((p, start.elapsed().as_secs_f64() * 1e3));
+                            }
+                        });
+                    if spawned.is_ok() {
+                        cache.compiling = Some((structure, slot));
+                    }
+                }
+                None
+            }
+        }
+    }
+
+    /// When to use pipelines specialised to the scene's structure (`Specialise::Off` by default).
+    pub fn set_specialise(&mut self, mode: Specialise) {
+        self.specialise = mode;
+    }
+
+    /// Whether the pipelines specialised to `structure` are ready (they draw the next dispatch of it).
+    pub fn specialised_ready(&self, structure: &Structure) -> bool {
+        self.specialised.ready.iter().any(|(s, _)| s == structure)
+    }
+
+    /// Whether a specialised compile is under way on its thread.
+    pub fn compiling(&self) -> bool {
+        self.specialised.compiling.is_some()
+    }
+
+    /// How long each structure's pipelines took to compile, in milliseconds, in the order they finished.
+    pub fn compile_times(&self) -> &[(Structure, f64)] {
+        &self.specialised.compile_ms
     }
 
     /// Whether bands of the uploaded scene are still to be dispatched.

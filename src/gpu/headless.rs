@@ -38,6 +38,11 @@ impl HeadlessRenderer {
         self.renderer.field()
     }
 
+    /// When the field pass uses pipelines specialised to the scene's structure (`FieldRenderer::set_specialise`).
+    pub fn set_specialise(&mut self, mode: crate::gpu::Specialise) {
+        self.renderer.field_mut().set_specialise(mode);
+    }
+
     /// Averages up to `frames` jittered renders of an unchanged scene, one more each call
     /// (`FieldRenderer::set_average_frames`); 1, the default, renders each scene once.
     pub fn set_average_frames(&mut self, frames: u32) {

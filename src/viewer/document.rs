@@ -123,6 +123,15 @@ impl Document {
         self.check_disk()
     }
 
+    /// Whether the file's modification time differs from the one last read or written: a stat, nothing read
+    /// (the window checks this while idle instead of drawing frames).
+    pub fn changed_on_disk(&self) -> bool {
+        self.path
+            .as_deref()
+            .and_then(mtime)
+            .is_some_and(|m| Some(m) != self.disk_mtime)
+    }
+
     /// Checks the file for changes now.
     pub fn check_disk(&mut self) -> Option<DiskChange> {
         let path = self.path.clone()?;

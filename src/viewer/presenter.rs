@@ -57,6 +57,9 @@ pub enum Outcome {
 /// raised.
 pub struct Presented {
     pub outcome: Outcome,
+    /// When the UI wants its next frame though nothing happens before (a delayed repaint: an export's
+    /// progress, a tooltip); `None`: only on input.
+    pub repaint_after: Option<std::time::Duration>,
     pub platform_output: egui::PlatformOutput,
     pub gpu_error: Option<GpuError>,
 }
@@ -143,6 +146,7 @@ impl ViewerGpu {
     ) -> Presented {
         let early = |outcome| Presented {
             outcome,
+            repaint_after: None,
             platform_output: Default::default(),
             gpu_error: None,
         };
@@ -174,10 +178,11 @@ impl ViewerGpu {
             }
         };
         let output = self.egui_ctx.run_ui(input, |ui| app.ui(ui));
-        let ui_repaint_now = output
-            .viewport_output
-            .get(&egui::ViewportId::ROOT)
-            .is_some_and(|v| v.repaint_delay.is_zero());
+        let delay = (output.viewport_output.get(&egui::ViewportId::ROOT))
+            .map_or(std::time::Duration::MAX, |v| v.repaint_delay);
+        let ui_repaint_now = delay.is_zero();
+        // egui asks for no repaint with a delay of Duration::MAX.
+        let repaint_after = (delay < std::time::Duration::from_secs(3600)).then_some(delay);
         let jobs = self
             .egui_ctx
             .tessellate(output.shapes, output.pixels_per_point);
@@ -198,7 +203,7 @@ impl ViewerGpu {
             .renderer
             .update_buffers(device, queue, &mut encoder, &jobs, &screen);
         // The viewport (recorded just now, by `update_buffers`) may want the next frame for its average.
-        let repaint_now = ui_repaint_now || self.report.lock().is_ok_and(|r| r.averaging());
+        let repaint_now = ui_repaint_now || self.report.lock().is_ok_and(|r| r.wants_frame());
         draw_egui(
             &self.renderer,
             &mut encoder,
@@ -215,6 +220,7 @@ impl ViewerGpu {
         }
         Presented {
             outcome: Outcome::Drawn { repaint_now },
+            repaint_after,
             platform_output: output.platform_output,
             gpu_error,
         }

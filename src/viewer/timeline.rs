@@ -112,6 +112,10 @@ impl ExportJob {
             let progress = shared.clone();
             let result = (|| -> Result<Vec<PathBuf>, String> {
                 let mut gpu = HeadlessRenderer::new().map_err(|e| e.to_string())?;
+                // Many frames of one structure: its specialised pipelines pay for their compile.
+                if frames.len() > 4 {
+                    gpu.set_specialise(crate::gpu::Specialise::Blocking);
+                }
                 export::export_frames(
                     &scene,
                     &target,

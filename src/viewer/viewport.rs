@@ -9,8 +9,8 @@ use wgpu::util::DeviceExt;
 
 use super::progressive::{FrameBudget, PREVIEW_TOLERANCE, Plan, Work};
 use crate::gpu::{
-    FRAME_FORMAT, FieldInputs, FieldRenderer, FrameTargets, GpuError, SceneRenderer, Upsample,
-    checked, read_frame, uniform_buffer,
+    FRAME_FORMAT, FieldInputs, FieldRenderer, FrameTargets, GpuError, SceneRenderer, Specialise,
+    Upsample, checked, read_frame, uniform_buffer,
 };
 use crate::scene::Scene;
 
@@ -68,12 +68,16 @@ pub struct ViewportReport {
     pub averaged: Option<(u32, u32)>,
     /// The side of the coarse field shown while the view moves, until the full field is whole again.
     pub preview: Option<u32>,
+    /// The frame just recorded made the picture whole after a coarse one (the UI, drawn before it, still
+    /// said otherwise).
+    pub refined: bool,
 }
 
 impl ViewportReport {
-    /// Whether the viewport wants another frame: to add to its average, or to refine a coarse picture.
-    pub fn averaging(&self) -> bool {
-        self.averaged.is_some_and(|(k, most)| k < most) || self.preview.is_some()
+    /// Whether the viewport wants another frame: to add to its average, to refine a coarse picture, or to let
+    /// the UI show that the picture is whole.
+    pub fn wants_frame(&self) -> bool {
+        self.averaged.is_some_and(|(k, most)| k < most) || self.preview.is_some() || self.refined
     }
 }
 
@@ -263,8 +267,13 @@ impl ViewportGpu {
             min_filter: wgpu::FilterMode::Linear,
             ..Default::default()
         });
+        // The viewer's frames never wait on a compile: each structure compiles on its own thread.
+        let mut scene_renderer = SceneRenderer::new(device);
+        scene_renderer
+            .field_mut()
+            .set_specialise(Specialise::Background);
         Self {
-            scene_renderer: SceneRenderer::new(device),
+            scene_renderer,
             grid_pipeline,
             grid_params,
             grid_bind_group,
@@ -276,6 +285,7 @@ impl ViewportGpu {
             sampler,
             targets: None,
             report,
+            // Generic: a coarse field's few texels gain little from a compile of their own.
             preview: FieldRenderer::new(device),
             upsample: Upsample::new(device),
             budget: FrameBudget::default(),
@@ -372,6 +382,7 @@ impl ViewportGpu {
             r.field_renders =
                 self.scene_renderer.field().dispatch_count() + self.preview.dispatch_count();
             r.averaged = self.scene_renderer.field().averaged_frames();
+            r.refined = r.preview.is_some() && self.showing_preview.is_none();
             r.preview = self.showing_preview;
         }
         result

@@ -39,8 +39,12 @@ pub enum ViewerError {
     Output(#[from] OutputError),
 }
 
-/// Longest wait between two frames when nothing happens (keeps hot reload and the status line alive).
-const IDLE_FRAME: Duration = Duration::from_millis(250);
+/// How soon a frame the surface could not give is tried again.
+const SKIPPED_RETRY: Duration = Duration::from_millis(16);
+
+/// How often an idle window looks at its file for changes made elsewhere (a stat; it draws a frame only when
+/// the file changed).
+const DISK_POLL: Duration = Duration::from_millis(250);
 
 /// Opens the window on `doc` and runs until it is closed.
 pub fn run(doc: Document, options: ViewOptions) -> Result<(), ViewerError> {
@@ -53,6 +57,7 @@ pub fn run(doc: Document, options: ViewOptions) -> Result<(), ViewerError> {
         error: None,
         frames: 0,
         next_frame: Instant::now(),
+        next_poll: Instant::now(),
     };
     event_loop
         .run_app(&mut handler)
@@ -122,6 +127,8 @@ struct Handler {
     error: Option<ViewerError>,
     frames: u32,
     next_frame: Instant,
+    /// When the idle window next looks at its file.
+    next_poll: Instant,
 }
 
 impl Gfx {
@@ -237,7 +244,13 @@ impl Handler {
                 return;
             }
             Outcome::Reconfigured => true,
-            Outcome::Minimised | Outcome::Skipped => false,
+            // A minimised window draws again when it is restored (a resize event).
+            Outcome::Minimised => false,
+            // No frame to draw into this time (a timeout, an occluded window): try again shortly.
+            Outcome::Skipped => {
+                self.next_frame = Instant::now() + SKIPPED_RETRY;
+                return;
+            }
         };
         gfx.egui_state
             .handle_platform_output(&gfx.surface.window, presented.platform_output);
@@ -270,7 +283,13 @@ impl Handler {
             }
         }
         let now = repaint_now || self.options.screenshot.is_some();
-        self.next_frame = Instant::now() + if now { Duration::ZERO } else { IDLE_FRAME };
+        // Idle is idle: the next frame comes with input, with a repaint the UI asked for after a delay, or
+        // when the file changes on disk.
+        self.next_frame = match (now, presented.repaint_after) {
+            (true, _) => Instant::now(),
+            (false, Some(delay)) => Instant::now() + delay,
+            (false, None) => Instant::now() + Duration::from_secs(3600),
+        };
         if now {
             gfx.window().request_redraw();
         }
@@ -360,6 +379,9 @@ impl ApplicationHandler for Handler {
     fn window_event(&mut self, event_loop: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
         let Some(gfx) = &mut self.gfx else { return };
         let response = gfx.egui_state.on_window_event(&gfx.surface.window, &event);
+        // egui-winit answers every event with "repaint", a redraw too: drawn, the frame itself says whether it
+        // wants the next one (`redraw`), or every frame would ask for another and the idle viewer would spin.
+        let drawn = matches!(event, WindowEvent::RedrawRequested);
         match event {
             WindowEvent::CloseRequested => {
                 if let Some(app) = &mut self.app {
@@ -375,6 +397,7 @@ impl ApplicationHandler for Handler {
             _ => {}
         }
         if response.repaint
+            && !drawn
             && let Some(gfx) = &self.gfx
         {
             gfx.window().request_redraw();
@@ -382,11 +405,20 @@ impl ApplicationHandler for Handler {
     }
 
     fn about_to_wait(&mut self, event_loop: &ActiveEventLoop) {
-        let Some(gfx) = &self.gfx else { return };
-        if Instant::now() >= self.next_frame {
-            gfx.window().request_redraw();
-            self.next_frame = Instant::now() + IDLE_FRAME;
+        let (Some(gfx), Some(app)) = (&self.gfx, &self.app) else {
+            return;
+        };
+        let now = Instant::now();
+        if now >= self.next_poll {
+            self.next_poll = now + DISK_POLL;
+            if app.doc.changed_on_disk() {
+                self.next_frame = now;
+            }
         }
-        event_loop.set_control_flow(ControlFlow::WaitUntil(self.next_frame));
+        if now >= self.next_frame {
+            gfx.window().request_redraw();
+            self.next_frame = now + Duration::from_secs(3600);
+        }
+        event_loop.set_control_flow(ControlFlow::WaitUntil(self.next_frame.min(self.next_poll)));
     }
 }

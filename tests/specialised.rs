@@ -1,0 +1,150 @@
+//! The field pass specialised to the scene's structure (pipeline-overridable constants: source counts, the
+//! Gauss-Kronrod order, jitter) gives the texture of the generic pass, on every shipped scene and every
+//! integrator; and a structure compiled in the background is used once ready, never waited for.
+
+use std::path::{Path, PathBuf};
+
+use energywave::gpu::{FieldRenderer, GpuContext, Specialise, Structure};
+use energywave::integrate::Integrator;
+use energywave::scene::Scene;
+
+fn shipped() -> Vec<(String, Scene)> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes");
+    let mut v: Vec<(String, Scene)> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p: &PathBuf| p.extension().is_some_and(|e| e == "toml"))
+        .map(|p| {
+            (
+                p.file_stem().unwrap().to_string_lossy().into_owned(),
+                Scene::load(&p).unwrap(),
+            )
+        })
+        .collect();
+    v.sort_by(|a, b| a.0.cmp(&b.0));
+    v
+}
+
+/// The field of `scene` through `field` (integrated again), read back.
+fn field_of(ctx: &GpuContext, field: &mut FieldRenderer, scene: &Scene) -> Vec<f32> {
+    let (device, queue) = (&ctx.device, &ctx.queue);
+    field.invalidate();
+    field
+        .prepare(device, queue, scene, &scene.place_billboard(1.0))
+        .unwrap();
+    let mut encoder = device.create_command_encoder(&Default::default());
+    field.encode(&mut encoder);
+    ctx.checked(|| queue.submit([encoder.finish()])).unwrap();
+    bytemuck::cast_slice(&ctx.read_texture(field.texture().unwrap(), 4).unwrap()).to_vec()
+}
+
+#[test]
+fn the_specialised_field_pass_gives_the_generic_texture() {
+    let ctx = GpuContext::new().expect("a GPU adapter (lavapipe in CI)");
+    let mut generic = FieldRenderer::new(&ctx.device);
+    generic.set_specialise(Specialise::Off);
+    let mut specialised = FieldRenderer::new(&ctx.device);
+    specialised.set_specialise(Specialise::Blocking);
+    let mut worst = 0.0f64;
+    let mut identical = 0;
+    let mut cases = 0;
+    for (name, base) in shipped() {
+        for (integrator, jitter) in [
+            (Integrator::Adaptive, None),
+            (Integrator::Simpson, None),
+            (Integrator::Simpson, Some(7)),
+        ] {
+            let mut scene = base.clone();
+            scene.billboard.resolution = 24;
+            scene.animation = None;
+            scene.integration.integrator = integrator;
+            scene.integration.jitter = jitter;
+            scene.integration.divisions = 64;
+            let a = field_of(&ctx, &mut generic, &scene);
+            let b = field_of(&ctx, &mut specialised, &scene);
+            let structure = Structure::of_scene(&scene, &scene.place_billboard(1.0));
+            assert!(
+                specialised.specialised_ready(&structure),
+                "{name}: compiled"
+            );
+            assert!(!generic.specialised_ready(&structure));
+            for (k, (&x, &y)) in a.iter().zip(&b).enumerate() {
+                let relative = (x as f64 - y as f64).abs() / (x.abs() as f64).max(0.01);
+                assert!(
+                    relative <= 1e-5,
+                    "{name}, {integrator:?} jitter {jitter:?}, texel {k}: generic {x}, specialised {y}"
+                );
+                worst = worst.max(relative);
+            }
+            identical += usize::from(a == b);
+            cases += 1;
+        }
+    }
+    eprintln!(
+        "specialised against generic: worst relative difference {worst:.1e}; {identical} of {cases} textures identical"
+    );
+}
+
+#[test]
+fn a_structure_compiles_in_the_background_and_is_used_once_ready() {
+    let ctx = GpuContext::new().expect("a GPU adapter (lavapipe in CI)");
+    let mut field = FieldRenderer::new(&ctx.device);
+    field.set_specialise(Specialise::Background);
+    let mut scene = Scene::default_scene();
+    scene.billboard.resolution = 16;
+    let structure = Structure::of_scene(&scene, &scene.place_billboard(1.0));
+    let first = field_of(&ctx, &mut field, &scene);
+    // The first dispatch ran on the generic pipelines and started the compile.
+    let start = std::time::Instant::now();
+    while !field.specialised_ready(&structure) {
+        assert!(start.elapsed().as_secs() < 120, "the compile finishes");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+        field_of(&ctx, &mut field, &scene);
+    }
+    assert!(!field.compiling());
+    assert_eq!(field.compile_times().len(), 1);
+    let (compiled, ms) = field.compile_times()[0];
+    assert_eq!(compiled, structure);
+    eprintln!("compiled {structure:?} in {ms:.0} ms");
+    let again = field_of(&ctx, &mut field, &scene);
+    for (&x, &y) in first.iter().zip(&again) {
+        assert!((x as f64 - y as f64).abs() <= 1e-5 * (x.abs() as f64).max(0.01));
+    }
+    // A value edit keeps the structure: nothing compiles.
+    scene.sources.tori[0].coefficient *= 1.5;
+    field_of(&ctx, &mut field, &scene);
+    assert!(!field.compiling() && field.compile_times().len() == 1);
+}
+
+/// An editing session passes through many structures; only the most recently drawn keep their pipelines
+/// (each holds the driver's machine code), so memory stays bounded however many were drawn.
+#[test]
+fn only_the_latest_structures_keep_their_pipelines() {
+    let ctx = GpuContext::new().expect("a GPU adapter (lavapipe in CI)");
+    let mut field = FieldRenderer::new(&ctx.device);
+    field.set_specialise(Specialise::Blocking);
+    let mut scene = Scene::default_scene();
+    scene.billboard.resolution = 8;
+    scene.integration.integrator = Integrator::Simpson;
+    scene.integration.divisions = 8;
+    let mut structures = Vec::new();
+    for k in 0..9 {
+        scene.sources.points.push(energywave::field::Point {
+            position: glam::DVec3::new(k as f64 * 0.1, 0.0, 0.0),
+            coefficient: 0.5,
+        });
+        field_of(&ctx, &mut field, &scene);
+        structures.push(Structure::of_scene(&scene, &scene.place_billboard(1.0)));
+    }
+    let kept = structures
+        .iter()
+        .filter(|s| field.specialised_ready(s))
+        .count();
+    assert!((1..=4).contains(&kept), "{kept} structures kept");
+    assert!(field.specialised_ready(structures.last().unwrap()));
+    assert!(
+        !field.specialised_ready(&structures[0]),
+        "the oldest was dropped"
+    );
+    assert_eq!(field.compile_times().len(), 9);
+}
