@@ -28,6 +28,9 @@ pub const REFINE_MS: f64 = 40.0;
 /// (lavapipe on two cores: 4 to 5 us), so that a first gesture on a slow adapter is not a frame of a whole field.
 const ASSUMED_TEXEL_MS: f64 = 4e-3;
 
+/// The largest field side a still frame integrates whole; larger ones are refined in bands.
+const MAX_WHOLE: u32 = 128;
+
 /// Frames further apart than this did not run back to back (the viewer was idle): they measure nothing.
 const STALE_MS: f64 = 400.0;
 
@@ -156,15 +159,20 @@ impl FrameBudget {
             return Plan::Preview { resolution: r };
         }
         match self.full_ms {
-            Some(c) if c * texels > REFINE_MS => {
-                let rows = (REFINE_MS / (c * w as f64)).floor().max(8.0) as u32;
+            // Within one refining frame's budget, and small enough that an estimate off by a few times still
+            // makes no long frame: all of it now.
+            Some(c) if c * texels <= REFINE_MS && w <= MAX_WHOLE => Plan::Full,
+            // A quarter of the rows at most, so that a low estimate (frames measure the GPU's work only once it
+            // is waited for) costs a few short frames, never one long one. Unmeasured: a CPU rasterizer's cost.
+            c => {
+                let c = c.unwrap_or(ASSUMED_TEXEL_MS);
+                let rows = (REFINE_MS / (c * w as f64)).floor() as u32;
+                let rows = rows.clamp(8, (w / 4).max(8));
                 Plan::Refine {
                     band_rows: rows.div_ceil(8) * 8,
                     bands: 1,
                 }
             }
-            // Within one refining frame's budget (or unmeasured): all of it now.
-            _ => Plan::Full,
         }
     }
 }
@@ -244,14 +252,22 @@ mod tests {
     fn a_cheap_field_is_integrated_whole_every_frame() {
         let mut b = FrameBudget::default();
         let mut t = Instant::now();
-        // Nothing measured yet: coarse, as if on a CPU rasterizer, until a full field has been timed.
+        // Nothing measured yet: coarse, and in bands, as if on a CPU rasterizer, until a full field is timed.
         assert!(matches!(b.plan(true, 256), Plan::Preview { .. }));
-        assert_eq!(b.plan(false, 256), Plan::Full);
+        assert!(matches!(b.plan(false, 256), Plan::Refine { .. }));
         assert_eq!(b.plan(true, 32), Plan::Full, "1024 texels fit any frame");
         run(&mut b, &mut t, 5, 16.7, Work::Nothing);
         run(&mut b, &mut t, 5, 18.0, Work::Full { texels: 65536 });
         assert_eq!(b.plan(true, 256), Plan::Full);
-        assert_eq!(b.plan(false, 256), Plan::Full);
+        // Still: a field up to 128 a side whole, a larger one in no fewer than four bands.
+        assert_eq!(b.plan(false, 128), Plan::Full);
+        assert_eq!(
+            b.plan(false, 256),
+            Plan::Refine {
+                band_rows: 64,
+                bands: 1
+            }
+        );
     }
 
     #[test]

@@ -417,6 +417,13 @@ impl ViewportGpu {
         main.set_average_frames(view.average_frames);
         let plan = if !progressive || main.shows(&inputs) {
             Plan::Full
+        } else if !moved && main.holds(&inputs) {
+            // Refining already: the next band, whatever the estimates say now (a whole field's remaining bands
+            // in one frame would be the long frame the bands are there to avoid).
+            Plan::Refine {
+                band_rows: main.band_layout().1,
+                bands: 1,
+            }
         } else {
             self.budget.plan(moved, w)
         };
