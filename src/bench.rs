@@ -239,6 +239,10 @@ pub struct ViewerFrameRow {
     pub refine_ms: f64,
     pub refine_frames: u32,
     pub refine_longest_frame_ms: f64,
+    /// A point source added (a new structure: a compile starts on its thread), then frames until the picture
+    /// is whole again: the longest of them, and how many.
+    pub add_source_longest_frame_ms: f64,
+    pub add_source_frames: u32,
 }
 
 /// The error of a brightness texture against the converged reference, on B clamped to [0, 1] (what the blend
@@ -784,6 +788,20 @@ fn viewer_frames(
     };
     let (dragging, dragging_resolution) = gesture(&mut viewer, &drag)?;
     settle(&mut viewer)?;
+    viewer
+        .app
+        .doc
+        .scene
+        .sources
+        .points
+        .push(crate::field::Point {
+            position: glam::DVec3::new(0.5, 1.0, 0.0),
+            coefficient: 1.0,
+        });
+    let first = timed(&mut viewer)?;
+    let (_, added_frames, added_longest) = settle(&mut viewer)?;
+    viewer.app.doc.scene.sources.points.pop();
+    settle(&mut viewer)?;
     viewer.app.progressive = false;
     let (orbiting_full_field, _) = gesture(&mut viewer, &orbit)?;
     viewer.app.progressive = true;
@@ -800,6 +818,8 @@ fn viewer_frames(
         refine_ms,
         refine_frames,
         refine_longest_frame_ms,
+        add_source_longest_frame_ms: first.max(added_longest),
+        add_source_frames: added_frames + 1,
     })
 }
 
@@ -995,7 +1015,7 @@ impl Report {
         if let Some(v) = &self.viewer {
             let _ = writeln!(
                 s,
-                "\nviewer frame {}x{} ({} scene, UI + viewport, wall): idle {:.1} ms ({:.1} FPS); orbiting {:.1} ms ({:.1} FPS, {:.2}x idle, field {}^2 while moving); dragging a control point {:.1} ms ({:.1} FPS, {:.2}x idle, field {}^2); orbiting with the whole field every frame {:.1} ms ({:.1} FPS, {:.2}x idle); full picture {:.0} ms after the last move ({} frames, longest {:.1} ms)",
+                "\nviewer frame {}x{} ({} scene, UI + viewport, wall): idle {:.1} ms ({:.1} FPS); orbiting {:.1} ms ({:.1} FPS, {:.2}x idle, field {}^2 while moving); dragging a control point {:.1} ms ({:.1} FPS, {:.2}x idle, field {}^2); orbiting with the whole field every frame {:.1} ms ({:.1} FPS, {:.2}x idle); full picture {:.0} ms after the last move ({} frames, longest {:.1} ms); a source added: longest frame {:.1} ms of {}",
                 v.width,
                 v.height,
                 v.scene,
@@ -1015,6 +1035,8 @@ impl Report {
                 v.refine_ms,
                 v.refine_frames,
                 v.refine_longest_frame_ms,
+                v.add_source_longest_frame_ms,
+                v.add_source_frames,
             );
         }
         if !self.equal_error.is_empty() {
@@ -1169,6 +1191,8 @@ mod tests {
                 refine_ms: 450.0,
                 refine_frames: 8,
                 refine_longest_frame_ms: 60.0,
+                add_source_longest_frame_ms: 70.0,
+                add_source_frames: 9,
             }),
             equal_error: vec![EqualErrorRow {
                 scene: "mixed".into(),

@@ -19,14 +19,8 @@ use energywave::scene::Scene;
 use energywave::viewer::navigation;
 use glam::DVec3;
 
-fn shipped(name: &str) -> Scene {
-    Scene::load(
-        &Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("assets/scenes")
-            .join(name),
-    )
-    .unwrap()
-}
+mod common;
+use common::shipped_scene;
 
 /// `scene` with its eye moved toward the target, to `fraction` of its distance.
 fn closer(scene: &Scene, fraction: f64) -> Scene {
@@ -65,7 +59,7 @@ fn deepest_source(scene: &Scene, eye: DVec3, inward: DVec3) -> f64 {
 #[test]
 fn every_ray_reaches_past_every_source_close_up_inside_and_orbiting() {
     let default = Scene::default_scene();
-    let beam = shipped("beam_end_on.toml");
+    let beam = shipped_scene("beam_end_on.toml");
     let mut cameras = vec![
         ("default", default.clone()),
         ("default at half distance", closer(&default, 0.5)),

@@ -22,6 +22,9 @@ use energywave::reference;
 use energywave::scene::Scene;
 use glam::DVec3;
 
+mod common;
+use common::shipped;
+
 const RELATIVE_TOLERANCE: f64 = 1.5e-4;
 
 /// One renderer shared by the tests of this file (devices are costly on a software rasteriser).
@@ -30,26 +33,6 @@ fn gpu() -> MutexGuard<'static, HeadlessRenderer> {
     GPU.get_or_init(|| Mutex::new(HeadlessRenderer::new().expect("a GPU adapter (lavapipe in CI)")))
         .lock()
         .unwrap_or_else(|e| e.into_inner())
-}
-
-fn scenes_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes")
-}
-
-fn shipped() -> Vec<(String, Scene)> {
-    let mut v: Vec<_> = std::fs::read_dir(scenes_dir())
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
-        .map(|p| {
-            (
-                p.file_stem().unwrap().to_string_lossy().into_owned(),
-                Scene::load(&p).unwrap(),
-            )
-        })
-        .collect();
-    v.sort_by(|a, b| a.0.cmp(&b.0));
-    v
 }
 
 /// Worst relative error of the GPU's B against the CPU's, over every texel.

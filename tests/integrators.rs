@@ -6,8 +6,6 @@
 //! Error of a render, as the benchmark states it: on B clamped to [0, 1], the largest difference and the share
 //! of texels off by more than 1/255; and on B unclamped, against the integrator's tolerance.
 
-use std::path::{Path, PathBuf};
-
 use energywave::bench::{RenderError, converged_reference};
 use energywave::field::{Point, Sources};
 use energywave::gpu::HeadlessRenderer;
@@ -16,26 +14,12 @@ use energywave::reference;
 use energywave::scene::Scene;
 use glam::DVec3;
 
+mod common;
+use common::shipped;
+
 /// The GPU (f32) against its f64 twin, relative to max(|B|, 0.01): a few times the 3e-5 measured on lavapipe,
 /// so that a bug of either twin, or a mistyped constant, shows.
 const TWIN_TOLERANCE: f64 = 1.5e-4;
-
-fn shipped() -> Vec<(String, Scene)> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes");
-    let mut v: Vec<(String, Scene)> = std::fs::read_dir(&dir)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p: &PathBuf| p.extension().is_some_and(|e| e == "toml"))
-        .map(|p| {
-            (
-                p.file_stem().unwrap().to_string_lossy().into_owned(),
-                Scene::load(&p).unwrap(),
-            )
-        })
-        .collect();
-    v.sort_by(|a, b| a.0.cmp(&b.0));
-    v
-}
 
 /// Largest difference of the GPU's B from the f64 twin's over every texel of `scene`, relative to
 /// max(|B|, 0.01): held to `TWIN_TOLERANCE`.

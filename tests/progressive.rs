@@ -2,13 +2,14 @@
 //! in bands once it holds still, ending on exactly the texture a still render gives; screenshots at full
 //! quality whatever the screen shows.
 
-use std::path::Path;
-
 use energywave::gpu::{FieldRenderer, GpuContext, HeadlessRenderer, Upsample, texture_2d};
 use energywave::scene::Scene;
 use energywave::viewer::document::Document;
 use energywave::viewer::navigation;
 use energywave::viewer::offscreen::OffscreenViewer;
+
+mod common;
+use common::shipped_scene;
 
 /// Runs `upsample` over `values` (n x n, rows from the top) to `w` x `w` and reads the result back.
 fn upsampled(ctx: &GpuContext, values: &[f32], n: u32, w: u32) -> Vec<f32> {
@@ -114,12 +115,7 @@ fn integrate(ctx: &GpuContext, scene: &Scene, band_rows: u32) -> (Vec<f32>, u32)
 fn a_field_integrated_in_bands_is_the_field_integrated_at_once() {
     let ctx = GpuContext::new().expect("a GPU adapter (lavapipe in CI)");
     for name in ["default.toml", "mixed.toml"] {
-        let mut scene = Scene::load(
-            &Path::new(env!("CARGO_MANIFEST_DIR"))
-                .join("assets/scenes")
-                .join(name),
-        )
-        .unwrap();
+        let mut scene = shipped_scene(name);
         scene.billboard.resolution = 44;
         let (whole, frames) = integrate(&ctx, &scene, 0);
         assert_eq!(frames, 1);

@@ -2,28 +2,12 @@
 //! Gauss-Kronrod order, jitter) gives the texture of the generic pass, on every shipped scene and every
 //! integrator; and a structure compiled in the background is used once ready, never waited for.
 
-use std::path::{Path, PathBuf};
-
 use energywave::gpu::{FieldRenderer, GpuContext, Specialise, Structure};
 use energywave::integrate::Integrator;
 use energywave::scene::Scene;
 
-fn shipped() -> Vec<(String, Scene)> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes");
-    let mut v: Vec<(String, Scene)> = std::fs::read_dir(&dir)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p: &PathBuf| p.extension().is_some_and(|e| e == "toml"))
-        .map(|p| {
-            (
-                p.file_stem().unwrap().to_string_lossy().into_owned(),
-                Scene::load(&p).unwrap(),
-            )
-        })
-        .collect();
-    v.sort_by(|a, b| a.0.cmp(&b.0));
-    v
-}
+mod common;
+use common::shipped;
 
 /// The field of `scene` through `field` (integrated again), read back.
 fn field_of(ctx: &GpuContext, field: &mut FieldRenderer, scene: &Scene) -> Vec<f32> {

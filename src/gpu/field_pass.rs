@@ -446,8 +446,11 @@ pub enum Specialise {
     #[default]
     Off,
     /// Compile a structure's pipelines on a thread of their own the first time it is drawn, and use the generic
-    /// ones until they are ready: no frame waits on a compile (the viewer).
+    /// ones until they are ready: no frame waits on a compile.
     Background,
+    /// Use a structure's pipelines if they are ready, and compile only when asked (`compile_in_background`):
+    /// the viewer compiles while it is idle, so that a compile never takes a core from its frames.
+    IfReady,
     /// Compile them before the first dispatch that needs them (renders and exports of many frames).
     Blocking,
 }
@@ -512,7 +515,8 @@ fn build_specialised(
 type CompileSlot = std::sync::Arc<std::sync::Mutex<Option<(SpecialisedSet, f64)>>>;
 
 /// Most structures whose specialised pipelines are kept (the least recently drawn go first): a compiled
-/// pipeline holds the driver's machine code, and an editing session may pass through many structures.
+/// structure holds about 20 MB of the driver's memory on lavapipe, and an editing session may pass through
+/// many structures.
 const KEPT_STRUCTURES: usize = 4;
 
 /// The specialised pipelines: those ready (most recently drawn first), and the one compile under way.
@@ -955,32 +959,66 @@ impl FieldRenderer {
         }
         match mode {
             Specialise::Off => None,
+            Specialise::IfReady => None,
             Specialise::Blocking => {
                 let start = std::time::Instant::now();
                 let set = build_specialised(device, module, layout, structure);
                 Some(cache.keep(structure, set, start.elapsed().as_secs_f64() * 1e3))
             }
             Specialise::Background => {
-                if cache.compiling.is_none() {
-                    let slot = CompileSlot::default();
-                    let (device, module, layout) = (device.clone(), module.clone(), layout.clone());
-                    let out = slot.clone();
-                    let spawned = std::thread::Builder::new()
-                        .name("energywave field compile".into())
-                        .spawn(move || {
-                            let start = std::time::Instant::now();
-                            let p = build_specialised(&device, &module, &layout, structure);
-                            if let Ok(mut slot) = out.lock() {
-                                *slot = Some((p, start.elapsed().as_secs_f64() * 1e3));
-                            }
-                        });
-                    if spawned.is_ok() {
-                        cache.compiling = Some((structure, slot));
-                    }
-                }
+                Self::start_compile(cache, device, module, layout, structure);
                 None
             }
         }
+    }
+
+    /// Starts compiling `structure`'s pipelines on a thread of its own, unless a compile is under way (one at
+    /// a time: a burst of structure changes compiles what is drawn when the compile before it has finished).
+    fn start_compile(
+        cache: &mut SpecialisedPipelines,
+        device: &wgpu::Device,
+        module: &wgpu::ShaderModule,
+        layout: &wgpu::PipelineLayout,
+        structure: Structure,
+    ) {
+        if cache.compiling.is_some() {
+            return;
+        }
+        let slot = CompileSlot::default();
+        let (device, module, layout) = (device.clone(), module.clone(), layout.clone());
+        let out = slot.clone();
+        let spawned = std::thread::Builder::new()
+            .name("energywave field compile".into())
+            .spawn(move || {
+                let start = std::time::Instant::now();
+                let p = build_specialised(&device, &module, &layout, structure);
+                if let Ok(mut slot) = out.lock() {
+                    *slot = Some((p, start.elapsed().as_secs_f64() * 1e3));
+                }
+            });
+        if spawned.is_ok() {
+            cache.compiling = Some((structure, slot));
+        }
+    }
+
+    /// Starts compiling the uploaded scene's specialised pipelines on a thread of their own, if they are not
+    /// ready and no compile is under way (`Specialise::IfReady`: the viewer calls this once its picture is
+    /// whole). Returns whether a compile is under way.
+    pub fn compile_in_background(&mut self) -> bool {
+        self.specialised.collect();
+        if let Some(p) = &self.uploaded {
+            let structure = Structure::of(&p.params);
+            if !self.specialised_ready(&structure) {
+                Self::start_compile(
+                    &mut self.specialised,
+                    &self.device,
+                    &self.module,
+                    &self.pipeline_layout,
+                    structure,
+                );
+            }
+        }
+        self.compiling()
     }
 
     /// When to use pipelines specialised to the scene's structure (`Specialise::Off` by default).

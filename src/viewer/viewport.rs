@@ -267,11 +267,12 @@ impl ViewportGpu {
             min_filter: wgpu::FilterMode::Linear,
             ..Default::default()
         });
-        // The viewer's frames never wait on a compile: each structure compiles on its own thread.
+        // The viewer's frames never wait on a compile: a structure compiles on its own thread once the picture
+        // is whole (`integrate`), so it takes no core from the frames that move or refine.
         let mut scene_renderer = SceneRenderer::new(device);
         scene_renderer
             .field_mut()
-            .set_specialise(Specialise::Background);
+            .set_specialise(Specialise::IfReady);
         Self {
             scene_renderer,
             grid_pipeline,
@@ -476,6 +477,10 @@ impl ViewportGpu {
         }
         if progressive {
             self.budget.frame_did(now, work);
+        }
+        let main = self.scene_renderer.field_mut();
+        if preview.is_none() && !main.pending() {
+            main.compile_in_background();
         }
         self.showing_preview = preview;
         let shown = match preview {

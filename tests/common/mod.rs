@@ -1,0 +1,34 @@
+//! What several test files share: the shipped scenes.
+// Each test file compiles this module on its own and uses part of it.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+
+use energywave::scene::Scene;
+
+/// `assets/scenes`.
+pub fn scenes_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes")
+}
+
+/// Every shipped scene with its file stem, in name order.
+pub fn shipped() -> Vec<(String, Scene)> {
+    let mut v: Vec<(String, Scene)> = std::fs::read_dir(scenes_dir())
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .map(|p| {
+            (
+                p.file_stem().unwrap().to_string_lossy().into_owned(),
+                Scene::load(&p).unwrap(),
+            )
+        })
+        .collect();
+    v.sort_by(|a, b| a.0.cmp(&b.0));
+    v
+}
+
+/// The shipped scene `name` (a file name in `assets/scenes`).
+pub fn shipped_scene(name: &str) -> Scene {
+    Scene::load(&scenes_dir().join(name)).unwrap()
+}
