@@ -2,7 +2,9 @@
 //! renders the jittered integrator again with new offsets and shows the mean of the frames so far, whose
 //! noise falls as 1/sqrt(k) towards the converged picture (the jittered estimate is unbiased).
 
-use super::context::{texture_2d, uniform_buffer};
+use super::context::{
+    compute_pass, loaded_texture_entry, r32_storage_entry, texture_2d, uniform_buffer,
+};
 use super::shaders;
 
 /// Rust mirror of `AverageParams` in `shaders/average.wgsl` (keep in sync; `tests/gpu_layout.rs` checks it).
@@ -40,17 +42,15 @@ struct Bound {
 
 impl FrameAverage {
     pub fn new(device: &wgpu::Device) -> Self {
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("energywave.average.shader"),
-            source: wgpu::ShaderSource::Wgsl(shaders::AVERAGE_PASS.into()),
-        });
-        let compute = wgpu::ShaderStages::COMPUTE;
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("energywave.average.bind_group_layout"),
-            entries: &[
+        let (pipeline, layout) = compute_pass(
+            device,
+            "average",
+            shaders::AVERAGE_PASS,
+            "average_frames",
+            &[
                 wgpu::BindGroupLayoutEntry {
                     binding: 0,
-                    visibility: compute,
+                    visibility: wgpu::ShaderStages::COMPUTE,
                     ty: wgpu::BindingType::Buffer {
                         ty: wgpu::BufferBindingType::Uniform,
                         has_dynamic_offset: false,
@@ -58,41 +58,10 @@ impl FrameAverage {
                     },
                     count: None,
                 },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 1,
-                    visibility: compute,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 2,
-                    visibility: compute,
-                    ty: wgpu::BindingType::StorageTexture {
-                        access: wgpu::StorageTextureAccess::ReadWrite,
-                        format: wgpu::TextureFormat::R32Float,
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                    },
-                    count: None,
-                },
+                loaded_texture_entry(1),
+                r32_storage_entry(2, wgpu::StorageTextureAccess::ReadWrite),
             ],
-        });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("energywave.average.pipeline_layout"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("average_frames"),
-            layout: Some(&pipeline_layout),
-            module: &module,
-            entry_point: Some("average_frames"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
+        );
         let params = uniform_buffer::<AverageParams>(device, "energywave.average.params");
         Self {
             pipeline,

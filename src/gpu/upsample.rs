@@ -2,7 +2,7 @@
 //! integrates a coarse field while the view moves and shows it through the same billboard pass as the full
 //! one, upsampled by Catmull-Rom (no blocks, no creases between texels).
 
-use super::context::texture_2d;
+use super::context::{compute_pass, loaded_texture_entry, r32_storage_entry, texture_2d};
 use super::shaders;
 
 /// The pipeline, and the W x W output with its bind group over one source texture.
@@ -21,49 +21,16 @@ struct Bound {
 
 impl Upsample {
     pub fn new(device: &wgpu::Device) -> Self {
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("energywave.upsample.shader"),
-            source: wgpu::ShaderSource::Wgsl(shaders::UPSAMPLE_PASS.into()),
-        });
-        let compute = wgpu::ShaderStages::COMPUTE;
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("energywave.upsample.bind_group_layout"),
-            entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: compute,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 1,
-                    visibility: compute,
-                    ty: wgpu::BindingType::StorageTexture {
-                        access: wgpu::StorageTextureAccess::WriteOnly,
-                        format: wgpu::TextureFormat::R32Float,
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                    },
-                    count: None,
-                },
+        let (pipeline, layout) = compute_pass(
+            device,
+            "upsample",
+            shaders::UPSAMPLE_PASS,
+            "upsample",
+            &[
+                loaded_texture_entry(0),
+                r32_storage_entry(1, wgpu::StorageTextureAccess::WriteOnly),
             ],
-        });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("energywave.upsample.pipeline_layout"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("upsample"),
-            layout: Some(&pipeline_layout),
-            module: &module,
-            entry_point: Some("upsample"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
+        );
         Self {
             pipeline,
             layout,
