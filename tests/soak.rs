@@ -53,7 +53,7 @@ fn thousands_of_frames_of_random_edits() {
     let mut v = OffscreenViewer::new(Document::new(scene, None), 640, 400)
         .expect("a GPU adapter (lavapipe in CI)");
     let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
-    let mut baseline = 0;
+    let (mut baseline, mut late) = (0, 0);
     for frame in 0..FRAMES {
         let s = &mut v.app.doc.scene;
         match rng.below(12) {
@@ -145,8 +145,14 @@ fn thousands_of_frames_of_random_edits() {
             field.iter().all(|b| b.is_finite()),
             "frame {frame}: a non-finite value in the field texture"
         );
-        if frame == FRAMES / 4 {
-            baseline = rss();
+        // The most memory held in the second quarter against the most in the second half: the viewer keeps the
+        // compiled pipelines of a few structures (gpu::field_pass KEPT_STRUCTURES) and compiles on a thread of
+        // its own, so resident memory steps up and down as compiles come and go; a leak keeps climbing (4.4 GB
+        // over these frames, when the compiled pipelines were kept without a bound).
+        if frame >= FRAMES / 2 {
+            late = late.max(rss());
+        } else if frame >= FRAMES / 4 {
+            baseline = baseline.max(rss());
         }
         if frame % 250 == 0 {
             let pixels = v
@@ -158,12 +164,14 @@ fn thousands_of_frames_of_random_edits() {
             );
         }
     }
-    let growth = rss().saturating_sub(baseline);
+    let growth = late.saturating_sub(baseline);
     eprintln!(
-        "{FRAMES} frames; resident memory grew by {} KiB after the first quarter",
+        "{FRAMES} frames; the second half's peak of resident memory is {} KiB over the second quarter's",
         growth / 1024
     );
-    assert!(growth < 64 << 20, "memory grew by {} MiB", growth >> 20);
+    // Measured over five runs: 20 to 87 MiB, in steps of 20 to 80 MiB as structures compile; the leak this
+    // guards against grew by gigabytes.
+    assert!(growth < 160 << 20, "memory grew by {} MiB", growth >> 20);
     assert!(
         v.field_renders() > FRAMES as u64 / 3,
         "the field was integrated again as edits came"
