@@ -300,70 +300,8 @@ fn integrate(@builtin(global_invocation_id) gid: vec3<u32>) {
 const KIND_POINT: u32 = 0u;
 const KIND_LINE: u32 = 1u;
 const KIND_TORUS: u32 = 2u;
-const SCAN: u32 = 6u;
-const MAX_WIDTH: f32 = 4.0;
-const MIN_AXIS_WIDTH: f32 = 1e-4;
-const U_PANEL: f32 = 4.0;
-const MAX_GAUSS_PANELS: u32 = 8u;
-const MAX_DEPTH: u32 = 10u;
-const MAX_REFINEMENTS: u32 = 24u;
-const RING_NEWTON: u32 = 6u;
-const RING_STEP: f32 = 0.125;
-
-// Gauss-Kronrod pairs on [-1, 1] for n = 3, 4, 5, 6, 7, 8 and 10: each rule's n + 1 rows in turn, (node x >= 0,
-// Kronrod weight, Gauss weight), the first at x = 0. Twin of adaptive::KRONROD.
-const KRONROD: array<vec3<f32>, 50> = array<vec3<f32>, 50>(
-    vec3<f32>(0.000000000, 0.450916539, 0.888888889),  // 3
-    vec3<f32>(0.434243749, 0.401397415, 0.000000000),  // 3
-    vec3<f32>(0.774596669, 0.268488090, 0.555555556),  // 3
-    vec3<f32>(0.960491269, 0.104656226, 0.000000000),  // 3
-    vec3<f32>(0.000000000, 0.346442982, 0.000000000),  // 4
-    vec3<f32>(0.339981044, 0.326949190, 0.652145155),  // 4
-    vec3<f32>(0.640286217, 0.266798340, 0.000000000),  // 4
-    vec3<f32>(0.861136312, 0.170053605, 0.347854845),  // 4
-    vec3<f32>(0.976560251, 0.062977374, 0.000000000),  // 4
-    vec3<f32>(0.000000000, 0.282987418, 0.568888889),  // 5
-    vec3<f32>(0.279630413, 0.272849802, 0.000000000),  // 5
-    vec3<f32>(0.538469310, 0.241040339, 0.478628670),  // 5
-    vec3<f32>(0.754166727, 0.186800797, 0.000000000),  // 5
-    vec3<f32>(0.906179846, 0.115233317, 0.236926885),  // 5
-    vec3<f32>(0.984085360, 0.042582037, 0.000000000),  // 5
-    vec3<f32>(0.000000000, 0.241072580, 0.000000000),  // 6
-    vec3<f32>(0.238619186, 0.233770864, 0.467913935),  // 6
-    vec3<f32>(0.463118212, 0.213209652, 0.000000000),  // 6
-    vec3<f32>(0.661209386, 0.181071994, 0.360761573),  // 6
-    vec3<f32>(0.821373341, 0.137320605, 0.000000000),  // 6
-    vec3<f32>(0.932469514, 0.083694440, 0.171324492),  // 6
-    vec3<f32>(0.988703203, 0.030396154, 0.000000000),  // 6
-    vec3<f32>(0.000000000, 0.209482141, 0.417959184),  // 7
-    vec3<f32>(0.207784955, 0.204432940, 0.000000000),  // 7
-    vec3<f32>(0.405845151, 0.190350578, 0.381830051),  // 7
-    vec3<f32>(0.586087235, 0.169004727, 0.000000000),  // 7
-    vec3<f32>(0.741531186, 0.140653260, 0.279705391),  // 7
-    vec3<f32>(0.864864423, 0.104790010, 0.000000000),  // 7
-    vec3<f32>(0.949107912, 0.063092093, 0.129484966),  // 7
-    vec3<f32>(0.991455371, 0.022935322, 0.000000000),  // 7
-    vec3<f32>(0.000000000, 0.184446406, 0.000000000),  // 8
-    vec3<f32>(0.183434642, 0.181400025, 0.362683783),  // 8
-    vec3<f32>(0.360701098, 0.172070609, 0.000000000),  // 8
-    vec3<f32>(0.525532410, 0.156652606, 0.313706646),  // 8
-    vec3<f32>(0.672354071, 0.136263109, 0.000000000),  // 8
-    vec3<f32>(0.796666477, 0.111646371, 0.222381034),  // 8
-    vec3<f32>(0.894120907, 0.082482299, 0.000000000),  // 8
-    vec3<f32>(0.960289856, 0.049439395, 0.101228536),  // 8
-    vec3<f32>(0.993379876, 0.017822383, 0.000000000),  // 8
-    vec3<f32>(0.000000000, 0.149445554, 0.000000000),  // 10
-    vec3<f32>(0.148874339, 0.147739105, 0.295524225),  // 10
-    vec3<f32>(0.294392863, 0.142775939, 0.000000000),  // 10
-    vec3<f32>(0.433395394, 0.134709217, 0.269266719),  // 10
-    vec3<f32>(0.562757135, 0.123491976, 0.000000000),  // 10
-    vec3<f32>(0.679409568, 0.109387159, 0.219086363),  // 10
-    vec3<f32>(0.780817727, 0.093125455, 0.000000000),  // 10
-    vec3<f32>(0.865063367, 0.075039675, 0.149451349),  // 10
-    vec3<f32>(0.930157491, 0.054755897, 0.000000000),  // 10
-    vec3<f32>(0.973906529, 0.032558162, 0.066671344),  // 10
-    vec3<f32>(0.995657163, 0.011694639, 0.000000000),  // 10
-);
+// The adaptive integrator's settings and the Gauss-Kronrod table (KRONROD, kronrod_start) are generated from
+// the twin's (gpu::shaders::shared_constants) and prepended to the module.
 
 // A feature and the piece [lo, hi] of the ray it owns: center s* and width h in s, and flat, the half-length of
 // the stretch where the source is closer than eps (0 where it is not).
@@ -376,10 +314,8 @@ struct Peak {
 }
 
 // At most MAX_PEAKS: a torus's two ring passes and its axis, or a chain's two closest approaches and two ends.
-const MAX_PEAKS: u32 = 4u;
-
 struct Peaks {
-    peaks: array<Peak, 4>,  // MAX_PEAKS
+    peaks: array<Peak, MAX_PEAKS>,
     count: u32,
 }
 
@@ -632,20 +568,7 @@ fn smooth_features(ray: Ray) -> Peaks {
 
 // KRONROD as a variable: indexing a constant array with a variable makes naga copy the whole array into a
 // temporary at every access, which lavapipe pays in full; a private variable is copied once.
-var<private> KRONROD_NODES: array<vec3<f32>, 50> = KRONROD;
-
-// The first row of the Gauss-Kronrod pair of `order` in KRONROD. Twin of adaptive::KRONROD_START.
-fn kronrod_start(order: u32) -> u32 {
-    switch order {
-        case 3u: { return 0u; }
-        case 4u: { return 4u; }
-        case 5u: { return 9u; }
-        case 6u: { return 15u; }
-        case 7u: { return 22u; }
-        case 8u: { return 30u; }
-        default: { return 39u; }
-    }
-}
+var<private> KRONROD_NODES: array<vec3<f32>, KRONROD_ROWS> = KRONROD;
 
 // The term's integrand in s, f = 1 / max(eps, d) zeta(t), at t clamped to the piece (before the coefficient).
 fn smooth_f(ray: Ray, p: Peak, t_in: f32) -> f32 {
@@ -812,20 +735,6 @@ fn integrate_adaptive(@builtin(global_invocation_id) gid: vec3<u32>) {
 }
 
 // -- Curves: Gauss-Legendre in u between the chain's kinks.
-
-const JUMP: f32 = 0.1;
-const PARAM_JUMP: f32 = 0.05;
-const END_SNAP: f32 = 1e-4;
-const CUT_MERGE: f32 = 1e-6;
-const SINGULAR_MERGE: f32 = 1e-3;
-const SWITCH_ROUNDS: u32 = 24u;
-const SWITCH_INSET: f32 = 1e-3;
-const KINK_ROUNDS: u32 = 12u;
-const KINK_BRACKET: f32 = 1e-3;
-const KINK_PROBE: f32 = 0.05;
-const MAX_KINKS: u32 = 8u;
-const PEAK_NEWTON: u32 = 2u;
-const PEAK_SETTLED: f32 = 0.25;
 
 // A chain's nearest point to the ray's point at t. Twin of ChainSample.
 struct ChainSample {
@@ -1015,7 +924,7 @@ fn find_kink(ray: Ray, a: ptr<function, ChainSample>, b: ptr<function, ChainSamp
 // The kinks of a chain along the ray, at most MAX_KINKS (more are dropped). Twin of Kinks.
 // Bit k of singular: the nearest point leaves a point at rest there, or jumps (see Kinks).
 struct Kinks {
-    at: array<f32, 8>,  // MAX_KINKS
+    at: array<f32, MAX_KINKS>,
     count: u32,
     singular: u32,
 }
@@ -1171,7 +1080,7 @@ fn offer(m: ptr<function, Minima>, x: ChainSample, g_left: f32, g_right: f32) {
 // A chain's features along the ray: its closest approaches (each owning its piece) and its kinks.
 struct CurveFeatures {
     found: Peaks,
-    kinks: array<f32, 8>,  // MAX_KINKS
+    kinks: array<f32, MAX_KINKS>,
     kink_count: u32,
     kink_singular: u32,
 }
@@ -1392,8 +1301,8 @@ fn nearest_on_chain_from(c: CurveSource, p: vec3<f32>, segment: ptr<function, u3
     return vec2<f32>((f32(best_j) + best.x) / f32(c.segment_count), best.y);
 }
 
-// Newton steps that carry a piece's nearest point from one node to the next.
-const TRACK_NEWTON: u32 = 2u;
+// A node's nearest point is carried from the last node's by TRACK_NEWTON Newton steps (generated: the field
+// pass's iteration budget counts them).
 // A node keeps Newton's nearest point where the last step moved it less than this along its segment.
 const TRACK_SETTLED: f32 = 1e-4;
 // The longest way along its segment (in u) a nearest point is carried from the last node.

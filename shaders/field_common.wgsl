@@ -205,8 +205,6 @@ fn nearest_on_segment(segment: CurveSegment, p: vec3<f32>) -> vec2<f32> {
     return select(best, vec2<f32>(1.0 - best.x, best.y), flip);
 }
 
-// A first derivative this much smaller (squared) than the second counts as zero (curve::DEGENERATE).
-const DEGENERATE: f32 = 1e-10;
 
 // Whether a segment's speed vanishes at its start (its first two control points coincide). Twin of
 // curve::Segment::starts_at_rest.

@@ -101,7 +101,8 @@ pub const KINK_PROBE: f64 = 0.05;
 pub const MAX_KINKS: usize = 8;
 /// The longest stretch of u one panel (one Gauss-Kronrod pair before refinement) covers.
 pub const U_PANEL: f64 = 4.0;
-/// Most panels on one cut of a piece. The WGSL twin holds the same constant (a test checks it).
+/// Most panels on one cut of a piece. This and the other settings here the WGSL twin uses are declared in it
+/// from these definitions (`gpu::shaders::shared_constants`).
 pub const MAX_GAUSS_PANELS: u32 = 8;
 
 /// Gauss-Kronrod pairs on [-1, 1]: the Gauss-Legendre rule of `n` nodes and the Kronrod rule of `2n + 1` nodes
@@ -110,8 +111,8 @@ pub const MAX_GAUSS_PANELS: u32 = 8;
 /// difference of the two rules on an interval bounds the error of the Kronrod value there, which the integrator
 /// refines until it is within its share of the tolerance (`integrate_panel`). Computed to 60 digits (the
 /// Stieltjes polynomial's roots, then the weights from the moments) and printed to 17; `tests` below check that
-/// the Kronrod rule of `n` is exact to degree `3n + 1` and the Gauss rule to `2n - 1`. The WGSL twin holds the
-/// same table.
+/// the Kronrod rule of `n` is exact to degree `3n + 1` and the Gauss rule to `2n - 1`. The WGSL twin's table is
+/// written from this one (`gpu::shaders::shared_constants`).
 pub const KRONROD_ORDERS: [u32; 7] = [3, 4, 5, 6, 7, 8, 10];
 pub const KRONROD_START: [usize; 7] = [0, 4, 9, 15, 22, 30, 39];
 #[allow(clippy::excessive_precision)]
@@ -392,10 +393,10 @@ pub struct Peak {
 }
 
 /// Widest feature considered: beyond it the map is as good as uniform.
-const MAX_WIDTH: f64 = 4.0;
+pub const MAX_WIDTH: f64 = 4.0;
 /// Narrowest axis feature: a ray through the axis itself has a true kink there, which a map this narrow
 /// resolves as well as any.
-const MIN_AXIS_WIDTH: f64 = 1e-4;
+pub const MIN_AXIS_WIDTH: f64 = 1e-4;
 
 /// The peak of a term whose squared distance is `d2(s) = d2_min + a (s - s*)^2`.
 fn peak(center: f64, d2_min: f64, a: f64, eps: f64) -> Peak {
@@ -515,8 +516,8 @@ impl Ring {
 }
 
 /// Newton steps that find a ring's closest approach, and the longest of them (in t).
-const RING_NEWTON: u32 = 6;
-const RING_STEP: f64 = 0.125;
+pub const RING_NEWTON: u32 = 6;
+pub const RING_STEP: f64 = 0.125;
 
 /// Most features of one term: a torus's two ring passes and its axis, or a chain's two closest approaches and its
 /// two ends.

@@ -188,9 +188,9 @@ fn curve_iterations(segments: u32) -> u64 {
     1 + 12 * segments as u64
 }
 
-/// Newton steps a Gauss node of a curve's piece takes from the last node's nearest point (`TRACK_NEWTON` in the
-/// shader) before it falls back, if it must, to solving the cubic.
-const TRACK_NEWTON: u64 = 2;
+/// Newton steps a Gauss node of a curve's piece takes from the last node's nearest point before it falls back, if
+/// it must, to solving the cubic (declared in the shader from here, `gpu::shaders::shared_constants`).
+pub(super) const TRACK_NEWTON: u64 = 2;
 
 /// Loop iterations of a curve's term in the adaptive integrator at most, `iterations` those of one evaluation of
 /// its distance: each evaluation may take Newton's steps from the last node (`track_nearest` in the shader), then
@@ -1116,15 +1116,6 @@ mod tests {
     use crate::field::{Curve, Point, Torus};
     use glam::DVec3;
 
-    #[test]
-    fn the_newton_steps_counted_are_the_shaders() {
-        let declared = format!("const TRACK_NEWTON: u32 = {TRACK_NEWTON}u;");
-        assert!(
-            crate::gpu::shaders::FIELD_PASS.contains(&declared),
-            "field.wgsl declares {declared}"
-        );
-    }
-
     /// The value the field module declares for `const NAME: TYPE = VALUE;`, as f64.
     fn shader_constant(name: &str) -> f64 {
         let source = crate::gpu::shaders::field_module_source();
@@ -1146,11 +1137,11 @@ mod tests {
     }
 
     #[test]
-    fn the_adaptive_integrators_constants_are_the_same_in_both_twins() {
-        // Mirrored by hand between src/adaptive.rs (and field::curve) and the shader: a mismatch makes the twins
-        // integrate differently where the tests may not look (8 panels on the CPU against 4 on the GPU went
-        // unnoticed once).
+    fn the_constants_shared_with_the_twin_are_generated_from_it_and_declared_once() {
+        // Mirrored by hand they drifted apart once (8 panels on the CPU against 4 on the GPU, unnoticed): now the
+        // module's declarations are written from the twin's definitions, and no WGSL file declares them again.
         use crate::adaptive as a;
+        use crate::gpu::shaders;
         let shared: &[(&str, f64)] = &[
             ("SCAN", a::SCAN as f64),
             ("JUMP", a::JUMP),
@@ -1171,14 +1162,62 @@ mod tests {
             ("SINGULAR_MERGE", a::SINGULAR_MERGE),
             ("SWITCH_ROUNDS", a::SWITCH_ROUNDS as f64),
             ("SWITCH_INSET", a::SWITCH_INSET),
+            ("MAX_WIDTH", a::MAX_WIDTH),
+            ("MIN_AXIS_WIDTH", a::MIN_AXIS_WIDTH),
+            ("RING_NEWTON", a::RING_NEWTON as f64),
+            ("RING_STEP", a::RING_STEP),
             ("DEGENERATE", crate::field::curve::DEGENERATE),
+            ("TRACK_NEWTON", TRACK_NEWTON as f64),
+            ("KRONROD_ROWS", a::KRONROD.len() as f64),
         ];
+        let module = shaders::field_module_source();
         for &(name, want) in shared {
             let got = shader_constant(name);
             assert!(
                 (got - want).abs() <= 1e-7 * want.abs(),
                 "{name}: the shader declares {got}, the f64 twin {want}"
             );
+            let declaration = format!("const {name}: ");
+            assert_eq!(
+                module.matches(&declaration).count(),
+                1,
+                "{name} declared once"
+            );
+            for (file, text) in [
+                ("field_common.wgsl", shaders::FIELD_COMMON),
+                ("field.wgsl", shaders::FIELD_PASS),
+            ] {
+                assert!(
+                    !text.contains(&declaration),
+                    "{file} declares {name} by hand"
+                );
+            }
+        }
+        // The Gauss-Kronrod table, row by row, and where each pair starts.
+        let rows: Vec<&str> = module
+            .lines()
+            .skip_while(|l| !l.starts_with("const KRONROD: "))
+            .skip(1)
+            .take_while(|l| l.trim_start().starts_with("vec3<f32>("))
+            .collect();
+        assert_eq!(rows.len(), a::KRONROD.len());
+        for (row, (x, k, g)) in rows.iter().zip(a::KRONROD) {
+            let values: Vec<f32> = row
+                .trim()
+                .trim_start_matches("vec3<f32>(")
+                .trim_end_matches("),")
+                .split(", ")
+                .map(|v| v.parse().expect("a number"))
+                .collect();
+            assert_eq!(values, [x as f32, k as f32, g as f32], "{row}");
+        }
+        for (k, n) in a::KRONROD_ORDERS
+            .iter()
+            .enumerate()
+            .take(a::KRONROD_ORDERS.len() - 1)
+        {
+            let case = format!("case {n}u: {{ return {}u; }}", a::KRONROD_START[k]);
+            assert!(module.contains(&case), "kronrod_start: {case}");
         }
     }
 
