@@ -64,19 +64,21 @@ fn every_wgsl_module_validates() {
     for (name, source) in modules {
         parse_and_validate(name, &source);
     }
-    // The field pass specialised to a structure (gpu::field_pass::Structure's constants), every kind present.
-    parse_and_validate_with(
-        "field.wgsl specialised",
-        &shaders::field_module_source(),
-        &[
-            ("POINT_COUNT", 2.0),
-            ("LINE_COUNT", 1.0),
-            ("TORUS_COUNT", 1.0),
-            ("CURVE_COUNT", 3.0),
-            ("GAUSS_ORDER", 5.0),
-            ("JITTER", 0.0),
-        ],
-    );
+    // Each field pass specialised to a structure (gpu::field_pass::Structure's constants), every kind present.
+    for (k, (entry, _)) in shaders::FIELD_PASSES.iter().enumerate() {
+        parse_and_validate_with(
+            &format!("{entry} specialised"),
+            &shaders::field_module_source(k),
+            &[
+                ("POINT_COUNT", 2.0),
+                ("LINE_COUNT", 1.0),
+                ("TORUS_COUNT", 1.0),
+                ("CURVE_COUNT", 3.0),
+                ("GAUSS_ORDER", 5.0),
+                ("JITTER", 0.0),
+            ],
+        );
+    }
     // Every .wgsl file in shaders/ is part of some module (no file escapes validation).
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders");
     let all: String = shaders::all_modules().into_iter().map(|(_, s)| s).collect();
@@ -134,7 +136,7 @@ macro_rules! fields {
 
 #[test]
 fn rust_mirrors_match_the_wgsl_layouts() {
-    let field = parse_and_validate("field", &shaders::field_module_source());
+    let field = parse_and_validate("simpson", &shaders::field_module_source(0));
     check_struct(
         &field,
         "FieldParams",

@@ -1,4 +1,5 @@
-//! The field pass: uploads the scene's sources and settings and dispatches `shaders/field.wgsl`, which
+//! The field pass: uploads the scene's sources and settings and dispatches the field passes (`shaders/simpson.wgsl`,
+//! `adaptive_smooth.wgsl`, `adaptive_curves.wgsl`, each assembled by `gpu::shaders`), which
 //! integrates B for every texel into an r32float storage texture (W x W x 4 bytes: O(W^2), no W x W x n
 //! buffer). The texture is re-rendered only when something it depends on changed.
 
@@ -12,12 +13,12 @@ use crate::geometry::Billboard;
 use crate::integrate::Integrator;
 use crate::scene::Scene;
 
-/// Rust mirrors of the WGSL structs of `shaders/field.wgsl` and `shaders/field_common.wgsl` (keep in
+/// Rust mirrors of the WGSL structs of `shaders/field_pass.wgsl` and `shaders/field_common.wgsl` (keep in
 /// sync; `tests/gpu_layout.rs` checks them against naga's layout).
 pub mod gpu_data {
     use bytemuck::{Pod, Zeroable};
 
-    /// `FieldParams` in `shaders/field.wgsl`.
+    /// `FieldParams` in `shaders/field_pass.wgsl`.
     #[repr(C)]
     #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
     pub struct FieldParams {
@@ -44,7 +45,7 @@ pub mod gpu_data {
     }
     const _: () = assert!(size_of::<FieldParams>() == 112);
 
-    /// `Chunk` in `shaders/field.wgsl`: one dispatch's range of samples or terms.
+    /// `Chunk` in `shaders/field_pass.wgsl`: one dispatch's range of samples or terms.
     #[repr(C)]
     #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
     pub struct Chunk {
@@ -387,7 +388,7 @@ impl StorageBuffer {
     }
 }
 
-/// The scene's structure a specialised pipeline is compiled for: the values of `shaders/field.wgsl`'s
+/// The scene's structure a specialised pipeline is compiled for: the values of `shaders/field_pass.wgsl`'s
 /// pipeline-overridable constants (source counts per kind, the Gauss-Kronrod order, jitter). Values (positions,
 /// coefficients, the camera) stay in storage buffers, so editing them never compiles anything.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -455,12 +456,9 @@ pub enum Specialise {
     Blocking,
 }
 
-/// The three entry points (simpson, adaptive smooth sources, adaptive curves), indexed by `Chunk::pipeline`.
-const ENTRIES: [&str; 3] = [
-    "integrate",
-    "integrate_adaptive",
-    "integrate_adaptive_curves",
-];
+/// The three passes' modules (simpson, adaptive smooth sources, adaptive curves: `shaders::FIELD_PASSES`),
+/// indexed by `Chunk::pipeline`; each holds its one entry point.
+type Modules = [wgpu::ShaderModule; 3];
 type Pipelines = [wgpu::ComputePipeline; 3];
 /// A structure's specialised pipelines: only its integrator's entry points.
 type SpecialisedSet = [Option<wgpu::ComputePipeline>; 3];
@@ -488,16 +486,18 @@ fn build_pipeline(
 /// The generic pipelines of every entry point.
 fn build_pipelines(
     device: &wgpu::Device,
-    module: &wgpu::ShaderModule,
+    modules: &Modules,
     layout: &wgpu::PipelineLayout,
 ) -> Pipelines {
-    ENTRIES.map(|entry| build_pipeline(device, module, layout, entry, &[]))
+    std::array::from_fn(|k| {
+        build_pipeline(device, &modules[k], layout, shaders::FIELD_PASSES[k].0, &[])
+    })
 }
 
 /// The pipelines of `structure`'s entry points, specialised to it.
 fn build_specialised(
     device: &wgpu::Device,
-    module: &wgpu::ShaderModule,
+    modules: &Modules,
     layout: &wgpu::PipelineLayout,
     structure: Structure,
 ) -> SpecialisedSet {
@@ -505,7 +505,11 @@ fn build_specialised(
     let mut set: SpecialisedSet = Default::default();
     for &k in structure.entries() {
         set[k] = Some(build_pipeline(
-            device, module, layout, ENTRIES[k], &constants,
+            device,
+            &modules[k],
+            layout,
+            shaders::FIELD_PASSES[k].0,
+            &constants,
         ));
     }
     set
@@ -568,7 +572,7 @@ impl SpecialisedPipelines {
 pub struct FieldRenderer {
     /// `integrate` (simpson) and `integrate_adaptive`, indexed by `FieldParams::integrator`.
     pipelines: Pipelines,
-    module: wgpu::ShaderModule,
+    modules: Modules,
     pipeline_layout: wgpu::PipelineLayout,
     specialise: Specialise,
     specialised: SpecialisedPipelines,
@@ -601,9 +605,11 @@ pub struct FieldRenderer {
 impl FieldRenderer {
     /// Builds the pipelines.
     pub fn new(device: &wgpu::Device) -> Self {
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("energywave.field.shader"),
-            source: wgpu::ShaderSource::Wgsl(shaders::field_module_source().into()),
+        let modules: Modules = std::array::from_fn(|k| {
+            device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some(&format!("energywave.field.{}", shaders::FIELD_PASSES[k].0)),
+                source: wgpu::ShaderSource::Wgsl(shaders::field_module_source(k).into()),
+            })
         });
         let storage = |binding| wgpu::BindGroupLayoutEntry {
             binding,
@@ -667,7 +673,7 @@ impl FieldRenderer {
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-        let pipelines = build_pipelines(device, &module, &pipeline_layout);
+        let pipelines = build_pipelines(device, &modules, &pipeline_layout);
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("energywave.field.params"),
             size: size_of::<FieldParams>() as u64,
@@ -687,7 +693,7 @@ impl FieldRenderer {
             .max(size_of::<Chunk>() as u64);
         Self {
             pipelines,
-            module,
+            modules,
             pipeline_layout,
             specialise: Specialise::default(),
             specialised: SpecialisedPipelines::default(),
@@ -904,7 +910,7 @@ impl FieldRenderer {
             &mut self.specialised,
             self.specialise,
             &self.device,
-            &self.module,
+            &self.modules,
             &self.pipeline_layout,
             Structure::of(&packed.params),
         );
@@ -946,7 +952,7 @@ impl FieldRenderer {
         cache: &mut SpecialisedPipelines,
         mode: Specialise,
         device: &wgpu::Device,
-        module: &wgpu::ShaderModule,
+        modules: &Modules,
         layout: &wgpu::PipelineLayout,
         structure: Structure,
     ) -> Option<std::sync::Arc<SpecialisedSet>> {
@@ -962,11 +968,11 @@ impl FieldRenderer {
             Specialise::IfReady => None,
             Specialise::Blocking => {
                 let start = std::time::Instant::now();
-                let set = build_specialised(device, module, layout, structure);
+                let set = build_specialised(device, modules, layout, structure);
                 Some(cache.keep(structure, set, start.elapsed().as_secs_f64() * 1e3))
             }
             Specialise::Background => {
-                Self::start_compile(cache, device, module, layout, structure);
+                Self::start_compile(cache, device, modules, layout, structure);
                 None
             }
         }
@@ -977,7 +983,7 @@ impl FieldRenderer {
     fn start_compile(
         cache: &mut SpecialisedPipelines,
         device: &wgpu::Device,
-        module: &wgpu::ShaderModule,
+        modules: &Modules,
         layout: &wgpu::PipelineLayout,
         structure: Structure,
     ) {
@@ -985,13 +991,13 @@ impl FieldRenderer {
             return;
         }
         let slot = CompileSlot::default();
-        let (device, module, layout) = (device.clone(), module.clone(), layout.clone());
+        let (device, modules, layout) = (device.clone(), modules.clone(), layout.clone());
         let out = slot.clone();
         let spawned = std::thread::Builder::new()
             .name("energywave field compile".into())
             .spawn(move || {
                 let start = std::time::Instant::now();
-                let p = build_specialised(&device, &module, &layout, structure);
+                let p = build_specialised(&device, &modules, &layout, structure);
                 if let Ok(mut slot) = out.lock() {
                     *slot = Some((p, start.elapsed().as_secs_f64() * 1e3));
                 }
@@ -1012,7 +1018,7 @@ impl FieldRenderer {
                 Self::start_compile(
                     &mut self.specialised,
                     &self.device,
-                    &self.module,
+                    &self.modules,
                     &self.pipeline_layout,
                     structure,
                 );
@@ -1118,7 +1124,7 @@ mod tests {
 
     /// The value the field module declares for `const NAME: TYPE = VALUE;`, as f64.
     fn shader_constant(name: &str) -> f64 {
-        let source = crate::gpu::shaders::field_module_source();
+        let source = crate::gpu::shaders::field_module_source(2);
         let start = format!("const {name}: ");
         let line = source
             .lines()
@@ -1170,7 +1176,7 @@ mod tests {
             ("TRACK_NEWTON", TRACK_NEWTON as f64),
             ("KRONROD_ROWS", a::KRONROD.len() as f64),
         ];
-        let module = shaders::field_module_source();
+        let module = shaders::field_module_source(2);
         for &(name, want) in shared {
             let got = shader_constant(name);
             assert!(
@@ -1185,7 +1191,11 @@ mod tests {
             );
             for (file, text) in [
                 ("field_common.wgsl", shaders::FIELD_COMMON),
-                ("field.wgsl", shaders::FIELD_PASS),
+                ("field_pass.wgsl", shaders::FIELD_PASS),
+                ("simpson.wgsl", shaders::SIMPSON_PASS),
+                ("adaptive.wgsl", shaders::ADAPTIVE_COMMON),
+                ("adaptive_smooth.wgsl", shaders::ADAPTIVE_SMOOTH_PASS),
+                ("adaptive_curves.wgsl", shaders::ADAPTIVE_CURVES_PASS),
             ] {
                 assert!(
                     !text.contains(&declaration),

@@ -1,10 +1,46 @@
-//! The WGSL sources, embedded in the binary. WGSL has no include: a pass that evaluates the field gets
-//! `field_common.wgsl` (the source structs and distance functions) prepended, so they live in one place.
+//! The WGSL sources, embedded in the binary. WGSL has no include: each field pass's module is assembled here
+//! from shared parts (the constants generated from the f64 twin, `field_common.wgsl` with the source structs
+//! and distance functions, `field_pass.wgsl` with the bindings, then the pass's own file), so each part lives in
+//! one place and each pass's module carries only its own code.
 
 /// Shared structs and functions of the field.
 pub const FIELD_COMMON: &str = include_str!("../../shaders/field_common.wgsl");
-/// The field pass proper (without the common part).
-pub const FIELD_PASS: &str = include_str!("../../shaders/field.wgsl");
+/// What every field pass shares: parameters, bindings, the structure's constants, the texel's ray.
+pub const FIELD_PASS: &str = include_str!("../../shaders/field_pass.wgsl");
+/// The papers' integrator, Simpson's rule (entry point `integrate`).
+pub const SIMPSON_PASS: &str = include_str!("../../shaders/simpson.wgsl");
+/// The adaptive integrator's parts shared by its two passes.
+pub const ADAPTIVE_COMMON: &str = include_str!("../../shaders/adaptive.wgsl");
+/// The adaptive integrator's pass for points, lines and tori (entry point `integrate_adaptive`).
+pub const ADAPTIVE_SMOOTH_PASS: &str = include_str!("../../shaders/adaptive_smooth.wgsl");
+/// The adaptive integrator's pass for curve chains (entry point `integrate_adaptive_curves`).
+pub const ADAPTIVE_CURVES_PASS: &str = include_str!("../../shaders/adaptive_curves.wgsl");
+
+/// The field passes: each entry point with the files of its module after the shared parts, in the order
+/// `gpu::field_pass` indexes its pipelines.
+pub const FIELD_PASSES: [(&str, &[&str]); 3] = [
+    ("integrate", &[SIMPSON_PASS]),
+    (
+        "integrate_adaptive",
+        &[ADAPTIVE_COMMON, ADAPTIVE_SMOOTH_PASS],
+    ),
+    (
+        "integrate_adaptive_curves",
+        &[ADAPTIVE_COMMON, ADAPTIVE_CURVES_PASS],
+    ),
+];
+
+/// The complete source of field pass `k`'s module (`FIELD_PASSES`): the constants it shares with its f64
+/// twin, generated from the twin's definitions (`shared_constants`), the common parts and the pass.
+pub fn field_module_source(k: usize) -> String {
+    let mut source = format!("{}\n{FIELD_COMMON}\n{FIELD_PASS}", shared_constants());
+    for part in FIELD_PASSES[k].1 {
+        source.push('\n');
+        source.push_str(part);
+    }
+    source
+}
+
 /// The billboard pass.
 pub const BILLBOARD_PASS: &str = include_str!("../../shaders/billboard.wgsl");
 
@@ -18,12 +54,6 @@ pub const AVERAGE_PASS: &str = include_str!("../../shaders/average.wgsl");
 pub const GRID_PASS: &str = include_str!("../../shaders/grid.wgsl");
 /// The viewer's copy of its offscreen viewport into egui's frame.
 pub const BLIT_PASS: &str = include_str!("../../shaders/blit.wgsl");
-
-/// The complete source of the field pass's module: the constants it shares with its f64 twin, generated from
-/// the twin's definitions (`shared_constants`), then the common part and the pass.
-pub fn field_module_source() -> String {
-    format!("{}\n{FIELD_COMMON}\n{FIELD_PASS}", shared_constants())
-}
 
 /// An f32 WGSL literal of `v`: the shortest decimal that reads back as `v as f32`.
 fn f32_literal(v: f64) -> String {
@@ -116,7 +146,18 @@ pub fn shared_constants() -> String {
 /// Every shader module the program builds, by name: what the validation tests check.
 pub fn all_modules() -> Vec<(&'static str, String)> {
     vec![
-        ("field.wgsl (with field_common.wgsl)", field_module_source()),
+        (
+            "simpson.wgsl (with field_common.wgsl and field_pass.wgsl)",
+            field_module_source(0),
+        ),
+        (
+            "adaptive_smooth.wgsl (with field_common.wgsl, field_pass.wgsl and adaptive.wgsl)",
+            field_module_source(1),
+        ),
+        (
+            "adaptive_curves.wgsl (with field_common.wgsl, field_pass.wgsl and adaptive.wgsl)",
+            field_module_source(2),
+        ),
         ("billboard.wgsl", BILLBOARD_PASS.to_string()),
         ("average.wgsl", AVERAGE_PASS.to_string()),
         ("upsample.wgsl", UPSAMPLE_PASS.to_string()),

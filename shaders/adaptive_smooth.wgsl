@@ -1,0 +1,256 @@
+// The adaptive integrator's pass for points, lines and tori (entry point integrate_adaptive): Gauss-Kronrod
+// pairs in u on each term's pieces. Assembled after field_pass.wgsl and adaptive.wgsl. Twin: src/adaptive.rs.
+
+// A point's, a line's or a torus's distance from p.
+fn smooth_distance(ray: Ray, p: vec3<f32>) -> f32 {
+    if ray.kind == KIND_POINT {
+        return length(p - ray.anchor);
+    }
+    if ray.kind == KIND_LINE {
+        return line_distance(p, ray.anchor, ray.along);
+    }
+    return torus_distance(p, ray.anchor, ray.along, ray.radius);
+}
+
+// The term's ray, with its source's geometry.
+fn smooth_ray(kind: u32, index: u32, s_point: vec3<f32>, e_point: vec3<f32>) -> Ray {
+    var ray = Ray(s_point, e_point - s_point, kind, index, vec3<f32>(0.0), vec3<f32>(0.0), 0.0);
+    if kind == KIND_POINT {
+        ray.anchor = points[index].position;
+    } else if kind == KIND_LINE {
+        let s = lines[index];
+        ray.anchor = s.point;
+        ray.along = s.direction;
+    } else {
+        let s = tori[index];
+        ray.anchor = s.center;
+        ray.along = s.axis;
+        ray.radius = s.major_radius;
+    }
+    return ray;
+}
+fn smooth_coefficient(kind: u32, index: u32) -> f32 {
+    if kind == KIND_POINT {
+        return points[index].coefficient;
+    }
+    if kind == KIND_LINE {
+        return lines[index].coefficient;
+    }
+    return tori[index].coefficient;
+}
+
+// A torus's ring along the ray: rho^2 = a t^2 + b t + c, z = z0 + z1 t, d^2 = (rho - r)^2 + z^2. Twin of Ring.
+struct Ring {
+    a: f32,
+    b: f32,
+    c: f32,
+    z0: f32,
+    z1: f32,
+    r: f32,
+}
+fn make_ring(ray: Ray) -> Ring {
+    let t = tori[ray.index];
+    let q = ray.start - t.center;
+    let z0 = dot(q, t.axis);
+    let z1 = dot(ray.dir, t.axis);
+    return Ring(dot(ray.dir, ray.dir) - z1 * z1, 2.0 * (dot(q, ray.dir) - z0 * z1), dot(q, q) - z0 * z0, z0, z1,
+        t.major_radius);
+}
+
+// Half the first and second derivatives of d^2 at t, and d^2. Twin of Ring::at.
+fn ring_at(g: Ring, t: f32) -> vec3<f32> {
+    let rho = sqrt(max(g.a * t * t + g.b * t + g.c, 1e-30));
+    let drho = (2.0 * g.a * t + g.b) / (2.0 * rho);
+    let ddrho = (g.a - drho * drho) / rho;
+    let z = g.z0 + g.z1 * t;
+    let first = (rho - g.r) * drho + z * g.z1;
+    let second = drho * drho + (rho - g.r) * ddrho + g.z1 * g.z1;
+    return vec3<f32>(first, second, (rho - g.r) * (rho - g.r) + z * z);
+}
+
+// Where Newton starts on [lo, hi]. Twin of Ring::start.
+fn ring_start(g: Ring, lo: f32, hi: f32, left: bool) -> f32 {
+    let disc = g.b * g.b - 4.0 * g.a * (g.c - g.r * g.r);
+    if g.a > 0.0 && disc >= 0.0 {
+        let root = sqrt(disc);
+        var t = (-g.b + root) / (2.0 * g.a);
+        if left {
+            t = (-g.b - root) / (2.0 * g.a);
+        }
+        if t >= lo && t <= hi {
+            return t;
+        }
+    }
+    if g.z1 != 0.0 {
+        let t = -g.z0 / g.z1;
+        if t >= lo && t <= hi {
+            return t;
+        }
+    }
+    return 0.5 * (lo + hi);
+}
+
+// The ring's closest approach on [lo, hi] from t0: (t*, d*^2, a). Twin of Ring::approach.
+fn ring_approach(g: Ring, t0: f32, lo: f32, hi: f32) -> vec3<f32> {
+    var t = clamp(t0, lo, hi);
+    for (var k = 0u; k < RING_NEWTON; k++) {
+        let v = ring_at(g, t);
+        var delta = 0.5 * RING_STEP * sign(v.x);
+        if v.y > 0.0 {
+            delta = clamp(v.x / v.y, -RING_STEP, RING_STEP);
+        }
+        t = clamp(t - delta, lo, hi);
+    }
+    let v = ring_at(g, t);
+    return vec3<f32>(t, v.z, max(v.y, 0.0));
+}
+
+// The features of a point, a line or a torus along the ray, sorted, each owning its piece. Twin of features.
+fn smooth_features(ray: Ray) -> Peaks {
+    var out: Peaks;
+    out.count = 1u;
+    if ray.kind == KIND_POINT {
+        let p = points[ray.index].position;
+        let a = dot(ray.dir, ray.dir);
+        var c = 0.0;
+        if a > 0.0 {
+            c = dot(p - ray.start, ray.dir) / a;
+        }
+        let closest = ray.start + ray.dir * c - p;
+        out.peaks[0] = make_peak(c, dot(closest, closest), a);
+    } else if ray.kind == KIND_LINE {
+        let l = lines[ray.index];
+        let r = line_approach(ray, l.point, l.direction);
+        out.peaks[0] = make_peak(r.x, r.y, r.z);
+    } else {
+        // One closest approach on each side of the axis, and the axis itself.
+        let t = tori[ray.index];
+        let ring = make_ring(ray);
+        let axis = line_approach(ray, t.center, t.axis);
+        if axis.z > 0.0 && axis.x > 0.0 && axis.x < 1.0 {
+            let l = ring_approach(ring, ring_start(ring, 0.0, axis.x, true), 0.0, axis.x);
+            let r = ring_approach(ring, ring_start(ring, axis.x, 1.0, false), axis.x, 1.0);
+            out.peaks[0] = make_peak(l.x, l.y, l.z);
+            out.peaks[1] = make_peak(r.x, r.y, r.z);
+            let width = clamp(sqrt(axis.y / axis.z), MIN_AXIS_WIDTH, MAX_WIDTH);
+            out.peaks[2] = Peak(0.0, 1.0, axis.x, width, 0.0);
+            out.count = 3u;
+        } else {
+            let r = ring_approach(ring, ring_start(ring, 0.0, 1.0, axis.x >= 1.0), 0.0, 1.0);
+            out.peaks[0] = make_peak(r.x, r.y, r.z);
+        }
+    }
+    share_ray(&out);
+    return out;
+}
+
+// The term's integrand in s, f = 1 / max(eps, d) zeta(t), at t clamped to the piece (before the coefficient).
+fn smooth_f(ray: Ray, p: Peak, t_in: f32) -> f32 {
+    let t = clamp(t_in, p.lo, p.hi);
+    let d = smooth_distance(ray, ray.start + ray.dir * t);
+    return falloff(d, EPSILON) * zeta_at(t);
+}
+
+// The Kronrod and Gauss values on [a, b] in u of a point's, a line's or a torus's term. Twin of kronrod.
+fn smooth_kronrod(ray: Ray, p: Peak, a: f32, b: f32) -> vec2<f32> {
+    let c = 0.5 * (a + b);
+    let r = 0.5 * (b - a);
+    var sum = vec2<f32>(0.0);
+    for (var i = 0u; i <= 2u * gauss_order(); i++) {
+        let node = kronrod_node(i);
+        let m = map_node(p, c + r * node.x);
+        sum += node.yz * (m.y * smooth_f(ray, p, m.x));
+    }
+    return r * sum;
+}
+
+// A point's, a line's or a torus's term on the panel [a, b] in u, refined where the pair disagrees. Twin of
+// integrate_panel.
+fn smooth_panel(ray: Ray, p: Peak, a: f32, b: f32, allowance: f32, refinements: ptr<function, u32>) -> f32 {
+    let end = 1u << MAX_DEPTH;
+    var at = 0u;
+    var level = 0u;
+    var sum = 0.0;
+    while at < end {
+        let x = part_bounds(a, b, at, level);
+        let kg = smooth_kronrod(ray, p, x.x, x.y);
+        if settled(kg, allowance, x.y - x.x) || level == MAX_DEPTH || *refinements == 0u {
+            sum += kg.x;
+            let next = next_part(at, level);
+            at = next.x;
+            level = next.y;
+        } else {
+            *refinements -= 1u;
+            level++;
+        }
+    }
+    return sum;
+}
+
+// A point's, a line's or a torus's term of B over its pieces. Twin of integrate_term.
+fn integrate_smooth_term(kind: u32, index: u32, s_point: vec3<f32>, e_point: vec3<f32>) -> f32 {
+    let coefficient = smooth_coefficient(kind, index);
+    if coefficient == 0.0 {
+        return 0.0;
+    }
+    let ray = smooth_ray(kind, index, s_point, e_point);
+    let found = smooth_features(ray);
+    let allowance = params.term_tolerance / (abs(coefficient) * max(pieces_length(found), 1e-30));
+    var refinements = select(8u, MAX_REFINEMENTS, gauss_order() > 5u);
+    var sum = 0.0;
+    for (var k = 0u; k < found.count; k++) {
+        let p = found.peaks[k];
+        let u0 = stable_asinh((p.lo - p.center) / p.width);
+        let u1 = stable_asinh((p.hi - p.center) / p.width);
+        if u1 <= u0 {
+            continue;
+        }
+        // The piece's cuts (twin of cuts, with no kinks): only the ends of the falloff's flat top, -kf and kf,
+        // so [u0, u1] falls into at most three parts: [u0, -kf], [-kf, kf] and [kf, u1], each clamped to it. No
+        // array: lavapipe keeps an array written with a variable index in memory (sorting the cuts into one cost
+        // about 8 % of the mixed scene's adaptive pass, measured).
+        let flat = p.flat > 0.0;
+        let kf = select(0.0, stable_asinh(p.flat / p.width), flat);
+        for (var j = 0u; j < select(1u, 3u, flat); j++) {
+            let a = select(clamp(select(kf, -kf, j == 1u), u0, u1), u0, j == 0u);
+            let b = select(clamp(select(kf, -kf, j == 0u), u0, u1), u1, j == 2u || !flat);
+            if b <= a {
+                continue;
+            }
+            let panels = u32(clamp(ceil((b - a) / U_PANEL), 1.0, f32(MAX_GAUSS_PANELS)));
+            let width = (b - a) / f32(panels);
+            for (var i = 0u; i < panels; i++) {
+                let pa = a + width * f32(i);
+                sum += smooth_panel(ray, p, pa, pa + width, allowance, &refinements);
+            }
+        }
+    }
+    return coefficient * sum;
+}
+@compute @workgroup_size(8, 8)
+fn integrate_adaptive(@builtin(global_invocation_id) gid: vec3<u32>) {
+    load_scalars();
+    let id = texel_of(gid);
+    let w = params.resolution;
+    if id.x >= w || id.y >= w {
+        return;
+    }
+    let seg = texel_segment(id.xy);
+    var b = 0.0;
+    // The range holds points, lines and tori only (gpu::field_pass::plan_chunks); its bounds come from the chunk
+    // alone, a storage buffer, so no driver specialises the shader for them.
+    for (var t = chunk.first; t < chunk.first + chunk.count; t++) {
+        var index = t;
+        var kind = KIND_POINT;
+        if index >= point_count() {
+            index -= point_count();
+            kind = KIND_LINE;
+            if index >= line_count() {
+                index -= line_count();
+                kind = KIND_TORUS;
+            }
+        }
+        b += integrate_smooth_term(kind, index, seg[0], seg[1]);
+    }
+    store(id.xy, b);
+}

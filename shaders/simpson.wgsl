@@ -1,0 +1,121 @@
+// The papers' integrator (METHOD.md section 3): Simpson's rule over n + 1 evenly spaced samples of the ray, or
+// with jitter the randomly shifted rectangle rule. Entry point `integrate`. Assembled after field_pass.wgsl.
+// CPU twin: src/reference.rs and src/integrate.rs.
+
+
+// A curve chain's term: b Sw(t*) / max(eps, L).
+fn curve_field(c: CurveSource, p: vec3<f32>, eps: f32) -> f32 {
+    let best = curve_nearest(c, p);
+    return c.coefficient * wseries(c, best.x) * falloff(best.y, eps);
+}
+
+// The PCG hash (Jarzynski and Olano 2020). Twin of integrate::pcg_hash.
+fn pcg_hash(x: u32) -> u32 {
+    let state = x * 747796405u + 2891336453u;
+    let word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+    return (word >> 22u) ^ word;
+}
+
+// The texel's jitter offset in [0, 1). Twin of integrate::jitter_offset.
+fn jitter_offset(id: vec2<u32>) -> f32 {
+    let index = id.y * params.resolution + id.x;
+    let h = pcg_hash(index ^ pcg_hash(params.seed + 0x9e3779b9u));
+    return f32(h >> 8u) / 16777216.0;
+}
+
+// One dispatch's samples of a texel's ray: k = first .. last of s_k = (k + shift) / n, weighted 1 4 2 4 ... 4 1
+// (Simpson's rule, shift 0) or all alike (the shifted rectangle rule); the weights' common factor is applied
+// once, at the end.
+struct Samples {
+    s_point: vec3<f32>,
+    e_point: vec3<f32>,
+    first: u32,
+    last: u32,
+    n: u32,
+    shift: f32,
+    simpson: bool,
+}
+
+// Sample k's position on the ray and its weight times zeta(s), zeta(s) = alpha / (s + beta)^2.
+fn sample_at(r: Samples, k: u32) -> vec4<f32> {
+    let s = (f32(k) + r.shift) / f32(r.n);
+    var weight = 1.0;
+    if r.simpson && k != 0u && k != r.n {
+        weight = select(2.0, 4.0, (k & 1u) == 1u);
+    }
+    return vec4<f32>(mix(r.s_point, r.e_point, s), weight * zeta_at(s));
+}
+
+// Each kind's part of the sum over the samples, source by source (thesis 3.28 summed in the other order): a
+// source is read once a texel and its values stay in registers for the samples.
+fn point_samples(r: Samples, src: PointSource) -> f32 {
+    var sum = 0.0;
+    for (var k = r.first; k < r.last; k++) {
+        let x = sample_at(r, k);
+        sum += x.w * falloff(length(x.xyz - src.position), EPSILON);
+    }
+    return src.coefficient * sum;
+}
+fn line_samples(r: Samples, src: LineSource) -> f32 {
+    var sum = 0.0;
+    for (var k = r.first; k < r.last; k++) {
+        let x = sample_at(r, k);
+        sum += x.w * falloff(line_distance(x.xyz, src.point, src.direction), EPSILON);
+    }
+    return src.coefficient * sum;
+}
+fn torus_samples(r: Samples, src: TorusSource) -> f32 {
+    var sum = 0.0;
+    for (var k = r.first; k < r.last; k++) {
+        let x = sample_at(r, k);
+        sum += x.w * falloff(torus_distance(x.xyz, src.center, src.axis, src.major_radius), EPSILON);
+    }
+    return src.coefficient * sum;
+}
+fn curve_samples(r: Samples, c: CurveSource) -> f32 {
+    var sum = 0.0;
+    for (var k = r.first; k < r.last; k++) {
+        let x = sample_at(r, k);
+        sum += x.w * curve_field(c, x.xyz, EPSILON);
+    }
+    return sum;
+}
+
+// The papers' integrator: Simpson's rule over k = 0..=n (3.33, corrected to end at s = 1), or with jitter the
+// randomly shifted rectangle rule (1 / n) sum f((k + xi) / n), unbiased, its error noise instead of bands. The
+// sum over the sources of psi is taken outside the sum over the samples.
+@compute @workgroup_size(8, 8)
+fn integrate(@builtin(global_invocation_id) gid: vec3<u32>) {
+    load_scalars();
+    let id = texel_of(gid);
+    let w = params.resolution;
+    if id.x >= w || id.y >= w {
+        return;
+    }
+    let seg = texel_segment(id.xy);
+    let n = params.divisions;
+    let jitter = jittered();
+    var r = Samples(seg[0], seg[1], chunk.first, 0u, n, 0.0, !jitter);
+    var scale = 1.0 / (3.0 * f32(n));
+    if jitter {
+        r.shift = jitter_offset(id.xy);
+        r.last = min(chunk.first + chunk.count, n);
+        scale = 1.0 / f32(n);
+    } else {
+        r.last = min(chunk.first + chunk.count, n + 1u);
+    }
+    var sum = 0.0;
+    for (var i = 0u; i < point_count(); i++) {
+        sum += point_samples(r, points[i]);
+    }
+    for (var i = 0u; i < line_count(); i++) {
+        sum += line_samples(r, lines[i]);
+    }
+    for (var i = 0u; i < torus_count(); i++) {
+        sum += torus_samples(r, tori[i]);
+    }
+    for (var i = 0u; i < curve_count(); i++) {
+        sum += curve_samples(r, curves[i]);
+    }
+    store(id.xy, sum * scale);
+}
