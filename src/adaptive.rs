@@ -65,10 +65,11 @@
 //! `shaders/adaptive.wgsl` with `adaptive_smooth.wgsl` and `adaptive_curves.wgsl` is the f32 twin of this file:
 //! `integrate_adaptive` for points, lines and tori and `integrate_adaptive_curves` for curves, dispatched apart
 //! (`gpu::field_pass::plan_chunks`). Differences: along a curve's part the shader visits the nodes in order
-//! along the ray and carries each nearest point on from the last node's (its rate du/dt, then two Newton steps on the segment, over at most `TRACK_REACH` of it), solving
-//! the cubic in closed form only where a part begins or Newton has not settled; this twin solves every node in
-//! closed form. Both find the same nearest point, to f32 rounding there. And in f32 two rules agreeing within
-//! 4e-6 of their value count as agreeing (`ROUNDING` here is 1e-13). The tests hold the GPU to this twin.
+//! along the ray and carries each nearest point on from the last node's (its rate du/dt, then two Newton
+//! steps on the segment, over at most `TRACK_REACH` of it), solving the cubic in closed form only where a part
+//! begins or Newton has not settled; this twin solves every node in closed form. Both find the same nearest
+//! point, to f32 rounding there. And in f32 two rules agreeing within 4e-6 of their value count as agreeing
+//! (`ROUNDING` here is 1e-13). The tests hold the GPU to this twin.
 
 use std::cell::Cell;
 
