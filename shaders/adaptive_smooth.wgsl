@@ -105,22 +105,94 @@ fn ring_approach(g: Ring, t0: f32, lo: f32, hi: f32) -> vec3<f32> {
     return vec3<f32>(t, v.z, max(v.y, 0.0));
 }
 
+// The closest approach of the ray to a point or a line: (t*, d*^2, a), d^2(t) = d*^2 + a (t - t*)^2. Twin of
+// point_approach and line_approach.
+fn approach(ray: Ray) -> vec3<f32> {
+    if ray.kind == KIND_POINT {
+        let a = dot(ray.dir, ray.dir);
+        var c = 0.0;
+        if a > 0.0 {
+            c = dot(ray.anchor - ray.start, ray.dir) / a;
+        }
+        let closest = ray.start + ray.dir * c - ray.anchor;
+        return vec3<f32>(c, dot(closest, closest), a);
+    }
+    return line_approach(ray, ray.anchor, ray.along);
+}
+
+// 1 / (lo + beta) - 1 / (hi + beta), without the difference's cancellation on a short stretch.
+fn decay_between(lo: f32, hi: f32) -> f32 {
+    return (hi - lo) / ((lo + BETA) * (hi + BETA));
+}
+
+// The part [lo, hi] (where d >= eps) of falloff_integral's integral: alpha (I(u_a) - I(u_b)), (value, 1) or
+// (0, 0) where it cancels beyond CLOSED_FORM_CONDITION. w_c = c + beta, k = a h2, big_a = A.
+fn falloff_piece(lo: f32, hi: f32, c: f32, h2: f32, a: f32, w_c: f32, big_a: f32) -> vec2<f32> {
+    if hi <= lo {
+        return vec2<f32>(0.0, 1.0);
+    }
+    let big_b = -a * w_c;
+    let k = a * h2;
+    let u_a = 1.0 / (lo + BETA);
+    let u_b = 1.0 / (hi + BETA);
+    let x_a = (a * w_c * (c - lo) + h2) * u_a;
+    let x_b = (a * w_c * (c - hi) + h2) * u_b;
+    let r_a = sqrt(x_a * x_a + k);
+    let r_b = sqrt(x_b * x_b + k);
+    let dr = big_a * (hi - lo) * u_a * u_b * (x_a + x_b) / (r_a + r_b);
+    var log_ratio = 0.0;
+    if x_a < 0.0 && x_b < 0.0 {
+        log_ratio = log((r_b - x_b) / (r_a - x_a));
+    } else {
+        let p_a = select(k / (r_a - x_a), x_a + r_a, x_a >= 0.0);
+        let p_b = select(k / (r_b - x_b), x_b + r_b, x_b >= 0.0);
+        log_ratio = log(p_a / p_b);
+    }
+    let bracket = dr - big_b * log_ratio;
+    let size = abs(dr) + abs(big_b * log_ratio);
+    // Written so that a NaN or an infinity declines too.
+    if !(abs(bracket) * CLOSED_FORM_CONDITION >= size) || !(abs(bracket) < F32_MAX) {
+        return vec2<f32>(0.0, 0.0);
+    }
+    return vec2<f32>(ALPHA * bracket / (big_a * sqrt(big_a)), 1.0);
+}
+
+// A point's or a line's term in closed form for d^2(s) = h2 + a (s - c)^2, before the coefficient: (value, 1),
+// or (0, 0) where it is not well conditioned and the term is integrated numerically. Twin of
+// integrate::falloff_integral.
+fn falloff_integral(c: f32, h2_in: f32, a: f32) -> vec2<f32> {
+    let h2 = max(h2_in, 0.0);
+    let eps = EPSILON;
+    if a <= 0.0 {
+        return vec2<f32>(ALPHA * decay_between(0.0, 1.0) / max(sqrt(h2), eps), 1.0);
+    }
+    var half = 0.0;
+    if h2 < eps * eps {
+        half = sqrt((eps * eps - h2) / a);
+    }
+    let flat_lo = clamp(c - half, 0.0, 1.0);
+    let flat_hi = clamp(c + half, 0.0, 1.0);
+    var sum = 0.0;
+    let w_c = c + BETA;
+    let big_a = a * w_c * w_c + h2;
+    var first = vec2<f32>(0.0, 1.0);
+    var second = vec2<f32>(0.0, 1.0);
+    if half > 0.0 {
+        sum = ALPHA * decay_between(flat_lo, flat_hi) / eps;
+        first = falloff_piece(0.0, flat_lo, c, h2, a, w_c, big_a);
+        second = falloff_piece(flat_hi, 1.0, c, h2, a, w_c, big_a);
+    } else {
+        first = falloff_piece(0.0, 1.0, c, h2, a, w_c, big_a);
+    }
+    return vec2<f32>(sum + first.x + second.x, first.y * second.y);
+}
+
 // The features of a point, a line or a torus along the ray, sorted, each owning its piece. Twin of features.
 fn smooth_features(ray: Ray) -> Peaks {
     var out: Peaks;
     out.count = 1u;
-    if ray.kind == KIND_POINT {
-        let p = points[ray.index].position;
-        let a = dot(ray.dir, ray.dir);
-        var c = 0.0;
-        if a > 0.0 {
-            c = dot(p - ray.start, ray.dir) / a;
-        }
-        let closest = ray.start + ray.dir * c - p;
-        out.peaks[0] = make_peak(c, dot(closest, closest), a);
-    } else if ray.kind == KIND_LINE {
-        let l = lines[ray.index];
-        let r = line_approach(ray, l.point, l.direction);
+    if ray.kind != KIND_TORUS {
+        let r = approach(ray);
         out.peaks[0] = make_peak(r.x, r.y, r.z);
     } else {
         // One closest approach on each side of the axis, and the axis itself.
@@ -194,6 +266,14 @@ fn integrate_smooth_term(kind: u32, index: u32, s_point: vec3<f32>, e_point: vec
         return 0.0;
     }
     let ray = smooth_ray(kind, index, s_point, e_point);
+    // A point's and a line's term in closed form, where it is well conditioned: no samples at all.
+    if kind != KIND_TORUS {
+        let r = approach(ray);
+        let closed = falloff_integral(r.x, r.y, r.z);
+        if closed.y > 0.0 {
+            return coefficient * closed.x;
+        }
+    }
     let found = smooth_features(ray);
     let allowance = params.term_tolerance / (abs(coefficient) * max(pieces_length(found), 1e-30));
     var refinements = select(8u, MAX_REFINEMENTS, gauss_order() > 5u);

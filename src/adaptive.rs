@@ -76,7 +76,7 @@ use std::cell::Cell;
 use glam::DVec3;
 
 use crate::field::{Sources, curve, falloff, line_distance, torus_distance, wseries};
-use crate::integrate::{Integration, zeta};
+use crate::integrate::{Integration, falloff_integral, zeta};
 
 /// Intervals of the scan along a curve's ray, which finds its closest approaches and kinks.
 pub const SCAN: u32 = 6;
@@ -532,19 +532,26 @@ struct Features {
 }
 
 /// The features of a term along `s -> e` (at most `MAX_PEAKS`), sorted along the ray, each owning its piece.
+/// The closest approach of the ray `s + t dir` to the point `p`: `(t*, d*^2, a)` with `d^2(t) = d*^2 + a (t - t*)^2`.
+fn point_approach(s: DVec3, dir: DVec3, p: DVec3) -> (f64, f64, f64) {
+    let a = dir.length_squared();
+    let c = if a > 0.0 { (p - s).dot(dir) / a } else { 0.0 };
+    (c, (s + dir * c - p).length_squared(), a)
+}
+
+/// Most cancellation the closed form of a point's or a line's term may suffer before the integrator takes it
+/// numerically instead (`integrate::falloff_integral`'s `condition`): in f32 (the shader, which uses the same
+/// bound) a term's error stays within about 2e-5 of it, measured over 200 000 random rays; the terms declined
+/// are those of a source close to the decay's pole at s = -beta.
+pub const CLOSED_FORM_CONDITION: f64 = 16.0;
+
 fn features(term: Term, s: DVec3, e: DVec3, scan: u32, eps: f64, bracket: f64) -> Features {
     let dir = e - s;
     let mut out = [peak(0.0, 0.0, 0.0, eps); MAX_PEAKS];
     let mut kinks = Kinks::default();
     let count = match term {
         Term::Point(p) => {
-            let a = dir.length_squared();
-            let c = if a > 0.0 {
-                (p.position - s).dot(dir) / a
-            } else {
-                0.0
-            };
-            let d2 = (s + dir * c - p.position).length_squared();
+            let (c, d2, a) = point_approach(s, dir, p.position);
             out[0] = peak(c, d2, a, eps);
             1
         }
@@ -1310,6 +1317,18 @@ fn integrate_term(term: Term, s: DVec3, e: DVec3, settings: &Integration, tolera
     let c = term.coefficient();
     if c == 0.0 {
         return 0.0;
+    }
+    // A point's and a line's term in closed form, where it is well conditioned: no samples at all.
+    let approach = match term {
+        Term::Point(p) => Some(point_approach(s, e - s, p.position)),
+        Term::Line(l) => Some(line_approach(s, e - s, l.point, l.direction)),
+        _ => None,
+    };
+    if let Some((center, d2, a)) = approach {
+        let (eps, alpha, beta) = (settings.epsilon, settings.alpha, settings.beta);
+        if let Some(v) = falloff_integral(center, d2, a, eps, alpha, beta, CLOSED_FORM_CONDITION) {
+            return c * v;
+        }
     }
     let order = kronrod_order(settings.tolerance);
     let found = features(term, s, e, SCAN, settings.epsilon, kink_bracket(order));

@@ -88,6 +88,82 @@ pub fn zeta(s: f64, alpha: f64, beta: f64) -> f64 {
     alpha / ((s + beta) * (s + beta))
 }
 
+/// The term of a point or a line in closed form: the integral over s in [0, 1] of `zeta(s) / max(eps, d(s))`
+/// for a squared distance along the ray `d(s)^2 = h2 + a (s - c)^2` (closest approach `c`, its squared distance
+/// `h2`), with no samples at all. Where `d < eps` (around `c` when `h2 < eps^2`) the integrand is
+/// `alpha / (eps (s + beta)^2)`. Elsewhere, with `w = s + beta`, `u = 1 / w` turns `ds / (w^2 d)` into
+/// `-u du / sqrt(Q(u))` for the quadratic `Q(u) = A u^2 + 2 B u + a`, `A = d(-beta)^2 = a (c + beta)^2 + h2`,
+/// `B = -a (c + beta)`, whose antiderivative is `I(u) = (r - B ln(X + r)) / A^(3/2)` with `X = A u + B` and
+/// `r = sqrt(X^2 + a h2)` (docs/METHOD.md, "Points and lines in closed form"). The differences of `r` and of
+/// the logarithm are taken without cancellation. `None` where the two parts of `I`'s difference cancel to more
+/// than `1 / condition` of their size (a source near the decay's pole at `s = -beta`, where A vanishes): the
+/// caller integrates numerically there.
+pub fn falloff_integral(
+    c: f64,
+    h2: f64,
+    a: f64,
+    eps: f64,
+    alpha: f64,
+    beta: f64,
+    condition: f64,
+) -> Option<f64> {
+    let h2 = h2.max(0.0);
+    // 1 / (lo + beta) - 1 / (hi + beta), without the difference's cancellation on a short stretch.
+    let decay = |lo: f64, hi: f64| (hi - lo) / ((lo + beta) * (hi + beta));
+    if a <= 0.0 {
+        // d does not change along the ray (a line parallel to it, or a ray of no length).
+        return Some(alpha * decay(0.0, 1.0) / h2.sqrt().max(eps));
+    }
+    // The stretch where d < eps, clamped to the ray.
+    let half = if h2 < eps * eps {
+        ((eps * eps - h2) / a).sqrt()
+    } else {
+        0.0
+    };
+    let (flat_lo, flat_hi) = ((c - half).clamp(0.0, 1.0), (c + half).clamp(0.0, 1.0));
+    let mut sum = if half > 0.0 {
+        alpha * decay(flat_lo, flat_hi) / eps
+    } else {
+        0.0
+    };
+    let w_c = c + beta;
+    let big_a = a * w_c * w_c + h2;
+    let big_b = -a * w_c;
+    let k = a * h2;
+    let piece = |lo: f64, hi: f64| -> Option<f64> {
+        if hi <= lo {
+            return Some(0.0);
+        }
+        // u runs from u_b = 1 / (hi + beta) up to u_a = 1 / (lo + beta).
+        let (u_a, u_b) = (1.0 / (lo + beta), 1.0 / (hi + beta));
+        // X = A u + B = (a (c + beta) (c - s) + h2) / (s + beta), without A u and B's cancellation.
+        let x = |s: f64, u: f64| (a * w_c * (c - s) + h2) * u;
+        let (x_a, x_b) = (x(lo, u_a), x(hi, u_b));
+        let (r_a, r_b) = ((x_a * x_a + k).sqrt(), (x_b * x_b + k).sqrt());
+        let dx = big_a * (hi - lo) * u_a * u_b;
+        let dr = dx * (x_a + x_b) / (r_a + r_b);
+        // ln((X_a + r_a) / (X_b + r_b)), each X + r written as k / (r - X) where X < 0.
+        let log = if x_a < 0.0 && x_b < 0.0 {
+            ((r_b - x_b) / (r_a - x_a)).ln()
+        } else {
+            let p = |x: f64, r: f64| if x >= 0.0 { x + r } else { k / (r - x) };
+            (p(x_a, r_a) / p(x_b, r_b)).ln()
+        };
+        let bracket = dr - big_b * log;
+        let size = dr.abs() + (big_b * log).abs();
+        if !(bracket.is_finite() && bracket.abs() * condition >= size) {
+            return None;
+        }
+        Some(alpha * bracket / (big_a * big_a.sqrt()))
+    };
+    if half > 0.0 {
+        sum += piece(0.0, flat_lo)? + piece(flat_hi, 1.0)?;
+    } else {
+        sum += piece(0.0, 1.0)?;
+    }
+    Some(sum)
+}
+
 /// Simpson's rule over [0, 1] with `n` (even) divisions, samples `k = 0..=n` (3.33, corrected to end at
 /// s = 1): `(1 / 3n) (f_0 + 4 f_1 + 2 f_2 + ... + 4 f_{n-1} + f_n)`.
 pub fn simpson(f: impl Fn(f64) -> f64, n: u32) -> f64 {
@@ -196,5 +272,94 @@ pub fn brightness(sources: &Sources, settings: &Integration, s: DVec3, e: DVec3,
         (Integrator::Simpson, None) => simpson(f, settings.divisions),
         (Integrator::Simpson, Some(_)) => shifted_rectangle(f, settings.divisions, xi),
         (Integrator::Adaptive, _) => crate::adaptive::brightness(sources, settings, s, e),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::DVec3;
+
+    /// A small deterministic generator (xorshift64*).
+    struct Rng(u64);
+    impl Rng {
+        fn unit(&mut self) -> f64 {
+            self.0 ^= self.0 >> 12;
+            self.0 ^= self.0 << 25;
+            self.0 ^= self.0 >> 27;
+            (self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11) as f64 / (1u64 << 53) as f64
+        }
+        fn vec(&mut self, scale: f64) -> DVec3 {
+            DVec3::new(self.unit() - 0.5, self.unit() - 0.5, self.unit() - 0.5) * 2.0 * scale
+        }
+    }
+
+    /// A point source's term along the ray from `s` to `e`, in closed form.
+    fn closed(s: DVec3, e: DVec3, x: DVec3, eps: f64, alpha: f64, beta: f64) -> Option<f64> {
+        let d = e - s;
+        let a = d.length_squared();
+        let c = if a > 0.0 { (x - s).dot(d) / a } else { 0.0 };
+        let h2 = (s + d * c - x).length_squared();
+        falloff_integral(c, h2, a, eps, alpha, beta, 1e6)
+    }
+
+    /// The same term by brute force: Simpson on the distance itself, refined where it has not converged.
+    fn brute(s: DVec3, e: DVec3, x: DVec3, eps: f64, alpha: f64, beta: f64) -> f64 {
+        let f = |t: f64| zeta(t, alpha, beta) / (s + (e - s) * t - x).length().max(eps);
+        simpson_refined(f, 1 << 12, 1e-13, 30).0
+    }
+
+    #[test]
+    fn the_closed_form_of_a_point_term_is_the_integral() {
+        let mut rng = Rng(0x51_7cc1_b727_220a);
+        let mut worst: f64 = 0.0;
+        let mut declined = 0;
+        for k in 0..400 {
+            let s = rng.vec(3.0);
+            let e = s + rng.vec(6.0);
+            // Far, near, within eps of the ray and on it; before, along and past the segment.
+            let along = s + (e - s) * (rng.unit() * 1.6 - 0.3);
+            let off = rng.vec(1.0) * [2.0, 0.3, 0.02, 0.004, 0.0][k % 5];
+            let x = along + off;
+            let eps = [0.01, 0.05, 0.2][k % 3];
+            let (alpha, beta) = (0.5 + rng.unit(), [0.05, 0.3, 1.0, 4.0][k % 4]);
+            let want = brute(s, e, x, eps, alpha, beta);
+            match closed(s, e, x, eps, alpha, beta) {
+                Some(got) => worst = worst.max((got - want).abs() / want.abs()),
+                None => declined += 1,
+            }
+        }
+        assert!(worst < 1e-9, "relative error {worst:e}");
+        assert!(declined <= 4, "{declined} of 400 rays declined");
+    }
+
+    #[test]
+    fn the_closed_form_covers_the_degenerate_rays() {
+        let (eps, alpha, beta) = (0.05, 1.0, 1.0);
+        let s = DVec3::new(0.0, 0.0, 0.0);
+        let e = DVec3::new(0.0, 0.0, 4.0);
+        // Through the source, with the stretch within eps inside the ray, at its start and past its end.
+        for z in [2.0, 0.0, 4.0, 4.03, -0.03] {
+            let x = DVec3::new(0.0, 0.0, z);
+            let got = closed(s, e, x, eps, alpha, beta).expect("well conditioned");
+            let want = brute(s, e, x, eps, alpha, beta);
+            assert!(
+                (got - want).abs() <= 1e-9 * want,
+                "z = {z}: {got} against {want}"
+            );
+        }
+        // Exactly eps from the ray, and a ray of no length (d constant).
+        let x = DVec3::new(eps, 0.0, 1.0);
+        let (got, want) = (
+            closed(s, e, x, eps, alpha, beta).unwrap(),
+            brute(s, e, x, eps, alpha, beta),
+        );
+        assert!((got - want).abs() <= 1e-9 * want, "{got} against {want}");
+        let x = DVec3::new(0.3, 0.0, 0.0);
+        let got = closed(s, s, x, eps, alpha, beta).unwrap();
+        assert!((got - alpha * (1.0 / beta - 1.0 / (1.0 + beta)) / 0.3).abs() < 1e-15);
+        // A source on the decay's pole (s = -beta): A vanishes, and the closed form declines.
+        let x = s + (e - s) * -beta;
+        assert_eq!(closed(s, e, x, eps, alpha, beta), None);
     }
 }

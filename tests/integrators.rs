@@ -7,7 +7,7 @@
 //! of texels off by more than 1/255; and on B unclamped, against the integrator's tolerance.
 
 use energywave::bench::{RenderError, converged_reference};
-use energywave::field::{Point, Sources};
+use energywave::field::{Line, Point, Sources};
 use energywave::gpu::HeadlessRenderer;
 use energywave::integrate::{Integration, Integrator, brightness, jitter_offset, zeta};
 use energywave::reference;
@@ -77,6 +77,75 @@ fn the_adaptive_integrator_on_the_gpu_matches_the_converged_reference_on_every_s
         assert!(
             reference.iter().any(|&b| b > 0.05),
             "{name}: the scene shows something"
+        );
+    }
+}
+
+/// A scene of points and lines only (whose terms the adaptive integrator takes in closed form), seen from `eye`.
+fn points_and_lines(eye: DVec3) -> Scene {
+    let mut scene = Scene::default_scene();
+    scene.sources.tori.clear();
+    scene.sources.curves.clear();
+    scene.sources.points = [
+        (DVec3::new(0.0, 0.0, 0.0), 1.5),
+        (DVec3::new(1.2, 0.4, -0.8), 0.7),
+        (DVec3::new(-1.5, -0.6, 0.5), 2.0),
+        (DVec3::new(0.3, 1.1, 1.4), -0.4),
+    ]
+    .map(|(position, coefficient)| Point {
+        position,
+        coefficient,
+    })
+    .to_vec();
+    scene.sources.lines = [
+        (DVec3::new(0.0, -1.0, 0.0), DVec3::new(1.0, 0.2, 0.0), 0.8),
+        (DVec3::new(0.5, 0.5, 0.5), DVec3::new(0.0, 0.0, 1.0), 0.5),
+    ]
+    .map(|(point, direction, coefficient)| Line {
+        point,
+        direction: direction.normalize(),
+        coefficient,
+    })
+    .to_vec();
+    scene.camera.eye = eye;
+    scene.camera.target = DVec3::ZERO;
+    scene.billboard.resolution = 40;
+    scene.integration.integrator = Integrator::Adaptive;
+    scene.integration.jitter = None;
+    scene
+}
+
+#[test]
+fn points_and_lines_in_closed_form_match_the_converged_reference_from_every_side() {
+    let mut gpu = HeadlessRenderer::new().expect("a GPU adapter (lavapipe in CI)");
+    // Far, close, end-on along a line, and from among the sources.
+    let eyes = [
+        DVec3::new(0.0, 2.0, 12.0),
+        DVec3::new(6.0, -3.0, 2.0),
+        DVec3::new(0.5, 0.5, 7.0),
+        DVec3::new(0.2, 0.3, 2.5),
+    ];
+    for eye in eyes {
+        let scene = points_and_lines(eye);
+        let reference = converged(&scene);
+        let bb = scene.place_billboard(1.0);
+        let tolerance = scene.integration.tolerance;
+        let cpu = reference::render_brightness(&scene, &bb).values;
+        let on_gpu = gpu.brightness(&scene, &bb).unwrap();
+        for (k, ((&g, &c), &r)) in on_gpu.iter().zip(&cpu).zip(&reference).enumerate() {
+            let at = (k % 40, k / 40);
+            assert!(
+                (c - r).abs() <= 1e-9 * r.abs().max(1.0),
+                "eye {eye}, texel {at:?}: the f64 twin's {c} against the converged {r}"
+            );
+            assert!(
+                (g as f64 - r).abs() <= tolerance + 4e-6 * r.abs(),
+                "eye {eye}, texel {at:?}: the GPU's {g} against the converged {r}"
+            );
+        }
+        assert!(
+            worst_against_twin(&mut gpu, &scene) <= TWIN_TOLERANCE,
+            "eye {eye}: the GPU against its twin"
         );
     }
 }

@@ -1173,6 +1173,7 @@ mod tests {
             ("RING_NEWTON", a::RING_NEWTON as f64),
             ("RING_STEP", a::RING_STEP),
             ("DEGENERATE", crate::field::curve::DEGENERATE),
+            ("CLOSED_FORM_CONDITION", a::CLOSED_FORM_CONDITION),
             ("TRACK_NEWTON", TRACK_NEWTON as f64),
             ("KRONROD_ROWS", a::KRONROD.len() as f64),
         ];
