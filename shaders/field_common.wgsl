@@ -144,20 +144,20 @@ fn segment_at(s: CurveSegment, t: f32) -> vec3<f32> {
 
 // Two Newton steps on the stationary cubic k, keeping the start if a step is not finite.
 fn polish(k: vec4<f32>, t0: f32) -> f32 {
-    var t = t0;
-    for (var i = 0; i < 2; i++) {
-        let f = ((k.x * t + k.y) * t + k.z) * t + k.w;
-        let df = (3.0 * k.x * t + 2.0 * k.y) * t + k.z;
-        if df == 0.0 {
-            break;
-        }
-        let next = t - f / df;
-        if abs(next) > 1e6 || next != next {
-            break;
-        }
-        t = next;
+    // A step that fails leaves t as it was, and fails again from there: two calls are the loop's two steps
+    // with its break, without the loop (which lavapipe keeps as one).
+    return newton_step(k, newton_step(k, t0));
+}
+
+// One Newton step on the stationary cubic k from t; t itself where the step is not finite.
+fn newton_step(k: vec4<f32>, t: f32) -> f32 {
+    let f = ((k.x * t + k.y) * t + k.z) * t + k.w;
+    let df = (3.0 * k.x * t + 2.0 * k.y) * t + k.z;
+    let next = t - f / df;
+    if df == 0.0 || abs(next) > 1e6 || next != next {
+        return t;
     }
-    return t;
+    return next;
 }
 
 // Nearest point of a segment to p: (t, distance). Candidates are both end points and the real roots of
@@ -184,25 +184,33 @@ fn nearest_on_segment(segment: CurveSegment, p: vec3<f32>) -> vec2<f32> {
     if end < best.y {
         best = vec2<f32>(1.0, end);
     }
+    // Each of the three slots in turn, unrolled (a slot past the roots found holds F32_MAX, out of range):
+    // indexing the roots by a loop variable kept them in memory on lavapipe.
     let roots = solve_cubic(k.x, k.y, k.z, k.w);
-    for (var i = 0u; i < roots.count; i++) {
-        let root = roots.values[i];
-        if !(root >= -0.5 && root <= 1.5) {
-            continue;
-        }
-        for (var step = 0; step < 2; step++) {
-            var t = root;
-            if step == 1 {
-                t = polish(k, root);
-            }
-            t = clamp(t, 0.0, 1.0);
-            let dist = length(segment_at(s, t) - p);
-            if dist < best.y {
-                best = vec2<f32>(t, dist);
-            }
-        }
-    }
+    best = offer_root(best, s, p, k, roots.values.x);
+    best = offer_root(best, s, p, k, roots.values.y);
+    best = offer_root(best, s, p, k, roots.values.z);
     return select(best, vec2<f32>(1.0 - best.x, best.y), flip);
+}
+
+// nearest_on_segment's candidates from one root of the stationary cubic k, raw and polished, clamped to
+// [0, 1], where the root lies in [-0.5, 1.5]: the nearer of them and `best`.
+fn offer_root(best: vec2<f32>, s: CurveSegment, p: vec3<f32>, k: vec4<f32>, root: f32) -> vec2<f32> {
+    if !(root >= -0.5 && root <= 1.5) {
+        return best;
+    }
+    var out = best;
+    let raw = clamp(root, 0.0, 1.0);
+    let raw_distance = length(segment_at(s, raw) - p);
+    if raw_distance < out.y {
+        out = vec2<f32>(raw, raw_distance);
+    }
+    let polished = clamp(polish(k, root), 0.0, 1.0);
+    let polished_distance = length(segment_at(s, polished) - p);
+    if polished_distance < out.y {
+        out = vec2<f32>(polished, polished_distance);
+    }
+    return out;
 }
 
 
