@@ -195,6 +195,7 @@ struct Kinks {
     count: u32,
     singular: u32,
 }
+
 fn push_kink(kinks: ptr<function, Kinks>, t: f32, singular: bool) {
     if (*kinks).count < MAX_KINKS {
         (*kinks).at[(*kinks).count] = t;
@@ -241,6 +242,7 @@ fn search_jumps(ray: Ray, a: ChainSample, b: ChainSample, kinks: ptr<function, K
 fn start_tangent(s: CurveSegment) -> vec3<f32> {
     return select(s.c1, s.c2, starts_at_rest(s));
 }
+
 fn end_tangent(s: CurveSegment) -> vec3<f32> {
     return select(2.0 * s.c2 + s.c1, -s.c2, ends_at_rest(s));
 }
@@ -254,6 +256,7 @@ fn tangent_into(c: CurveSource, j: u32) -> vec4<f32> {
     }
     return vec4<f32>(end_tangent(s), select(0.0, 1.0, ends_at_rest(s)));
 }
+
 fn tangent_out_of(c: CurveSource, j: u32) -> vec4<f32> {
     var s = segments[c.first_segment + j];
     if all(start_tangent(s) == vec3<f32>(0.0)) && j + 1u < c.segment_count {
@@ -321,6 +324,7 @@ struct Minima {
     best1: ChainSample,
     count: u32,
 }
+
 fn offer(m: ptr<function, Minima>, x: ChainSample, g_left: f32, g_right: f32) {
     if !(x.d2 < g_left && x.d2 <= g_right) {
         return;
@@ -830,15 +834,15 @@ fn integrate_curve_term(index: u32, s_point: vec3<f32>, e_point: vec3<f32>) -> f
     }
     return coefficient * sum;
 }
+
 @compute @workgroup_size(8, 8)
 fn integrate_adaptive_curves(@builtin(global_invocation_id) gid: vec3<u32>) {
-    load_scalars();
-    let id = texel_of(gid);
-    let w = params.resolution;
-    if id.x >= w || id.y >= w {
+    let texel = begin_texel(gid);
+    if !texel.inside {
         return;
     }
-    let seg = texel_segment(id.xy);
+    let id = texel.id;
+    let seg = array<vec3<f32>, 2>(texel.start, texel.end);
     let first_curve = point_count() + line_count() + torus_count();
     var b = 0.0;
     // The range holds curves only (gpu::field_pass::plan_chunks).

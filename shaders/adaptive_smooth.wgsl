@@ -29,6 +29,7 @@ fn smooth_ray(kind: u32, index: u32, s_point: vec3<f32>, e_point: vec3<f32>) -> 
     }
     return ray;
 }
+
 fn smooth_coefficient(kind: u32, index: u32) -> f32 {
     if kind == KIND_POINT {
         return points[index].coefficient;
@@ -48,6 +49,7 @@ struct Ring {
     z1: f32,
     r: f32,
 }
+
 fn make_ring(ray: Ray) -> Ring {
     let t = tori[ray.index];
     let q = ray.start - t.center;
@@ -307,15 +309,15 @@ fn integrate_smooth_term(kind: u32, index: u32, s_point: vec3<f32>, e_point: vec
     }
     return coefficient * sum;
 }
+
 @compute @workgroup_size(8, 8)
 fn integrate_adaptive(@builtin(global_invocation_id) gid: vec3<u32>) {
-    load_scalars();
-    let id = texel_of(gid);
-    let w = params.resolution;
-    if id.x >= w || id.y >= w {
+    let texel = begin_texel(gid);
+    if !texel.inside {
         return;
     }
-    let seg = texel_segment(id.xy);
+    let id = texel.id;
+    let seg = array<vec3<f32>, 2>(texel.start, texel.end);
     var b = 0.0;
     // The range holds points, lines and tori only (gpu::field_pass::plan_chunks); its bounds come from the chunk
     // alone, a storage buffer, so no driver specialises the shader for them.

@@ -27,6 +27,7 @@ struct FieldParams {
     seed: u32,
     gauss_order: u32,   // adaptive: n of the Gauss-Kronrod pair (n and 2n + 1 nodes; adaptive::kronrod_order)
 }
+
 @group(0) @binding(0) var<storage, read> params: FieldParams;
 
 // The scene's structure, fixed when a pipeline is specialised to it (gpu::field_pass::Structure sets these
@@ -46,36 +47,42 @@ fn point_count() -> u32 {
     }
     return POINT_COUNT;
 }
+
 fn line_count() -> u32 {
     if LINE_COUNT == GENERIC {
         return params.line_count;
     }
     return LINE_COUNT;
 }
+
 fn torus_count() -> u32 {
     if TORUS_COUNT == GENERIC {
         return params.torus_count;
     }
     return TORUS_COUNT;
 }
+
 fn curve_count() -> u32 {
     if CURVE_COUNT == GENERIC {
         return params.curve_count;
     }
     return CURVE_COUNT;
 }
+
 fn gauss_order() -> u32 {
     if GAUSS_ORDER == GENERIC {
         return params.gauss_order;
     }
     return GAUSS_ORDER;
 }
+
 fn jittered() -> bool {
     if JITTER == GENERIC {
         return params.jitter != 0u;
     }
     return JITTER != 0u;
 }
+
 // The integrand's scalars, copied from params once an invocation (load_scalars, first thing in every entry point):
 // lavapipe does not hoist a storage-buffer load out of a loop, so a value read from params (or any source buffer)
 // inside the loops over samples and nodes is loaded again, lane by lane, at every pass. Reading the torus and
@@ -88,6 +95,7 @@ fn load_scalars() {
     BETA = params.beta;
     EPSILON = params.epsilon;
 }
+
 @group(0) @binding(1) var<storage, read> points: array<PointSource>;
 @group(0) @binding(2) var<storage, read> lines: array<LineSource>;
 @group(0) @binding(3) var<storage, read> tori: array<TorusSource>;
@@ -112,6 +120,7 @@ struct Chunk {
 fn texel_of(gid: vec3<u32>) -> vec2<u32> {
     return vec2<u32>(gid.x, gid.y + chunk.row_offset);
 }
+
 @group(0) @binding(8) var<storage, read> chunk: Chunk;
 fn store(id: vec2<u32>, value: f32) {
     var v = value;
@@ -150,6 +159,26 @@ fn curve_nearest(c: CurveSource, p: vec3<f32>) -> vec2<f32> {
         }
     }
     return best;
+}
+
+// What every entry point does first: copy the scalars (load_scalars) and find its texel and the texel's ray.
+// inside is false for the invocations of the last workgroups that overhang the texture.
+struct Texel {
+    id: vec2<u32>,
+    start: vec3<f32>,
+    end: vec3<f32>,
+    inside: bool,
+}
+
+fn begin_texel(gid: vec3<u32>) -> Texel {
+    load_scalars();
+    let id = texel_of(gid);
+    let w = params.resolution;
+    if id.x >= w || id.y >= w {
+        return Texel(id, vec3<f32>(0.0), vec3<f32>(0.0), false);
+    }
+    let seg = texel_segment(id);
+    return Texel(id, seg[0], seg[1], true);
 }
 
 // The texel's segment S -> E (4.2, 4.3): texel center on the billboard, column from the left, row from the top.

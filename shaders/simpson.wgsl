@@ -56,6 +56,7 @@ fn point_samples(r: Samples, src: PointSource) -> f32 {
     }
     return src.coefficient * sum;
 }
+
 fn line_samples(r: Samples, src: LineSource) -> f32 {
     var sum = 0.0;
     for (var k = r.first; k < r.last; k++) {
@@ -64,6 +65,7 @@ fn line_samples(r: Samples, src: LineSource) -> f32 {
     }
     return src.coefficient * sum;
 }
+
 fn torus_samples(r: Samples, src: TorusSource) -> f32 {
     var sum = 0.0;
     for (var k = r.first; k < r.last; k++) {
@@ -72,6 +74,7 @@ fn torus_samples(r: Samples, src: TorusSource) -> f32 {
     }
     return src.coefficient * sum;
 }
+
 fn curve_samples(r: Samples, c: CurveSource) -> f32 {
     var sum = 0.0;
     for (var k = r.first; k < r.last; k++) {
@@ -86,13 +89,12 @@ fn curve_samples(r: Samples, c: CurveSource) -> f32 {
 // sum over the sources of psi is taken outside the sum over the samples.
 @compute @workgroup_size(8, 8)
 fn integrate(@builtin(global_invocation_id) gid: vec3<u32>) {
-    load_scalars();
-    let id = texel_of(gid);
-    let w = params.resolution;
-    if id.x >= w || id.y >= w {
+    let texel = begin_texel(gid);
+    if !texel.inside {
         return;
     }
-    let seg = texel_segment(id.xy);
+    let id = texel.id;
+    let seg = array<vec3<f32>, 2>(texel.start, texel.end);
     let n = params.divisions;
     let jitter = jittered();
     var r = Samples(seg[0], seg[1], chunk.first, 0u, n, 0.0, !jitter);

@@ -1522,7 +1522,7 @@ mod tests {
         // The Kronrod rule of 2n + 1 nodes is exact to degree 3n + 1, its Gauss rule of n nodes to 2n - 1, and
         // the Gauss rule is not exact at degree 2n: the integral of x^k over [-1, 1] is 2 / (k + 1) for even k.
         let moment = |k: u32| {
-            if k % 2 == 0 {
+            if k.is_multiple_of(2) {
                 2.0 / (k as f64 + 1.0)
             } else {
                 0.0
