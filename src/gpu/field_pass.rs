@@ -570,7 +570,7 @@ impl SpecialisedPipelines {
 
 /// The field pass: its pipelines (one per integrator) and the GPU copies of one scene's data.
 pub struct FieldRenderer {
-    /// `integrate` (simpson) and `integrate_adaptive`, indexed by `FieldParams::integrator`.
+    /// The generic pipelines of the three passes (`shaders::FIELD_PASSES`), indexed by `Chunk::pipeline`.
     pipelines: Pipelines,
     modules: Modules,
     pipeline_layout: wgpu::PipelineLayout,
