@@ -1,8 +1,6 @@
-//! Integration along a texel's ray: the decay zeta and Simpson's rule (METHOD.md section 3, thesis 3.29-3.33).
-
-use glam::DVec3;
-
-use crate::field::Sources;
+//! Integration along a texel's ray: the settings, the decay zeta, Simpson's rule and the shifted rectangle rule
+//! (METHOD.md section 3, thesis 3.29-3.33), and a point's or a line's term in closed form. The dispatch over the
+//! integrators is `reference::brightness`.
 
 /// How B is integrated along a ray.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -259,20 +257,6 @@ pub fn pcg_hash(x: u32) -> u32 {
     let state = x.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
     let word = ((state >> ((state >> 28) + 4)) ^ state).wrapping_mul(277_803_737);
     (word >> 22) ^ word
-}
-
-/// The brightness B of the segment from `s` to `e` (3.30): the integral over [0, 1] of
-/// `psi((1 - t) S + t E) zeta(t)`, by the scene's integrator. `xi` is the texel's jitter offset (used by the
-/// jittered `simpson` integrator only).
-pub fn brightness(sources: &Sources, settings: &Integration, s: DVec3, e: DVec3, xi: f64) -> f64 {
-    let f = |t: f64| {
-        sources.psi(s + (e - s) * t, settings.epsilon) * zeta(t, settings.alpha, settings.beta)
-    };
-    match (settings.integrator, settings.jitter) {
-        (Integrator::Simpson, None) => simpson(f, settings.divisions),
-        (Integrator::Simpson, Some(_)) => shifted_rectangle(f, settings.divisions, xi),
-        (Integrator::Adaptive, _) => crate::adaptive::brightness(sources, settings, s, e),
-    }
 }
 
 #[cfg(test)]

@@ -6,9 +6,25 @@
 use glam::DVec3;
 
 use crate::compose::{blend, blend_transparent, sample_bilinear};
+use crate::field::Sources;
 use crate::geometry::{Billboard, Reach, ray_end};
-use crate::integrate::{brightness, jitter_offset};
+use crate::integrate::{Integration, Integrator, jitter_offset, shifted_rectangle, simpson, zeta};
 use crate::scene::Scene;
+
+/// The brightness B of the segment from `s` to `e` (3.30): the integral over [0, 1] of
+/// `psi((1 - t) S + t E) zeta(t)`, by the scene's integrator: the papers' rule (`crate::integrate`) or the
+/// adaptive one (`crate::adaptive`). `xi` is the texel's jitter offset (used by the jittered `simpson`
+/// integrator only).
+pub fn brightness(sources: &Sources, settings: &Integration, s: DVec3, e: DVec3, xi: f64) -> f64 {
+    let f = |t: f64| {
+        sources.psi(s + (e - s) * t, settings.epsilon) * zeta(t, settings.alpha, settings.beta)
+    };
+    match (settings.integrator, settings.jitter) {
+        (Integrator::Simpson, None) => simpson(f, settings.divisions),
+        (Integrator::Simpson, Some(_)) => shifted_rectangle(f, settings.divisions, xi),
+        (Integrator::Adaptive, _) => crate::adaptive::brightness(sources, settings, s, e),
+    }
+}
 
 /// The billboard's brightness texture: `resolution` x `resolution` values of B, row-major, rows from the top.
 #[derive(Clone, Debug, PartialEq)]

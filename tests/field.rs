@@ -3,7 +3,8 @@
 use energywave::field::{
     Curve, Line, Point, Sources, Torus, line_distance, torus_distance, wseries,
 };
-use energywave::integrate::{Integration, Integrator, brightness, simpson, simpson_refined, zeta};
+use energywave::integrate::{Integration, Integrator, simpson, simpson_refined, zeta};
+use energywave::reference::brightness;
 use glam::DVec3;
 use proptest::prelude::*;
 

@@ -9,8 +9,9 @@
 use energywave::bench::{RenderError, converged_reference};
 use energywave::field::{Line, Point, Sources};
 use energywave::gpu::HeadlessRenderer;
-use energywave::integrate::{Integration, Integrator, brightness, jitter_offset, zeta};
+use energywave::integrate::{Integration, Integrator, jitter_offset, zeta};
 use energywave::reference;
+use energywave::reference::brightness;
 use energywave::scene::Scene;
 use glam::DVec3;
 

@@ -162,6 +162,12 @@ pub fn texture_2d(
     })
 }
 
+/// Bytes of GPU memory a field texture (r32float) takes at resolution `w`: the field pass's and the mean of
+/// its jittered frames.
+pub fn field_texture_bytes(w: u32) -> u64 {
+    w as u64 * w as u64 * 4
+}
+
 /// Device, queue and the adapter they came from.
 pub struct GpuContext {
     pub instance: wgpu::Instance,

@@ -5,7 +5,7 @@
 
 use wgpu::util::DeviceExt;
 
-use super::context::{GpuError, checked, texture_2d};
+use super::context::{GpuError, checked, field_texture_bytes, texture_2d};
 use super::frame_average::FrameAverage;
 use super::shaders;
 use crate::field::curve::segments;
@@ -119,11 +119,6 @@ pub mod gpu_data {
 
 use gpu_data::*;
 
-/// Bytes of GPU memory the field pass's texture takes at resolution `w` (r32float).
-pub fn field_texture_bytes(w: u32) -> u64 {
-    w as u64 * w as u64 * 4
-}
-
 /// What the field texture of a scene and billboard depends on (equal inputs give equal textures): compare the
 /// inputs of two frames to tell whether the field changed between them.
 #[derive(Clone, Debug, PartialEq)]
@@ -190,8 +185,8 @@ fn curve_iterations(segments: u32) -> u64 {
 }
 
 /// Newton steps a Gauss node of a curve's piece takes from the last node's nearest point before it falls back, if
-/// it must, to solving the cubic (declared in the shader from here, `gpu::shaders::shared_constants`).
-pub(super) const TRACK_NEWTON: u64 = 2;
+/// it must, to solving the cubic.
+const TRACK_NEWTON: u64 = shaders::TRACK_NEWTON as u64;
 
 /// Loop iterations of a curve's term in the adaptive integrator at most, `iterations` those of one evaluation of
 /// its distance: each evaluation may take Newton's steps from the last node (`track_nearest` in the shader), then

@@ -141,9 +141,8 @@ impl FrameAverage {
 
     /// GPU memory held: the mean texture and the uniform, in bytes.
     pub fn gpu_bytes(&self) -> u64 {
-        let texture = (self.mean.as_ref()).map_or(0, |b| {
-            super::field_pass::field_texture_bytes(b.mean.width())
-        });
+        let texture =
+            (self.mean.as_ref()).map_or(0, |b| super::context::field_texture_bytes(b.mean.width()));
         texture + self.params.size()
     }
 }

@@ -13,9 +13,10 @@ mod upsample;
 
 pub use billboard_pass::{BillboardRenderer, billboard_params, view_projection};
 pub use context::{
-    GpuContext, GpuError, checked, describe, map_read, read_texture, texture_2d, uniform_buffer,
+    GpuContext, GpuError, checked, describe, field_texture_bytes, map_read, read_texture,
+    texture_2d, uniform_buffer,
 };
-pub use field_pass::{FieldInputs, FieldRenderer, Specialise, Structure, field_texture_bytes};
+pub use field_pass::{FieldInputs, FieldRenderer, Specialise, Structure};
 pub use frame::{FRAME_FORMAT, FrameTargets, SceneRenderer, f16_to_f32, read_frame};
 pub use headless::{Frame, HeadlessRenderer};
 pub use upsample::Upsample;

@@ -100,8 +100,8 @@ impl Upsample {
 
     /// GPU memory held: the output texture, in bytes.
     pub fn gpu_bytes(&self) -> u64 {
-        self.bound.as_ref().map_or(0, |b| {
-            super::field_pass::field_texture_bytes(b.output.width())
-        })
+        self.bound
+            .as_ref()
+            .map_or(0, |b| super::context::field_texture_bytes(b.output.width()))
     }
 }
