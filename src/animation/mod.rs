@@ -1,6 +1,7 @@
 //! Time in scenes: a timeline (frame rate, length), travelling pulses along curves (the thesis's eq. 5.1)
-//! and keyframed parameters. A scene without an animation is still; [`Animation::apply`] gives the scene as
-//! it is at one frame, which every renderer then draws as a still.
+//! and keyframed parameters. A scene without an animation is still; `Animation::apply` (in `crate::scene`,
+//! with everything else that reads or writes a scene) gives the scene as it is at one frame, which every
+//! renderer then draws as a still.
 //!
 //! - [`pulse`]: the W series of a curve as a function of the frame (METHOD.md section 5);
 //! - [`keyframes`]: linear keys on any numeric parameter, named by its path in the scene file.
@@ -12,8 +13,6 @@ pub use keyframes::{
     IntegrationSetting, Key, PARAMETER_FORMS, Parameter, SourceKind, Track, Value,
 };
 pub use pulse::Pulse;
-
-use crate::scene::Scene;
 
 /// Frame rate of a scene that animates without saying how fast.
 pub const DEFAULT_FRAME_RATE: f64 = 30.0;
@@ -81,21 +80,6 @@ impl Animation {
         self.tracks.iter().find(|t| &t.parameter == parameter)
     }
 
-    /// `scene` (whose base values are the unkeyed ones) as it is at `frame`: every track's value set, then
-    /// every pulse's W series. Frames may be fractional (keys interpolate, pulses are continuous in time).
-    pub fn apply(&self, scene: &mut Scene, frame: f64) {
-        for track in &self.tracks {
-            if let Some(value) = track.value_at(frame) {
-                track.parameter.set(scene, value);
-            }
-        }
-        for p in &self.pulses {
-            if let Some(curve) = scene.sources.curves.get_mut(p.curve) {
-                curve.weights = p.pulse.weights(frame);
-            }
-        }
-    }
-
     /// Source `index` of `kind` was removed: its pulse and tracks go, later sources' move down one.
     pub fn source_removed(&mut self, kind: SourceKind, index: usize) {
         if kind == SourceKind::Curves {
@@ -135,37 +119,5 @@ impl Animation {
                 t.parameter = t.parameter.with_source_index(i + 1);
             }
         }
-    }
-
-    /// Drops what no longer names anything in `scene` (a control point or weight removed in the viewer),
-    /// so that the scene still saves as a valid file.
-    pub fn retain_valid(&mut self, scene: &Scene) {
-        let curves = scene.sources.curves.len();
-        self.pulses.retain(|p| p.curve < curves);
-        self.tracks.retain(|t| {
-            t.parameter.get(scene).is_some()
-                && !matches!(t.parameter, Parameter::Weight(i, _) if self.pulses.iter().any(|p| p.curve == i))
-        });
-    }
-}
-
-impl Scene {
-    /// True when the scene has an animation (a timeline; it may still hold nothing that moves).
-    pub fn is_animated(&self) -> bool {
-        self.animation.is_some()
-    }
-
-    /// How many frames the scene has: its animation's length, or 1 for a still scene.
-    pub fn frame_count(&self) -> u32 {
-        self.animation.as_ref().map_or(1, |a| a.frames)
-    }
-
-    /// The scene as it is at `frame`: keyed parameters and pulses applied (a clone of the scene if still).
-    pub fn at_frame(&self, frame: f64) -> Scene {
-        let mut s = self.clone();
-        if let Some(a) = &self.animation {
-            a.apply(&mut s, frame);
-        }
-        s
     }
 }

@@ -7,6 +7,7 @@
 mod animation_file;
 mod error;
 mod file;
+mod keyed;
 
 use std::path::{Path, PathBuf};
 

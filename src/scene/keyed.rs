@@ -1,0 +1,181 @@
+//! Where time meets the scene: the value a keyed parameter names in a scene, read and written; an animation
+//! applied to a scene at one frame; a scene's frames. `crate::animation` holds the timeline, keys and pulses
+//! and knows nothing of the scene; this module imports it, not the other way round.
+
+use glam::DVec3;
+
+use crate::animation::{Animation, IntegrationSetting, Parameter, SourceKind, Value};
+use crate::scene::Scene;
+
+impl Parameter {
+    /// The parameter's current value in `scene`; `None` when the path names nothing there (a source or a
+    /// control point that does not exist, a weight of a curve without a W series).
+    pub fn get(&self, scene: &Scene) -> Option<Value> {
+        let s = &scene.sources;
+        let v = |p: DVec3| Value::Vector(p.to_array());
+        Some(match *self {
+            Parameter::EnergyColor => Value::Vector(scene.colors.energy),
+            Parameter::BackgroundColor => Value::Vector(scene.colors.background),
+            Parameter::Position(SourceKind::Points, i) => v(s.points.get(i)?.position),
+            Parameter::Position(SourceKind::Lines, i) => v(s.lines.get(i)?.point),
+            Parameter::Position(SourceKind::Tori, i) => v(s.tori.get(i)?.center),
+            Parameter::Position(SourceKind::Curves, _) => return None,
+            Parameter::Direction(SourceKind::Lines, i) => v(s.lines.get(i)?.direction),
+            Parameter::Direction(SourceKind::Tori, i) => v(s.tori.get(i)?.axis),
+            Parameter::Direction(..) => return None,
+            Parameter::Coefficient(SourceKind::Points, i) => {
+                Value::Number(s.points.get(i)?.coefficient)
+            }
+            Parameter::Coefficient(SourceKind::Lines, i) => {
+                Value::Number(s.lines.get(i)?.coefficient)
+            }
+            Parameter::Coefficient(SourceKind::Tori, i) => {
+                Value::Number(s.tori.get(i)?.coefficient)
+            }
+            Parameter::Coefficient(SourceKind::Curves, i) => {
+                Value::Number(s.curves.get(i)?.coefficient)
+            }
+            Parameter::MajorRadius(i) => Value::Number(s.tori.get(i)?.major_radius),
+            Parameter::ControlPoint(i, j) => v(*s.curves.get(i)?.control_points.get(j)?),
+            Parameter::Weight(i, j) => Value::Number(*s.curves.get(i)?.weights.get(j)?),
+            Parameter::Integration(k) => Value::Number(match k {
+                IntegrationSetting::DecayLength => scene.integration.decay_length,
+                IntegrationSetting::Alpha => scene.integration.alpha,
+                IntegrationSetting::Beta => scene.integration.beta,
+                IntegrationSetting::Epsilon => scene.integration.epsilon,
+            }),
+        })
+    }
+
+    /// Writes `value` into `scene`; does nothing when the path names nothing there or the value is of the
+    /// wrong kind. Directions are normalised (a zero vector leaves the direction as it was), colors clamped
+    /// to 0..1, radii and weights kept positive, as the scene loader would require.
+    pub fn set(&self, scene: &mut Scene, value: Value) {
+        let s = &mut scene.sources;
+        match (self, value) {
+            (Parameter::EnergyColor, Value::Vector(c)) => {
+                scene.colors.energy = c.map(|x| x.clamp(0.0, 1.0))
+            }
+            (Parameter::BackgroundColor, Value::Vector(c)) => {
+                scene.colors.background = c.map(|x| x.clamp(0.0, 1.0))
+            }
+            (Parameter::Position(kind, i), Value::Vector(p)) => {
+                let p = DVec3::from_array(p);
+                let slot = match kind {
+                    SourceKind::Points => s.points.get_mut(*i).map(|x| &mut x.position),
+                    SourceKind::Lines => s.lines.get_mut(*i).map(|x| &mut x.point),
+                    SourceKind::Tori => s.tori.get_mut(*i).map(|x| &mut x.center),
+                    SourceKind::Curves => None,
+                };
+                if let Some(slot) = slot {
+                    *slot = p;
+                }
+            }
+            (Parameter::Direction(kind, i), Value::Vector(d)) => {
+                let d = DVec3::from_array(d);
+                let slot = match kind {
+                    SourceKind::Lines => s.lines.get_mut(*i).map(|x| &mut x.direction),
+                    SourceKind::Tori => s.tori.get_mut(*i).map(|x| &mut x.axis),
+                    _ => None,
+                };
+                if let Some(slot) = slot
+                    && d.length() > 1e-12
+                {
+                    *slot = d.normalize();
+                }
+            }
+            (Parameter::Coefficient(kind, i), Value::Number(x)) => {
+                let slot = match kind {
+                    SourceKind::Points => s.points.get_mut(*i).map(|x| &mut x.coefficient),
+                    SourceKind::Lines => s.lines.get_mut(*i).map(|x| &mut x.coefficient),
+                    SourceKind::Tori => s.tori.get_mut(*i).map(|x| &mut x.coefficient),
+                    SourceKind::Curves => s.curves.get_mut(*i).map(|x| &mut x.coefficient),
+                };
+                if let Some(slot) = slot {
+                    *slot = x;
+                }
+            }
+            (Parameter::MajorRadius(i), Value::Number(x)) => {
+                if let Some(t) = s.tori.get_mut(*i) {
+                    t.major_radius = x.max(1e-9);
+                }
+            }
+            (Parameter::ControlPoint(i, j), Value::Vector(p)) => {
+                if let Some(slot) = s
+                    .curves
+                    .get_mut(*i)
+                    .and_then(|c| c.control_points.get_mut(*j))
+                {
+                    *slot = DVec3::from_array(p);
+                }
+            }
+            (Parameter::Integration(k), Value::Number(x)) => {
+                let i = &mut scene.integration;
+                let slot = match k {
+                    IntegrationSetting::DecayLength => &mut i.decay_length,
+                    IntegrationSetting::Alpha => &mut i.alpha,
+                    IntegrationSetting::Beta => &mut i.beta,
+                    IntegrationSetting::Epsilon => &mut i.epsilon,
+                };
+                // Every keyable setting is positive. Interpolating between valid keys stays valid; this only
+                // guards against rounding.
+                *slot = x.max(1e-9);
+            }
+            (Parameter::Weight(i, j), Value::Number(x)) => {
+                if let Some(slot) = s.curves.get_mut(*i).and_then(|c| c.weights.get_mut(*j)) {
+                    *slot = x.max(0.0);
+                }
+            }
+            _ => {}
+        }
+    }
+}
+
+impl Animation {
+    /// `scene` (whose base values are the unkeyed ones) as it is at `frame`: every track's value set, then
+    /// every pulse's W series. Frames may be fractional (keys interpolate, pulses are continuous in time).
+    pub fn apply(&self, scene: &mut Scene, frame: f64) {
+        for track in &self.tracks {
+            if let Some(value) = track.value_at(frame) {
+                track.parameter.set(scene, value);
+            }
+        }
+        for p in &self.pulses {
+            if let Some(curve) = scene.sources.curves.get_mut(p.curve) {
+                curve.weights = p.pulse.weights(frame);
+            }
+        }
+    }
+
+    /// Drops what no longer names anything in `scene` (a control point or weight removed in the viewer),
+    /// so that the scene still saves as a valid file.
+    pub fn retain_valid(&mut self, scene: &Scene) {
+        let curves = scene.sources.curves.len();
+        self.pulses.retain(|p| p.curve < curves);
+        self.tracks.retain(|t| {
+            t.parameter.get(scene).is_some()
+                && !matches!(t.parameter, Parameter::Weight(i, _) if self.pulses.iter().any(|p| p.curve == i))
+        });
+    }
+}
+
+impl Scene {
+    /// True when the scene has an animation (a timeline; it may still hold nothing that moves).
+    pub fn is_animated(&self) -> bool {
+        self.animation.is_some()
+    }
+
+    /// How many frames the scene has: its animation's length, or 1 for a still scene.
+    pub fn frame_count(&self) -> u32 {
+        self.animation.as_ref().map_or(1, |a| a.frames)
+    }
+
+    /// The scene as it is at `frame`: keyed parameters and pulses applied (a clone of the scene if still).
+    pub fn at_frame(&self, frame: f64) -> Scene {
+        let mut s = self.clone();
+        if let Some(a) = &self.animation {
+            a.apply(&mut s, frame);
+        }
+        s
+    }
+}
