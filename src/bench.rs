@@ -36,7 +36,9 @@ pub const REFERENCE_TOLERANCE: f64 = 1e-7;
 /// How many times the reference splits an interval at most (down to a width of 2^-40).
 pub const REFERENCE_MAX_DEPTH: u32 = 28;
 /// The adaptive tolerances tried, cheapest first, for the equal-error comparison.
-const TOLERANCES: [f64; 11] = [5e-2, 2e-2, 1e-2, 3e-3, 1e-3, 3e-4, 1e-4, 3e-5, 1e-5, 3e-6, 1e-6];
+const TOLERANCES: [f64; 11] = [
+    5e-2, 2e-2, 1e-2, 3e-3, 1e-3, 3e-4, 1e-4, 3e-5, 1e-5, 3e-6, 1e-6,
+];
 
 const RESOLUTIONS: [u32; 3] = [128, 256, 512];
 const DIVISIONS: [u32; 3] = [64, 128, 256];

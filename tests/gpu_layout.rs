@@ -184,8 +184,8 @@ fn rust_mirrors_match_the_wgsl_layouts() {
     check_struct(
         &grid,
         "GridParams",
-        size_of::<energywave::viewer::viewport::gpu_data::GridParams>(),
-        fields!(energywave::viewer::viewport::gpu_data::GridParams: view_proj),
+        size_of::<energywave::gpu::grid_pass::gpu_data::GridParams>(),
+        fields!(energywave::gpu::grid_pass::gpu_data::GridParams: view_proj),
     );
     let billboard = parse_and_validate("billboard", shaders::BILLBOARD_PASS);
     check_struct(

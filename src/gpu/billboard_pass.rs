@@ -3,7 +3,7 @@
 
 use glam::DMat4;
 
-use super::context::uniform_buffer;
+use super::context::{pass_layouts, uniform_buffer};
 use crate::geometry::{Billboard, Camera};
 
 /// Rust mirror of `BillboardParams` in `shaders/billboard.wgsl` (keep in sync; `tests/gpu_layout.rs` checks
@@ -86,31 +86,24 @@ impl BillboardRenderer {
             },
             count: None,
         };
-        let layout =
-            device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("energywave.billboard.bind_group_layout"),
-                entries: &[
-                    wgpu::BindGroupLayoutEntry {
-                        binding: 0,
-                        visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-                        ty: wgpu::BindingType::Buffer {
-                            ty: wgpu::BufferBindingType::Uniform,
-                            has_dynamic_offset: false,
-                            min_binding_size: wgpu::BufferSize::new(
-                                size_of::<BillboardParams>() as u64
-                            ),
-                        },
-                        count: None,
+        let (layout, pipeline_layout) = pass_layouts(
+            device,
+            "billboard",
+            &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: wgpu::BufferSize::new(size_of::<BillboardParams>() as u64),
                     },
-                    texture(1),
-                    texture(2),
-                ],
-            });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("energywave.billboard.pipeline_layout"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
+                    count: None,
+                },
+                texture(1),
+                texture(2),
+            ],
+        );
         let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("energywave.billboard.pipeline"),
             layout: Some(&pipeline_layout),

@@ -64,6 +64,25 @@ pub fn checked<T>(device: &wgpu::Device, f: impl FnOnce() -> T) -> Result<T, Gpu
     }
 }
 
+/// A pass's bind group layout over `entries` and its pipeline layout of that one group, labelled
+/// `energywave.<name>.*`: what every pass builds before its pipeline.
+pub fn pass_layouts(
+    device: &wgpu::Device,
+    name: &str,
+    entries: &[wgpu::BindGroupLayoutEntry],
+) -> (wgpu::BindGroupLayout, wgpu::PipelineLayout) {
+    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some(&format!("energywave.{name}.bind_group_layout")),
+        entries,
+    });
+    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some(&format!("energywave.{name}.pipeline_layout")),
+        bind_group_layouts: &[Some(&layout)],
+        immediate_size: 0,
+    });
+    (layout, pipeline_layout)
+}
+
 /// A compute pipeline over one bind group of `entries`, from the WGSL `source` and its entry point `entry`
 /// (labelled `energywave.<name>.*`): the small passes' shared setup.
 pub fn compute_pass(
@@ -77,15 +96,7 @@ pub fn compute_pass(
         label: Some(&format!("energywave.{name}.shader")),
         source: wgpu::ShaderSource::Wgsl(source.into()),
     });
-    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some(&format!("energywave.{name}.bind_group_layout")),
-        entries,
-    });
-    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some(&format!("energywave.{name}.pipeline_layout")),
-        bind_group_layouts: &[Some(&layout)],
-        immediate_size: 0,
-    });
+    let (layout, pipeline_layout) = pass_layouts(device, name, entries);
     let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
         label: Some(entry),
         layout: Some(&pipeline_layout),

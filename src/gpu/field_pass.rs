@@ -5,7 +5,7 @@
 
 use wgpu::util::DeviceExt;
 
-use super::context::{GpuError, checked, field_texture_bytes, texture_2d};
+use super::context::{GpuError, checked, field_texture_bytes, pass_layouts, texture_2d};
 use super::frame_average::FrameAverage;
 use super::shaders;
 use crate::field::curve::segments;
@@ -616,9 +616,10 @@ impl FieldRenderer {
             },
             count: None,
         };
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("energywave.field.bind_group_layout"),
-            entries: &[
+        let (layout, pipeline_layout) = pass_layouts(
+            device,
+            "field",
+            &[
                 wgpu::BindGroupLayoutEntry {
                     binding: 0,
                     visibility: wgpu::ShaderStages::COMPUTE,
@@ -662,12 +663,7 @@ impl FieldRenderer {
                     count: None,
                 },
             ],
-        });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("energywave.field.pipeline_layout"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
+        );
         let pipelines = build_pipelines(device, &modules, &pipeline_layout);
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("energywave.field.params"),

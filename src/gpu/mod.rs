@@ -3,21 +3,25 @@
 //! for the command line and the tests. The viewer draws through the same passes.
 
 mod billboard_pass;
+mod blit_pass;
 mod context;
 mod field_pass;
 mod frame;
 mod frame_average;
+pub mod grid_pass;
 mod headless;
 pub mod shaders;
 mod upsample;
 
 pub use billboard_pass::{BillboardRenderer, billboard_params, view_projection};
+pub use blit_pass::BlitPass;
 pub use context::{
     GpuContext, GpuError, checked, describe, field_texture_bytes, map_read, read_texture,
     texture_2d, uniform_buffer,
 };
 pub use field_pass::{FieldInputs, FieldRenderer, Specialise, Structure};
 pub use frame::{FRAME_FORMAT, FrameTargets, SceneRenderer, f16_to_f32, read_frame};
+pub use grid_pass::GridPass;
 pub use headless::{Frame, HeadlessRenderer};
 pub use upsample::Upsample;
 

@@ -5,43 +5,17 @@
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
-use wgpu::util::DeviceExt;
-
 use super::progressive::{FrameBudget, PREVIEW_TOLERANCE, Plan, Work};
 use crate::gpu::{
-    FRAME_FORMAT, FieldInputs, FieldRenderer, FrameTargets, GpuError, SceneRenderer, Specialise,
-    Upsample, checked, read_frame, uniform_buffer,
+    BlitPass, FieldInputs, FieldRenderer, FrameTargets, GpuError, GridPass, SceneRenderer,
+    Specialise, Upsample, checked, read_frame,
 };
 use crate::scene::Scene;
 
 /// Format of the offscreen viewport: half floats, so the blend and the grid keep more than 8 bits.
 pub const VIEWPORT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 
-/// Rust mirrors of `shaders/grid.wgsl` (keep in sync; `tests/gpu_layout.rs` checks them).
-pub mod gpu_data {
-    use bytemuck::{Pod, Zeroable};
-
-    /// `GridParams` in `shaders/grid.wgsl`.
-    #[repr(C)]
-    #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-    pub struct GridParams {
-        pub view_proj: [[f32; 4]; 4], // 0
-    }
-    const _: () = assert!(size_of::<GridParams>() == 64);
-
-    /// One vertex of the grid's line list (vertex attributes 0 and 1 of `vs_main`).
-    #[repr(C)]
-    #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-    pub struct GridVertex {
-        pub position: [f32; 3], // 0
-        pub color: [f32; 4],    // 12
-    }
-    const _: () = assert!(size_of::<GridVertex>() == 28);
-}
-
-use gpu_data::{GridParams, GridVertex};
-
-use crate::gpu::shaders::{BLIT_PASS as BLIT_SHADER, GRID_PASS as GRID_SHADER};
+use crate::gpu::grid_pass::gpu_data::GridVertex;
 
 /// What one viewport frame shows.
 #[derive(Clone, Debug)]
@@ -84,16 +58,8 @@ impl ViewportReport {
 /// The viewport's pipelines and GPU state, kept in egui-wgpu's callback resources.
 pub struct ViewportGpu {
     scene_renderer: SceneRenderer,
-    grid_pipeline: wgpu::RenderPipeline,
-    grid_params: wgpu::Buffer,
-    grid_bind_group: wgpu::BindGroup,
-    grid_vertices: wgpu::Buffer,
-    grid_count: u32,
-    /// What `grid_vertices` holds now.
-    grid_uploaded: Vec<GridVertex>,
-    blit_pipeline: wgpu::RenderPipeline,
-    blit_layout: wgpu::BindGroupLayout,
-    sampler: wgpu::Sampler,
+    grid: GridPass,
+    blit: BlitPass,
     targets: Option<(FrameTargets, wgpu::BindGroup)>,
     report: Arc<Mutex<ViewportReport>>,
     /// The coarse field of a moving view, its upsampling to W x W, and what frames cost.
@@ -121,152 +87,6 @@ impl ViewportGpu {
         target_format: wgpu::TextureFormat,
         report: Arc<Mutex<ViewportReport>>,
     ) -> Self {
-        let grid_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("energywave.grid.shader"),
-            source: wgpu::ShaderSource::Wgsl(GRID_SHADER.into()),
-        });
-        let grid_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("energywave.grid.bind_group_layout"),
-            entries: &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::VERTEX,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: wgpu::BufferSize::new(size_of::<GridParams>() as u64),
-                },
-                count: None,
-            }],
-        });
-        let grid_params = uniform_buffer::<GridParams>(device, "energywave.grid.params");
-        let grid_bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("energywave.grid.bind_group"),
-            layout: &grid_layout,
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: grid_params.as_entire_binding(),
-            }],
-        });
-        let grid_pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("energywave.grid.pipeline_layout"),
-            bind_group_layouts: &[Some(&grid_layout)],
-            immediate_size: 0,
-        });
-        let grid_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("energywave.grid.pipeline"),
-            layout: Some(&grid_pipeline_layout),
-            vertex: wgpu::VertexState {
-                module: &grid_module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[Some(wgpu::VertexBufferLayout {
-                    array_stride: size_of::<GridVertex>() as u64,
-                    step_mode: wgpu::VertexStepMode::Vertex,
-                    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x4],
-                })],
-            },
-            primitive: wgpu::PrimitiveState {
-                topology: wgpu::PrimitiveTopology::LineList,
-                ..Default::default()
-            },
-            depth_stencil: None,
-            multisample: wgpu::MultisampleState::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &grid_module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format: FRAME_FORMAT,
-                    // Lines over the background; alpha stays 1 (the billboard copies it).
-                    blend: Some(wgpu::BlendState {
-                        color: wgpu::BlendComponent {
-                            src_factor: wgpu::BlendFactor::SrcAlpha,
-                            dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha,
-                            operation: wgpu::BlendOperation::Add,
-                        },
-                        alpha: wgpu::BlendComponent {
-                            src_factor: wgpu::BlendFactor::Zero,
-                            dst_factor: wgpu::BlendFactor::One,
-                            operation: wgpu::BlendOperation::Add,
-                        },
-                    }),
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
-        let grid_vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("energywave.grid.vertices"),
-            contents: &[0; size_of::<GridVertex>() * 2],
-            usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
-        });
-
-        let blit_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("energywave.blit.shader"),
-            source: wgpu::ShaderSource::Wgsl(BLIT_SHADER.into()),
-        });
-        let blit_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("energywave.blit.bind_group_layout"),
-            entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 1,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-                    count: None,
-                },
-            ],
-        });
-        let blit_pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("energywave.blit.pipeline_layout"),
-            bind_group_layouts: &[Some(&blit_layout)],
-            immediate_size: 0,
-        });
-        let blit_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("energywave.blit.pipeline"),
-            layout: Some(&blit_pipeline_layout),
-            vertex: wgpu::VertexState {
-                module: &blit_module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: None,
-            multisample: wgpu::MultisampleState::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &blit_module,
-                entry_point: Some(if target_format.is_srgb() {
-                    "fs_srgb"
-                } else {
-                    "fs_display"
-                }),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format: target_format,
-                    blend: None,
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
-        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
-            label: Some("energywave.blit.sampler"),
-            mag_filter: wgpu::FilterMode::Linear,
-            min_filter: wgpu::FilterMode::Linear,
-            ..Default::default()
-        });
         // The viewer's frames never wait on a compile: a structure compiles on its own thread once the picture
         // is whole (`integrate`), so it takes no core from the frames that move or refine.
         let mut scene_renderer = SceneRenderer::new(device);
@@ -275,15 +95,8 @@ impl ViewportGpu {
             .set_specialise(Specialise::IfReady);
         Self {
             scene_renderer,
-            grid_pipeline,
-            grid_params,
-            grid_bind_group,
-            grid_vertices,
-            grid_count: 0,
-            grid_uploaded: Vec::new(),
-            blit_pipeline,
-            blit_layout,
-            sampler,
+            grid: GridPass::new(device),
+            blit: BlitPass::new(device, target_format),
             targets: None,
             report,
             // Generic: a coarse field's few texels gain little from a compile of their own.
@@ -307,20 +120,7 @@ impl ViewportGpu {
         let size = [view.size[0].max(1), view.size[1].max(1)];
         if self.targets.as_ref().is_none_or(|(t, _)| t.size != size) {
             let targets = FrameTargets::new(device, size);
-            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("energywave.blit.bind_group"),
-                layout: &self.blit_layout,
-                entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: wgpu::BindingResource::TextureView(&targets.color_view),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: wgpu::BindingResource::Sampler(&self.sampler),
-                    },
-                ],
-            });
+            let bind_group = self.blit.bind_group(device, &targets.color_view);
             self.targets = Some((targets, bind_group));
         }
         let (targets, bind_group) = self.targets.take().expect("created above");
@@ -343,15 +143,9 @@ impl ViewportGpu {
         } else {
             Vec::new()
         };
-        self.upload_grid_vertices(device, queue, vertices);
+        self.grid.upload(device, queue, vertices);
         let result = self.integrate(device, queue, encoder, view, targets, progressive);
-        let grid = (self.grid_count > 0).then_some((
-            &self.grid_pipeline,
-            &self.grid_bind_group,
-            &self.grid_params,
-            &self.grid_vertices,
-            self.grid_count,
-        ));
+        let grid = &self.grid;
         let result = result.and_then(|brightness| {
             self.scene_renderer.compose(
                 device,
@@ -361,21 +155,8 @@ impl ViewportGpu {
                 targets,
                 false,
                 (&brightness.0, brightness.1),
-                |pass, view_proj| {
-                    // The grid lies behind the glow, which blends over it.
-                    if let Some((pipeline, bind_group, params, vertices, count)) = grid {
-                        // Written before the submit that runs this pass, with the renderer's own projection.
-                        queue.write_buffer(
-                            params,
-                            0,
-                            bytemuck::bytes_of(&GridParams { view_proj }),
-                        );
-                        pass.set_pipeline(pipeline);
-                        pass.set_bind_group(0, bind_group, &[]);
-                        pass.set_vertex_buffer(0, vertices.slice(..));
-                        pass.draw(0..count, 0..1);
-                    }
-                },
+                // The grid lies behind the glow, which blends over it, with the renderer's own projection.
+                |pass, view_proj| grid.draw(queue, pass, view_proj),
             )
         });
         if let Ok(mut r) = self.report.lock() {
@@ -491,37 +272,11 @@ impl ViewportGpu {
         Ok((view.clone(), side))
     }
 
-    /// Uploads the grid's vertices when they changed (they depend only on the scene's extent).
-    fn upload_grid_vertices(
-        &mut self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        vertices: Vec<GridVertex>,
-    ) {
-        self.grid_count = vertices.len() as u32;
-        if vertices == self.grid_uploaded {
-            return;
-        }
-        let bytes: &[u8] = bytemuck::cast_slice(&vertices);
-        if bytes.len() as u64 > self.grid_vertices.size() {
-            self.grid_vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("energywave.grid.vertices"),
-                contents: bytes,
-                usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
-            });
-        } else if !bytes.is_empty() {
-            queue.write_buffer(&self.grid_vertices, 0, bytes);
-        }
-        self.grid_uploaded = vertices;
-    }
-
     /// Copies the last recorded frame into egui's render pass (whose viewport egui has set to the callback's
     /// rectangle).
     pub fn paint(&self, pass: &mut wgpu::RenderPass<'static>) {
         if let Some((_, bind_group)) = &self.targets {
-            pass.set_pipeline(&self.blit_pipeline);
-            pass.set_bind_group(0, bind_group, &[]);
-            pass.draw(0..3, 0..1);
+            self.blit.draw(pass, bind_group);
         }
     }
 
