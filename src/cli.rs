@@ -14,7 +14,7 @@ use crate::gpu::{GpuError, HeadlessRenderer};
 use crate::integrate::Integrator;
 use crate::output::{self, Format, OutputError};
 use crate::reference;
-use crate::scene::{DEFAULT_SCENE_NAME, MAX_DIVISIONS, MAX_RESOLUTION, Scene, SceneError};
+use crate::scene::{DEFAULT_SCENE_NAME, MAX_RESOLUTION, Scene, SceneError, limits};
 use crate::viewer::{Document, ViewOptions, ViewerError};
 
 /// Design and render energy-wave effects (Watanabe, Abe and Konno 2016).
@@ -183,12 +183,13 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
 }
 
 fn parse_divisions(s: &str) -> Result<u32, String> {
-    match s.parse::<u32>() {
-        Ok(n) if n >= 2 && n % 2 == 0 && n <= MAX_DIVISIONS => Ok(n),
-        _ => Err(format!(
-            "{s:?}: Simpson's rule needs an even division count between 2 and {MAX_DIVISIONS}"
-        )),
-    }
+    let n = s.parse::<u32>().map_err(|_| {
+        format!(
+            "{s:?}: {}",
+            limits::divisions(0).expect_err("0 is not a count")
+        )
+    })?;
+    limits::divisions(n).map_err(|rule| format!("{s:?}: {rule}"))
 }
 
 fn parse_integrator(s: &str) -> Result<Integrator, String> {
@@ -202,12 +203,8 @@ fn parse_integrator(s: &str) -> Result<Integrator, String> {
 }
 
 fn parse_tolerance(s: &str) -> Result<f64, String> {
-    match s.parse::<f64>() {
-        Ok(t) if t > 1e-9 && t < 0.1 => Ok(t),
-        _ => Err(format!(
-            "{s:?}: the tolerance (the error allowed on B) must be a number between 1e-9 and 0.1, for example 1e-4"
-        )),
-    }
+    let t = s.parse::<f64>().unwrap_or(f64::NAN);
+    limits::tolerance(t).map_err(|rule| format!("{s:?}: {rule}"))
 }
 
 /// Parses the arguments, runs the command, prints any error and returns the exit status.

@@ -8,6 +8,7 @@ mod animation_file;
 mod error;
 mod file;
 mod keyed;
+pub mod limits;
 
 use std::path::{Path, PathBuf};
 
@@ -26,10 +27,7 @@ pub const DEFAULT_SCENE_TOML: &str = include_str!("../../assets/scenes/default.t
 /// The name under which the embedded default scene reports errors.
 pub const DEFAULT_SCENE_NAME: &str = "<embedded default scene>";
 
-/// Largest billboard resolution a scene may ask for (a GPU may allow less; the renderer checks its limit).
-pub const MAX_RESOLUTION: u32 = 16384;
-/// Largest Simpson division count a scene may ask for.
-pub const MAX_DIVISIONS: u32 = 1 << 20;
+pub use limits::{MAX_DIVISIONS, MAX_RESOLUTION};
 /// The largest world coordinate of any point of a scene (`camera.eye`, a source's position, ...): squared
 /// distances between such points stay well inside f32 (about 3.4e38).
 pub const MAX_COORDINATE: f64 = 1e15;
@@ -429,11 +427,8 @@ fn validate(file: &SceneFile, locator: &Locator<'_>, problems: &mut Vec<Problem>
     let resolution = bb
         .and_then(|b| b.resolution)
         .unwrap_or(BillboardSettings::default().resolution);
-    if !(1..=MAX_RESOLUTION).contains(&resolution) {
-        c.fail(
-            &bb_path.key("resolution"),
-            format!("{resolution} texels: must be between 1 and {MAX_RESOLUTION}"),
-        );
+    if let Err(rule) = limits::resolution(resolution) {
+        c.fail(&bb_path.key("resolution"), format!("{resolution}: {rule}"));
     }
 
     // [integration]
@@ -441,11 +436,8 @@ fn validate(file: &SceneFile, locator: &Locator<'_>, problems: &mut Vec<Problem>
     let defaults = Integration::default();
     let int = file.integration.as_ref();
     let divisions = int.and_then(|i| i.divisions).unwrap_or(defaults.divisions);
-    if divisions < 2 || !divisions.is_multiple_of(2) || divisions > MAX_DIVISIONS {
-        c.fail(
-            &int_path.key("divisions"),
-            format!("{divisions}: Simpson's rule needs an even division count between 2 and {MAX_DIVISIONS} (the papers use 200)"),
-        );
+    if let Err(rule) = limits::divisions(divisions) {
+        c.fail(&int_path.key("divisions"), format!("{divisions}: {rule}"));
     }
     let integrator = match int.and_then(|i| i.integrator.as_deref()) {
         None => defaults.integrator,
@@ -459,15 +451,17 @@ fn validate(file: &SceneFile, locator: &Locator<'_>, problems: &mut Vec<Problem>
             defaults.integrator
         }
     };
-    let tolerance = int.and_then(|i| i.tolerance).map_or(defaults.tolerance, |x| {
-        c.in_open_range(
-            &int_path.key("tolerance"),
-            x,
-            1e-9,
-            0.1,
-            "the error the adaptive integrator allows on B must lie between 1e-9 and 0.1 (default 1e-4)",
-        )
-    });
+    let tolerance = int
+        .and_then(|i| i.tolerance)
+        .map_or(defaults.tolerance, |x| {
+            c.in_open_range(
+                &int_path.key("tolerance"),
+                x,
+                limits::MIN_TOLERANCE,
+                limits::MAX_TOLERANCE,
+                limits::TOLERANCE_RULE,
+            )
+        });
     let jitter = int.and_then(|i| i.jitter).unwrap_or(false);
     let seed = int.and_then(|i| i.seed);
     if seed.is_some() && !jitter {

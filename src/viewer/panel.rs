@@ -8,14 +8,22 @@ use super::app::ViewerApp;
 use crate::animation::SourceKind;
 use crate::field::{Curve, Line, Point, Torus, wseries};
 use crate::integrate::Integrator;
-use crate::scene::MAX_DIVISIONS;
+use crate::scene::limits;
 
 /// Largest Simpson division count the panel offers (the file format allows more, for batch renders).
 const PANEL_MAX_DIVISIONS: u32 = 4096;
 /// Largest billboard resolution the panel offers: beyond it a frame takes seconds even on a real GPU (the file
 /// format and the command line allow more, for batch renders).
 pub const PANEL_MAX_RESOLUTION: u32 = 4096;
-const _: () = assert!(PANEL_MAX_DIVISIONS <= MAX_DIVISIONS);
+/// The tolerances the panel's drag value offers.
+const PANEL_TOLERANCE: std::ops::RangeInclusive<f64> = 1e-7..=0.05;
+// Whatever the panel offers, the scene loader accepts (`scene::limits`): an edited scene always saves and loads.
+const _: () = assert!(PANEL_MAX_DIVISIONS <= limits::MAX_DIVISIONS);
+const _: () = assert!(PANEL_MAX_RESOLUTION <= limits::MAX_RESOLUTION);
+const _: () = assert!(
+    *PANEL_TOLERANCE.start() > limits::MIN_TOLERANCE
+        && *PANEL_TOLERANCE.end() < limits::MAX_TOLERANCE
+);
 
 /// Three drag values for a vector; returns true when it changed.
 fn vec3(ui: &mut Ui, label: &str, v: &mut DVec3, speed: f64) -> bool {
@@ -235,7 +243,7 @@ fn render_section(ui: &mut Ui, app: &mut ViewerApp) {
                                 ui,
                                 "tolerance",
                                 DragValue::new(&mut i.tolerance)
-                                    .range(1e-7..=0.05)
+                                    .range(PANEL_TOLERANCE)
                                     .speed(1e-5)
                                     .max_decimals(7),
                             );
