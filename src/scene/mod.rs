@@ -349,10 +349,43 @@ impl Checker<'_, '_> {
 
 fn validate(file: &SceneFile, locator: &Locator<'_>, problems: &mut Vec<Problem>) -> Scene {
     let mut c = Checker { locator, problems };
+    let camera = check_camera(&mut c, file);
+    let billboard = check_billboard(&mut c, file, camera.eye);
+    let (integration, nu, decay_length) = check_integration(&mut c, file);
+    let colors = check_colors(&mut c, file);
+    let sources = check_sources(&mut c, file);
+    let int_path = FieldPath::default().key("integration");
+    let center = billboard.center;
+    // Without a decay length, the papers' nu at this file's own camera: the scene renders as they would here,
+    // and keeps that look wherever the camera goes.
+    let decay_length = decay_length.unwrap_or_else(|| {
+        let d = geometry::papers_decay_length(&camera, &sources, center, nu);
+        if !(d > 0.0 && d.is_finite()) && c.problems.is_empty() {
+            c.fail(
+                &int_path,
+                format!("the decay length derived from the camera, (nu - 1) times the eye-to-billboard distance, is {d}: set decay_length"),
+            );
+        }
+        d
+    });
+
+    Scene {
+        camera,
+        billboard,
+        integration: Integration {
+            decay_length,
+            ..integration
+        },
+        colors,
+        sources,
+        animation: None,
+    }
+}
+
+/// `[camera]`: eye, target, up and the field of view, and how they relate.
+fn check_camera(c: &mut Checker<'_, '_>, file: &SceneFile) -> Camera {
     let root = FieldPath::default();
     let defaults_camera = Camera::default();
-
-    // [camera]
     let cam_path = root.key("camera");
     let cam = file.camera.as_ref();
     let get = |f: fn(&file::CameraFile) -> Option<[f64; 3]>| cam.and_then(f);
@@ -394,8 +427,12 @@ fn validate(file: &SceneFile, locator: &Locator<'_>, problems: &mut Vec<Problem>
         up,
         fov_y_degrees: fov_y,
     };
+    camera
+}
 
-    // [billboard]
+/// `[billboard]`: a fixed center and size (both or neither), and the resolution.
+fn check_billboard(c: &mut Checker<'_, '_>, file: &SceneFile, eye: DVec3) -> BillboardSettings {
+    let root = FieldPath::default();
     let bb_path = root.key("billboard");
     let bb = file.billboard.as_ref();
     let center = bb
@@ -430,8 +467,18 @@ fn validate(file: &SceneFile, locator: &Locator<'_>, problems: &mut Vec<Problem>
     if let Err(rule) = limits::resolution(resolution) {
         c.fail(&bb_path.key("resolution"), format!("{resolution}: {rule}"));
     }
+    BillboardSettings {
+        center,
+        size,
+        resolution,
+    }
+}
 
-    // [integration]
+/// `[integration]`: the integrator and its settings; also the papers' nu and the decay length if the file
+/// gives it (without one, `validate` derives it from the camera once the sources are known). The returned
+/// settings' decay length is that placeholder's to fill.
+fn check_integration(c: &mut Checker<'_, '_>, file: &SceneFile) -> (Integration, f64, Option<f64>) {
+    let root = FieldPath::default();
     let int_path = root.key("integration");
     let defaults = Integration::default();
     let int = file.integration.as_ref();
@@ -516,8 +563,22 @@ fn validate(file: &SceneFile, locator: &Locator<'_>, problems: &mut Vec<Problem>
             "epsilon must be positive (it bounds 1 / distance on the sources)",
         )
     });
+    let settings = Integration {
+        integrator,
+        divisions,
+        tolerance,
+        jitter,
+        decay_length: decay_length.unwrap_or(0.0),
+        alpha,
+        beta,
+        epsilon,
+    };
+    (settings, nu, decay_length)
+}
 
-    // [colors]
+/// `[colors]`: each channel in 0..1.
+fn check_colors(c: &mut Checker<'_, '_>, file: &SceneFile) -> Colors {
+    let root = FieldPath::default();
     let col_path = root.key("colors");
     let default_colors = Colors::default();
     let col = file.colors.as_ref();
@@ -531,8 +592,12 @@ fn validate(file: &SceneFile, locator: &Locator<'_>, problems: &mut Vec<Problem>
         .map_or(default_colors.background, |a| {
             c.color(&col_path.key("background"), a)
         });
+    Colors { energy, background }
+}
 
-    // Sources.
+/// The sources, each kind in its array of tables.
+fn check_sources(c: &mut Checker<'_, '_>, file: &SceneFile) -> Sources {
+    let root = FieldPath::default();
     let mut sources = Sources::default();
     for (i, p) in file.points.iter().enumerate() {
         let path = root.key("points").index(i);
@@ -613,39 +678,5 @@ fn validate(file: &SceneFile, locator: &Locator<'_>, problems: &mut Vec<Problem>
             weights,
         });
     }
-
-    // Without a decay length, the papers' nu at this file's own camera: the scene renders as they would here,
-    // and keeps that look wherever the camera goes.
-    let decay_length = decay_length.unwrap_or_else(|| {
-        let d = geometry::papers_decay_length(&camera, &sources, center, nu);
-        if !(d > 0.0 && d.is_finite()) && c.problems.is_empty() {
-            c.fail(
-                &int_path,
-                format!("the decay length derived from the camera, (nu - 1) times the eye-to-billboard distance, is {d}: set decay_length"),
-            );
-        }
-        d
-    });
-
-    Scene {
-        camera,
-        billboard: BillboardSettings {
-            center,
-            size,
-            resolution,
-        },
-        integration: Integration {
-            integrator,
-            divisions,
-            tolerance,
-            jitter,
-            decay_length,
-            alpha,
-            beta,
-            epsilon,
-        },
-        colors: Colors { energy, background },
-        sources,
-        animation: None,
-    }
+    sources
 }
