@@ -1,0 +1,253 @@
+//! The equal-error study: the adaptive integrator against simpson at n = 200, both against the converged f64
+//! reference.
+
+use super::*;
+
+/// The equal-error reference is computed on at most this many texels per side (a subset of larger textures).
+pub(super) const REFERENCE_SIZE: u32 = 256;
+
+/// The converged reference of the equal-error comparison: f64 Simpson with this many divisions, refined
+/// (`integrate::simpson_refined`) wherever its estimated error exceeds `REFERENCE_TOLERANCE` on B.
+pub const REFERENCE_DIVISIONS: u32 = 4096;
+/// The reference's estimated error on B, texel by texel.
+pub const REFERENCE_TOLERANCE: f64 = 1e-7;
+/// How many times the reference splits an interval at most (down to a width of 2^-40).
+pub const REFERENCE_MAX_DEPTH: u32 = 28;
+/// The adaptive tolerances tried, cheapest first, for the equal-error comparison.
+pub(super) const TOLERANCES: [f64; 11] = [
+    5e-2, 2e-2, 1e-2, 3e-3, 1e-3, 3e-4, 1e-4, 3e-5, 1e-5, 3e-6, 1e-6,
+];
+
+/// The error of a brightness texture against the converged reference: the largest on B itself (the tolerance's
+/// promise, B > 1 included: exports keep it), and the share of texels whose picture changes, on B clamped to
+/// [0, 1] as the blend shows it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct RenderError {
+    /// Largest |B - B_ref|, unclamped.
+    pub max_abs: f64,
+    /// Share of texels off by more than 1/255 on B clamped to [0, 1].
+    pub share_over_1_255: f64,
+}
+
+impl RenderError {
+    /// The error of `values` (every `stride`-th texel of a W x W texture, rows and columns) against
+    /// `reference` (those texels only).
+    pub fn of(values: &[f32], w: u32, stride: u32, reference: &[f64]) -> Self {
+        let mut max_abs: f64 = 0.0;
+        let mut over = 0usize;
+        let texels = (0..w).step_by(stride as usize).flat_map(|j| {
+            (0..w)
+                .step_by(stride as usize)
+                .map(move |i| (j * w + i) as usize)
+        });
+        for (k, r) in texels.zip(reference) {
+            let b = values[k] as f64;
+            max_abs = max_abs.max((b - r).abs());
+            let shown = b.clamp(0.0, 1.0) - r.clamp(0.0, 1.0);
+            over += (shown.abs() > 1.0 / 255.0) as usize;
+        }
+        Self {
+            max_abs,
+            share_over_1_255: over as f64 / reference.len().max(1) as f64,
+        }
+    }
+
+    /// True when no figure of `self` is larger than `other`'s.
+    pub fn no_larger_than(&self, other: &RenderError) -> bool {
+        self.max_abs <= other.max_abs && self.share_over_1_255 <= other.share_over_1_255
+    }
+}
+
+/// The papers' integrator at n = 200 against the adaptive one at the cheapest tolerance whose error is no
+/// larger, both against the converged reference.
+#[derive(Clone, Debug, Serialize)]
+pub struct EqualErrorRow {
+    pub scene: String,
+    pub resolution: u32,
+    /// Every how many texels (in each direction) the error is computed.
+    pub error_stride: u32,
+    pub reference: String,
+    pub simpson_divisions: u32,
+    /// Which field pass times both integrators: the fastest the project has, specialised to the structure.
+    pub pipelines: String,
+    pub simpson: PassTiming,
+    pub simpson_error: RenderError,
+    pub adaptive_tolerance: f64,
+    pub adaptive: PassTiming,
+    pub adaptive_error: RenderError,
+    /// Whether some tried tolerance reached the error of `simpson` (else the finest tried is shown).
+    pub equal_error: bool,
+    /// Median time of `simpson` over median time of `adaptive` (GPU timestamps where available).
+    pub speedup: f64,
+    /// Every tolerance tried, with its error.
+    pub tried: Vec<(f64, RenderError)>,
+}
+
+/// The converged f64 reference of B (`REFERENCE_DIVISIONS`, `REFERENCE_TOLERANCE`) for every `stride`-th
+/// texel of `scene`'s billboard (rows, then columns), and how it was reached.
+pub fn converged_reference(scene: &Scene, stride: u32) -> (Vec<f64>, ReferenceStats) {
+    let s = scene;
+    let w = s.billboard.resolution;
+    let billboard = s.place_billboard(1.0);
+    let reach = s.ray_reach(&billboard);
+    let plane = (billboard.center - s.camera.eye).dot(-billboard.normal);
+    let texels: Vec<(u32, u32)> = (0..w)
+        .step_by(stride as usize)
+        .flat_map(|j| (0..w).step_by(stride as usize).map(move |i| (i, j)))
+        .collect();
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let chunk = texels.len().div_ceil(threads).max(1);
+    let mut out = vec![(0.0, 0); texels.len()];
+    std::thread::scope(|scope| {
+        for (ts, os) in texels.chunks(chunk).zip(out.chunks_mut(chunk)) {
+            let (s, billboard) = (&s, &billboard);
+            scope.spawn(move || {
+                for (&(i, j), o) in ts.iter().zip(os) {
+                    // In the scene's own terms, not the integrators' normalised s: sigma is the depth past
+                    // the billboard in decay lengths, zeta(sigma) = alpha / (sigma + beta)^2, and the ray
+                    // ends at sigma = reach.stretch.
+                    let p = billboard.texel_center(i, j, w);
+                    let i = &s.integration;
+                    let per_depth = (p - s.camera.eye) / plane;
+                    let span = reach.stretch;
+                    let f = |t: f64| {
+                        let sigma = t * span;
+                        s.sources
+                            .psi(p + per_depth * (sigma * i.decay_length), i.epsilon)
+                            * integrate::zeta(sigma, i.alpha, i.beta)
+                            * span
+                    };
+                    *o = integrate::simpson_refined(
+                        f,
+                        REFERENCE_DIVISIONS,
+                        REFERENCE_TOLERANCE,
+                        REFERENCE_MAX_DEPTH,
+                    );
+                }
+            });
+        }
+    });
+    // Without refinement, a texel spends the n + 1 samples and 2 more a pair of intervals, to check them.
+    let unrefined = 2 * REFERENCE_DIVISIONS as u64 + 1;
+    let stats = ReferenceStats {
+        refined_share: out.iter().filter(|(_, e)| *e > unrefined).count() as f64
+            / out.len().max(1) as f64,
+        mean_evaluations: out.iter().map(|(_, e)| *e as f64).sum::<f64>() / out.len().max(1) as f64,
+        max_evaluations: out.iter().map(|(_, e)| *e).max().unwrap_or(0),
+    };
+    (out.into_iter().map(|(b, _)| b).collect(), stats)
+}
+
+/// How the converged reference of one render was reached.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct ReferenceStats {
+    /// Share of texels refined beyond the uniform `REFERENCE_DIVISIONS` (and its check).
+    pub refined_share: f64,
+    /// Evaluations of the integrand a texel, on average and at most.
+    pub mean_evaluations: f64,
+    pub max_evaluations: u64,
+}
+
+impl std::fmt::Display for ReferenceStats {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "f64 CPU, Simpson n = {REFERENCE_DIVISIONS} refined to an estimated {REFERENCE_TOLERANCE:e} on B ({:.1}% of texels refined; {:.0} evaluations a texel on average, {} at most)",
+            100.0 * self.refined_share,
+            self.mean_evaluations,
+            self.max_evaluations,
+        )
+    }
+}
+
+/// The equal-error comparison: on the torus, Bezier and mixed scenes at 256 and 512 (256 only with --quick),
+/// the errors of simpson (n = 200) and of the adaptive integrator at each tolerance against the converged
+/// reference, then the two timed interleaved at the cheapest tolerance whose error is no larger.
+pub(super) fn equal_error(
+    bench: &mut FieldBench,
+    options: &BenchOptions,
+    progress: &mut impl FnMut(&str),
+) -> Result<Vec<EqualErrorRow>, GpuError> {
+    let scenes = [
+        ("torus", load(TORUS_SCENE, "torus_r0.9_t5.1.toml")),
+        ("bezier", load(BEZIER_SCENE, "bezier_b5.0.toml")),
+        ("mixed", load(MIXED_SCENE, "mixed.toml")),
+    ];
+    let resolutions: &[u32] = match (&options.equal_error_sizes, options.quick) {
+        (Some(sizes), _) => sizes,
+        (None, true) => &[256],
+        (None, false) => &[256, 512],
+    };
+    let mut rows = Vec::new();
+    for &resolution in resolutions {
+        for (name, base) in &scenes {
+            // The f64 reference is the slow part: above 256, every (W / 256)-th texel in each direction, so
+            // that it costs the same at every size.
+            let stride = (resolution / REFERENCE_SIZE).max(1);
+            let mut simpson = base.clone();
+            simpson.billboard.resolution = resolution;
+            simpson.integration.integrator = Integrator::Simpson;
+            simpson.integration.jitter = None;
+            simpson.integration.divisions = 200;
+            progress(&format!(
+                "equal error: {name}, {resolution} x {resolution}: f64 reference (n = {REFERENCE_DIVISIONS} and more)"
+            ));
+            let (reference, reference_stats) = converged_reference(&simpson, stride);
+            let simpson_error =
+                RenderError::of(&bench.brightness(&simpson)?, resolution, stride, &reference);
+            let mut adaptive = simpson.clone();
+            adaptive.integration.integrator = Integrator::Adaptive;
+            let mut tried = Vec::new();
+            let mut chosen = None;
+            for &tolerance in &TOLERANCES {
+                adaptive.integration.tolerance = tolerance;
+                let error = RenderError::of(
+                    &bench.brightness(&adaptive)?,
+                    resolution,
+                    stride,
+                    &reference,
+                );
+                tried.push((tolerance, error));
+                if error.no_larger_than(&simpson_error) {
+                    chosen = Some(tolerance);
+                    break;
+                }
+            }
+            let equal = chosen.is_some();
+            let tolerance = chosen.unwrap_or(TOLERANCES[TOLERANCES.len() - 1]);
+            adaptive.integration.tolerance = tolerance;
+            let adaptive_error = tried.last().expect("a tolerance was tried").1;
+            progress(&format!(
+                "equal error: {name}, {resolution} x {resolution}: timing simpson n = 200 against adaptive tolerance {tolerance:e}"
+            ));
+            let t = bench.interleaved(2, options.warmup(), options.frames(), |k, _| {
+                if k == 0 {
+                    simpson.clone()
+                } else {
+                    adaptive.clone()
+                }
+            })?;
+            let mut t = t.into_iter();
+            let (ts, ta) = (t.next().expect("two"), t.next().expect("two"));
+            let speedup = ts.best().median_ms / ta.best().median_ms;
+            rows.push(EqualErrorRow {
+                scene: name.to_string(),
+                resolution,
+                error_stride: stride,
+                reference: reference_stats.to_string(),
+                simpson_divisions: 200,
+                pipelines: "specialised to the scene's structure (gpu::Specialise::Blocking)"
+                    .into(),
+                simpson: ts,
+                simpson_error,
+                adaptive_tolerance: tolerance,
+                adaptive: ta,
+                adaptive_error,
+                equal_error: equal,
+                speedup,
+                tried,
+            });
+        }
+    }
+    Ok(rows)
+}

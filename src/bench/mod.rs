@@ -1,0 +1,508 @@
+//! Benchmarks: the papers' speed grid (METHOD.md section 7) reproduced side by side, deformation against a
+//! static scene, and whole viewer frames. Shared by `energywave bench` and `cargo bench`.
+//!
+//! The field pass (the work the papers timed) is timed with GPU timestamp queries where the adapter has them,
+//! and always with wall time around submit and wait. Each figure is the median of several frames after
+//! warm-up, with the spread (min, max). Figures that are compared with each other are measured in the same
+//! process, interleaved frame by frame. Nothing here asserts a duration.
+
+use std::path::Path;
+use std::time::Instant;
+
+use glam::DVec3;
+use serde::Serialize;
+
+use crate::gpu::{FieldRenderer, GpuContext, GpuError, Specialise, map_read};
+use crate::integrate::{self, Integrator};
+use crate::scene::Scene;
+
+mod equal_error;
+mod report;
+mod timing;
+mod viewer_frames;
+
+pub use equal_error::*;
+pub use report::*;
+pub use timing::*;
+use viewer_frames::*;
+
+/// The torus of paper figure 7 (R = 0.9, t = 5.1).
+const TORUS_SCENE: &str = include_str!("../../assets/scenes/torus_r0.9_t5.1.toml");
+/// The two smoothly connected Bezier curves of paper figure 9 (b = 5.0).
+const BEZIER_SCENE: &str = include_str!("../../assets/scenes/bezier_b5.0.toml");
+/// Every kind of source at once.
+const MIXED_SCENE: &str = include_str!("../../assets/scenes/mixed.toml");
+
+const RESOLUTIONS: [u32; 3] = [128, 256, 512];
+const DIVISIONS: [u32; 3] = [64, 128, 256];
+
+/// The texts' frames per second (AMD FirePro D500, OpenCL, 2016), by scene, resolution, divisions.
+pub fn paper_fps(scene: &str, resolution: u32, divisions: u32) -> Option<f64> {
+    let table: [[f64; 3]; 3] = match scene {
+        "torus" => [
+            [384.61, 168.63, 62.35],
+            [116.69, 46.49, 16.85],
+            [31.23, 13.49, 5.21],
+        ],
+        "bezier" => [
+            [116.69, 60.17, 28.94],
+            [34.64, 17.16, 8.31],
+            [9.00, 4.40, 2.15],
+        ],
+        _ => return None,
+    };
+    let r = RESOLUTIONS.iter().position(|&x| x == resolution)?;
+    let d = DIVISIONS.iter().position(|&x| x == divisions)?;
+    Some(table[r][d])
+}
+
+/// How much to measure.
+#[derive(Clone, Debug, Serialize)]
+pub struct BenchOptions {
+    /// Fewer frames, and the largest resolution left out: under two minutes on a 2-core software GPU.
+    pub quick: bool,
+    /// The sections to run.
+    pub sections: Sections,
+    /// The equal-error comparison's billboard resolutions, instead of 256 and 512 (256 with `quick`).
+    pub equal_error_sizes: Option<Vec<u32>>,
+}
+
+/// One part of the benchmark, for `bench --only`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum Section {
+    /// The papers' grid of resolutions and division counts.
+    Grid,
+    /// The same scene static and deforming.
+    Deformation,
+    /// The adaptive integrator against simpson at equal error.
+    EqualError,
+    /// Whole viewer frames.
+    Viewer,
+}
+
+/// Which sections run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub struct Sections {
+    pub grid: bool,
+    pub deformation: bool,
+    pub equal_error: bool,
+    pub viewer: bool,
+}
+
+impl Sections {
+    /// Every section.
+    pub const ALL: Sections = Sections {
+        grid: true,
+        deformation: true,
+        equal_error: true,
+        viewer: true,
+    };
+
+    /// Only those listed; every section for an empty list.
+    pub fn only(list: &[Section]) -> Sections {
+        if list.is_empty() {
+            return Sections::ALL;
+        }
+        Sections {
+            grid: list.contains(&Section::Grid),
+            deformation: list.contains(&Section::Deformation),
+            equal_error: list.contains(&Section::EqualError),
+            viewer: list.contains(&Section::Viewer),
+        }
+    }
+}
+
+impl Default for BenchOptions {
+    fn default() -> Self {
+        Self {
+            quick: false,
+            sections: Sections::ALL,
+            equal_error_sizes: None,
+        }
+    }
+}
+
+impl BenchOptions {
+    fn warmup(&self) -> usize {
+        if self.quick { 1 } else { 2 }
+    }
+    fn frames(&self) -> usize {
+        if self.quick { 3 } else { 7 }
+    }
+    fn resolutions(&self) -> &'static [u32] {
+        if self.quick {
+            &RESOLUTIONS[..2]
+        } else {
+            &RESOLUTIONS
+        }
+    }
+}
+
+fn load(text: &str, name: &str) -> Scene {
+    Scene::parse(text, Path::new(name)).expect("the benchmark scenes are valid (held by tests)")
+}
+
+fn machine() -> String {
+    let cpu = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .map(|l| l.split(':').nth(1).unwrap_or("").trim().to_owned())
+        })
+        .unwrap_or_else(|| std::env::consts::ARCH.to_owned());
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    format!("{cpu}, {cores} cores, {}", std::env::consts::OS)
+}
+
+/// A scene moved a little for round `round`: the deforming variant.
+fn deformed(base: &Scene, round: usize) -> Scene {
+    let mut s = base.clone();
+    let wobble = DVec3::new(
+        0.0,
+        0.05 * (round as f64 * 0.7).sin(),
+        0.05 * (round as f64 * 0.7).cos(),
+    );
+    if let Some(c) = s.sources.curves.first_mut() {
+        c.control_points[1] += wobble;
+    } else if let Some(t) = s.sources.tori.first_mut() {
+        t.center += wobble;
+    }
+    s
+}
+
+/// Runs the benchmarks, reporting progress through `progress`.
+pub fn run(options: BenchOptions, mut progress: impl FnMut(&str)) -> Result<Report, GpuError> {
+    let start = Instant::now();
+    let mut bench = FieldBench::new()?;
+    let adapter = bench.ctx.adapter_summary();
+    progress(&format!("adapter: {adapter}"));
+    let scenes = [
+        ("torus", load(TORUS_SCENE, "torus_r0.9_t5.1.toml")),
+        ("bezier", load(BEZIER_SCENE, "bezier_b5.0.toml")),
+    ];
+
+    let timestamp_queries = bench.queries.is_some();
+    // The papers' grid: every cell of a resolution interleaved, frame by frame.
+    let mut grid = Vec::new();
+    let resolutions = if options.sections.grid {
+        options.resolutions()
+    } else {
+        &[]
+    };
+    for &resolution in resolutions {
+        let cells: Vec<(&str, Scene)> = scenes
+            .iter()
+            .flat_map(|(name, base)| {
+                DIVISIONS.iter().map(move |&n| {
+                    let mut s = base.clone();
+                    s.integration.integrator = Integrator::Simpson;
+                    s.billboard.resolution = resolution;
+                    s.integration.divisions = n;
+                    (*name, s)
+                })
+            })
+            .collect();
+        progress(&format!(
+            "grid: {resolution} x {resolution}, {} cells",
+            cells.len()
+        ));
+        // Each cell twice, the generic pass and the specialised one, interleaved.
+        let mode = |k: usize| [Specialise::Off, Specialise::Blocking][k % 2];
+        let timings = bench.interleaved_as(
+            2 * cells.len(),
+            options.warmup(),
+            options.frames(),
+            mode,
+            |k, _| cells[k / 2].1.clone(),
+        )?;
+        let field_bytes = bench.field.gpu_bytes();
+        let mut timings = timings.into_iter();
+        for (name, s) in &cells {
+            let (generic, specialised) =
+                (timings.next().expect("two"), timings.next().expect("two"));
+            grid.push(GridRow {
+                scene: name.to_string(),
+                resolution,
+                divisions: s.integration.divisions,
+                ours: generic,
+                specialised,
+                paper_fps: paper_fps(name, resolution, s.integration.divisions),
+                field_bytes,
+            });
+        }
+    }
+
+    // Deformation costs nothing extra: the same scene static and moving, interleaved.
+    let mut deformation = Vec::new();
+    let deforming: &[_] = if options.sections.deformation {
+        &scenes
+    } else {
+        &[]
+    };
+    for (name, base) in deforming {
+        let mut base = base.clone();
+        base.integration.integrator = Integrator::Simpson;
+        base.billboard.resolution = 256;
+        base.integration.divisions = 128;
+        progress(&format!("deformation: {name}, 256 x 256, n = 128"));
+        let t = bench.interleaved(2, options.warmup(), options.frames(), |k, round| {
+            if k == 0 {
+                base.clone()
+            } else {
+                deformed(&base, round)
+            }
+        })?;
+        let mut t = t.into_iter();
+        deformation.push(DeformationRow {
+            scene: name.to_string(),
+            resolution: 256,
+            divisions: 128,
+            static_scene: t.next().expect("two variants"),
+            deforming: t.next().expect("two variants"),
+        });
+    }
+    let equal_error = if options.sections.equal_error {
+        equal_error(&mut bench, &options, &mut progress)?
+    } else {
+        Vec::new()
+    };
+    let compile = (bench.field.compile_times().iter())
+        .map(|(structure, ms)| CompileTime {
+            structure: format!("{structure:?}"),
+            ms: *ms,
+        })
+        .collect();
+    drop(bench);
+    let viewer = if options.sections.viewer {
+        Some(viewer_frames(&options, &mut progress)?)
+    } else {
+        None
+    };
+
+    Ok(Report {
+        adapter,
+        timestamp_queries,
+        machine: machine(),
+        warmup_frames: options.warmup(),
+        options,
+        warmup_seconds: WARMUP_SECONDS,
+        grid,
+        deformation,
+        viewer,
+        equal_error,
+        compile,
+        total_seconds: start.elapsed().as_secs_f64(),
+    })
+}
+
+/// Whole viewer frames at 1280 x 720 on the default scene: idle (settled), orbiting and dragging a control point
+/// as the viewer draws them (a coarse field while moving), orbiting with the whole field every frame, and the
+/// time from the last move to the full picture.
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_papers_table_is_complete_and_read_by_row_and_column() {
+        assert_eq!(paper_fps("torus", 128, 64), Some(384.61));
+        assert_eq!(paper_fps("torus", 512, 256), Some(5.21));
+        assert_eq!(paper_fps("bezier", 256, 128), Some(17.16));
+        assert_eq!(paper_fps("bezier", 512, 64), Some(9.00));
+        assert_eq!(paper_fps("torus", 1024, 64), None);
+        // Both benchmark scenes are the papers' settings.
+        let t = load(TORUS_SCENE, "t");
+        assert_eq!(
+            (
+                t.sources.tori[0].major_radius,
+                t.sources.tori[0].coefficient
+            ),
+            (0.9, 5.1)
+        );
+        let b = load(BEZIER_SCENE, "b");
+        assert_eq!(b.sources.curves[0].coefficient, 5.0);
+    }
+
+    #[test]
+    fn render_errors_take_b_unclamped_and_count_the_picture_clamped() {
+        // 4 x 4 texels, stride 2: texels (0,0), (2,0), (0,2), (2,2) are compared.
+        let mut values = vec![0.5f32; 16];
+        values[0] = 0.51; // 0.01 off
+        values[2] = 1.25; // B > 1 against 1.2: off by 0.05, though both clamp to 1 in the picture
+        values[10] = 0.5 + 0.5 / 255.0; // under 1/255
+        values[1] = 100.0; // not sampled
+        let reference = [0.5, 1.2, 0.5, 0.5];
+        let e = RenderError::of(&values, 4, 2, &reference);
+        assert!((e.max_abs - 0.05).abs() < 1e-6, "{e:?}");
+        assert_eq!(e.share_over_1_255, 0.25);
+        assert!(e.no_larger_than(&RenderError {
+            max_abs: 0.06,
+            share_over_1_255: 0.25
+        }));
+        assert!(!e.no_larger_than(&RenderError {
+            max_abs: 0.06,
+            share_over_1_255: 0.2
+        }));
+        assert!(!e.no_larger_than(&RenderError {
+            max_abs: 0.02,
+            share_over_1_255: 0.25
+        }));
+    }
+
+    #[test]
+    fn timings_take_the_median_and_the_spread() {
+        let t = Timing::of(vec![5.0, 1.0, 3.0]);
+        assert_eq!(
+            (t.median_ms, t.min_ms, t.max_ms, t.samples),
+            (3.0, 1.0, 5.0, 3)
+        );
+        let t = Timing::of(vec![4.0, 1.0, 3.0, 2.0]);
+        assert_eq!(t.median_ms, 2.5);
+        assert_eq!(t.fps(), 400.0);
+    }
+
+    fn pass(ms: f64) -> PassTiming {
+        PassTiming {
+            gpu: Some(Timing::of(vec![ms, ms * 0.9, ms * 1.1])),
+            wall: Timing::of(vec![ms * 1.2]),
+        }
+    }
+
+    #[test]
+    fn the_report_puts_our_figures_beside_the_papers() {
+        let report = Report {
+            adapter: "test adapter".into(),
+            timestamp_queries: true,
+            machine: "test machine".into(),
+            options: BenchOptions {
+                quick: true,
+                ..Default::default()
+            },
+            warmup_frames: 1,
+            warmup_seconds: WARMUP_SECONDS,
+            grid: vec![GridRow {
+                scene: "torus".into(),
+                resolution: 256,
+                divisions: 128,
+                ours: pass(20.0),
+                specialised: pass(15.0),
+                paper_fps: paper_fps("torus", 256, 128),
+                field_bytes: 262_144 + 1024,
+            }],
+            deformation: vec![DeformationRow {
+                scene: "bezier".into(),
+                resolution: 256,
+                divisions: 128,
+                static_scene: pass(10.0),
+                deforming: pass(11.0),
+            }],
+            viewer: Some(ViewerFrameRow {
+                width: 1280,
+                height: 720,
+                scene: "default".into(),
+                idle: Timing::of(vec![16.0]),
+                orbiting: Timing::of(vec![40.0]),
+                orbiting_resolution: 48,
+                orbiting_full_field: Timing::of(vec![200.0]),
+                dragging: Timing::of(vec![41.0]),
+                dragging_resolution: 48,
+                refine_ms: 450.0,
+                refine_frames: 8,
+                refine_longest_frame_ms: 60.0,
+                add_source_longest_frame_ms: 70.0,
+                add_source_frames: 9,
+            }),
+            equal_error: vec![EqualErrorRow {
+                scene: "mixed".into(),
+                resolution: 256,
+                error_stride: 1,
+                reference: "f64 CPU, Simpson n = 4096".into(),
+                simpson_divisions: 200,
+                pipelines: "specialised".into(),
+                simpson: pass(30.0),
+                simpson_error: RenderError {
+                    max_abs: 0.02,
+                    share_over_1_255: 0.001,
+                },
+                adaptive_tolerance: 1e-4,
+                adaptive: pass(5.0),
+                adaptive_error: RenderError {
+                    max_abs: 0.003,
+                    share_over_1_255: 0.0,
+                },
+                equal_error: true,
+                speedup: 6.0,
+                tried: vec![],
+            }],
+            compile: vec![CompileTime {
+                structure: "torus".into(),
+                ms: 280.0,
+            }],
+            total_seconds: 3.0,
+        };
+        let table = report.table();
+        // Generic 20 ms, specialised 15 ms (1.33x): 66.67 FPS against the papers' 46.49, ratio 1.434; GPU time is
+        // preferred to wall time.
+        assert!(
+            table.contains("20.00")
+                && table.contains("15.00")
+                && table.contains("1.33")
+                && table.contains("66.67")
+                && table.contains("46.49")
+                && table.contains("1.434"),
+            "{table}"
+        );
+        assert!(table.contains("compiled torus in 280 ms"), "{table}");
+        assert!(table.contains("ratio 1.100"), "{table}");
+        assert!(table.contains("test adapter") && table.contains("GPU timestamps"));
+        let json: serde_json::Value = serde_json::from_str(&report.to_json()).unwrap();
+        assert_eq!(json["adapter"], "test adapter");
+        assert_eq!(json["grid"][0]["ours"]["gpu"]["median_ms"], 20.0);
+        assert_eq!(json["grid"][0]["specialised"]["gpu"]["median_ms"], 15.0);
+        assert_eq!(json["compile"][0]["ms"], 280.0);
+        assert!(
+            table.contains("6.00x") && table.contains("2.0e-2 0.100%"),
+            "{table}"
+        );
+        assert_eq!(json["equal_error"][0]["speedup"], 6.0);
+        assert_eq!(json["equal_error"][0]["adaptive_error"]["max_abs"], 0.003);
+        assert_eq!(json["grid"][0]["paper_fps"], 46.49);
+        assert_eq!(json["grid"][0]["field_bytes"], 263_168);
+        assert_eq!(
+            json["deformation"][0]["deforming"]["wall"]["median_ms"],
+            13.2
+        );
+        assert_eq!(json["viewer"]["orbiting"]["median_ms"], 40.0);
+        assert_eq!(json["options"]["quick"], true);
+        // A run of some sections prints only theirs.
+        let only = Report {
+            grid: Vec::new(),
+            deformation: Vec::new(),
+            viewer: None,
+            ..report
+        };
+        let table = only.table();
+        assert!(
+            table.contains("speedup") && table.contains("6.00x"),
+            "{table}"
+        );
+        for absent in ["paper FPS", "deformation", "viewer frame", "--quick"] {
+            assert!(!table.contains(absent), "{absent}: {table}");
+        }
+    }
+
+    #[test]
+    fn the_deforming_variant_moves_a_source_every_frame() {
+        let b = load(BEZIER_SCENE, "b");
+        assert_ne!(
+            deformed(&b, 1).sources.curves[0].control_points[1],
+            deformed(&b, 2).sources.curves[0].control_points[1]
+        );
+        let t = load(TORUS_SCENE, "t");
+        assert_ne!(
+            deformed(&t, 1).sources.tori[0].center,
+            deformed(&t, 2).sources.tori[0].center
+        );
+    }
+}

@@ -1,0 +1,253 @@
+//! What a run measured, and its tables and JSON.
+
+use super::*;
+
+/// One cell of the papers' grid.
+#[derive(Clone, Debug, Serialize)]
+pub struct GridRow {
+    pub scene: String,
+    pub resolution: u32,
+    pub divisions: u32,
+    /// The generic field pass (loops bounded by the counts in its storage buffers).
+    pub ours: PassTiming,
+    /// The field pass specialised to the scene's structure (`gpu::Specialise`), interleaved with the generic.
+    pub specialised: PassTiming,
+    pub paper_fps: Option<f64>,
+    /// GPU memory held by the field pass (texture, uniform and storage buffers), bytes.
+    pub field_bytes: u64,
+}
+
+/// A static scene against the same scene deforming every frame, interleaved.
+#[derive(Clone, Debug, Serialize)]
+pub struct DeformationRow {
+    pub scene: String,
+    pub resolution: u32,
+    pub divisions: u32,
+    pub static_scene: PassTiming,
+    /// A control point (the torus's center for the torus) moves every frame.
+    pub deforming: PassTiming,
+}
+
+/// Whole viewer frames (UI, viewport, field when it changes), wall time, no display.
+#[derive(Clone, Debug, Serialize)]
+pub struct ViewerFrameRow {
+    pub width: u32,
+    pub height: u32,
+    pub scene: String,
+    /// Nothing changes: the field is not integrated again.
+    pub idle: Timing,
+    /// The camera orbits a little every frame, as the viewer draws it: a coarse field while moving
+    /// (`viewer::progressive`).
+    pub orbiting: Timing,
+    /// The side of the coarse field the viewer chose while orbiting (the full field's side if none).
+    pub orbiting_resolution: u32,
+    /// The same orbit with the whole field integrated every frame (progressive refinement off): the baseline.
+    pub orbiting_full_field: Timing,
+    /// A control point of the curve dragged a little every frame, as the viewer draws it.
+    pub dragging: Timing,
+    pub dragging_resolution: u32,
+    /// From the last moving frame to the full-quality picture: milliseconds, frames, and the longest of them.
+    pub refine_ms: f64,
+    pub refine_frames: u32,
+    pub refine_longest_frame_ms: f64,
+    /// A point source added (a new structure: a compile starts on its thread), then frames until the picture
+    /// is whole again: the longest of them, and how many.
+    pub add_source_longest_frame_ms: f64,
+    pub add_source_frames: u32,
+}
+
+/// Everything one run measured.
+#[derive(Clone, Debug, Serialize)]
+pub struct Report {
+    pub adapter: String,
+    pub timestamp_queries: bool,
+    pub machine: String,
+    pub options: BenchOptions,
+    /// Warm-up before each timed set: at least this many frames and `warmup_seconds`.
+    pub warmup_frames: usize,
+    pub warmup_seconds: f64,
+    pub grid: Vec<GridRow>,
+    pub deformation: Vec<DeformationRow>,
+    pub viewer: Option<ViewerFrameRow>,
+    pub equal_error: Vec<EqualErrorRow>,
+    /// What each structure's specialised pipelines took to compile, in milliseconds.
+    pub compile: Vec<CompileTime>,
+    pub total_seconds: f64,
+}
+
+/// The compile of one structure's specialised pipelines.
+#[derive(Clone, Debug, Serialize)]
+pub struct CompileTime {
+    pub structure: String,
+    pub ms: f64,
+}
+
+impl Report {
+    /// The papers' grid beside their figures.
+    pub(super) fn grid_table(&self, s: &mut String) {
+        use std::fmt::Write;
+        let _ = writeln!(
+            s,
+            "\n{:<7} {:>5} {:>4} {:>11} {:>15} {:>8} {:>9} {:>10} {:>8} {:>10}",
+            "scene",
+            "W",
+            "n",
+            "generic ms",
+            "specialised ms",
+            "speedup",
+            "FPS",
+            "paper FPS",
+            "ratio",
+            "field MiB"
+        );
+        for r in &self.grid {
+            let (g, t) = (r.ours.best(), r.specialised.best());
+            let paper = r.paper_fps.map_or("-".to_owned(), |p| format!("{p:.2}"));
+            let ratio = r
+                .paper_fps
+                .map_or("-".to_owned(), |p| format!("{:.3}", t.fps() / p));
+            let _ = writeln!(
+                s,
+                "{:<7} {:>5} {:>4} {:>11.2} {:>15.2} {:>8.2} {:>9.2} {:>10} {:>8} {:>10.2}",
+                r.scene,
+                r.resolution,
+                r.divisions,
+                g.median_ms,
+                t.median_ms,
+                g.median_ms / t.median_ms,
+                t.fps(),
+                paper,
+                ratio,
+                r.field_bytes as f64 / (1024.0 * 1024.0)
+            );
+        }
+        let _ = writeln!(
+            s,
+            "(FPS and the ratio to the papers' 2016 GPU are the specialised pass's; medians, min..max in the JSON)"
+        );
+        for c in &self.compile {
+            let _ = writeln!(s, "compiled {} in {:.0} ms", c.structure, c.ms);
+        }
+        if self.options.quick {
+            let _ = writeln!(
+                s,
+                "(--quick: 512 x 512 left out; run without --quick for the whole grid)"
+            );
+        }
+    }
+
+    /// The report as a human-readable table.
+    pub fn table(&self) -> String {
+        use std::fmt::Write;
+        let mut s = String::new();
+        let source = if self.timestamp_queries {
+            "GPU timestamps"
+        } else {
+            "wall time (no timestamp queries)"
+        };
+        let _ = writeln!(s, "adapter: {}", self.adapter);
+        let _ = writeln!(s, "machine: {}", self.machine);
+        let _ = writeln!(
+            s,
+            "field pass only, {source}; median of {} frames after at least {} warm-up frames and {} s (min..max)",
+            self.options.frames(),
+            self.warmup_frames,
+            self.warmup_seconds
+        );
+        if !self.grid.is_empty() {
+            self.grid_table(&mut s);
+        }
+        if !self.deformation.is_empty() {
+            let _ = writeln!(
+                s,
+                "\ndeformation (interleaved with the static scene; GPU ms where available, wall ms):"
+            );
+        }
+        for d in &self.deformation {
+            let (a, b) = (d.static_scene.best(), d.deforming.best());
+            let _ = writeln!(
+                s,
+                "{:<7} {}x{} n={}: static {:.2} ms, deforming {:.2} ms (ratio {:.3}); wall {:.2} vs {:.2} ms",
+                d.scene,
+                d.resolution,
+                d.resolution,
+                d.divisions,
+                a.median_ms,
+                b.median_ms,
+                b.median_ms / a.median_ms,
+                d.static_scene.wall.median_ms,
+                d.deforming.wall.median_ms
+            );
+        }
+        if let Some(v) = &self.viewer {
+            let _ = writeln!(
+                s,
+                "\nviewer frame {}x{} ({} scene, UI + viewport, wall): idle {:.1} ms ({:.1} FPS); orbiting {:.1} ms ({:.1} FPS, {:.2}x idle, field {}^2 while moving); dragging a control point {:.1} ms ({:.1} FPS, {:.2}x idle, field {}^2); orbiting with the whole field every frame {:.1} ms ({:.1} FPS, {:.2}x idle); full picture {:.0} ms after the last move ({} frames, longest {:.1} ms); a source added: longest frame {:.1} ms of {}",
+                v.width,
+                v.height,
+                v.scene,
+                v.idle.median_ms,
+                v.idle.fps(),
+                v.orbiting.median_ms,
+                v.orbiting.fps(),
+                v.orbiting.median_ms / v.idle.median_ms,
+                v.orbiting_resolution,
+                v.dragging.median_ms,
+                v.dragging.fps(),
+                v.dragging.median_ms / v.idle.median_ms,
+                v.dragging_resolution,
+                v.orbiting_full_field.median_ms,
+                v.orbiting_full_field.fps(),
+                v.orbiting_full_field.median_ms / v.idle.median_ms,
+                v.refine_ms,
+                v.refine_frames,
+                v.refine_longest_frame_ms,
+                v.add_source_longest_frame_ms,
+                v.add_source_frames,
+            );
+        }
+        if !self.equal_error.is_empty() {
+            let _ = writeln!(
+                s,
+                "\nequal error: simpson n = 200 against adaptive at the cheapest tolerance with no larger error; error vs the converged reference (max |dB| on B, share of texels off by > 1/255 on B clamped to [0, 1])"
+            );
+            let _ = writeln!(
+                s,
+                "{:<7} {:>4} {:>11} {:>20} {:>9} {:>11} {:>20} {:>8}",
+                "scene",
+                "W",
+                "simpson ms",
+                "simpson error",
+                "tol",
+                "adaptive ms",
+                "adaptive error",
+                "speedup"
+            );
+            for r in &self.equal_error {
+                let e = |e: &RenderError| {
+                    format!("{:.1e} {:.3}%", e.max_abs, 100.0 * e.share_over_1_255)
+                };
+                let _ = writeln!(
+                    s,
+                    "{:<7} {:>4} {:>11.2} {:>20} {:>9.0e} {:>11.2} {:>20} {:>7.2}x{}",
+                    r.scene,
+                    r.resolution,
+                    r.simpson.best().median_ms,
+                    e(&r.simpson_error),
+                    r.adaptive_tolerance,
+                    r.adaptive.best().median_ms,
+                    e(&r.adaptive_error),
+                    r.speedup,
+                    if r.equal_error { "" } else { " (error larger)" }
+                );
+            }
+        }
+        let _ = writeln!(s, "\ntotal: {:.0} s", self.total_seconds);
+        s
+    }
+
+    /// The report as JSON: every figure with its unit in its name, the adapter and the settings.
+    pub fn to_json(&self) -> String {
+        serde_json::to_string_pretty(self).expect("a report always serialises")
+    }
+}

@@ -1,0 +1,205 @@
+//! The timing harness: medians and spreads, and the field pass timed on one context (GPU timestamps where the
+//! adapter has them, wall time always), scenes interleaved frame by frame.
+
+use super::*;
+
+/// Median and spread of a set of durations, in milliseconds.
+#[derive(Clone, Debug, Serialize)]
+pub struct Timing {
+    pub median_ms: f64,
+    pub min_ms: f64,
+    pub max_ms: f64,
+    pub samples: usize,
+}
+
+impl Timing {
+    pub(super) fn of(mut ms: Vec<f64>) -> Self {
+        ms.sort_by(f64::total_cmp);
+        let n = ms.len();
+        let median = if n % 2 == 1 {
+            ms[n / 2]
+        } else {
+            0.5 * (ms[n / 2 - 1] + ms[n / 2])
+        };
+        Self {
+            median_ms: median,
+            min_ms: ms[0],
+            max_ms: ms[n - 1],
+            samples: n,
+        }
+    }
+
+    pub fn fps(&self) -> f64 {
+        1e3 / self.median_ms
+    }
+}
+
+/// The field pass of one frame, timed both ways.
+#[derive(Clone, Debug, Serialize)]
+pub struct PassTiming {
+    /// GPU time of the compute pass from timestamp queries, when the adapter has them.
+    pub gpu: Option<Timing>,
+    /// Wall time from upload to the end of the GPU's work (submit and wait).
+    pub wall: Timing,
+}
+
+impl PassTiming {
+    /// The figure to report: GPU time where there is one, else wall time.
+    pub fn best(&self) -> &Timing {
+        self.gpu.as_ref().unwrap_or(&self.wall)
+    }
+}
+
+/// Times the field pass on one context: timestamp queries if available, else wall time only.
+pub(super) struct FieldBench {
+    pub(super) ctx: GpuContext,
+    pub(super) field: FieldRenderer,
+    pub(super) queries: Option<(wgpu::QuerySet, wgpu::Buffer, wgpu::Buffer)>,
+}
+
+impl FieldBench {
+    pub(super) fn new() -> Result<Self, GpuError> {
+        let ctx = GpuContext::new()?;
+        let field = FieldRenderer::new(&ctx.device);
+        let queries = ctx
+            .device
+            .features()
+            .contains(wgpu::Features::TIMESTAMP_QUERY)
+            .then(|| {
+                let set = ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
+                    label: Some("energywave.bench.timestamps"),
+                    ty: wgpu::QueryType::Timestamp,
+                    count: 2,
+                });
+                let resolve = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("energywave.bench.resolve"),
+                    size: 16,
+                    usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                    mapped_at_creation: false,
+                });
+                let read = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("energywave.bench.read"),
+                    size: 16,
+                    usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+                    mapped_at_creation: false,
+                });
+                (set, resolve, read)
+            });
+        Ok(Self {
+            ctx,
+            field,
+            queries,
+        })
+    }
+
+    /// Integrates the field of `scene` once (forced, even if unchanged): (GPU ms, wall ms).
+    pub(super) fn frame(&mut self, scene: &Scene) -> Result<(Option<f64>, f64), GpuError> {
+        let (device, queue) = (&self.ctx.device, &self.ctx.queue);
+        let start = Instant::now();
+        self.field.invalidate();
+        let billboard = scene.place_billboard(1.0);
+        self.field.prepare(device, queue, scene, &billboard)?;
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("energywave.bench.encoder"),
+        });
+        let writes = self
+            .queries
+            .as_ref()
+            .map(|(set, _, _)| wgpu::ComputePassTimestampWrites {
+                query_set: set,
+                beginning_of_pass_write_index: Some(0),
+                end_of_pass_write_index: Some(1),
+            });
+        self.field.encode_timed(&mut encoder, writes);
+        if let Some((set, resolve, read)) = &self.queries {
+            encoder.resolve_query_set(set, 0..2, resolve, 0);
+            encoder.copy_buffer_to_buffer(resolve, 0, read, 0, 16);
+        }
+        self.ctx.checked(|| queue.submit([encoder.finish()]))?;
+        device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| GpuError::Readback(e.to_string()))?;
+        let wall = start.elapsed().as_secs_f64() * 1e3;
+        let gpu = match &self.queries {
+            Some((_, _, read)) => {
+                let ticks: [u64; 2] = bytemuck::pod_read_unaligned(&map_read(device, read)?[..16]);
+                let period = queue.get_timestamp_period() as f64;
+                Some(ticks[1].saturating_sub(ticks[0]) as f64 * period * 1e-6)
+            }
+            None => None,
+        };
+        Ok((gpu, wall))
+    }
+
+    /// The brightness texture of `scene`, integrated on the GPU and read back.
+    pub(super) fn brightness(&mut self, scene: &Scene) -> Result<Vec<f32>, GpuError> {
+        self.frame(scene)?;
+        let texture = self.field.texture().expect("integrated above");
+        let bytes = self.ctx.read_texture(texture, 4)?;
+        Ok(bytemuck::cast_slice(&bytes).to_vec())
+    }
+
+    /// Times `scenes` interleaved frame by frame (so that drift of a shared, noisy machine hits them alike):
+    /// at least `warmup` untimed rounds and `WARMUP_SECONDS`, then `frames` timed ones. `next(k, i)` gives scene
+    /// `k` for round `i`.
+    pub(super) fn interleaved(
+        &mut self,
+        count: usize,
+        warmup: usize,
+        frames: usize,
+        next: impl FnMut(usize, usize) -> Scene,
+    ) -> Result<Vec<PassTiming>, GpuError> {
+        self.interleaved_as(count, warmup, frames, |_| Specialise::Blocking, next)
+    }
+
+    /// `interleaved`, scene `k` drawn by the pipelines `mode(k)` chooses (compiled in the warm-up).
+    pub(super) fn interleaved_as(
+        &mut self,
+        count: usize,
+        warmup: usize,
+        frames: usize,
+        mode: impl Fn(usize) -> Specialise,
+        mut next: impl FnMut(usize, usize) -> Scene,
+    ) -> Result<Vec<PassTiming>, GpuError> {
+        let mut gpu = vec![Vec::new(); count];
+        let mut wall = vec![Vec::new(); count];
+        let start = Instant::now();
+        let mut round = 0;
+        while round < warmup || warming(start, round) {
+            for k in 0..count {
+                self.field.set_specialise(mode(k));
+                self.frame(&next(k, round))?;
+            }
+            round += 1;
+        }
+        for round in round..round + frames {
+            for k in 0..count {
+                self.field.set_specialise(mode(k));
+                let (g, w) = self.frame(&next(k, round))?;
+                wall[k].push(w);
+                if let Some(g) = g {
+                    gpu[k].push(g);
+                }
+            }
+        }
+        Ok((0..count)
+            .map(|k| PassTiming {
+                gpu: (!gpu[k].is_empty()).then(|| Timing::of(gpu[k].clone())),
+                wall: Timing::of(wall[k].clone()),
+            })
+            .collect())
+    }
+}
+
+/// Least time spent warming up before anything is timed. A real GPU idles at a fraction of its clock and only
+/// reaches full speed after a moment of steady work: an H200 timed after two warm-up frames that followed a
+/// few seconds of CPU work (the equal-error reference) ran at its idle clock, 345 of 1980 MHz, about 5.7 times
+/// slower than in the grid section just before. On lavapipe the warm-up frames alone take longer than this.
+pub const WARMUP_SECONDS: f64 = 0.5;
+/// Most warm-up rounds, whatever the time: a pass of a few microseconds reaches `WARMUP_SECONDS` in well under this.
+pub(super) const MAX_WARMUP_ROUNDS: usize = 100_000;
+
+/// Whether warm-up that began at `start` and has run `rounds` rounds should go on.
+pub(super) fn warming(start: Instant, rounds: usize) -> bool {
+    rounds < MAX_WARMUP_ROUNDS && start.elapsed().as_secs_f64() < WARMUP_SECONDS
+}
