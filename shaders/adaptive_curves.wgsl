@@ -841,13 +841,11 @@ fn integrate_adaptive_curves(@builtin(global_invocation_id) gid: vec3<u32>) {
     if !texel.inside {
         return;
     }
-    let id = texel.id;
-    let seg = array<vec3<f32>, 2>(texel.start, texel.end);
     let first_curve = point_count() + line_count() + torus_count();
     var b = 0.0;
     // The range holds curves only (gpu::field_pass::plan_chunks).
     for (var t = chunk.first; t < chunk.first + chunk.count; t++) {
-        b += integrate_curve_term(t - first_curve, seg[0], seg[1]);
+        b += integrate_curve_term(t - first_curve, texel.start, texel.end);
     }
-    store(id.xy, b);
+    store(texel.id, b);
 }

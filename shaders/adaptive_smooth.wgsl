@@ -316,8 +316,6 @@ fn integrate_adaptive(@builtin(global_invocation_id) gid: vec3<u32>) {
     if !texel.inside {
         return;
     }
-    let id = texel.id;
-    let seg = array<vec3<f32>, 2>(texel.start, texel.end);
     var b = 0.0;
     // The range holds points, lines and tori only (gpu::field_pass::plan_chunks); its bounds come from the chunk
     // alone, a storage buffer, so no driver specialises the shader for them.
@@ -332,7 +330,7 @@ fn integrate_adaptive(@builtin(global_invocation_id) gid: vec3<u32>) {
                 kind = KIND_TORUS;
             }
         }
-        b += integrate_smooth_term(kind, index, seg[0], seg[1]);
+        b += integrate_smooth_term(kind, index, texel.start, texel.end);
     }
-    store(id.xy, b);
+    store(texel.id, b);
 }

@@ -93,14 +93,12 @@ fn integrate(@builtin(global_invocation_id) gid: vec3<u32>) {
     if !texel.inside {
         return;
     }
-    let id = texel.id;
-    let seg = array<vec3<f32>, 2>(texel.start, texel.end);
     let n = params.divisions;
     let jitter = jittered();
-    var r = Samples(seg[0], seg[1], chunk.first, 0u, n, 0.0, !jitter);
+    var r = Samples(texel.start, texel.end, chunk.first, 0u, n, 0.0, !jitter);
     var scale = 1.0 / (3.0 * f32(n));
     if jitter {
-        r.shift = jitter_offset(id.xy);
+        r.shift = jitter_offset(texel.id);
         r.last = min(chunk.first + chunk.count, n);
         scale = 1.0 / f32(n);
     } else {
@@ -119,5 +117,5 @@ fn integrate(@builtin(global_invocation_id) gid: vec3<u32>) {
     for (var i = 0u; i < curve_count(); i++) {
         sum += curve_samples(r, curves[i]);
     }
-    store(id.xy, sum * scale);
+    store(texel.id, sum * scale);
 }
