@@ -2,6 +2,7 @@
 //! The table of a full run on the reference machine is recorded in `benches/README.md`.
 
 use energywave::bench::{BenchOptions, run};
+use energywave::cli::bench_viewer;
 
 fn main() {
     let quick = std::env::args().any(|a| a == "--quick");
@@ -10,6 +11,7 @@ fn main() {
             quick,
             ..Default::default()
         },
+        &mut bench_viewer,
         |p| eprintln!("{p}"),
     ) {
         Ok(report) => print!("{}", report.table()),

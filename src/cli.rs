@@ -15,6 +15,7 @@ use crate::integrate::Integrator;
 use crate::output::{self, Format, OutputError};
 use crate::reference;
 use crate::scene::{DEFAULT_SCENE_NAME, MAX_RESOLUTION, Scene, SceneError, limits};
+use crate::viewer::offscreen::OffscreenViewer;
 use crate::viewer::{Document, ViewOptions, ViewerError};
 
 /// Design and render energy-wave effects (Watanabe, Abe and Konno 2016).
@@ -285,6 +286,7 @@ fn bench(args: &BenchArgs) -> Result<(), CliError> {
             equal_error_sizes: (!args.equal_error_sizes.is_empty())
                 .then(|| args.equal_error_sizes.clone()),
         },
+        &mut bench_viewer,
         |p| eprintln!("{p}"),
     )?;
     print!("{}", report.table());
@@ -293,6 +295,39 @@ fn bench(args: &BenchArgs) -> Result<(), CliError> {
         eprintln!("wrote {}", path.display());
     }
     Ok(())
+}
+
+/// The viewer the bench times: the real one, drawn offscreen at the bench's size, on the default scene.
+pub fn bench_viewer() -> Result<Box<dyn crate::bench::TimedViewer>, crate::gpu::GpuError> {
+    let [w, h] = crate::bench::VIEWER_SIZE;
+    let doc = Document::new(Scene::default_scene(), None);
+    Ok(Box::new(OffscreenViewer::new(doc, w, h)?))
+}
+
+impl crate::bench::TimedViewer for OffscreenViewer {
+    fn frame(&mut self) -> Result<(), crate::gpu::GpuError> {
+        OffscreenViewer::frame(self).map(|_| ())
+    }
+
+    fn wants_frame(&self) -> bool {
+        self.app.report().wants_frame()
+    }
+
+    fn preview(&self) -> Option<u32> {
+        self.app.report().preview
+    }
+
+    fn scene_mut(&mut self) -> &mut Scene {
+        self.app.scene_mut()
+    }
+
+    fn orbit(&mut self, yaw: f64) {
+        crate::viewer::navigation::orbit(&mut self.app.scene_mut().camera, yaw, 0.0);
+    }
+
+    fn set_progressive(&mut self, on: bool) {
+        self.app.view_mut().progressive = on;
+    }
 }
 
 /// Refuses, before any rendering, a billboard resolution or a frame size this device cannot hold, naming

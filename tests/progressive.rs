@@ -149,7 +149,7 @@ fn the_viewer_previews_while_orbiting_and_ends_on_the_still_picture() {
     let mut v = OffscreenViewer::new(Document::new(Scene::default_scene(), None), width, height)
         .expect("a GPU adapter (lavapipe in CI)");
     settle(&mut v);
-    let w = v.app.doc.scene.billboard.resolution;
+    let w = v.app.scene().billboard.resolution;
     // What a full field costs on this adapter (a second render, compiled and warm).
     let mut headless = HeadlessRenderer::new().unwrap();
     let mut probe = v.app.frame_scene();
@@ -165,7 +165,7 @@ fn the_viewer_previews_while_orbiting_and_ends_on_the_still_picture() {
     let start = std::time::Instant::now();
     let mut previews = Vec::new();
     for _ in 0..8 {
-        navigation::orbit(&mut v.app.doc.scene.camera, 0.02, 0.0);
+        navigation::orbit(&mut v.app.scene_mut().camera, 0.02, 0.0);
         v.frame().unwrap();
         previews.push(v.app.report().preview);
     }
@@ -191,6 +191,6 @@ fn the_viewer_previews_while_orbiting_and_ends_on_the_still_picture() {
     assert_eq!(v.viewport_image().unwrap(), shot);
     // The texture the viewport ends on is the still render's, bit for bit.
     let shown = v.field_values().unwrap();
-    let bb = moving.place_billboard(v.app.viewport_px[0] as f64 / v.app.viewport_px[1] as f64);
+    let bb = moving.place_billboard(v.app.viewport_px()[0] as f64 / v.app.viewport_px()[1] as f64);
     assert_eq!(shown, headless.brightness(&moving, &bb).unwrap());
 }

@@ -55,7 +55,7 @@ fn thousands_of_frames_of_random_edits() {
     let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
     let (mut baseline, mut late) = (0, 0);
     for frame in 0..FRAMES {
-        let s = &mut v.app.doc.scene;
+        let s = v.app.scene_mut();
         match rng.below(12) {
             0 => s.sources.points.push(Point {
                 position: DVec3::new(

@@ -63,7 +63,7 @@ fn minimised_window_draws_nothing_and_comes_back_at_the_new_size() {
     assert_eq!(v.frame_image().unwrap().len(), 800 * 500 * 4);
     assert_eq!(v.app.scene(), &scene);
     // The viewport grew with the window and shows the glow.
-    assert!(v.app.viewport_px[0] > 400 && v.app.viewport_px[1] > 400);
+    assert!(v.app.viewport_px()[0] > 400 && v.app.viewport_px()[1] > 400);
     let image = v.viewport_image().unwrap();
     assert!(lit_share(&image) > 0.01, "lit share {}", lit_share(&image));
 }
@@ -86,7 +86,11 @@ fn lost_outdated_and_invalid_surfaces_are_reconfigured_and_the_next_frame_draws(
         assert!(matches!(v.frame().unwrap(), Outcome::Drawn { .. }));
         assert_eq!(v.surface.presented, presented + 1);
     }
-    let notice = v.app.notice.clone().expect("the validation error is said");
+    let notice = v
+        .app
+        .notice()
+        .cloned()
+        .expect("the validation error is said");
     assert!(notice.1 && notice.0.contains("validation"), "{notice:?}");
 
     for fault in [SurfaceFault::Timeout, SurfaceFault::Occluded] {
@@ -107,8 +111,8 @@ fn a_lost_device_is_recreated_keeping_the_scene_its_history_and_the_picture() {
     let mut v = viewer();
     let original = v.app.scene().clone();
     // An edit, committed to the history at the end of the frame.
-    v.app.doc.scene.sources.tori[0].coefficient *= 2.0;
-    v.app.doc.scene.colors.energy = [1.0, 0.5, 0.2];
+    v.app.scene_mut().sources.tori[0].coefficient *= 2.0;
+    v.app.scene_mut().colors.energy = [1.0, 0.5, 0.2];
     assert!(matches!(v.frame().unwrap(), Outcome::Drawn { .. }));
     let edited = v.app.scene().clone();
     let before = v.viewport_image().unwrap();
@@ -133,7 +137,11 @@ fn a_lost_device_is_recreated_keeping_the_scene_its_history_and_the_picture() {
         "outcomes {outcomes:?}"
     );
     assert_eq!(v.recoveries, 1);
-    let notice = v.app.notice.clone().expect("the loss is said in the panel");
+    let notice = v
+        .app
+        .notice()
+        .cloned()
+        .expect("the loss is said in the panel");
     assert!(notice.1 && notice.0.contains("lost"), "{notice:?}");
 
     for _ in 0..2 {
@@ -172,17 +180,17 @@ fn a_still_jittered_view_averages_its_frames_then_rests() {
     let converged = v.viewport_image().unwrap();
     assert!(lit_share(&converged) > 0.01);
 
-    let i = &mut v.app.doc.scene.integration;
+    let i = &mut v.app.scene_mut().integration;
     i.integrator = energywave::integrate::Integrator::Simpson;
     i.divisions = 6;
     i.jitter = Some(3);
-    v.app.average_frames = 1;
+    v.app.view_mut().average_frames = 1;
     settle(&mut v);
     let one = v.viewport_image().unwrap();
     assert_eq!(v.app.report().averaged, None);
 
     // Averaging: each frame asks for the next until the mean holds them all, then the viewer rests.
-    v.app.average_frames = 24;
+    v.app.view_mut().average_frames = 24;
     let renders = v.field_renders();
     for k in 1..=24 {
         let outcome = v.frame().unwrap();
@@ -210,7 +218,7 @@ fn a_still_jittered_view_averages_its_frames_then_rests() {
     );
 
     // Orbiting starts a new mean.
-    energywave::viewer::navigation::orbit(&mut v.app.doc.scene.camera, 0.3, 0.0);
+    energywave::viewer::navigation::orbit(&mut v.app.scene_mut().camera, 0.3, 0.0);
     assert_eq!(v.frame().unwrap(), Outcome::Drawn { repaint_now: true });
     assert_eq!(v.app.report().averaged, Some((1, 24)));
 }

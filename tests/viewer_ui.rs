@@ -60,7 +60,7 @@ fn harness(scene: Scene) -> Harness<'static, ViewerApp> {
 
 /// The viewport's pixels of a rendered frame, as an average color and the image.
 fn viewport_pixels(h: &mut Harness<'static, ViewerApp>) -> Vec<[u8; 4]> {
-    let rect = h.state().viewport_rect;
+    let rect = h.state().viewport_rect();
     let image = h.render().expect("the frame renders");
     let ppp = image.width() as f32 / SIZE.x;
     let mut v = Vec::new();
@@ -138,7 +138,7 @@ fn editing_a_value_changes_the_scene_and_the_image() {
     assert!(!h.state().report().wants_frame(), "the picture is whole");
     let after = viewport_pixels(&mut h);
     let renders = h.state().report().field_renders;
-    h.state_mut().doc.scene.colors.energy = [1.0, 0.3, 0.1];
+    h.state_mut().scene_mut().colors.energy = [1.0, 0.3, 0.1];
     h.run();
     let warm = viewport_pixels(&mut h);
     assert!(mean_abs_difference(&after, &warm) > 2.0);
@@ -170,7 +170,7 @@ fn sources_can_be_added_duplicated_and_deleted() {
     h.get_by_label("+ curve").click();
     h.run();
     assert_eq!(count(&h), (0, 1, 1, 2));
-    assert!(h.state().doc.is_dirty() && h.state().doc.title().ends_with('*'));
+    assert!(h.state().document().is_dirty() && h.state().document().title().ends_with('*'));
 }
 
 #[test]
@@ -204,7 +204,7 @@ fn undo_and_redo_restore_the_state() {
 #[test]
 fn invalid_entries_are_refused() {
     let mut h = harness(light_scene());
-    let limit = h.state().max_resolution;
+    let limit = h.state().max_resolution();
     h.get_by_role_and_label(Role::SpinButton, "divisions n")
         .set_value_accesskit(201.0);
     h.run();
@@ -253,7 +253,7 @@ fn dragging_a_control_point_bends_the_curve() {
     let mut h = harness(light_scene());
     let id = HandleId::Control { curve: 0, index: 3 };
     let before_point = handles::get(h.state().scene(), id).unwrap();
-    let rect = h.state().viewport_rect;
+    let rect = h.state().viewport_rect();
     let start = handles::to_screen(&h.state().scene().camera, rect, before_point).unwrap();
     let end = start + Vec2::new(60.0, -80.0);
     let before = viewport_pixels(&mut h);
@@ -310,7 +310,7 @@ fn dragging_a_control_point_bends_the_curve() {
 #[test]
 fn dragging_empty_space_orbits_and_the_wheel_zooms() {
     let mut h = harness(light_scene());
-    let rect = h.state().viewport_rect;
+    let rect = h.state().viewport_rect();
     let camera = h.state().scene().camera.clone();
     let start = Pos2::new(rect.right() - 40.0, rect.bottom() - 40.0);
     h.hover_at(start);
@@ -329,7 +329,7 @@ fn dragging_empty_space_orbits_and_the_wheel_zooms() {
             < 1e-9
     );
     assert!(
-        !h.state().history.can_undo(),
+        !h.state().history().can_undo(),
         "navigation is not an undo step"
     );
     h.hover_at(rect.center());
@@ -389,7 +389,7 @@ fn unsaved_changes_are_not_lost_without_asking() {
     let mut other_scene = light_scene();
     other_scene.sources.curves.clear();
     std::fs::write(&other, other_scene.to_toml()).unwrap();
-    h.state_mut().path_input = other.display().to_string();
+    *h.state_mut().path_input_mut() = other.display().to_string();
     h.get_by_label("Open").click();
     h.run();
     assert!(
@@ -399,9 +399,9 @@ fn unsaved_changes_are_not_lost_without_asking() {
     h.get_by_label("Discard").click();
     h.run();
     assert_eq!(*h.state().scene(), other_scene);
-    assert!(!h.state().doc.is_dirty());
+    assert!(!h.state().document().is_dirty());
     assert!(
-        !h.state().history.can_undo(),
+        !h.state().history().can_undo(),
         "a new document starts a new history"
     );
     // Saving clears the mark; the file holds the edits.
@@ -409,7 +409,7 @@ fn unsaved_changes_are_not_lost_without_asking() {
     h.run();
     h.key_press_modifiers(Modifiers::COMMAND, Key::S);
     h.run();
-    assert!(!h.state().doc.is_dirty());
+    assert!(!h.state().document().is_dirty());
     assert_eq!(
         energywave::scene::Scene::load(&other)
             .unwrap()
@@ -443,7 +443,7 @@ fn repaints_continuously(h: &Harness<'static, ViewerApp>) -> bool {
 #[test]
 fn the_animated_preset_plays_steps_scrubs_loops_and_edits_while_paused() {
     let mut h = harness(pulse_scene());
-    assert_eq!(h.state().playback.frame, 0);
+    assert_eq!(h.state().playback().frame, 0);
     assert!(!repaints_continuously(&h), "paused: no continuous repaint");
     // The preset's loop starts 46 frames into eq. 5.1's run: frame 0 has the pulse halfway along the curve,
     // frame 40 (the thesis's 86) near its end, so the two pictures differ.
@@ -451,7 +451,7 @@ fn the_animated_preset_plays_steps_scrubs_loops_and_edits_while_paused() {
     h.get_by_role_and_label(Role::Slider, "frame")
         .set_value_accesskit(40.0);
     h.run();
-    assert_eq!(h.state().playback.frame, 40);
+    assert_eq!(h.state().playback().frame, 40);
     let near_end = viewport_pixels(&mut h);
     assert!(
         mean_abs_difference(&halfway, &near_end) > 5.0,
@@ -467,25 +467,25 @@ fn the_animated_preset_plays_steps_scrubs_loops_and_edits_while_paused() {
     // Step forward and back.
     h.get_by_label("Step >").click();
     h.run();
-    assert_eq!(h.state().playback.frame, 41);
+    assert_eq!(h.state().playback().frame, 41);
     h.get_by_label("< Step").click();
     h.get_by_label("< Step").click();
     h.run();
-    assert_eq!(h.state().playback.frame, 39);
+    assert_eq!(h.state().playback().frame, 39);
 
     // Play: frames advance with time and the viewer repaints continuously, only while playing.
     h.get_by_label("Play").click();
     h.step();
     h.step();
     h.step();
-    assert!(h.state().playback.playing);
-    assert!(h.state().playback.frame > 39, "frames advance");
+    assert!(h.state().playback().playing);
+    assert!(h.state().playback().frame > 39, "frames advance");
     assert!(repaints_continuously(&h));
     h.get_by_label("Pause").click();
     h.run();
-    let paused_at = h.state().playback.frame;
+    let paused_at = h.state().playback().frame;
     h.run();
-    assert_eq!(h.state().playback.frame, paused_at);
+    assert_eq!(h.state().playback().frame, paused_at);
     assert!(!repaints_continuously(&h));
 
     // Looping wraps past the last frame; without it playback stops there.
@@ -495,7 +495,7 @@ fn the_animated_preset_plays_steps_scrubs_loops_and_edits_while_paused() {
     h.key_press(Key::Space);
     h.step();
     h.step();
-    assert!(h.state().playback.frame < 90, "wrapped to the start");
+    assert!(h.state().playback().frame < 90, "wrapped to the start");
     h.key_press(Key::Space);
     h.run();
     h.get_by_label("loop").click();
@@ -506,12 +506,12 @@ fn the_animated_preset_plays_steps_scrubs_loops_and_edits_while_paused() {
     h.step();
     h.step();
     h.run();
-    assert_eq!(h.state().playback.frame, 91);
-    assert!(!h.state().playback.playing, "stopped on the last frame");
+    assert_eq!(h.state().playback().frame, 91);
+    assert!(!h.state().playback().playing, "stopped on the last frame");
 
     // Playback is not a document edit.
-    assert!(!h.state().history.can_undo());
-    assert!(!h.state().doc.is_dirty());
+    assert!(!h.state().history().can_undo());
+    assert!(!h.state().document().is_dirty());
 
     // An edit while paused: the pulse's width; it is an undo step, and undo leaves the frame alone.
     h.get_by_role_and_label(Role::Slider, "frame")
@@ -532,7 +532,7 @@ fn the_animated_preset_plays_steps_scrubs_loops_and_edits_while_paused() {
     h.key_press_modifiers(Modifiers::COMMAND, Key::Z);
     h.run();
     assert_eq!(pulse(&h).width, 50.0);
-    assert_eq!(h.state().playback.frame, 40);
+    assert_eq!(h.state().playback().frame, 40);
     assert!(h.state().report().error.is_none());
 }
 
@@ -547,24 +547,24 @@ fn a_still_scene_can_be_animated_with_a_key() {
     h.run();
     assert!(h.state().scene().is_animated());
     // Key the torus's coefficient at frame 0 (the path typed in the Animation section), then at frame 50.
-    h.state_mut().animation_form.new_track = "tori[0].coefficient".into();
+    h.state_mut().animation_form_mut().new_track = "tori[0].coefficient".into();
     h.get_by_label("key at frame 0").click_accesskit();
     h.run();
     h.get_by_role_and_label(Role::Slider, "frame")
         .set_value_accesskit(50.0);
     h.run();
     // Both the track's button and the one beside the typed path key the track at the current frame.
-    h.state_mut().animation_form.new_track = "tori[0].coefficient".into();
+    h.state_mut().animation_form_mut().new_track = "tori[0].coefficient".into();
     for button in h.get_all_by_label("key at frame 50") {
         button.click_accesskit();
     }
     h.run();
     let a = h.state().scene().animation.clone().unwrap();
-    assert_eq!(h.state().playback.frame, 50, "{:?}", h.state().notice);
-    assert_eq!(a.tracks.len(), 1, "{:?}", h.state().notice);
+    assert_eq!(h.state().playback().frame, 50, "{:?}", h.state().notice());
+    assert_eq!(a.tracks.len(), 1, "{:?}", h.state().notice());
     let frames: Vec<f64> = a.tracks[0].keys.iter().map(|k| k.frame).collect();
     assert_eq!(frames, [0.0, 50.0]);
-    assert!(h.state().history.can_undo(), "keys are document edits");
+    assert!(h.state().history().can_undo(), "keys are document edits");
 }
 
 #[test]
@@ -580,7 +580,7 @@ fn the_viewer_exports_a_sprite_sheet_beside_the_ui() {
     h.get_by_label("Export").click_accesskit();
     h.run();
     {
-        let form = &mut h.state_mut().animation_form;
+        let form = h.state_mut().animation_form_mut();
         form.export_kind = energywave::viewer::animation_panel::ExportKind::Sheet;
         form.export_path = dir.join("sheet.png").display().to_string();
         form.size = [20, 16];
@@ -588,13 +588,13 @@ fn the_viewer_exports_a_sprite_sheet_beside_the_ui() {
     h.run();
     h.get_by_label("Export 5 frames").click_accesskit();
     h.run();
-    assert!(h.state().export_job.is_some(), "{:?}", h.state().notice);
+    assert!(h.state().is_exporting(), "{:?}", h.state().notice());
     let start = std::time::Instant::now();
-    while h.state().export_job.is_some() && start.elapsed().as_secs() < 120 {
+    while h.state().is_exporting() && start.elapsed().as_secs() < 120 {
         std::thread::sleep(std::time::Duration::from_millis(100));
         h.step();
     }
-    let notice = h.state().notice.clone();
+    let notice = h.state().notice().cloned();
     assert!(
         notice
             .as_ref()
@@ -628,7 +628,7 @@ fn editing_a_keyed_value_while_paused_sets_a_key_at_that_frame() {
         Some(1.5)
     );
     assert!(
-        !h.state().doc.is_dirty(),
+        !h.state().document().is_dirty(),
         "showing keyed values is not an edit"
     );
     h.get_by_role_and_label(Role::SpinButton, "radius R")

@@ -24,7 +24,8 @@ mod viewer_frames;
 pub use equal_error::*;
 pub use report::*;
 pub use timing::*;
-use viewer_frames::*;
+use viewer_frames::viewer_frames;
+pub use viewer_frames::{OpenViewer, TimedViewer, VIEWER_SIZE};
 
 /// The torus of paper figure 7 (R = 0.9, t = 5.1).
 const TORUS_SCENE: &str = include_str!("../../assets/scenes/torus_r0.9_t5.1.toml");
@@ -172,8 +173,13 @@ fn deformed(base: &Scene, round: usize) -> Scene {
     s
 }
 
-/// Runs the benchmarks, reporting progress through `progress`.
-pub fn run(options: BenchOptions, mut progress: impl FnMut(&str)) -> Result<Report, GpuError> {
+/// Runs the sections `options` asks for, reporting progress through `progress`; `open_viewer` opens the
+/// viewer whose frames the viewer section times.
+pub fn run(
+    options: BenchOptions,
+    open_viewer: OpenViewer,
+    mut progress: impl FnMut(&str),
+) -> Result<Report, GpuError> {
     let start = Instant::now();
     let mut bench = FieldBench::new()?;
     let adapter = bench.ctx.adapter_summary();
@@ -276,7 +282,7 @@ pub fn run(options: BenchOptions, mut progress: impl FnMut(&str)) -> Result<Repo
         .collect();
     drop(bench);
     let viewer = if options.sections.viewer {
-        Some(viewer_frames(&options, &mut progress)?)
+        Some(viewer_frames(&options, open_viewer, &mut progress)?)
     } else {
         None
     };

@@ -1,24 +1,49 @@
-//! Whole viewer frames, drawn offscreen through the viewer's own UI and viewport code.
+//! Whole viewer frames, drawn offscreen through the viewer's own UI and viewport code. The bench does not import
+//! the viewer: whoever runs it hands in the viewer as a [`TimedViewer`] (the command line hands in
+//! `viewer::offscreen::OffscreenViewer`).
 
 use super::*;
-use crate::viewer::Document;
-use crate::viewer::offscreen::OffscreenViewer;
+
+/// The size of the viewer's frames timed.
+pub const VIEWER_SIZE: [u32; 2] = [1280, 720];
+
+/// A viewer drawn offscreen, frame by frame, as the bench times it.
+pub trait TimedViewer {
+    /// One whole frame: UI, viewport, and the field when it changed; waits for the GPU.
+    fn frame(&mut self) -> Result<(), GpuError>;
+    /// True while the picture is not whole yet (a coarse field refining, frames averaging).
+    fn wants_frame(&self) -> bool;
+    /// The side of the coarse field drawn at the last frame, when it was not the full one.
+    fn preview(&self) -> Option<u32>;
+    /// The scene, changed between frames as a user's gesture would.
+    fn scene_mut(&mut self) -> &mut Scene;
+    /// Turns the camera about its target by `yaw` radians, as an orbit drag does.
+    fn orbit(&mut self, yaw: f64);
+    /// Progressive refinement on (the viewer's default) or off (the whole field every frame).
+    fn set_progressive(&mut self, on: bool);
+}
+
+/// Opens the viewer to time, at `VIEWER_SIZE` on the default scene.
+pub type OpenViewer<'a> = &'a mut dyn FnMut() -> Result<Box<dyn TimedViewer>, GpuError>;
 
 pub(super) fn viewer_frames(
     options: &BenchOptions,
+    open: OpenViewer,
     progress: &mut impl FnMut(&str),
 ) -> Result<ViewerFrameRow, GpuError> {
-    progress("viewer: 1280 x 720, default scene");
-    let mut viewer = OffscreenViewer::new(Document::new(Scene::default_scene(), None), 1280, 720)?;
-    let timed = |viewer: &mut OffscreenViewer| -> Result<f64, GpuError> {
+    let [width, height] = VIEWER_SIZE;
+    progress(&format!("viewer: {width} x {height}, default scene"));
+    let mut viewer = open()?;
+    let viewer = viewer.as_mut();
+    let timed = |viewer: &mut dyn TimedViewer| -> Result<f64, GpuError> {
         let t = Instant::now();
         viewer.frame()?;
         Ok(t.elapsed().as_secs_f64() * 1e3)
     };
     // Until the picture is whole and nothing asks for another frame.
-    let settle = |viewer: &mut OffscreenViewer| -> Result<(f64, u32, f64), GpuError> {
+    let settle = |viewer: &mut dyn TimedViewer| -> Result<(f64, u32, f64), GpuError> {
         let (start, mut frames, mut longest) = (Instant::now(), 0, 0.0f64);
-        while viewer.app.report().wants_frame() && frames < 1000 {
+        while viewer.wants_frame() && frames < 1000 {
             longest = longest.max(timed(viewer)?);
             frames += 1;
         }
@@ -30,33 +55,33 @@ pub(super) fn viewer_frames(
         viewer.frame()?;
         rounds += 1;
     }
-    settle(&mut viewer)?;
+    settle(viewer)?;
     let frames = options.frames().max(3);
     let mut idle = Vec::new();
     for _ in 0..frames {
-        idle.push(timed(&mut viewer)?);
+        idle.push(timed(viewer)?);
     }
     // A gesture: several frames in a row, each moving the view, timed once the frame budget has adapted.
-    let gesture = |viewer: &mut OffscreenViewer,
-                   step: &dyn Fn(&mut Scene)|
+    let gesture = |viewer: &mut dyn TimedViewer,
+                   step: &dyn Fn(&mut dyn TimedViewer)|
      -> Result<(Vec<f64>, u32), GpuError> {
         let (mut ms, mut resolution) = (Vec::new(), 0);
         for k in 0..frames + 4 {
-            step(&mut viewer.app.doc.scene);
+            step(viewer);
             let t = timed(viewer)?;
             if k >= 4 {
                 ms.push(t);
-                resolution = (viewer.app.report().preview)
-                    .unwrap_or(viewer.app.doc.scene.billboard.resolution);
+                resolution = (viewer.preview()).unwrap_or(viewer.scene_mut().billboard.resolution);
             }
         }
         Ok((ms, resolution))
     };
-    let orbit = |s: &mut Scene| crate::viewer::navigation::orbit(&mut s.camera, 0.01, 0.0);
-    let (orbiting, orbiting_resolution) = gesture(&mut viewer, &orbit)?;
-    let (refine_ms, refine_frames, refine_longest_frame_ms) = settle(&mut viewer)?;
-    let drag = |s: &mut Scene| {
-        if let Some(p) = s
+    let orbit = |v: &mut dyn TimedViewer| v.orbit(0.01);
+    let (orbiting, orbiting_resolution) = gesture(viewer, &orbit)?;
+    let (refine_ms, refine_frames, refine_longest_frame_ms) = settle(viewer)?;
+    let drag = |v: &mut dyn TimedViewer| {
+        if let Some(p) = v
+            .scene_mut()
             .sources
             .curves
             .first_mut()
@@ -65,28 +90,22 @@ pub(super) fn viewer_frames(
             p.y += 0.01;
         }
     };
-    let (dragging, dragging_resolution) = gesture(&mut viewer, &drag)?;
-    settle(&mut viewer)?;
-    viewer
-        .app
-        .doc
-        .scene
-        .sources
-        .points
-        .push(crate::field::Point {
-            position: glam::DVec3::new(0.5, 1.0, 0.0),
-            coefficient: 1.0,
-        });
-    let first = timed(&mut viewer)?;
-    let (_, added_frames, added_longest) = settle(&mut viewer)?;
-    viewer.app.doc.scene.sources.points.pop();
-    settle(&mut viewer)?;
-    viewer.app.progressive = false;
-    let (orbiting_full_field, _) = gesture(&mut viewer, &orbit)?;
-    viewer.app.progressive = true;
+    let (dragging, dragging_resolution) = gesture(viewer, &drag)?;
+    settle(viewer)?;
+    viewer.scene_mut().sources.points.push(crate::field::Point {
+        position: glam::DVec3::new(0.5, 1.0, 0.0),
+        coefficient: 1.0,
+    });
+    let first = timed(viewer)?;
+    let (_, added_frames, added_longest) = settle(viewer)?;
+    viewer.scene_mut().sources.points.pop();
+    settle(viewer)?;
+    viewer.set_progressive(false);
+    let (orbiting_full_field, _) = gesture(viewer, &orbit)?;
+    viewer.set_progressive(true);
     Ok(ViewerFrameRow {
-        width: 1280,
-        height: 720,
+        width,
+        height,
         scene: "default".into(),
         idle: Timing::of(idle),
         orbiting: Timing::of(orbiting),

@@ -421,13 +421,12 @@ fn check_camera(c: &mut Checker<'_, '_>, file: &SceneFile) -> Camera {
             "must not be parallel to the view direction (target - eye)",
         );
     }
-    let camera = Camera {
+    Camera {
         eye,
         target,
         up,
         fov_y_degrees: fov_y,
-    };
-    camera
+    }
 }
 
 /// `[billboard]`: a fixed center and size (both or neither), and the resolution.

@@ -3,10 +3,12 @@
 
 use egui::{DragValue, Ui};
 
-use super::app::ViewerApp;
-use super::panel::{labelled, wseries_plot};
+use super::action::{Action, Edit};
+use super::timeline::ExportJob;
+use super::widgets::{labelled, wseries_plot};
 use crate::animation::{Animation, CurvePulse, MAX_FRAMES, Parameter, Pulse, Track, Value};
 use crate::export::Target;
+use crate::scene::Scene;
 
 /// What an export from the viewer writes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -87,14 +89,22 @@ fn value_editor(ui: &mut Ui, value: &mut Value, color: bool, name: egui::Id) {
     }
 }
 
-/// Time: the timeline's settings, pulses along curves, keyed parameters, and the export.
-pub fn show(ui: &mut Ui, app: &mut ViewerApp) {
-    let frame = app.playback.frame;
+/// Time: the timeline's settings, pulses along curves, keyed parameters, and the export. `shown` is the
+/// scene at `frame`, `form` the section's own fields, `export` the export running if any, `scene_path` the
+/// document's file.
+pub fn show(
+    ui: &mut Ui,
+    shown: &Scene,
+    frame: u32,
+    form: &mut AnimationForm,
+    export: Option<&ExportJob>,
+    scene_path: Option<&std::path::Path>,
+) -> Vec<Action> {
+    let mut out = Vec::new();
     egui::CollapsingHeader::new("Animation")
         .default_open(true)
         .show(ui, |ui| {
-            let scene = &mut app.doc.scene;
-            let Some(animation) = &scene.animation else {
+            let Some(original) = &shown.animation else {
                 ui.label("A still scene.");
                 if ui
                     .button("Animate")
@@ -103,12 +113,12 @@ pub fn show(ui: &mut Ui, app: &mut ViewerApp) {
                     )
                     .clicked()
                 {
-                    scene.animation = Some(Animation::default());
+                    out.push(Action::Edit(Edit::Animation(Some(Animation::default()))));
                 }
                 return;
             };
-            let current = scene.at_frame(frame as f64);
-            let mut animation = animation.clone();
+            let current = shown;
+            let mut animation = original.clone();
             egui::Grid::new("energywave.timeline_settings")
                 .num_columns(2)
                 .show(ui, |ui| {
@@ -147,10 +157,10 @@ pub fn show(ui: &mut Ui, app: &mut ViewerApp) {
             });
 
             ui.strong("Travelling pulses");
-            if scene.sources.curves.is_empty() {
+            if shown.sources.curves.is_empty() {
                 ui.label("(add a curve to run a pulse along it)");
             }
-            for (i, curve) in scene.sources.curves.iter().enumerate() {
+            for (i, curve) in shown.sources.curves.iter().enumerate() {
                 let index = animation.pulses.iter().position(|p| p.curve == i);
                 let mut on = index.is_some();
                 if ui
@@ -277,7 +287,7 @@ pub fn show(ui: &mut Ui, app: &mut ViewerApp) {
                                 .clicked()
                                 && let Some(v) = track
                                     .value_at(frame as f64)
-                                    .or_else(|| track.parameter.get(&current))
+                                    .or_else(|| track.parameter.get(current))
                             {
                                 track.set_key(frame as f64, v);
                             }
@@ -293,7 +303,7 @@ pub fn show(ui: &mut Ui, app: &mut ViewerApp) {
             animation.tracks.retain(|t| !t.keys.is_empty());
             ui.horizontal(|ui| {
                 ui.add(
-                    egui::TextEdit::singleline(&mut app.animation_form.new_track)
+                    egui::TextEdit::singleline(&mut form.new_track)
                         .hint_text("curves[0].coefficient")
                         .desired_width(170.0),
                 );
@@ -302,9 +312,9 @@ pub fn show(ui: &mut Ui, app: &mut ViewerApp) {
                     .on_hover_text(crate::animation::PARAMETER_FORMS)
                     .clicked()
                 {
-                    let path = app.animation_form.new_track.trim().to_owned();
+                    let path = form.new_track.trim().to_owned();
                     match Parameter::parse(&path) {
-                        Ok(parameter) => match parameter.get(&current) {
+                        Ok(parameter) => match parameter.get(current) {
                             Some(value) => {
                                 match animation
                                     .tracks
@@ -320,38 +330,43 @@ pub fn show(ui: &mut Ui, app: &mut ViewerApp) {
                                         }],
                                     }),
                                 }
-                                app.animation_form.new_track.clear();
+                                form.new_track.clear();
                             }
-                            None => {
-                                app.notice = Some((
-                                    format!(
-                                        "{path}: the scene has no such source, point or weight"
-                                    ),
-                                    true,
-                                ))
-                            }
+                            None => out.push(Action::error(format!(
+                                "{path}: the scene has no such source, point or weight"
+                            ))),
                         },
-                        Err(e) => app.notice = Some((e, true)),
+                        Err(e) => out.push(Action::error(e)),
                     }
                 }
             });
 
-            animation.retain_valid(scene);
-            scene.animation = (!remove_animation).then_some(animation);
+            if remove_animation {
+                out.push(Action::Edit(Edit::Animation(None)));
+            } else if animation != *original {
+                out.push(Action::Edit(Edit::Animation(Some(animation))));
+            }
         });
-    export_section(ui, app);
+    export_section(ui, shown, form, export, scene_path, &mut out);
+    out
 }
 
 /// Export of the animation to files, on a thread of its own.
-fn export_section(ui: &mut Ui, app: &mut ViewerApp) {
-    let Some(animation) = &app.doc.scene.animation else {
+fn export_section(
+    ui: &mut Ui,
+    shown: &Scene,
+    form: &mut AnimationForm,
+    export: Option<&ExportJob>,
+    scene_path: Option<&std::path::Path>,
+    out: &mut Vec<Action>,
+) {
+    let Some(animation) = &shown.animation else {
         return;
     };
     let frames = animation.frames;
     egui::CollapsingHeader::new("Export")
         .default_open(false)
         .show(ui, |ui| {
-            let form = &mut app.animation_form;
             ui.horizontal(|ui| {
                 ui.selectable_value(&mut form.export_kind, ExportKind::Sequence, "PNG sequence");
                 ui.selectable_value(&mut form.export_kind, ExportKind::Gif, "GIF");
@@ -361,7 +376,7 @@ fn export_section(ui: &mut Ui, app: &mut ViewerApp) {
                 export_path: String::new(),
                 ..form.clone()
             }
-            .export_target_path(app.doc.path());
+            .export_target_path(scene_path);
             ui.add(
                 egui::TextEdit::singleline(&mut form.export_path)
                     .hint_text(default_path.display().to_string())
@@ -388,7 +403,7 @@ fn export_section(ui: &mut Ui, app: &mut ViewerApp) {
                 )
                 .on_hover_text("alpha = min(B, 1), to composite over anything (not in a GIF)");
             });
-            if let Some(job) = &app.export_job {
+            if let Some(job) = export {
                 let status = job.status();
                 ui.add(
                     egui::ProgressBar::new(status.done as f32 / status.total.max(1) as f32).text(
@@ -405,7 +420,7 @@ fn export_section(ui: &mut Ui, app: &mut ViewerApp) {
                 .on_hover_text("Renders every frame of the animation on a second GPU device")
                 .clicked()
             {
-                let path = form.export_target_path(app.doc.path());
+                let path = form.export_target_path(scene_path);
                 let sheet = form.export_kind == ExportKind::Sheet;
                 let transparent = form.transparent && form.export_kind != ExportKind::Gif;
                 let checked = Target::for_output(&path, sheet, None).and_then(|target| {
@@ -435,18 +450,14 @@ fn export_section(ui: &mut Ui, app: &mut ViewerApp) {
                     Ok(target)
                 });
                 match checked {
-                    Ok(target) => {
-                        let description = path.display().to_string();
-                        app.export_job = Some(super::timeline::ExportJob::start(
-                            app.doc.scene.clone(),
-                            target,
-                            0..frames,
-                            (form.size[0], form.size[1]),
-                            transparent,
-                            description,
-                        ));
-                    }
-                    Err(e) => app.notice = Some((e.to_string(), true)),
+                    Ok(target) => out.push(Action::Export {
+                        target,
+                        frames: 0..frames,
+                        size: (form.size[0], form.size[1]),
+                        transparent,
+                        description: path.display().to_string(),
+                    }),
+                    Err(e) => out.push(Action::error(e.to_string())),
                 }
             }
         });

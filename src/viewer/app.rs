@@ -1,5 +1,8 @@
 //! The viewer's state and its whole user interface, independent of the window: the window loop and the UI tests
 //! both call `ViewerApp::ui`. State here is plain parameters; GPU resources live in `viewport::ViewportGpu`.
+//!
+//! The panels and the viewport read the scene as shown (the document's at the current frame) and return what
+//! the user asked for as [`Action`]s; `ViewerApp::apply` carries each out, here and nowhere else.
 
 use std::collections::VecDeque;
 use std::path::PathBuf;
@@ -8,15 +11,15 @@ use std::time::{Instant, SystemTime};
 
 use egui::{Color32, Key, KeyboardShortcut, Modifiers, PointerButton, Sense};
 
-use super::animation_panel;
+use super::action::{Action, Edit};
+use super::animation_panel::{self, AnimationForm};
 use super::document::{DiskChange, Document};
 use super::handles::{self, HandleId};
 use super::history::History;
 use super::navigation;
-use super::panel;
+use super::panel::{self, ViewSettings};
 use super::timeline::{self, ExportJob, Playback};
 use super::viewport::{ViewportCallback, ViewportReport, ViewportView};
-use crate::animation::{Parameter, Value};
 use crate::geometry::Camera;
 use crate::integrate::Integrator;
 use crate::scene::Scene;
@@ -56,38 +59,27 @@ enum Gesture {
     },
 }
 
-/// Jittered frames the viewport averages while the view is still, unless set otherwise: the noise falls to
-/// 1/8 of one frame's.
-pub const DEFAULT_AVERAGE_FRAMES: u32 = 64;
-
 /// The viewer's state.
 pub struct ViewerApp {
-    pub doc: Document,
-    pub history: History,
-    pub show_grid: bool,
-    pub show_handles: bool,
-    /// With jitter: how many frames the viewport averages while the view is still (1: none).
-    pub average_frames: u32,
-    /// While the view moves, show a coarse field sized to the frame budget and refine it once still
-    /// (`progressive`); off: every frame integrates the full field.
-    pub progressive: bool,
-    /// Screenshot size relative to the viewport: 1, 2 or 4.
-    pub screenshot_scale: u32,
+    doc: Document,
+    history: History,
+    /// How the scene is shown (grid, handles, averaging, fast preview, screenshot scale).
+    view: ViewSettings,
     /// The path typed in the file section.
-    pub path_input: String,
+    path_input: String,
     /// Name of the GPU adapter, for the status line.
-    pub adapter: String,
+    adapter: String,
     /// Largest billboard resolution the device allows.
-    pub max_resolution: u32,
+    max_resolution: u32,
     /// The viewport's size in physical pixels at the last frame.
-    pub viewport_px: [u32; 2],
+    viewport_px: [u32; 2],
     /// The viewport's rectangle (egui points) at the last frame.
-    pub viewport_rect: egui::Rect,
+    viewport_rect: egui::Rect,
     /// The camera as loaded, for "Reset view".
-    pub home_camera: Camera,
-    pub pending: Option<Pending>,
+    home_camera: Camera,
+    pending: Option<Pending>,
     /// The last message for the user (and whether it is an error).
-    pub notice: Option<(String, bool)>,
+    notice: Option<(String, bool)>,
     report: Arc<Mutex<ViewportReport>>,
     gesture: Option<Gesture>,
     hovered: Option<HandleId>,
@@ -95,25 +87,11 @@ pub struct ViewerApp {
     last_frame: Option<Instant>,
     requests: Vec<Request>,
     /// The animation's current frame and transport (not a document edit).
-    pub playback: Playback,
+    playback: Playback,
     /// The Animation section's own fields (the parameter being typed, the export settings).
-    pub animation_form: animation_panel::AnimationForm,
+    animation_form: AnimationForm,
     /// An export running beside the UI.
-    pub export_job: Option<ExportJob>,
-    /// The document's title as it was before this frame's edits (see `show_keyed_values`).
-    title: String,
-}
-
-/// How many sources, control points and weights a scene has: keyed values are only written back by path
-/// when no edit renumbered them.
-fn source_shape(scene: &Scene) -> Vec<usize> {
-    let s = &scene.sources;
-    let mut v = vec![s.points.len(), s.lines.len(), s.tori.len(), s.curves.len()];
-    for c in &s.curves {
-        v.push(c.control_points.len());
-        v.push(c.weights.len());
-    }
-    v
+    export_job: Option<ExportJob>,
 }
 
 const SAVE: KeyboardShortcut = KeyboardShortcut::new(Modifiers::COMMAND, Key::S);
@@ -137,11 +115,7 @@ impl ViewerApp {
                 .path()
                 .map_or(String::new(), |p| p.display().to_string()),
             doc,
-            show_grid: true,
-            show_handles: true,
-            average_frames: DEFAULT_AVERAGE_FRAMES,
-            progressive: true,
-            screenshot_scale: 1,
+            view: ViewSettings::default(),
             adapter,
             max_resolution,
             viewport_px: [0, 0],
@@ -155,66 +129,8 @@ impl ViewerApp {
             last_frame: None,
             requests: Vec::new(),
             playback: Playback::default(),
-            animation_form: animation_panel::AnimationForm::default(),
+            animation_form: AnimationForm::default(),
             export_job: None,
-            title: String::new(),
-        }
-    }
-
-    /// The document's title for the panel (unsaved changes marked), unaffected by the keyed values shown
-    /// during the frame.
-    pub fn title(&self) -> String {
-        if self.title.is_empty() {
-            self.doc.title()
-        } else {
-            self.title.clone()
-        }
-    }
-
-    /// Writes each keyed parameter's value at the current frame into the document's scene, so that the
-    /// panel and the handles show (and edit) what is on screen. Returns (parameter, base value, value
-    /// shown) for `key_edited_values` to undo afterwards.
-    fn show_keyed_values(&mut self) -> Vec<(Parameter, Value, Value)> {
-        let Some(animation) = &self.doc.scene.animation else {
-            return Vec::new();
-        };
-        let frame = self.playback.frame as f64;
-        let mut shown = Vec::new();
-        for track in animation.tracks.clone() {
-            let p = track.parameter.clone();
-            let (Some(base), Some(value)) = (p.get(&self.doc.scene), track.value_at(frame)) else {
-                continue;
-            };
-            p.set(&mut self.doc.scene, value);
-            if let Some(injected) = p.get(&self.doc.scene) {
-                shown.push((p, base, injected));
-            }
-        }
-        shown
-    }
-
-    /// After the panel and the viewport: a keyed value edited there becomes a key at the current frame (an
-    /// edit while paused), and the scene's own values come back. Skipped when an edit renumbered sources,
-    /// points or weights (the paths may name others now; the shown values then stay as the base values,
-    /// which only a still render uses).
-    fn key_edited_values(&mut self, shown: Vec<(Parameter, Value, Value)>, shape: Vec<usize>) {
-        if shown.is_empty() || source_shape(&self.doc.scene) != shape {
-            return;
-        }
-        let frame = self.playback.frame as f64;
-        for (parameter, base, injected) in shown {
-            if let (Some(now), Some(animation)) = (
-                parameter.get(&self.doc.scene),
-                self.doc.scene.animation.as_mut(),
-            ) && now != injected
-                && let Some(track) = animation
-                    .tracks
-                    .iter_mut()
-                    .find(|t| t.parameter == parameter)
-            {
-                track.set_key(frame, now);
-            }
-            parameter.set(&mut self.doc.scene, base);
         }
     }
 
@@ -286,9 +202,84 @@ impl ViewerApp {
         self.report = report;
     }
 
-    /// The scene being edited.
+    /// The scene being edited (its base values: keyed parameters as the file holds them).
     pub fn scene(&self) -> &Scene {
         &self.doc.scene
+    }
+
+    /// The scene, for a change from outside the UI (a script, a test standing in for another tool): the next
+    /// frame shows it, and commits it to the history as one edit.
+    pub fn scene_mut(&mut self) -> &mut Scene {
+        &mut self.doc.scene
+    }
+
+    /// The document: its file, whether it has unsaved changes, its title.
+    pub fn document(&self) -> &Document {
+        &self.doc
+    }
+
+    pub fn history(&self) -> &History {
+        &self.history
+    }
+
+    /// How the scene is shown.
+    pub fn view(&self) -> &ViewSettings {
+        &self.view
+    }
+
+    pub fn view_mut(&mut self) -> &mut ViewSettings {
+        &mut self.view
+    }
+
+    /// The file name typed in the panel's file section (what Open and Save As use).
+    pub fn path_input_mut(&mut self) -> &mut String {
+        &mut self.path_input
+    }
+
+    /// The Animation section's own fields: the parameter path being typed, the export's settings.
+    pub fn animation_form_mut(&mut self) -> &mut AnimationForm {
+        &mut self.animation_form
+    }
+
+    /// The animation's current frame and transport.
+    pub fn playback(&self) -> &Playback {
+        &self.playback
+    }
+
+    /// True while an export runs beside the UI.
+    pub fn is_exporting(&self) -> bool {
+        self.export_job.is_some()
+    }
+
+    /// The last message for the user, and whether it is an error.
+    pub fn notice(&self) -> Option<&(String, bool)> {
+        self.notice.as_ref()
+    }
+
+    /// Largest billboard resolution the device allows.
+    pub fn max_resolution(&self) -> u32 {
+        self.max_resolution
+    }
+
+    /// The viewport's size in physical pixels at the last frame.
+    pub fn viewport_px(&self) -> [u32; 2] {
+        self.viewport_px
+    }
+
+    /// The viewport's rectangle (egui points) at the last frame.
+    pub fn viewport_rect(&self) -> egui::Rect {
+        self.viewport_rect
+    }
+
+    /// What the viewport draws this frame: the scene as shown at the viewport's size.
+    pub fn viewport_view(&self) -> ViewportView {
+        ViewportView {
+            scene: self.frame_scene(),
+            size: [self.viewport_px[0].max(1), self.viewport_px[1].max(1)],
+            show_grid: self.view.show_grid,
+            average_frames: self.view.average_frames,
+            progressive: self.view.progressive,
+        }
     }
 
     /// Takes what the UI asked of the window since the last call.
@@ -315,29 +306,94 @@ impl ViewerApp {
         Some(v[v.len() / 2])
     }
 
-    pub fn undo(&mut self) {
-        if self.history.undo(&mut self.doc.scene) {
-            self.notify("Undone", false);
+    /// Carries out what the user asked for: every action of the panels, the viewport, the shortcuts and the
+    /// prompts comes through here.
+    pub fn apply(&mut self, action: Action) {
+        match action {
+            Action::Open(path) => {
+                if self.doc.is_dirty() {
+                    self.pending = Some(Pending::Open(path));
+                } else {
+                    self.open_now(path);
+                }
+            }
+            Action::Save => self.save(),
+            Action::SaveAs(path) => match self.doc.save_as(&path) {
+                Ok(()) => self.notify(format!("Saved {}", path.display()), false),
+                Err(e) => self.notify(e.to_string(), true),
+            },
+            Action::Undo => {
+                if self.history.undo(&mut self.doc.scene) {
+                    self.notify("Undone", false);
+                }
+            }
+            Action::Redo => {
+                if self.history.redo(&mut self.doc.scene) {
+                    self.notify("Redone", false);
+                }
+            }
+            Action::AcceptReload => self.doc.accept_reload(),
+            Action::KeepMine => self.doc.pending_reload = None,
+            Action::Screenshot => {
+                let path = self.doc.screenshot_path(SystemTime::now());
+                self.requests.push(Request::Screenshot {
+                    path,
+                    scale: self.view.screenshot_scale,
+                });
+            }
+            Action::FrameEffect => {
+                let aspect = self.aspect();
+                let scene = &mut self.doc.scene;
+                navigation::frame_sources(&mut scene.camera, &scene.sources, aspect);
+            }
+            Action::ResetView => self.doc.scene.camera = self.home_camera.clone(),
+            Action::Export {
+                target,
+                frames,
+                size,
+                transparent,
+                description,
+            } => {
+                if self.export_job.is_none() {
+                    self.export_job = Some(ExportJob::start(
+                        self.doc.scene.clone(),
+                        target,
+                        frames,
+                        size,
+                        transparent,
+                        description,
+                    ));
+                }
+            }
+            Action::Notify { text, is_error } => self.notify(text, is_error),
+            Action::Edit(edit) => edit.apply(&mut self.doc.scene, self.playback.frame as f64),
         }
+    }
+
+    fn apply_all(&mut self, actions: Vec<Action>) {
+        for action in actions {
+            self.apply(action);
+        }
+    }
+
+    pub fn undo(&mut self) {
+        self.apply(Action::Undo);
     }
 
     pub fn redo(&mut self) {
-        if self.history.redo(&mut self.doc.scene) {
-            self.notify("Redone", false);
-        }
+        self.apply(Action::Redo);
     }
 
     /// Saves to the document's file, or to the typed path when it has none.
-    pub fn save(&mut self) {
+    fn save(&mut self) {
         let result = match self.doc.save() {
             Ok(true) => Ok(()),
             Ok(false) => {
-                let path = PathBuf::from(self.path_input.trim());
                 if self.path_input.trim().is_empty() {
                     self.notify("Type a file name to save to, then Save As", true);
                     return;
                 }
-                self.doc.save_as(&path)
+                self.doc.save_as(&PathBuf::from(self.path_input.trim()))
             }
             Err(e) => Err(e),
         };
@@ -352,29 +408,6 @@ impl ViewerApp {
                 false,
             ),
             Err(e) => self.notify(e.to_string(), true),
-        }
-    }
-
-    /// Saves to the typed path.
-    pub fn save_as(&mut self) {
-        let path = PathBuf::from(self.path_input.trim());
-        if self.path_input.trim().is_empty() {
-            self.notify("Type a file name to save to", true);
-            return;
-        }
-        match self.doc.save_as(&path) {
-            Ok(()) => self.notify(format!("Saved {}", path.display()), false),
-            Err(e) => self.notify(e.to_string(), true),
-        }
-    }
-
-    /// Opens the typed path, asking first if there are unsaved changes.
-    pub fn open(&mut self) {
-        let path = PathBuf::from(self.path_input.trim());
-        if self.doc.is_dirty() {
-            self.pending = Some(Pending::Open(path));
-        } else {
-            self.open_now(path);
         }
     }
 
@@ -399,23 +432,9 @@ impl ViewerApp {
         }
     }
 
-    /// Asks the window for a screenshot of the viewport beside the scene file.
-    pub fn screenshot(&mut self) {
-        let path = self.doc.screenshot_path(SystemTime::now());
-        self.requests.push(Request::Screenshot {
-            path,
-            scale: self.screenshot_scale,
-        });
-    }
-
-    pub fn frame_effect(&mut self) {
-        let aspect = self.viewport_px[0].max(1) as f64 / self.viewport_px[1].max(1) as f64;
-        let scene = &mut self.doc.scene;
-        navigation::frame_sources(&mut scene.camera, &scene.sources, aspect);
-    }
-
-    pub fn reset_view(&mut self) {
-        self.doc.scene.camera = self.home_camera.clone();
+    /// The viewport's width over its height.
+    fn aspect(&self) -> f64 {
+        self.viewport_px[0].max(1) as f64 / self.viewport_px[1].max(1) as f64
     }
 
     /// The whole interface for one frame.
@@ -441,24 +460,48 @@ impl ViewerApp {
             }
             None => {}
         }
-        self.shortcuts(ui.ctx());
+        let actions = self.shortcuts(ui.ctx());
+        self.apply_all(actions);
 
         egui::Panel::bottom("energywave.status").show(ui, |ui| self.status_bar(ui));
         self.animation_ui(ui);
-        self.title = self.doc.title();
-        let shape = source_shape(&self.doc.scene);
-        let shown = self.show_keyed_values();
-        egui::Panel::left("energywave.panel")
+        let shown = self.frame_scene();
+        let actions = egui::Panel::left("energywave.panel")
             .resizable(true)
             .default_size(340.0)
             .show(ui, |ui| {
-                egui::ScrollArea::vertical().show(ui, |ui| panel::show(ui, self));
-            });
-        egui::CentralPanel::default()
+                egui::ScrollArea::vertical()
+                    .show(ui, |ui| {
+                        let cx = panel::Context {
+                            doc: &self.doc,
+                            shown: &shown,
+                            history: &self.history,
+                            max_resolution: self.max_resolution,
+                            aspect: self.aspect(),
+                        };
+                        let mut actions =
+                            panel::show(ui, &cx, &mut self.path_input, &mut self.view);
+                        ui.separator();
+                        actions.extend(animation_panel::show(
+                            ui,
+                            &shown,
+                            self.playback.frame,
+                            &mut self.animation_form,
+                            self.export_job.as_ref(),
+                            self.doc.path(),
+                        ));
+                        actions
+                    })
+                    .inner
+            })
+            .inner;
+        self.apply_all(actions);
+        let actions = egui::CentralPanel::default()
             .frame(egui::Frame::NONE)
-            .show(ui, |ui| self.viewport(ui));
-        self.key_edited_values(shown, shape);
-        self.modals(ui.ctx());
+            .show(ui, |ui| self.viewport(ui))
+            .inner;
+        self.apply_all(actions);
+        self.unsaved_prompt(ui.ctx());
 
         // An edit is committed when it settles: no button held (a drag is one step).
         if !ui.ctx().input(|i| i.pointer.any_down()) {
@@ -466,24 +509,26 @@ impl ViewerApp {
         }
     }
 
-    fn shortcuts(&mut self, ctx: &egui::Context) {
+    fn shortcuts(&mut self, ctx: &egui::Context) -> Vec<Action> {
+        let mut out = Vec::new();
         if ctx.input_mut(|i| i.consume_shortcut(&SAVE)) {
-            self.save();
+            out.push(Action::Save);
         }
         if ctx.input_mut(|i| i.consume_shortcut(&REDO) || i.consume_shortcut(&REDO_Y)) {
-            self.redo();
+            out.push(Action::Redo);
         }
         if ctx.input_mut(|i| i.consume_shortcut(&UNDO)) {
-            self.undo();
+            out.push(Action::Undo);
         }
         if ctx.input_mut(|i| i.consume_key(Modifiers::NONE, Key::F12)) {
-            self.screenshot();
+            out.push(Action::Screenshot);
         }
         if !ctx.egui_wants_keyboard_input()
             && ctx.input_mut(|i| i.consume_key(Modifiers::NONE, Key::F))
         {
-            self.frame_effect();
+            out.push(Action::FrameEffect);
         }
+        out
     }
 
     fn status_bar(&mut self, ui: &mut egui::Ui) {
@@ -535,7 +580,9 @@ impl ViewerApp {
         });
     }
 
-    fn viewport(&mut self, ui: &mut egui::Ui) {
+    /// The 3D view with its handles: navigation and handle drags come back as edits.
+    fn viewport(&mut self, ui: &mut egui::Ui) -> Vec<Action> {
+        let mut out = Vec::new();
         let rect = ui.available_rect_before_wrap();
         let response = ui.allocate_rect(rect, Sense::click_and_drag());
         let ppp = ui.ctx().pixels_per_point();
@@ -545,27 +592,25 @@ impl ViewerApp {
             (rect.height() * ppp).round() as u32,
         ];
         if self.viewport_px[0] == 0 || self.viewport_px[1] == 0 {
-            return;
+            return out;
         }
+        let view = self.viewport_view();
+        // Handles and navigation work on the scene as shown; their edits apply after this frame's view.
+        let shown = view.scene.clone();
         ui.painter().add(egui_wgpu::Callback::new_paint_callback(
             rect,
-            ViewportCallback(ViewportView {
-                scene: self.frame_scene(),
-                size: self.viewport_px,
-                show_grid: self.show_grid,
-                average_frames: self.average_frames,
-                progressive: self.progressive,
-            }),
+            ViewportCallback(view),
         ));
 
         // Handles first: a press on a handle drags it, anywhere else navigates.
+        let show_handles = self.view.show_handles;
         let pointer = response.hover_pos().or(response.interact_pointer_pos());
         let dragged_handle = match &self.gesture {
             Some(Gesture::Handle { id, .. }) => Some(*id),
             _ => None,
         };
-        self.hovered = match (self.show_handles, pointer) {
-            (true, Some(p)) if dragged_handle.is_none() => handles::pick(&self.doc.scene, rect, p),
+        self.hovered = match (show_handles, pointer) {
+            (true, Some(p)) if dragged_handle.is_none() => handles::pick(&shown, rect, p),
             _ => self.hovered,
         };
         if response.drag_started() {
@@ -574,14 +619,13 @@ impl ViewerApp {
                 .input(|i| i.pointer.press_origin())
                 .or(response.interact_pointer_pos())
                 .unwrap_or(rect.center());
-            let camera = self.doc.scene.camera.clone();
-            let handle = self
-                .show_handles
-                .then(|| handles::pick(&self.doc.scene, rect, press))
+            let camera = shown.camera.clone();
+            let handle = show_handles
+                .then(|| handles::pick(&shown, rect, press))
                 .flatten();
             self.gesture = if response.dragged_by(PointerButton::Primary) {
                 Some(
-                    match handle.and_then(|id| handles::get(&self.doc.scene, id).map(|p| (id, p))) {
+                    match handle.and_then(|id| handles::get(&shown, id).map(|p| (id, p))) {
                         Some((id, start)) => Gesture::Handle { id, start, press },
                         None => Gesture::Orbit {
                             start: camera,
@@ -601,25 +645,31 @@ impl ViewerApp {
             match gesture {
                 Gesture::Handle { id, start, press } => {
                     let q = handles::drag_in_view_plane(
-                        &self.doc.scene.camera,
+                        &shown.camera,
                         rect.height(),
                         *start,
                         now - *press,
                     );
-                    handles::set(&mut self.doc.scene, *id, q);
+                    if handles::get(&shown, *id) != Some(q) {
+                        out.push(Action::set_vector(id.parameter(), q));
+                    }
                 }
                 Gesture::Orbit { start, press } => {
                     let d = now - *press;
                     let mut camera = start.clone();
                     // About a full turn across a typical viewport's width.
                     navigation::orbit(&mut camera, d.x as f64 * 0.0065, d.y as f64 * 0.0065);
-                    self.doc.scene.camera = camera;
+                    if camera != shown.camera {
+                        out.push(Action::Edit(Edit::Camera(camera)));
+                    }
                 }
                 Gesture::Pan { start, press } => {
                     let d = now - *press;
                     let mut camera = start.clone();
                     navigation::pan(&mut camera, d.x as f64, d.y as f64, rect.height() as f64);
-                    self.doc.scene.camera = camera;
+                    if camera != shown.camera {
+                        out.push(Action::Edit(Edit::Camera(camera)));
+                    }
                 }
             }
         }
@@ -629,23 +679,16 @@ impl ViewerApp {
         if response.hovered() {
             let scroll = ui.input(|i| i.smooth_scroll_delta.y);
             if scroll != 0.0 {
-                let toward = pointer.map(|p| handles::screen_ray(&self.doc.scene.camera, rect, p));
-                navigation::zoom(
-                    &mut self.doc.scene.camera,
-                    (-scroll as f64 * 0.003).exp(),
-                    toward,
-                );
+                let toward = pointer.map(|p| handles::screen_ray(&shown.camera, rect, p));
+                let mut camera = shown.camera.clone();
+                navigation::zoom(&mut camera, (-scroll as f64 * 0.003).exp(), toward);
+                out.push(Action::Edit(Edit::Camera(camera)));
             }
         }
 
         let painter = ui.painter_at(rect);
-        if self.show_handles {
-            handles::draw(
-                &painter,
-                rect,
-                &self.doc.scene,
-                dragged_handle.or(self.hovered),
-            );
+        if show_handles {
+            handles::draw(&painter, rect, &shown, dragged_handle.or(self.hovered));
         }
         if let Some(error) = self.report().error {
             painter.text(
@@ -656,9 +699,17 @@ impl ViewerApp {
                 Color32::from_rgb(255, 110, 90),
             );
         }
+        out
     }
 
-    fn modals(&mut self, ctx: &egui::Context) {
+    /// The prompt about unsaved changes before an open or a quit, while one waits.
+    fn unsaved_prompt(&mut self, ctx: &egui::Context) {
+        #[derive(Clone, Copy)]
+        enum Choice {
+            Save,
+            Discard,
+            Cancel,
+        }
         let Some(pending) = self.pending.clone() else {
             return;
         };
@@ -675,24 +726,24 @@ impl ViewerApp {
             ));
             ui.label(what);
             ui.horizontal(|ui| {
-                if ui.button("Save").clicked() {
-                    choice = Some("save");
-                }
-                if ui.button("Discard").clicked() {
-                    choice = Some("discard");
-                }
-                if ui.button("Cancel").clicked() {
-                    choice = Some("cancel");
+                for (label, c) in [
+                    ("Save", Choice::Save),
+                    ("Discard", Choice::Discard),
+                    ("Cancel", Choice::Cancel),
+                ] {
+                    if ui.button(label).clicked() {
+                        choice = Some(c);
+                    }
                 }
             });
         });
         let proceed = match choice {
-            Some("save") => {
+            Some(Choice::Save) => {
                 self.save();
                 !self.doc.is_dirty()
             }
-            Some("discard") => true,
-            Some(_) => {
+            Some(Choice::Discard) => true,
+            Some(Choice::Cancel) => {
                 self.pending = None;
                 false
             }

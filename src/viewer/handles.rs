@@ -5,6 +5,7 @@
 use egui::{Color32, Pos2, Rect, Stroke, Vec2};
 use glam::DVec3;
 
+use crate::animation::{Parameter, SourceKind};
 use crate::field::curve::segments;
 use crate::geometry::Camera;
 use crate::scene::Scene;
@@ -70,20 +71,15 @@ pub fn get(scene: &Scene, id: HandleId) -> Option<DVec3> {
     }
 }
 
-/// Moves a handle to `p` (a no-op if it no longer exists).
-pub fn set(scene: &mut Scene, id: HandleId, p: DVec3) {
-    let s = &mut scene.sources;
-    let slot = match id {
-        HandleId::Point(i) => s.points.get_mut(i).map(|x| &mut x.position),
-        HandleId::LinePoint(i) => s.lines.get_mut(i).map(|x| &mut x.point),
-        HandleId::TorusCenter(i) => s.tori.get_mut(i).map(|x| &mut x.center),
-        HandleId::Control { curve, index } => s
-            .curves
-            .get_mut(curve)
-            .and_then(|c| c.control_points.get_mut(index)),
-    };
-    if let Some(slot) = slot {
-        *slot = p;
+impl HandleId {
+    /// The scene parameter the handle moves: dragging it is an edit of that parameter.
+    pub fn parameter(self) -> Parameter {
+        match self {
+            HandleId::Point(i) => Parameter::Position(SourceKind::Points, i),
+            HandleId::LinePoint(i) => Parameter::Position(SourceKind::Lines, i),
+            HandleId::TorusCenter(i) => Parameter::Position(SourceKind::Tori, i),
+            HandleId::Control { curve, index } => Parameter::ControlPoint(curve, index),
+        }
     }
 }
 
@@ -226,10 +222,35 @@ mod tests {
         // Same depth: it moved in the view plane.
         let f = scene.camera.frame();
         assert!(((q - p).dot(f.forward)).abs() < 1e-9);
-        // Picking finds it where it is drawn, and set moves it.
+        // Picking finds it where it is drawn, and an edit of its parameter moves it.
         assert_eq!(pick(&scene, rect, before + Vec2::new(2.0, 1.0)), Some(id));
         let mut edited = scene.clone();
-        set(&mut edited, id, q);
+        id.parameter()
+            .set(&mut edited, crate::animation::Value::Vector(q.to_array()));
         assert_eq!(get(&edited, id), Some(q));
+    }
+
+    #[test]
+    fn every_handle_names_the_parameter_it_moves() {
+        let scene = Scene::parse(
+            include_str!("../../assets/scenes/mixed.toml"),
+            std::path::Path::new("mixed.toml"),
+        )
+        .unwrap();
+        let all = handles(&scene);
+        for kind in ["Point", "LinePoint", "TorusCenter", "Control"] {
+            assert!(
+                all.iter()
+                    .any(|(id, _)| format!("{id:?}").starts_with(kind)),
+                "the scene has a {kind} handle"
+            );
+        }
+        for (id, p) in all {
+            assert_eq!(
+                id.parameter().get(&scene),
+                Some(crate::animation::Value::Vector(p.to_array())),
+                "{id:?}"
+            );
+        }
     }
 }

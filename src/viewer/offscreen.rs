@@ -170,14 +170,8 @@ impl OffscreenViewer {
     /// The viewport alone at its last size, rendered again and read back (RGBA).
     pub fn viewport_image(&mut self) -> Result<Vec<[f32; 4]>, GpuError> {
         let view = ViewportView {
-            scene: self.app.frame_scene(),
-            size: [
-                self.app.viewport_px[0].max(1),
-                self.app.viewport_px[1].max(1),
-            ],
-            show_grid: self.app.show_grid,
-            average_frames: self.app.average_frames,
             progressive: false,
+            ..self.app.viewport_view()
         };
         let (device, queue) = (&self.gpu.ctx.device, &self.gpu.ctx.queue);
         match self

@@ -1,14 +1,18 @@
-//! The side panel: every parameter of the scene, edited live. Values a user cannot sensibly enter are
-//! prevented here (odd division counts, R <= 0, zero directions, ...), so the GPU never sees them.
+//! The side panel: every parameter of the scene, edited live. It reads the scene as shown (at the current
+//! frame of its animation) and returns what the user asked for as actions; `ViewerApp::apply` carries them
+//! out. Values a user cannot sensibly enter are prevented here (odd division counts, R <= 0, zero
+//! directions, ...), so the GPU never sees them.
 
-use egui::{Color32, DragValue, Slider, Stroke, Ui};
-use glam::DVec3;
+use egui::{DragValue, Slider, Ui};
 
-use super::app::ViewerApp;
-use crate::animation::SourceKind;
-use crate::field::{Curve, Line, Point, Torus, wseries};
+use super::action::{Action, Edit};
+use super::document::Document;
+use super::history::History;
+use super::widgets::{ERROR_COLOR, color, direction, labelled, vec3, wseries_plot};
+use crate::animation::{IntegrationSetting, Parameter, SourceKind};
+use crate::field::Curve;
 use crate::integrate::Integrator;
-use crate::scene::limits;
+use crate::scene::{Scene, limits};
 
 /// Largest Simpson division count the panel offers (the file format allows more, for batch renders).
 const PANEL_MAX_DIVISIONS: u32 = 4096;
@@ -25,138 +29,131 @@ const _: () = assert!(
         && *PANEL_TOLERANCE.end() < limits::MAX_TOLERANCE
 );
 
-/// Three drag values for a vector; returns true when it changed.
-fn vec3(ui: &mut Ui, label: &str, v: &mut DVec3, speed: f64) -> bool {
-    let mut changed = false;
-    ui.horizontal(|ui| {
-        ui.label(label);
-        for (axis, c) in ["x", "y", "z"].iter().zip(v.as_mut()) {
-            changed |= ui
-                .add(
-                    DragValue::new(c)
-                        .speed(speed)
-                        .prefix(format!("{axis} "))
-                        .max_decimals(4),
-                )
-                .changed();
-        }
-    });
-    changed
+/// Jittered frames the viewport averages while the view is still, unless set otherwise: the noise falls to
+/// 1/8 of one frame's.
+pub const DEFAULT_AVERAGE_FRAMES: u32 = 64;
+
+/// How the viewer shows the scene: the viewer's own settings, edited by the panel in place (they are not
+/// part of the document and have no undo).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ViewSettings {
+    pub show_grid: bool,
+    pub show_handles: bool,
+    /// With jitter: how many frames the viewport averages while the view is still (1: none).
+    pub average_frames: u32,
+    /// While the view moves, show a coarse field sized to the frame budget and refine it once still
+    /// (`progressive`); off: every frame integrates the full field.
+    pub progressive: bool,
+    /// Screenshot size relative to the viewport: 1, 2 or 4.
+    pub screenshot_scale: u32,
 }
 
-/// A direction editor: the vector is normalised, and a zero vector is refused (the old one is kept).
-fn direction(ui: &mut Ui, label: &str, v: &mut DVec3) {
-    let mut edited = *v;
-    if vec3(ui, label, &mut edited, 0.01) {
-        if edited.length() > 1e-6 {
-            *v = edited.normalize();
-        } else {
-            ui.colored_label(
-                Color32::from_rgb(255, 110, 90),
-                "a direction cannot be zero",
-            );
+impl Default for ViewSettings {
+    fn default() -> Self {
+        Self {
+            show_grid: true,
+            show_handles: true,
+            average_frames: DEFAULT_AVERAGE_FRAMES,
+            progressive: true,
+            screenshot_scale: 1,
         }
     }
 }
 
-fn color(ui: &mut Ui, label: &str, c: &mut [f64; 3]) {
-    ui.horizontal(|ui| {
-        let mut rgb = c.map(|x| x as f32);
-        if ui.color_edit_button_rgb(&mut rgb).changed() {
-            *c = rgb.map(|x| (x as f64).clamp(0.0, 1.0));
-        }
-        ui.label(label);
-    });
+/// What the panel reads and does not edit.
+pub struct Context<'a> {
+    /// The document: its title, file and the state of its file on disk.
+    pub doc: &'a Document,
+    /// The scene as shown: the document's at the current frame of its animation.
+    pub shown: &'a Scene,
+    pub history: &'a History,
+    /// Largest billboard resolution the device allows.
+    pub max_resolution: u32,
+    /// The viewport's width over its height.
+    pub aspect: f64,
 }
 
-/// A label and a value widget, the widget named by the label for accessibility (screen readers, UI tests).
-pub(super) fn labelled(ui: &mut Ui, label: &str, widget: impl egui::Widget) -> egui::Response {
-    let l = ui.label(label);
-    ui.add(widget).labelled_by(l.id)
+/// The panel's file, view, rendering and sources sections (the Animation section is `animation_panel`).
+/// `path` is the file name typed in the file section.
+pub fn show(ui: &mut Ui, cx: &Context, path: &mut String, view: &mut ViewSettings) -> Vec<Action> {
+    let mut out = Vec::new();
+    file_section(ui, cx, path, view, &mut out);
+    ui.separator();
+    view_section(ui, cx.shown, view, &mut out);
+    ui.separator();
+    render_section(ui, cx, view, &mut out);
+    ui.separator();
+    sources_section(ui, cx.shown, &mut out);
+    out
 }
 
-fn coefficient(ui: &mut Ui, c: &mut f64) {
-    ui.horizontal(|ui| {
-        labelled(
-            ui,
-            "coefficient",
-            DragValue::new(c)
-                .speed(0.05)
-                .range(-1e4..=1e4)
-                .max_decimals(3),
-        );
-    });
-}
-
-/// The panel.
-pub fn show(ui: &mut Ui, app: &mut ViewerApp) {
-    file_section(ui, app);
-    ui.separator();
-    view_section(ui, app);
-    ui.separator();
-    render_section(ui, app);
-    ui.separator();
-    sources_section(ui, app);
-    ui.separator();
-    super::animation_panel::show(ui, app);
-}
-
-fn file_section(ui: &mut Ui, app: &mut ViewerApp) {
-    ui.heading(app.title());
+fn file_section(
+    ui: &mut Ui,
+    cx: &Context,
+    path: &mut String,
+    view: &mut ViewSettings,
+    out: &mut Vec<Action>,
+) {
+    ui.heading(cx.doc.title());
     ui.horizontal(|ui| {
         ui.label("File");
         ui.add(
-            egui::TextEdit::singleline(&mut app.path_input)
+            egui::TextEdit::singleline(path)
                 .hint_text("scene.toml")
                 .desired_width(f32::INFINITY),
         );
     });
+    let typed = || std::path::PathBuf::from(path.trim());
     ui.horizontal(|ui| {
         if ui
             .button("Open")
             .on_hover_text("Open the file named above")
             .clicked()
         {
-            app.open();
+            out.push(Action::Open(typed()));
         }
         if ui.button("Save").on_hover_text("Ctrl+S").clicked() {
-            app.save();
+            out.push(Action::Save);
         }
         if ui
             .button("Save As")
             .on_hover_text("Save to the file named above")
             .clicked()
         {
-            app.save_as();
+            out.push(if path.trim().is_empty() {
+                Action::error("Type a file name to save to")
+            } else {
+                Action::SaveAs(typed())
+            });
         }
         ui.separator();
         let undo = ui
-            .add_enabled(app.history.can_undo(), egui::Button::new("Undo"))
+            .add_enabled(cx.history.can_undo(), egui::Button::new("Undo"))
             .on_hover_text("Ctrl+Z");
         if undo.clicked() {
-            app.undo();
+            out.push(Action::Undo);
         }
         let redo = ui
-            .add_enabled(app.history.can_redo(), egui::Button::new("Redo"))
+            .add_enabled(cx.history.can_redo(), egui::Button::new("Redo"))
             .on_hover_text("Ctrl+Shift+Z");
         if redo.clicked() {
-            app.redo();
+            out.push(Action::Redo);
         }
     });
-    if let Some(error) = &app.doc.disk_error {
+    if let Some(error) = &cx.doc.disk_error {
         ui.colored_label(
-            Color32::from_rgb(255, 110, 90),
+            ERROR_COLOR,
             format!("Not reloaded, keeping the last good scene:\n{error}"),
         );
     }
-    if app.doc.pending_reload.is_some() {
+    if cx.doc.pending_reload.is_some() {
         ui.horizontal(|ui| {
-            ui.colored_label(Color32::from_rgb(255, 200, 90), "Changed on disk.");
+            ui.colored_label(egui::Color32::from_rgb(255, 200, 90), "Changed on disk.");
             if ui.button("Reload (drop my edits)").clicked() {
-                app.doc.accept_reload();
+                out.push(Action::AcceptReload);
             }
             if ui.button("Keep mine").clicked() {
-                app.doc.pending_reload = None;
+                out.push(Action::KeepMine);
             }
         });
     }
@@ -166,87 +163,120 @@ fn file_section(ui: &mut Ui, app: &mut ViewerApp) {
             .on_hover_text("F12: the viewport, as PNG beside the scene")
             .clicked()
         {
-            app.screenshot();
+            out.push(Action::Screenshot);
         }
         egui::ComboBox::new("energywave.screenshot_scale", "scale")
-            .selected_text(format!("{}\u{d7}", app.screenshot_scale))
+            .selected_text(format!("{}\u{d7}", view.screenshot_scale))
             .width(50.0)
             .show_ui(ui, |ui| {
                 for s in [1, 2, 4] {
-                    ui.selectable_value(&mut app.screenshot_scale, s, format!("{s}\u{d7}"));
+                    ui.selectable_value(&mut view.screenshot_scale, s, format!("{s}\u{d7}"));
                 }
             });
     });
 }
 
-fn view_section(ui: &mut Ui, app: &mut ViewerApp) {
+fn view_section(ui: &mut Ui, shown: &Scene, view: &mut ViewSettings, out: &mut Vec<Action>) {
     egui::CollapsingHeader::new("View").default_open(false).show(ui, |ui| {
         ui.horizontal(|ui| {
-            ui.checkbox(&mut app.show_grid, "grid");
-            ui.checkbox(&mut app.show_handles, "handles");
-            ui.checkbox(&mut app.progressive, "fast preview").on_hover_text(
+            ui.checkbox(&mut view.show_grid, "grid");
+            ui.checkbox(&mut view.show_handles, "handles");
+            ui.checkbox(&mut view.progressive, "fast preview").on_hover_text(
                 "While the view moves, integrate a coarser field that holds the frame rate, and refine \
                  it to the full one once still; off: the full field every frame",
             );
             if ui.button("Frame").on_hover_text("F: frame the effect").clicked() {
-                app.frame_effect();
+                out.push(Action::FrameEffect);
             }
             if ui.button("Reset view").clicked() {
-                app.reset_view();
+                out.push(Action::ResetView);
             }
         });
-        let cam = &mut app.doc.scene.camera;
+        let mut cam = shown.camera.clone();
         let mut eye = cam.eye;
         let mut target = cam.target;
-        let changed = vec3(ui, "eye", &mut eye, 0.05) | vec3(ui, "target", &mut target, 0.05);
+        let moved = vec3(ui, "eye", &mut eye, 0.05) | vec3(ui, "target", &mut target, 0.05);
         // The eye must not sit on the target.
-        if changed && (eye - target).length() > 1e-6 {
+        let mut changed = moved && (eye - target).length() > 1e-6;
+        if changed {
             cam.eye = eye;
             cam.target = target;
         }
-        let mut up = cam.up;
-        direction(ui, "up", &mut up);
-        if up.cross((cam.target - cam.eye).normalize()).length() > 1e-6 {
+        if let Some(up) = direction(ui, "up", cam.up)
+            && up.cross((cam.target - cam.eye).normalize()).length() > 1e-6
+        {
             cam.up = up;
+            changed = true;
         }
-        ui.add(Slider::new(&mut cam.fov_y_degrees, 1.0..=150.0).text("field of view (\u{b0})"));
+        changed |= ui
+            .add(Slider::new(&mut cam.fov_y_degrees, 1.0..=150.0).text("field of view (\u{b0})"))
+            .changed();
+        if changed {
+            out.push(Action::Edit(Edit::Camera(cam)));
+        }
         ui.label("Drag: orbit \u{b7} right/middle drag: pan \u{b7} wheel: zoom \u{b7} drag a handle: move it");
     });
 }
 
-fn render_section(ui: &mut Ui, app: &mut ViewerApp) {
-    let max_resolution = app.max_resolution;
-    let average_frames = &mut app.average_frames;
-    let scene = &mut app.doc.scene;
+/// A drag value for an animatable number: a `Set` when the user changed it.
+fn number(
+    ui: &mut Ui,
+    out: &mut Vec<Action>,
+    label: &str,
+    parameter: Parameter,
+    value: f64,
+    widget: impl FnOnce(&mut f64) -> DragValue<'_>,
+) -> egui::Response {
+    let mut x = value;
+    let response = labelled(ui, label, widget(&mut x));
+    if response.changed() && x != value {
+        out.push(Action::set_number(parameter, x));
+    }
+    response
+}
+
+fn render_section(ui: &mut Ui, cx: &Context, view: &mut ViewSettings, out: &mut Vec<Action>) {
+    let scene = cx.shown;
+    let i = &scene.integration;
+    let edit = |out: &mut Vec<Action>, e: Edit| out.push(Action::Edit(e));
     egui::CollapsingHeader::new("Rendering")
         .default_open(true)
         .show(ui, |ui| {
-            let i = &mut scene.integration;
             egui::Grid::new("energywave.integration")
                 .num_columns(2)
                 .show(ui, |ui| {
                     ui.label("integrator");
                     ui.horizontal(|ui| {
                         for integrator in [Integrator::Adaptive, Integrator::Simpson] {
-                            ui.selectable_value(&mut i.integrator, integrator, integrator.name())
-                                .on_hover_text(match integrator {
-                                    Integrator::Adaptive => "Samples where the field needs them, to a tolerance (fast, no banding)",
-                                    Integrator::Simpson => "The papers' n evenly spaced samples (bands at a low n)",
-                                });
+                            let hint = match integrator {
+                                Integrator::Adaptive => "Samples where the field needs them, to a tolerance (fast, no banding)",
+                                Integrator::Simpson => "The papers' n evenly spaced samples (bands at a low n)",
+                            };
+                            if ui
+                                .selectable_label(i.integrator == integrator, integrator.name())
+                                .on_hover_text(hint)
+                                .clicked()
+                                && i.integrator != integrator
+                            {
+                                edit(out, Edit::Integrator(integrator));
+                            }
                         }
                     });
                     ui.end_row();
                     match i.integrator {
                         Integrator::Adaptive => {
-                            i.jitter = None;
-                            labelled(
+                            let mut t = i.tolerance;
+                            let r = labelled(
                                 ui,
                                 "tolerance",
-                                DragValue::new(&mut i.tolerance)
+                                DragValue::new(&mut t)
                                     .range(PANEL_TOLERANCE)
                                     .speed(1e-5)
                                     .max_decimals(7),
                             );
+                            if r.changed() && t != i.tolerance {
+                                edit(out, Edit::Tolerance(t));
+                            }
                             ui.end_row();
                         }
                         Integrator::Simpson => {
@@ -259,22 +289,25 @@ fn render_section(ui: &mut Ui, app: &mut ViewerApp) {
                                     .speed(2),
                             );
                             // Simpson's rule needs an even count.
-                            i.divisions = (n + n % 2).clamp(2, PANEL_MAX_DIVISIONS);
+                            let n = (n + n % 2).clamp(2, PANEL_MAX_DIVISIONS);
+                            if n != i.divisions {
+                                edit(out, Edit::Divisions(n));
+                            }
                             ui.end_row();
                             let mut jitter = i.jitter.is_some();
                             ui.label("");
-                            ui.checkbox(&mut jitter, "jitter (noise instead of bands)");
+                            if ui
+                                .checkbox(&mut jitter, "jitter (noise instead of bands)")
+                                .changed()
+                            {
+                                edit(out, Edit::Jitter(jitter.then_some(i.jitter.unwrap_or(0))));
+                            }
                             ui.end_row();
-                            i.jitter = match (jitter, i.jitter) {
-                                (true, Some(seed)) => Some(seed),
-                                (true, None) => Some(0),
-                                (false, _) => None,
-                            };
                             if jitter {
                                 labelled(
                                     ui,
                                     "average frames",
-                                    DragValue::new(average_frames).range(1..=1024),
+                                    DragValue::new(&mut view.average_frames).range(1..=1024),
                                 )
                                 .on_hover_text(
                                     "While the view is still, average this many jittered frames \
@@ -285,12 +318,14 @@ fn render_section(ui: &mut Ui, app: &mut ViewerApp) {
                         }
                     }
                     let step = 0.005 * i.decay_length;
-                    labelled(
+                    let setting = |k| Parameter::Integration(k);
+                    number(
                         ui,
+                        out,
                         "decay length",
-                        DragValue::new(&mut i.decay_length)
-                            .range(1e-3..=1e6)
-                            .speed(step),
+                        setting(IntegrationSetting::DecayLength),
+                        i.decay_length,
+                        |x| DragValue::new(x).range(1e-3..=1e6).speed(step),
                     )
                     .on_hover_text(
                         "The depth past the billboard, in scene units, over which \u{3b6} falls from \
@@ -298,221 +333,272 @@ fn render_section(ui: &mut Ui, app: &mut ViewerApp) {
                          holds as the camera moves",
                     );
                     ui.end_row();
-                    labelled(
-                        ui,
-                        "\u{3b1}",
-                        DragValue::new(&mut i.alpha)
-                            .range(0.001..=1000.0)
-                            .speed(0.01),
-                    );
+                    number(ui, out, "\u{3b1}", setting(IntegrationSetting::Alpha), i.alpha, |x| {
+                        DragValue::new(x).range(0.001..=1000.0).speed(0.01)
+                    });
                     ui.end_row();
-                    labelled(
-                        ui,
-                        "\u{3b2}",
-                        DragValue::new(&mut i.beta)
-                            .range(0.001..=1000.0)
-                            .speed(0.01),
-                    );
+                    number(ui, out, "\u{3b2}", setting(IntegrationSetting::Beta), i.beta, |x| {
+                        DragValue::new(x).range(0.001..=1000.0).speed(0.01)
+                    });
                     ui.end_row();
-                    labelled(
+                    number(
                         ui,
+                        out,
                         "\u{3b5} (clamp)",
-                        DragValue::new(&mut i.epsilon)
-                            .range(1e-6..=10.0)
-                            .speed(0.001)
-                            .max_decimals(6),
+                        setting(IntegrationSetting::Epsilon),
+                        i.epsilon,
+                        |x| {
+                            DragValue::new(x)
+                                .range(1e-6..=10.0)
+                                .speed(0.001)
+                                .max_decimals(6)
+                        },
                     );
                     ui.end_row();
-                    let b = &mut scene.billboard;
-                    let top = max_resolution.clamp(8, PANEL_MAX_RESOLUTION);
-                    labelled(
+                    let top = cx.max_resolution.clamp(8, PANEL_MAX_RESOLUTION);
+                    let mut w = scene.billboard.resolution;
+                    let r = labelled(
                         ui,
                         "resolution W",
-                        DragValue::new(&mut b.resolution).range(8..=top).speed(4),
+                        DragValue::new(&mut w).range(8..=top).speed(4),
                     );
+                    if r.changed() && w != scene.billboard.resolution {
+                        edit(out, Edit::Resolution(w));
+                    }
                     ui.end_row();
                 });
-            let b = &mut scene.billboard;
-            let mut fixed = b.center.is_some();
-            if ui
-                .checkbox(&mut fixed, "fixed billboard (else placed automatically)")
-                .changed()
-            {
-                if fixed {
-                    let aspect =
-                        app.viewport_px[0].max(1) as f64 / app.viewport_px[1].max(1) as f64;
-                    let placed = crate::geometry::place_billboard(
-                        &scene.camera,
-                        &scene.sources,
-                        None,
-                        None,
-                        aspect,
-                    );
-                    b.center = Some(placed.center);
-                    b.size = Some(placed.size);
-                } else {
-                    b.center = None;
-                    b.size = None;
-                }
+            billboard_editor(ui, cx, out);
+            if let Some(c) = color(ui, "energy Ce", scene.colors.energy) {
+                out.push(Action::set_vector(Parameter::EnergyColor, glam::DVec3::from_array(c)));
             }
-            if let (Some(center), Some(size)) = (&mut b.center, &mut b.size) {
-                let mut c = *center;
-                // The billboard must not contain the eye.
-                if vec3(ui, "center", &mut c, 0.05) && (c - scene.camera.eye).length() > 1e-6 {
-                    *center = c;
-                }
-                ui.horizontal(|ui| {
-                    labelled(
-                        ui,
-                        "size l",
-                        DragValue::new(size).range(1e-3..=1e5).speed(0.05),
-                    );
-                });
+            if let Some(c) = color(ui, "background Cb", scene.colors.background) {
+                out.push(Action::set_vector(
+                    Parameter::BackgroundColor,
+                    glam::DVec3::from_array(c),
+                ));
             }
-            color(ui, "energy Ce", &mut scene.colors.energy);
-            color(ui, "background Cb", &mut scene.colors.background);
         });
 }
 
-fn sources_section(ui: &mut Ui, app: &mut ViewerApp) {
-    let scene = &mut app.doc.scene;
-    let target = scene.camera.target;
+/// Fixed or automatic placement of the billboard; a fixed one's center and size.
+fn billboard_editor(ui: &mut Ui, cx: &Context, out: &mut Vec<Action>) {
+    let scene = cx.shown;
+    let b = &scene.billboard;
+    let mut fixed = b.center.is_some();
+    if ui
+        .checkbox(&mut fixed, "fixed billboard (else placed automatically)")
+        .changed()
+    {
+        let placement = fixed.then(|| {
+            // Fixed where it is now.
+            let placed = crate::geometry::place_billboard(
+                &scene.camera,
+                &scene.sources,
+                None,
+                None,
+                cx.aspect,
+            );
+            (placed.center, placed.size)
+        });
+        out.push(Action::Edit(Edit::Billboard(placement)));
+    }
+    if let (Some(center), Some(size)) = (b.center, b.size) {
+        let mut c = center;
+        // The billboard must not contain the eye.
+        if vec3(ui, "center", &mut c, 0.05) && (c - scene.camera.eye).length() > 1e-6 {
+            out.push(Action::Edit(Edit::Billboard(Some((c, size)))));
+        }
+        ui.horizontal(|ui| {
+            let mut l = size;
+            let r = labelled(
+                ui,
+                "size l",
+                DragValue::new(&mut l).range(1e-3..=1e5).speed(0.05),
+            );
+            if r.changed() && l != size {
+                out.push(Action::Edit(Edit::Billboard(Some((center, l)))));
+            }
+        });
+    }
+}
+
+fn sources_section(ui: &mut Ui, shown: &Scene, out: &mut Vec<Action>) {
+    let target = shown.camera.target;
     ui.horizontal(|ui| {
         ui.strong("Sources");
-        if ui.button("+ point").clicked() {
-            scene.sources.points.push(Point {
-                position: target,
-                coefficient: 2.0,
-            });
-        }
-        if ui.button("+ line").clicked() {
-            scene.sources.lines.push(Line {
-                point: target,
-                direction: DVec3::X,
-                coefficient: 0.5,
-            });
-        }
-        if ui.button("+ torus").clicked() {
-            scene.sources.tori.push(Torus {
-                center: target,
-                axis: DVec3::Y,
-                major_radius: 1.0,
-                coefficient: 3.0,
-            });
-        }
-        if ui.button("+ curve").clicked() {
-            scene.sources.curves.push(Curve {
-                control_points: vec![
-                    target - DVec3::X * 2.0,
-                    target + DVec3::Y * 1.5,
-                    target + DVec3::X * 2.0,
-                ],
-                coefficient: 4.0,
-                weights: vec![],
-            });
-        }
-    });
-    let s = &mut scene.sources;
-    let mut edits = Vec::new();
-    edits.push((
-        SourceKind::Points,
-        list(ui, "Point", &mut s.points, |ui, p| {
-            vec3(ui, "position", &mut p.position, 0.02);
-            coefficient(ui, &mut p.coefficient);
-        }),
-    ));
-    edits.push((
-        SourceKind::Lines,
-        list(ui, "Line", &mut s.lines, |ui, l| {
-            vec3(ui, "point", &mut l.point, 0.02);
-            direction(ui, "direction", &mut l.direction);
-            coefficient(ui, &mut l.coefficient);
-        }),
-    ));
-    let tori = list(ui, "Torus", &mut s.tori, |ui, t| {
-        vec3(ui, "center", &mut t.center, 0.02);
-        direction(ui, "axis", &mut t.axis);
-        ui.horizontal(|ui| {
-            labelled(
-                ui,
-                "radius R",
-                DragValue::new(&mut t.major_radius)
-                    .range(1e-3..=1e4)
-                    .speed(0.01),
-            );
-        });
-        coefficient(ui, &mut t.coefficient);
-    });
-    edits.push((SourceKind::Tori, tori));
-    edits.push((
-        SourceKind::Curves,
-        list(ui, "Curve", &mut s.curves, curve_editor),
-    ));
-    // Pulses and keys follow their sources when a source is deleted or duplicated.
-    if let Some(animation) = &mut scene.animation {
-        for (kind, edit) in edits {
-            match edit {
-                Some(ListEdit::Deleted(i)) => animation.source_removed(kind, i),
-                Some(ListEdit::Duplicated(i)) => animation.source_inserted(kind, i + 1),
-                None => {}
+        for (label, kind) in [
+            ("+ point", SourceKind::Points),
+            ("+ line", SourceKind::Lines),
+            ("+ torus", SourceKind::Tori),
+            ("+ curve", SourceKind::Curves),
+        ] {
+            if ui.button(label).clicked() {
+                out.push(Action::Edit(Edit::AddSource(kind, target)));
             }
         }
-    }
+    });
+    let s = &shown.sources;
+    let position = |ui: &mut Ui, out: &mut Vec<Action>, label, parameter, p| {
+        let mut q = p;
+        if vec3(ui, label, &mut q, 0.02) {
+            out.push(Action::set_vector(parameter, q));
+        }
+    };
+    let axis = |ui: &mut Ui, out: &mut Vec<Action>, label, parameter, d| {
+        if let Some(d) = direction(ui, label, d) {
+            out.push(Action::set_vector(parameter, d));
+        }
+    };
+    list(
+        ui,
+        out,
+        "Point",
+        SourceKind::Points,
+        &s.points,
+        |ui, out, i, p| {
+            position(
+                ui,
+                out,
+                "position",
+                Parameter::Position(SourceKind::Points, i),
+                p.position,
+            );
+            coefficient(ui, out, SourceKind::Points, i, p.coefficient);
+        },
+    );
+    list(
+        ui,
+        out,
+        "Line",
+        SourceKind::Lines,
+        &s.lines,
+        |ui, out, i, l| {
+            position(
+                ui,
+                out,
+                "point",
+                Parameter::Position(SourceKind::Lines, i),
+                l.point,
+            );
+            axis(
+                ui,
+                out,
+                "direction",
+                Parameter::Direction(SourceKind::Lines, i),
+                l.direction,
+            );
+            coefficient(ui, out, SourceKind::Lines, i, l.coefficient);
+        },
+    );
+    list(
+        ui,
+        out,
+        "Torus",
+        SourceKind::Tori,
+        &s.tori,
+        |ui, out, i, t| {
+            position(
+                ui,
+                out,
+                "center",
+                Parameter::Position(SourceKind::Tori, i),
+                t.center,
+            );
+            axis(
+                ui,
+                out,
+                "axis",
+                Parameter::Direction(SourceKind::Tori, i),
+                t.axis,
+            );
+            ui.horizontal(|ui| {
+                number(
+                    ui,
+                    out,
+                    "radius R",
+                    Parameter::MajorRadius(i),
+                    t.major_radius,
+                    |x| DragValue::new(x).range(1e-3..=1e4).speed(0.01),
+                );
+            });
+            coefficient(ui, out, SourceKind::Tori, i, t.coefficient);
+        },
+    );
+    let pulsed = |i: usize| {
+        shown
+            .animation
+            .as_ref()
+            .is_some_and(|a| a.pulses.iter().any(|p| p.curve == i))
+    };
+    list(
+        ui,
+        out,
+        "Curve",
+        SourceKind::Curves,
+        &s.curves,
+        |ui, out, i, c| curve_editor(ui, out, i, c, pulsed(i)),
+    );
 }
 
-/// A source deleted or duplicated in a list.
-enum ListEdit {
-    Deleted(usize),
-    Duplicated(usize),
+fn coefficient(ui: &mut Ui, out: &mut Vec<Action>, kind: SourceKind, i: usize, c: f64) {
+    ui.horizontal(|ui| {
+        number(
+            ui,
+            out,
+            "coefficient",
+            Parameter::Coefficient(kind, i),
+            c,
+            |x| {
+                DragValue::new(x)
+                    .speed(0.05)
+                    .range(-1e4..=1e4)
+                    .max_decimals(3)
+            },
+        );
+    });
 }
 
-/// A list of sources of one kind, each with its editor and Duplicate / Delete; says which was deleted or
-/// duplicated.
-fn list<T: Clone>(
+/// A list of sources of one kind, each with its editor and Duplicate / Delete.
+fn list<T>(
     ui: &mut Ui,
-    kind: &str,
-    items: &mut Vec<T>,
-    mut edit: impl FnMut(&mut Ui, &mut T),
-) -> Option<ListEdit> {
-    let mut duplicate = None;
-    let mut delete = None;
-    for (i, item) in items.iter_mut().enumerate() {
-        egui::CollapsingHeader::new(format!("{kind} {}", i + 1))
-            .id_salt((kind, i))
+    out: &mut Vec<Action>,
+    label: &str,
+    kind: SourceKind,
+    items: &[T],
+    mut editor: impl FnMut(&mut Ui, &mut Vec<Action>, usize, &T),
+) {
+    for (i, item) in items.iter().enumerate() {
+        egui::CollapsingHeader::new(format!("{label} {}", i + 1))
+            .id_salt((label, i))
             .default_open(true)
             .show(ui, |ui| {
-                edit(ui, item);
+                editor(ui, out, i, item);
                 ui.horizontal(|ui| {
                     if ui.small_button("Duplicate").clicked() {
-                        duplicate = Some(i);
+                        out.push(Action::Edit(Edit::DuplicateSource(kind, i)));
                     }
                     if ui.small_button("Delete").clicked() {
-                        delete = Some(i);
+                        out.push(Action::Edit(Edit::DeleteSource(kind, i)));
                     }
                 });
             });
     }
-    if let Some(i) = duplicate {
-        let copy = items[i].clone();
-        items.insert(i + 1, copy);
-        return Some(ListEdit::Duplicated(i));
-    }
-    if let Some(i) = delete {
-        items.remove(i);
-        return Some(ListEdit::Deleted(i));
-    }
-    None
 }
 
-fn curve_editor(ui: &mut Ui, c: &mut Curve) {
-    coefficient(ui, &mut c.coefficient);
+/// Curve `i`: its coefficient, control points, segments and W series (`pulsed`: the W series is the
+/// animation's travelling pulse, shown and not edited here).
+fn curve_editor(ui: &mut Ui, out: &mut Vec<Action>, i: usize, c: &Curve, pulsed: bool) {
+    coefficient(ui, out, SourceKind::Curves, i, c.coefficient);
     let segments = (c.control_points.len() - 1) / 2;
     ui.label(format!(
         "{segments} segment(s), {} control points",
         c.control_points.len()
     ));
-    for (k, p) in c.control_points.iter_mut().enumerate() {
-        vec3(ui, &format!("B{k}"), p, 0.02);
+    for (k, &p) in c.control_points.iter().enumerate() {
+        let mut q = p;
+        if vec3(ui, &format!("B{k}"), &mut q, 0.02) {
+            out.push(Action::set_vector(Parameter::ControlPoint(i, k), q));
+        }
     }
     ui.horizontal(|ui| {
         if ui
@@ -520,45 +606,43 @@ fn curve_editor(ui: &mut Ui, c: &mut Curve) {
             .on_hover_text("Continue the chain smoothly")
             .clicked()
         {
-            let n = c.control_points.len();
-            let (end, before) = (c.control_points[n - 1], c.control_points[n - 2]);
-            let tangent = end - before;
-            // The new middle point on the end tangent keeps the joint smooth.
-            c.control_points.push(end + tangent);
-            c.control_points
-                .push(end + tangent * 2.0 + tangent.any_orthonormal_vector() * tangent.length());
+            out.push(Action::Edit(Edit::AddSegment(i)));
         }
         if ui
             .add_enabled(segments > 1, egui::Button::new("- segment").small())
             .clicked()
         {
-            c.control_points.truncate(c.control_points.len() - 2);
+            out.push(Action::Edit(Edit::RemoveSegment(i)));
         }
     });
     ui.label("Local intensity W");
-    let mut remove = None;
-    for (k, w) in c.weights.iter_mut().enumerate() {
+    if pulsed {
+        ui.label("Driven by its travelling pulse (Animation section)");
+        wseries_plot(ui, &c.weights);
+        return;
+    }
+    for (k, &w) in c.weights.iter().enumerate() {
         ui.horizontal(|ui| {
-            ui.add(Slider::new(w, 0.0..=2.0).text(format!("w{k}")));
+            let mut x = w;
+            if ui
+                .add(Slider::new(&mut x, 0.0..=2.0).text(format!("w{k}")))
+                .changed()
+                && x != w
+            {
+                out.push(Action::set_number(Parameter::Weight(i, k), x));
+            }
             if ui
                 .small_button("remove")
                 .on_hover_text(format!("Remove w{k}"))
                 .clicked()
             {
-                remove = Some(k);
+                out.push(Action::Edit(Edit::RemoveWeight(i, k)));
             }
         });
     }
-    if let Some(k) = remove {
-        c.weights.remove(k);
-    }
     ui.horizontal(|ui| {
         if ui.small_button("+ weight").clicked() {
-            let last = c.weights.last().copied().unwrap_or(1.0);
-            if c.weights.is_empty() {
-                c.weights.push(1.0);
-            }
-            c.weights.push(last);
+            out.push(Action::Edit(Edit::AddWeight(i)));
         }
         if !c.weights.is_empty()
             && ui
@@ -566,44 +650,8 @@ fn curve_editor(ui: &mut Ui, c: &mut Curve) {
                 .on_hover_text("All weights 1 (no W series)")
                 .clicked()
         {
-            c.weights.clear();
+            out.push(Action::Edit(Edit::UniformWeights(i)));
         }
     });
     wseries_plot(ui, &c.weights);
-}
-
-/// A plot of Sw(t) over [0, 1] with the weights at their nominal parameters i / (n - 1).
-pub(super) fn wseries_plot(ui: &mut Ui, weights: &[f64]) {
-    let (rect, _) = ui.allocate_exact_size(
-        egui::vec2(ui.available_width().min(300.0), 70.0),
-        egui::Sense::hover(),
-    );
-    let painter = ui.painter_at(rect);
-    painter.rect_filled(rect, 2.0, ui.visuals().extreme_bg_color);
-    let top = weights.iter().copied().fold(1.0f64, f64::max) * 1.1;
-    let to_screen = |t: f64, w: f64| {
-        egui::pos2(
-            rect.left() + t as f32 * rect.width(),
-            rect.bottom() - (w / top) as f32 * rect.height(),
-        )
-    };
-    let points: Vec<egui::Pos2> = (0..=100)
-        .map(|k| {
-            let t = k as f64 / 100.0;
-            to_screen(t, wseries::evaluate(weights, t))
-        })
-        .collect();
-    painter.add(egui::Shape::line(
-        points,
-        Stroke::new(1.5, Color32::from_rgb(120, 180, 255)),
-    ));
-    let n = weights.len();
-    for (i, &w) in weights.iter().enumerate() {
-        let t = if n > 1 {
-            i as f64 / (n - 1) as f64
-        } else {
-            0.5
-        };
-        painter.circle_filled(to_screen(t, w), 2.5, Color32::from_rgb(255, 205, 60));
-    }
 }

@@ -16,7 +16,7 @@ use winit::window::{Window, WindowId};
 use super::app::{Request, ViewerApp};
 use super::document::Document;
 use super::presenter::{Acquired, FrameSurface, Outcome, ViewerGpu, draw_egui};
-use super::viewport::{ViewportGpu, ViewportView};
+use super::viewport::ViewportGpu;
 use crate::gpu::{GpuContext, GpuError, read_texture, texture_2d};
 use crate::output::{self, OutputError};
 
@@ -303,14 +303,9 @@ fn save_viewport(
     path: &std::path::Path,
     scale: u32,
 ) -> Result<(), ViewerError> {
-    let [w, h] = app.viewport_px;
-    let view = ViewportView {
-        scene: app.frame_scene(),
-        size: [w.max(1) * scale, h.max(1) * scale],
-        show_grid: app.show_grid,
-        average_frames: app.average_frames,
-        progressive: false,
-    };
+    let mut view = app.viewport_view();
+    view.size = view.size.map(|x| x * scale);
+    view.progressive = false;
     let (device, queue) = (&gpu.ctx.device, &gpu.ctx.queue);
     let vp = gpu
         .renderer
@@ -411,7 +406,7 @@ impl ApplicationHandler for Handler {
         let now = Instant::now();
         if now >= self.next_poll {
             self.next_poll = now + DISK_POLL;
-            if app.doc.changed_on_disk() {
+            if app.document().changed_on_disk() {
                 self.next_frame = now;
             }
         }

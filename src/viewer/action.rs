@@ -1,0 +1,365 @@
+//! What the user asked for, as the panels and the viewport return it: `ViewerApp::apply` carries out every
+//! action in one place. An [`Edit`] changes the document's scene; [`Edit::apply`] is the whole of what an
+//! edit does, and the only place the viewer writes into the scene.
+
+use std::path::PathBuf;
+
+use glam::DVec3;
+
+use crate::animation::{Animation, Parameter, SourceKind, Value};
+use crate::export::Target;
+use crate::field::{Curve, Line, Point, Torus};
+use crate::geometry::Camera;
+use crate::integrate::Integrator;
+use crate::scene::Scene;
+
+/// One request from the UI.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Action {
+    /// Open a scene file (asking first if there are unsaved changes).
+    Open(PathBuf),
+    /// Save to the document's file, or to the typed path when it has none.
+    Save,
+    /// Save to this path.
+    SaveAs(PathBuf),
+    Undo,
+    Redo,
+    /// Take the file's new content from disk, dropping the edits since.
+    AcceptReload,
+    /// Keep the edits over the file's new content on disk.
+    KeepMine,
+    /// A screenshot of the viewport at the chosen scale.
+    Screenshot,
+    /// Place the camera to see every source.
+    FrameEffect,
+    /// The camera as the file had it.
+    ResetView,
+    /// Render frames of the animation to files beside the UI.
+    Export {
+        target: Target,
+        frames: std::ops::Range<u32>,
+        size: (u32, u32),
+        transparent: bool,
+        description: String,
+    },
+    /// Tell the user something (an error when `is_error`).
+    Notify {
+        text: String,
+        is_error: bool,
+    },
+    /// Change the scene.
+    Edit(Edit),
+}
+
+/// A change to the document's scene.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Edit {
+    /// One animatable parameter to a value as shown at the current frame: a key at that frame when the
+    /// parameter is keyed (the scene's own value stays), else the scene's own value.
+    Set(Parameter, Value),
+    Camera(Camera),
+    Integrator(Integrator),
+    Tolerance(f64),
+    /// Simpson's division count (even).
+    Divisions(u32),
+    /// Jittered sampling with a seed, or none.
+    Jitter(Option<u32>),
+    Resolution(u32),
+    /// The billboard fixed at a center with a size, or placed automatically (`None`).
+    Billboard(Option<(DVec3, f64)>),
+    /// A new source of the kind, at a point (the camera's target).
+    AddSource(SourceKind, DVec3),
+    /// A copy of a source, listed right after it.
+    DuplicateSource(SourceKind, usize),
+    DeleteSource(SourceKind, usize),
+    /// One more segment at the end of a curve, continuing it smoothly.
+    AddSegment(usize),
+    /// The last segment of a curve removed (a curve keeps one).
+    RemoveSegment(usize),
+    /// One more weight at the end of a curve's W series (the first makes a uniform series of two).
+    AddWeight(usize),
+    /// A curve's weight `j` removed.
+    RemoveWeight(usize, usize),
+    /// A curve's W series removed (uniform intensity).
+    UniformWeights(usize),
+    /// The animation as a whole: timeline, pulses and keys (`None`: a still scene).
+    Animation(Option<Animation>),
+}
+
+impl Action {
+    /// `Set` of a parameter to a vector.
+    pub fn set_vector(parameter: Parameter, v: DVec3) -> Self {
+        Action::Edit(Edit::Set(parameter, Value::Vector(v.to_array())))
+    }
+
+    /// `Set` of a parameter to a number.
+    pub fn set_number(parameter: Parameter, x: f64) -> Self {
+        Action::Edit(Edit::Set(parameter, Value::Number(x)))
+    }
+
+    pub fn error(text: impl Into<String>) -> Self {
+        Action::Notify {
+            text: text.into(),
+            is_error: true,
+        }
+    }
+}
+
+impl Edit {
+    /// Applies the edit to `scene` (the document's, with its unkeyed base values), the UI being at `frame`.
+    /// An edit that names nothing (a source deleted meanwhile) does nothing.
+    pub fn apply(self, scene: &mut Scene, frame: f64) {
+        let s = &mut scene.sources;
+        match self {
+            Edit::Set(parameter, value) => {
+                let track = scene
+                    .animation
+                    .as_mut()
+                    .and_then(|a| a.tracks.iter_mut().find(|t| t.parameter == parameter));
+                match track {
+                    Some(track) => track.set_key(frame, value),
+                    None => parameter.set(scene, value),
+                }
+            }
+            Edit::Camera(camera) => scene.camera = camera,
+            Edit::Integrator(integrator) => {
+                scene.integration.integrator = integrator;
+                // Jitter belongs to simpson.
+                if integrator == Integrator::Adaptive {
+                    scene.integration.jitter = None;
+                }
+            }
+            Edit::Tolerance(t) => scene.integration.tolerance = t,
+            Edit::Divisions(n) => scene.integration.divisions = n,
+            Edit::Jitter(seed) => scene.integration.jitter = seed,
+            Edit::Resolution(w) => scene.billboard.resolution = w,
+            Edit::Billboard(fixed) => {
+                scene.billboard.center = fixed.map(|(c, _)| c);
+                scene.billboard.size = fixed.map(|(_, l)| l);
+            }
+            Edit::AddSource(kind, at) => match kind {
+                SourceKind::Points => s.points.push(Point {
+                    position: at,
+                    coefficient: 2.0,
+                }),
+                SourceKind::Lines => s.lines.push(Line {
+                    point: at,
+                    direction: DVec3::X,
+                    coefficient: 0.5,
+                }),
+                SourceKind::Tori => s.tori.push(Torus {
+                    center: at,
+                    axis: DVec3::Y,
+                    major_radius: 1.0,
+                    coefficient: 3.0,
+                }),
+                SourceKind::Curves => s.curves.push(Curve {
+                    control_points: vec![
+                        at - DVec3::X * 2.0,
+                        at + DVec3::Y * 1.5,
+                        at + DVec3::X * 2.0,
+                    ],
+                    coefficient: 4.0,
+                    weights: vec![],
+                }),
+            },
+            Edit::DuplicateSource(kind, i) => {
+                let copied = match kind {
+                    SourceKind::Points => duplicate(&mut s.points, i),
+                    SourceKind::Lines => duplicate(&mut s.lines, i),
+                    SourceKind::Tori => duplicate(&mut s.tori, i),
+                    SourceKind::Curves => duplicate(&mut s.curves, i),
+                };
+                // Pulses and keys follow their sources.
+                if copied && let Some(a) = &mut scene.animation {
+                    a.source_inserted(kind, i + 1);
+                }
+            }
+            Edit::DeleteSource(kind, i) => {
+                let removed = match kind {
+                    SourceKind::Points => remove(&mut s.points, i),
+                    SourceKind::Lines => remove(&mut s.lines, i),
+                    SourceKind::Tori => remove(&mut s.tori, i),
+                    SourceKind::Curves => remove(&mut s.curves, i),
+                };
+                if removed && let Some(a) = &mut scene.animation {
+                    a.source_removed(kind, i);
+                }
+            }
+            Edit::AddSegment(c) => {
+                if let Some(c) = s.curves.get_mut(c) {
+                    let n = c.control_points.len();
+                    let (end, before) = (c.control_points[n - 1], c.control_points[n - 2]);
+                    let tangent = end - before;
+                    // The new middle point on the end tangent keeps the joint smooth.
+                    c.control_points.push(end + tangent);
+                    c.control_points.push(
+                        end + tangent * 2.0 + tangent.any_orthonormal_vector() * tangent.length(),
+                    );
+                }
+            }
+            Edit::RemoveSegment(c) => {
+                if let Some(c) = s.curves.get_mut(c)
+                    && c.control_points.len() > 3
+                {
+                    c.control_points.truncate(c.control_points.len() - 2);
+                }
+            }
+            Edit::AddWeight(c) => {
+                if let Some(c) = s.curves.get_mut(c) {
+                    let last = c.weights.last().copied().unwrap_or(1.0);
+                    if c.weights.is_empty() {
+                        c.weights.push(1.0);
+                    }
+                    c.weights.push(last);
+                }
+            }
+            Edit::RemoveWeight(c, j) => {
+                if let Some(c) = s.curves.get_mut(c)
+                    && j < c.weights.len()
+                {
+                    c.weights.remove(j);
+                }
+            }
+            Edit::UniformWeights(c) => {
+                if let Some(c) = s.curves.get_mut(c) {
+                    c.weights.clear();
+                }
+            }
+            Edit::Animation(animation) => scene.animation = animation,
+        }
+        // Keys and pulses on what an edit removed go with it, so that the scene still saves as a valid file.
+        if let Some(mut a) = scene.animation.take() {
+            a.retain_valid(scene);
+            scene.animation = Some(a);
+        }
+    }
+}
+
+fn duplicate<T: Clone>(items: &mut Vec<T>, i: usize) -> bool {
+    let Some(copy) = items.get(i).cloned() else {
+        return false;
+    };
+    items.insert(i + 1, copy);
+    true
+}
+
+fn remove<T>(items: &mut Vec<T>, i: usize) -> bool {
+    if i < items.len() {
+        items.remove(i);
+        true
+    } else {
+        false
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::animation::{Key, Track};
+
+    /// The default scene with the torus's radius keyed at frames 0 (1.0) and 20 (2.0).
+    fn keyed() -> Scene {
+        let mut s = Scene::default_scene();
+        s.animation = Some(Animation {
+            tracks: vec![Track {
+                parameter: Parameter::MajorRadius(0),
+                keys: vec![
+                    Key {
+                        frame: 0.0,
+                        value: Value::Number(1.0),
+                    },
+                    Key {
+                        frame: 20.0,
+                        value: Value::Number(2.0),
+                    },
+                ],
+            }],
+            ..Animation::default()
+        });
+        s
+    }
+
+    #[test]
+    fn a_keyed_value_edited_becomes_a_key_and_an_unkeyed_one_the_base_value() {
+        let mut s = keyed();
+        let base = s.sources.tori[0].major_radius;
+        Edit::Set(Parameter::MajorRadius(0), Value::Number(2.4)).apply(&mut s, 10.0);
+        assert_eq!(s.sources.tori[0].major_radius, base, "the base value stays");
+        assert_eq!(s.at_frame(10.0).sources.tori[0].major_radius, 2.4);
+        assert_eq!(s.animation.as_ref().unwrap().tracks[0].keys.len(), 3);
+        Edit::Set(
+            Parameter::Coefficient(SourceKind::Tori, 0),
+            Value::Number(7.0),
+        )
+        .apply(&mut s, 10.0);
+        assert_eq!(s.sources.tori[0].coefficient, 7.0);
+        assert_eq!(
+            s.animation.as_ref().unwrap().tracks.len(),
+            1,
+            "no track made"
+        );
+    }
+
+    #[test]
+    fn keys_follow_their_sources_and_go_with_them() {
+        let mut s = keyed();
+        Edit::DuplicateSource(SourceKind::Tori, 0).apply(&mut s, 0.0);
+        assert_eq!(s.sources.tori.len(), 2);
+        Edit::DeleteSource(SourceKind::Tori, 0).apply(&mut s, 0.0);
+        // The copy, now first, carries no keys: the track went with the source it keyed.
+        assert!(s.animation.as_ref().unwrap().tracks.is_empty());
+        // A weight's key goes when the weight does, and the scene still saves as a valid file.
+        let mut s = Scene::default_scene();
+        let weights = s.sources.curves[0].weights.len();
+        assert!(weights > 2);
+        s.animation = Some(Animation {
+            tracks: vec![Track {
+                parameter: Parameter::Weight(0, weights - 1),
+                keys: vec![Key {
+                    frame: 0.0,
+                    value: Value::Number(0.5),
+                }],
+            }],
+            ..Animation::default()
+        });
+        Edit::RemoveWeight(0, 0).apply(&mut s, 0.0);
+        assert!(s.animation.as_ref().unwrap().tracks.is_empty());
+        Scene::parse(&s.to_toml(), std::path::Path::new("edited.toml")).expect("valid");
+    }
+
+    #[test]
+    fn edits_that_name_nothing_do_nothing() {
+        let s0 = Scene::default_scene();
+        for edit in [
+            Edit::DeleteSource(SourceKind::Points, 3),
+            Edit::DuplicateSource(SourceKind::Lines, 0),
+            Edit::AddSegment(5),
+            Edit::RemoveWeight(0, 99),
+            Edit::Set(Parameter::MajorRadius(9), Value::Number(1.0)),
+        ] {
+            let mut s = s0.clone();
+            edit.clone().apply(&mut s, 0.0);
+            assert_eq!(s, s0, "{edit:?}");
+        }
+        // A curve keeps its last segment.
+        let mut s = s0.clone();
+        let n = s.sources.curves[0].control_points.len();
+        for _ in 0..n {
+            Edit::RemoveSegment(0).apply(&mut s, 0.0);
+        }
+        assert_eq!(s.sources.curves[0].control_points.len(), 3);
+        Edit::AddSegment(0).apply(&mut s, 0.0);
+        assert_eq!(s.sources.curves[0].control_points.len(), 5);
+    }
+
+    #[test]
+    fn choosing_adaptive_drops_the_jitter() {
+        let mut s = Scene::default_scene();
+        Edit::Integrator(Integrator::Simpson).apply(&mut s, 0.0);
+        Edit::Jitter(Some(3)).apply(&mut s, 0.0);
+        assert_eq!(s.integration.jitter, Some(3));
+        Edit::Integrator(Integrator::Adaptive).apply(&mut s, 0.0);
+        assert_eq!(s.integration.jitter, None);
+    }
+}
