@@ -1,4 +1,4 @@
-// The adaptive integrator's shared parts (twin of src/adaptive.rs): source by source, the ray shared into pieces
+// The adaptive integrator's shared parts (twin of src/reference/adaptive.rs): source by source, the ray shared into pieces
 // around the term's features (closest approaches, a torus's axis), each mapped by s = s* + h sinh(u), and
 // integrated by Gauss-Kronrod pairs in u, bisected where the pair disagrees. Two passes build on this file:
 // adaptive_smooth.wgsl (points, lines and tori; entry point integrate_adaptive) and adaptive_curves.wgsl

@@ -1,5 +1,5 @@
 // The adaptive integrator's pass for points, lines and tori (entry point integrate_adaptive): Gauss-Kronrod
-// pairs in u on each term's pieces. Assembled after field_pass.wgsl and adaptive.wgsl. Twin: src/adaptive.rs.
+// pairs in u on each term's pieces. Assembled after field_pass.wgsl and adaptive.wgsl. Twin: src/reference/adaptive_smooth.rs.
 
 // A point's, a line's or a torus's distance from p.
 fn smooth_distance(ray: Ray, p: vec3<f32>) -> f32 {
@@ -161,7 +161,7 @@ fn falloff_piece(lo: f32, hi: f32, c: f32, h2: f32, a: f32, w_c: f32, big_a: f32
 
 // A point's or a line's term in closed form for d^2(s) = h2 + a (s - c)^2, before the coefficient: (value, 1),
 // or (0, 0) where it is not well conditioned and the term is integrated numerically. Twin of
-// integrate::falloff_integral.
+// reference::adaptive_smooth::falloff_integral.
 fn falloff_integral(c: f32, h2_in: f32, a: f32) -> vec2<f32> {
     let h2 = max(h2_in, 0.0);
     let eps = EPSILON;

@@ -2,7 +2,7 @@
 // lies behind it, color = clamp((1 - B) Cb + B Ce) (METHOD.md section 4). Cb is read from a copy of the
 // background at the fragment's pixel, so the blend is exact for any B (fixed-function blending cannot apply
 // the negative weight 1 - B that blows the glow out when B > 1). Rust side: src/gpu/billboard_pass.rs
-// (gpu_data holds the mirror of BillboardParams; keep in sync). CPU twin: src/reference.rs::compose_frame.
+// (gpu_data holds the mirror of BillboardParams; keep in sync). CPU twin: src/reference/billboard.rs.
 
 struct BillboardParams {
     view_proj: mat4x4<f32>,
@@ -36,7 +36,7 @@ fn vs_main(@builtin(vertex_index) index: u32) -> VertexOut {
 }
 
 // Bilinear filtering by hand (r32float is not filterable everywhere), texel centers at (i + 0.5) / W,
-// clamped at the edges. Twin of compose::sample_bilinear.
+// clamped at the edges. Twin of reference::billboard::sample_bilinear.
 fn sample_brightness(uv: vec2<f32>) -> f32 {
     let w = i32(params.resolution);
     let x = uv * f32(w) - 0.5;

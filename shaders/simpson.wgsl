@@ -1,6 +1,6 @@
 // The papers' integrator (METHOD.md section 3): Simpson's rule over n + 1 evenly spaced samples of the ray, or
 // with jitter the randomly shifted rectangle rule. Entry point `integrate`. Assembled after field_pass.wgsl.
-// CPU twin: src/reference.rs and src/integrate.rs.
+// CPU twin: src/reference/simpson.rs.
 
 
 // A curve chain's term: b Sw(t*) / max(eps, L).
@@ -16,7 +16,7 @@ fn pcg_hash(x: u32) -> u32 {
     return (word >> 22u) ^ word;
 }
 
-// The texel's jitter offset in [0, 1). Twin of integrate::jitter_offset.
+// The texel's jitter offset in [0, 1). Twin of reference::simpson::jitter_offset.
 fn jitter_offset(id: vec2<u32>) -> f32 {
     let index = id.y * params.resolution + id.x;
     let h = pcg_hash(index ^ pcg_hash(params.seed + 0x9e3779b9u));

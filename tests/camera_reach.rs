@@ -4,17 +4,17 @@
 //!
 //! The checks are independent of how `geometry::ray_reach` finds the end: the sources' farthest depths come
 //! from their own geometry (a Bezier curve lies in its control points' hull, a torus's circle reaches
-//! `R sqrt(1 - (a.n)^2)` along n), and B is judged against `bench::converged_reference`, which integrates
+//! `R sqrt(1 - (a.n)^2)` along n), and B is judged against `reference::converged`, which integrates
 //! the decay in scene units (depth past the billboard over the decay length) rather than the integrators'
 //! rescaled s.
 
 use std::path::Path;
 
-use energywave::bench::converged_reference;
 use energywave::geometry::ray_end;
 use energywave::gpu::HeadlessRenderer;
 use energywave::integrate::Integrator;
 use energywave::reference;
+use energywave::reference::converged::converged_reference;
 use energywave::scene::Scene;
 use energywave::viewer::navigation;
 use glam::DVec3;

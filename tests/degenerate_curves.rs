@@ -2,18 +2,18 @@
 //! speed vanishes (coincident control points at either end or at a joint, a segment of zero length inside a
 //! chain), with and without a W series, and the papers' seven-weight W series, whose knots the nearest point
 //! crosses. The reference is f64 Simpson from n = 4096 refined texel by texel to an estimated 1e-7 on B
-//! (`bench::converged_reference`), which knows nothing of the adaptive integrator's features: an independent
+//! (`reference::converged`), which knows nothing of the adaptive integrator's features: an independent
 //! method. Errors are on B itself, unclamped, against the integrator's own tolerance.
 //!
 //! Also a closed form with the decay zeta at work (alpha = beta = 1, nu = 2): a line through the eye along the
 //! view axis, for which every texel's B is known exactly, on the CPU and the GPU and with both integrators.
 
-use energywave::bench::converged_reference;
 use energywave::field::{Curve, Line, Sources};
 use energywave::geometry::Camera;
 use energywave::gpu::HeadlessRenderer;
 use energywave::integrate::{Integration, Integrator};
 use energywave::reference;
+use energywave::reference::converged::converged_reference;
 use energywave::scene::{BillboardSettings, Scene};
 use glam::DVec3;
 

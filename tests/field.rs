@@ -3,8 +3,9 @@
 use energywave::field::{
     Curve, Line, Point, Sources, Torus, line_distance, torus_distance, wseries,
 };
-use energywave::integrate::{Integration, Integrator, simpson, simpson_refined, zeta};
+use energywave::integrate::{Integration, Integrator, zeta};
 use energywave::reference::brightness;
+use energywave::reference::simpson::{simpson, simpson_refined};
 use glam::DVec3;
 use proptest::prelude::*;
 

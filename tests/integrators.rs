@@ -6,12 +6,14 @@
 //! Error of a render, as the benchmark states it: on B clamped to [0, 1], the largest difference and the share
 //! of texels off by more than 1/255; and on B unclamped, against the integrator's tolerance.
 
-use energywave::bench::{RenderError, converged_reference};
+use energywave::bench::RenderError;
 use energywave::field::{Line, Point, Sources};
 use energywave::gpu::HeadlessRenderer;
-use energywave::integrate::{Integration, Integrator, jitter_offset, zeta};
+use energywave::integrate::{Integration, Integrator, zeta};
 use energywave::reference;
 use energywave::reference::brightness;
+use energywave::reference::converged::converged_reference;
+use energywave::reference::simpson::jitter_offset;
 use energywave::scene::Scene;
 use glam::DVec3;
 
@@ -173,7 +175,7 @@ fn grazing_ray() -> (Sources, Integration, DVec3, DVec3) {
 fn jittered_sampling_is_unbiased_where_fixed_samples_are_not() {
     let (sources, settings, s, e) = grazing_ray();
     let f = |t: f64| sources.psi(s + (e - s) * t, settings.epsilon) * zeta(t, 1.0, 1.0);
-    let exact = energywave::integrate::simpson(f, 1 << 20);
+    let exact = energywave::reference::simpson::simpson(f, 1 << 20);
     // Eight evenly spaced samples miss the peak: the fixed rule is off by far more than its noise would be.
     let fixed = brightness(
         &sources,

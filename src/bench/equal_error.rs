@@ -2,17 +2,11 @@
 //! reference.
 
 use super::*;
+use crate::reference::converged::{REFERENCE_DIVISIONS, converged_reference};
 
 /// The equal-error reference is computed on at most this many texels per side (a subset of larger textures).
 pub(super) const REFERENCE_SIZE: u32 = 256;
 
-/// The converged reference of the equal-error comparison: f64 Simpson with this many divisions, refined
-/// (`integrate::simpson_refined`) wherever its estimated error exceeds `REFERENCE_TOLERANCE` on B.
-pub const REFERENCE_DIVISIONS: u32 = 4096;
-/// The reference's estimated error on B, texel by texel.
-pub const REFERENCE_TOLERANCE: f64 = 1e-7;
-/// How many times the reference splits an interval at most (down to a width of 2^-40).
-pub const REFERENCE_MAX_DEPTH: u32 = 28;
 /// The adaptive tolerances tried, cheapest first, for the equal-error comparison.
 pub(super) const TOLERANCES: [f64; 11] = [
     5e-2, 2e-2, 1e-2, 3e-3, 1e-3, 3e-4, 1e-4, 3e-5, 1e-5, 3e-6, 1e-6,
@@ -81,83 +75,6 @@ pub struct EqualErrorRow {
     pub speedup: f64,
     /// Every tolerance tried, with its error.
     pub tried: Vec<(f64, RenderError)>,
-}
-
-/// The converged f64 reference of B (`REFERENCE_DIVISIONS`, `REFERENCE_TOLERANCE`) for every `stride`-th
-/// texel of `scene`'s billboard (rows, then columns), and how it was reached.
-pub fn converged_reference(scene: &Scene, stride: u32) -> (Vec<f64>, ReferenceStats) {
-    let s = scene;
-    let w = s.billboard.resolution;
-    let billboard = s.place_billboard(1.0);
-    let reach = s.ray_reach(&billboard);
-    let plane = (billboard.center - s.camera.eye).dot(-billboard.normal);
-    let texels: Vec<(u32, u32)> = (0..w)
-        .step_by(stride as usize)
-        .flat_map(|j| (0..w).step_by(stride as usize).map(move |i| (i, j)))
-        .collect();
-    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let chunk = texels.len().div_ceil(threads).max(1);
-    let mut out = vec![(0.0, 0); texels.len()];
-    std::thread::scope(|scope| {
-        for (ts, os) in texels.chunks(chunk).zip(out.chunks_mut(chunk)) {
-            let (s, billboard) = (&s, &billboard);
-            scope.spawn(move || {
-                for (&(i, j), o) in ts.iter().zip(os) {
-                    // In the scene's own terms, not the integrators' normalised s: sigma is the depth past
-                    // the billboard in decay lengths, zeta(sigma) = alpha / (sigma + beta)^2, and the ray
-                    // ends at sigma = reach.stretch.
-                    let p = billboard.texel_center(i, j, w);
-                    let i = &s.integration;
-                    let per_depth = (p - s.camera.eye) / plane;
-                    let span = reach.stretch;
-                    let f = |t: f64| {
-                        let sigma = t * span;
-                        s.sources
-                            .psi(p + per_depth * (sigma * i.decay_length), i.epsilon)
-                            * integrate::zeta(sigma, i.alpha, i.beta)
-                            * span
-                    };
-                    *o = integrate::simpson_refined(
-                        f,
-                        REFERENCE_DIVISIONS,
-                        REFERENCE_TOLERANCE,
-                        REFERENCE_MAX_DEPTH,
-                    );
-                }
-            });
-        }
-    });
-    // Without refinement, a texel spends the n + 1 samples and 2 more a pair of intervals, to check them.
-    let unrefined = 2 * REFERENCE_DIVISIONS as u64 + 1;
-    let stats = ReferenceStats {
-        refined_share: out.iter().filter(|(_, e)| *e > unrefined).count() as f64
-            / out.len().max(1) as f64,
-        mean_evaluations: out.iter().map(|(_, e)| *e as f64).sum::<f64>() / out.len().max(1) as f64,
-        max_evaluations: out.iter().map(|(_, e)| *e).max().unwrap_or(0),
-    };
-    (out.into_iter().map(|(b, _)| b).collect(), stats)
-}
-
-/// How the converged reference of one render was reached.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
-pub struct ReferenceStats {
-    /// Share of texels refined beyond the uniform `REFERENCE_DIVISIONS` (and its check).
-    pub refined_share: f64,
-    /// Evaluations of the integrand a texel, on average and at most.
-    pub mean_evaluations: f64,
-    pub max_evaluations: u64,
-}
-
-impl std::fmt::Display for ReferenceStats {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(
-            f,
-            "f64 CPU, Simpson n = {REFERENCE_DIVISIONS} refined to an estimated {REFERENCE_TOLERANCE:e} on B ({:.1}% of texels refined; {:.0} evaluations a texel on average, {} at most)",
-            100.0 * self.refined_share,
-            self.mean_evaluations,
-            self.max_evaluations,
-        )
-    }
 }
 
 /// The equal-error comparison: on the torus, Bezier and mixed scenes at 256 and 512 (256 only with --quick),

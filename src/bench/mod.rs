@@ -13,7 +13,7 @@ use glam::DVec3;
 use serde::Serialize;
 
 use crate::gpu::{FieldRenderer, GpuContext, GpuError, Specialise, map_read};
-use crate::integrate::{self, Integrator};
+use crate::integrate::Integrator;
 use crate::scene::Scene;
 
 mod equal_error;

@@ -1,7 +1,14 @@
-//! The final blend and the composed frame (METHOD.md section 4, thesis 4.8).
+//! The billboard pass's f64 twin (`shaders/billboard.wgsl`): the final blend and the composed frame (METHOD.md
+//! section 4, thesis 4.8).
 //!
 //! Colors are display values in [0, 1] (as an artist picks them), blended as they are, the way the papers
 //! blend: `color = clamp((1 - B) Cb + B Ce)`. B above 1 blows the glow out toward white by design.
+
+use rayon::prelude::*;
+
+use super::field_pass::BrightnessTexture;
+use crate::geometry::Billboard;
+use crate::scene::Scene;
 
 /// `clamp((1 - B) Cb + B Ce, 0, 1)` per channel.
 pub fn blend(b: f64, energy: [f64; 3], background: [f64; 3]) -> [f64; 3] {
@@ -41,6 +48,47 @@ pub fn sample_bilinear(texture: &[f64], w: u32, u: f64, v: f64) -> f64 {
     let top = at(x0, y0) * (1.0 - fx) + at(x0 + 1, y0) * fx;
     let bottom = at(x0, y0 + 1) * (1.0 - fx) + at(x0 + 1, y0 + 1) * fx;
     top * (1.0 - fy) + bottom * fy
+}
+
+/// The frame the camera sees, RGBA, rows from the top: the background color everywhere, and over the
+/// billboard the blend of B (sampled bilinearly, as the GPU's pass does) `clamp((1 - B) Cb + B Ce)`, alpha 1.
+/// With `transparent`, the background is transparent and the billboard carries straight color with
+/// alpha = min(B, 1) (`blend_transparent`).
+pub fn compose_frame(
+    scene: &Scene,
+    billboard: &Billboard,
+    texture: &BrightnessTexture,
+    width: u32,
+    height: u32,
+    transparent: bool,
+) -> Vec<[f64; 4]> {
+    let [r, g, b] = scene.colors.background;
+    let clear = if transparent {
+        [0.0; 4]
+    } else {
+        [r, g, b, 1.0]
+    };
+    let mut pixels = vec![clear; width as usize * height as usize];
+    pixels
+        .par_chunks_mut(width.max(1) as usize)
+        .enumerate()
+        .for_each(|(y, row)| {
+            for (x, out) in row.iter_mut().enumerate() {
+                let dir = scene
+                    .camera
+                    .pixel_ray(x as f64 + 0.5, y as f64 + 0.5, width, height);
+                if let Some((u, v)) = billboard.hit(scene.camera.eye, dir) {
+                    let b = sample_bilinear(&texture.values, texture.resolution, u, v);
+                    *out = if transparent {
+                        blend_transparent(b, scene.colors.energy)
+                    } else {
+                        let [r, g, b] = blend(b, scene.colors.energy, scene.colors.background);
+                        [r, g, b, 1.0]
+                    };
+                }
+            }
+        });
+    pixels
 }
 
 #[cfg(test)]

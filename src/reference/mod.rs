@@ -1,0 +1,33 @@
+//! The f64 CPU reference renderer: the billboard's brightness texture B and the composed frame, formula for
+//! formula as METHOD.md states them, on every core. It is the oracle the GPU passes are tested against, and
+//! `energywave render --backend cpu`.
+//!
+//! One module for each GPU pass it twins, named after the pass's WGSL file in `shaders/`:
+//!
+//! | WGSL (`shaders/`)       | f64 twin                                                                    |
+//! |-------------------------|-----------------------------------------------------------------------------|
+//! | `field_common.wgsl`     | `crate::field`: the sources, their distances, the nearest point on a curve, the W series |
+//! | `field_pass.wgsl`       | [`field_pass`]: each texel's ray, B by the scene's integrator, the brightness texture |
+//! | `simpson.wgsl`          | [`simpson`]: the papers' rule (and the shifted rectangle rule with jitter)   |
+//! | `adaptive.wgsl`         | [`adaptive`]: the adaptive integrator's shared parts (Gauss-Kronrod, pieces, cuts) |
+//! | `adaptive_smooth.wgsl`  | [`adaptive_smooth`]: points, lines (in closed form where it holds) and tori  |
+//! | `adaptive_curves.wgsl`  | [`adaptive_curves`]: curve chains, their scan, jumps and kinks               |
+//! | `billboard.wgsl`        | [`billboard`]: the blend and the composed frame                              |
+//!
+//! The other shaders only display or resample a field already integrated (`average.wgsl`, the viewer's running
+//! mean of jittered frames; `upsample.wgsl`, `grid.wgsl`, `blit.wgsl`) and have no twin. [`converged`] is the
+//! value both twins are held to: Simpson refined until converged, knowing nothing of either integrator.
+//!
+//! The shader constants the twins share are written into the WGSL from the definitions here
+//! (`gpu::shaders::shared_constants`).
+
+pub mod adaptive;
+pub mod adaptive_curves;
+pub mod adaptive_smooth;
+pub mod billboard;
+pub mod converged;
+pub mod field_pass;
+pub mod simpson;
+
+pub use billboard::compose_frame;
+pub use field_pass::{BrightnessTexture, brightness, render_brightness, texel_brightness};
