@@ -3,7 +3,7 @@
 
 use glam::DMat4;
 
-use super::context::{pass_layouts, uniform_buffer};
+use super::context::{RenderPipelineSpec, pass_layouts, render_pipeline, uniform_buffer};
 use crate::geometry::{Billboard, Camera};
 
 /// Rust mirror of `BillboardParams` in `shaders/billboard.wgsl` (keep in sync; `tests/gpu_layout.rs` checks
@@ -104,35 +104,22 @@ impl BillboardRenderer {
                 texture(2),
             ],
         );
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("energywave.billboard.pipeline"),
-            layout: Some(&pipeline_layout),
-            vertex: wgpu::VertexState {
+        let pipeline = render_pipeline(
+            device,
+            RenderPipelineSpec {
+                name: "billboard",
                 module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: wgpu::PrimitiveState {
+                layout: &pipeline_layout,
+                vertex_buffers: &[],
                 topology: wgpu::PrimitiveTopology::TriangleStrip,
-                cull_mode: None,
-                ..Default::default()
-            },
-            depth_stencil: None,
-            multisample: wgpu::MultisampleState::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
+                fragment_entry: "fs_main",
+                target: wgpu::ColorTargetState {
                     format,
                     blend: None,
                     write_mask: wgpu::ColorWrites::ALL,
-                })],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+                },
+            },
+        );
         let params = uniform_buffer::<BillboardParams>(device, "energywave.billboard.params");
         Self {
             pipeline,

@@ -1,7 +1,7 @@
 //! The viewer's copy of its offscreen frame into the window's (egui's) render pass, converting to the
 //! window's format (`shaders/blit.wgsl`).
 
-use super::context::pass_layouts;
+use super::context::{RenderPipelineSpec, pass_layouts, render_pipeline};
 use super::shaders::BLIT_PASS as BLIT_SHADER;
 
 /// The copy's pipeline for one target format, and what a frame's bind group is made of.
@@ -41,35 +41,26 @@ impl BlitPass {
                 },
             ],
         );
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("energywave.blit.pipeline"),
-            layout: Some(&pipeline_layout),
-            vertex: wgpu::VertexState {
+        let pipeline = render_pipeline(
+            device,
+            RenderPipelineSpec {
+                name: "blit",
                 module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: None,
-            multisample: wgpu::MultisampleState::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some(if target_format.is_srgb() {
+                layout: &pipeline_layout,
+                vertex_buffers: &[],
+                topology: wgpu::PrimitiveTopology::TriangleList,
+                fragment_entry: if target_format.is_srgb() {
                     "fs_srgb"
                 } else {
                     "fs_display"
-                }),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
+                },
+                target: wgpu::ColorTargetState {
                     format: target_format,
                     blend: None,
                     write_mask: wgpu::ColorWrites::ALL,
-                })],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+                },
+            },
+        );
         let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("energywave.blit.sampler"),
             mag_filter: wgpu::FilterMode::Linear,

@@ -83,6 +83,48 @@ pub fn pass_layouts(
     (layout, pipeline_layout)
 }
 
+/// What sets one render pass's pipeline apart from the others': the pipeline's module holds `vs_main` and the
+/// fragment entry point; one color target, no depth, no multisampling.
+pub struct RenderPipelineSpec<'a> {
+    /// Labels it `energywave.<name>.pipeline`.
+    pub name: &'a str,
+    pub module: &'a wgpu::ShaderModule,
+    pub layout: &'a wgpu::PipelineLayout,
+    pub vertex_buffers: &'a [Option<wgpu::VertexBufferLayout<'a>>],
+    pub topology: wgpu::PrimitiveTopology,
+    pub fragment_entry: &'a str,
+    pub target: wgpu::ColorTargetState,
+}
+
+/// A render pass's pipeline (the billboard, the grid, the blit): what every one of them builds alike.
+pub fn render_pipeline(device: &wgpu::Device, spec: RenderPipelineSpec) -> wgpu::RenderPipeline {
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(&format!("energywave.{}.pipeline", spec.name)),
+        layout: Some(spec.layout),
+        vertex: wgpu::VertexState {
+            module: spec.module,
+            entry_point: Some("vs_main"),
+            compilation_options: Default::default(),
+            buffers: spec.vertex_buffers,
+        },
+        primitive: wgpu::PrimitiveState {
+            topology: spec.topology,
+            cull_mode: None,
+            ..Default::default()
+        },
+        depth_stencil: None,
+        multisample: wgpu::MultisampleState::default(),
+        fragment: Some(wgpu::FragmentState {
+            module: spec.module,
+            entry_point: Some(spec.fragment_entry),
+            compilation_options: Default::default(),
+            targets: &[Some(spec.target)],
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
+}
+
 /// A compute pipeline over one bind group of `entries`, from the WGSL `source` and its entry point `entry`
 /// (labelled `energywave.<name>.*`): the small passes' shared setup.
 pub fn compute_pass(
@@ -98,7 +140,7 @@ pub fn compute_pass(
     });
     let (layout, pipeline_layout) = pass_layouts(device, name, entries);
     let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some(entry),
+        label: Some(&format!("energywave.{name}.{entry}")),
         layout: Some(&pipeline_layout),
         module: &module,
         entry_point: Some(entry),

@@ -466,8 +466,13 @@ fn build_pipeline(
     entry: &str,
     constants: &[(&str, f64)],
 ) -> wgpu::ComputePipeline {
+    let specialised = if constants.is_empty() {
+        ""
+    } else {
+        ".specialised"
+    };
     device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some(entry),
+        label: Some(&format!("energywave.field.{entry}{specialised}")),
         layout: Some(layout),
         module,
         entry_point: Some(entry),

@@ -3,7 +3,7 @@
 
 use wgpu::util::DeviceExt;
 
-use super::context::{pass_layouts, uniform_buffer};
+use super::context::{RenderPipelineSpec, pass_layouts, render_pipeline, uniform_buffer};
 use super::frame::FRAME_FORMAT;
 use super::shaders::GRID_PASS as GRID_SHADER;
 
@@ -71,30 +71,20 @@ impl GridPass {
                 resource: params.as_entire_binding(),
             }],
         });
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("energywave.grid.pipeline"),
-            layout: Some(&pipeline_layout),
-            vertex: wgpu::VertexState {
+        let pipeline = render_pipeline(
+            device,
+            RenderPipelineSpec {
+                name: "grid",
                 module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[Some(wgpu::VertexBufferLayout {
+                layout: &pipeline_layout,
+                vertex_buffers: &[Some(wgpu::VertexBufferLayout {
                     array_stride: size_of::<GridVertex>() as u64,
                     step_mode: wgpu::VertexStepMode::Vertex,
                     attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x4],
                 })],
-            },
-            primitive: wgpu::PrimitiveState {
                 topology: wgpu::PrimitiveTopology::LineList,
-                ..Default::default()
-            },
-            depth_stencil: None,
-            multisample: wgpu::MultisampleState::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
+                fragment_entry: "fs_main",
+                target: wgpu::ColorTargetState {
                     format: FRAME_FORMAT,
                     // Lines over the background; alpha stays 1 (the billboard copies it).
                     blend: Some(wgpu::BlendState {
@@ -110,11 +100,9 @@ impl GridPass {
                         },
                     }),
                     write_mask: wgpu::ColorWrites::ALL,
-                })],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+                },
+            },
+        );
         let vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("energywave.grid.vertices"),
             contents: &[0; size_of::<GridVertex>() * 2],
