@@ -152,7 +152,7 @@ fn find_kink(ray: Ray, a: ptr<function, ChainSample>, b: ptr<function, ChainSamp
     var last_moved = 0i;
     var stale = false;
     for (var round = 0u; round < KINK_ROUNDS; round++) {
-        if (*b).t - (*a).t <= select(1e-5, KINK_BRACKET, gauss_order() <= 5u) {
+        if (*b).t - (*a).t <= select(FINE_KINK_BRACKET, KINK_BRACKET, gauss_order() <= COARSE_ORDER) {
             break;
         }
         var guess = 0.5 * ((*a).t + (*b).t);
@@ -724,7 +724,7 @@ fn integrate_curve_term(index: u32, s_point: vec3<f32>, e_point: vec3<f32>) -> f
     }
     let features = curve_features(ray);
     let allowance = params.term_tolerance / (abs(coefficient) * max(pieces_length(features.found), 1e-30));
-    var refinements = select(8u, MAX_REFINEMENTS, gauss_order() > 5u);
+    var refinements = select(COARSE_REFINEMENTS, MAX_REFINEMENTS, gauss_order() > COARSE_ORDER);
     var sum = 0.0;
     for (var k = 0u; k < features.found.count; k++) {
         let p = features.found.peaks[k];

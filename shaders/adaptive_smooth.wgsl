@@ -278,7 +278,7 @@ fn integrate_smooth_term(kind: u32, index: u32, s_point: vec3<f32>, e_point: vec
     }
     let found = smooth_features(ray);
     let allowance = params.term_tolerance / (abs(coefficient) * max(pieces_length(found), 1e-30));
-    var refinements = select(8u, MAX_REFINEMENTS, gauss_order() > 5u);
+    var refinements = select(COARSE_REFINEMENTS, MAX_REFINEMENTS, gauss_order() > COARSE_ORDER);
     var sum = 0.0;
     for (var k = 0u; k < found.count; k++) {
         let p = found.peaks[k];

@@ -41,7 +41,7 @@ pub mod gpu_data {
         pub term_tolerance: f32, // 96
         pub jitter: u32,         // 100
         pub seed: u32,           // 104
-        pub gauss_order: u32, // 108: adaptive: n of the Gauss-Kronrod pair (reference::adaptive::kronrod_order)
+        pub gauss_order: u32, // 108: adaptive: n of the Gauss-Kronrod pair (integrate::adaptive::kronrod_order)
     }
     const _: () = assert!(size_of::<FieldParams>() == 112);
 
@@ -151,21 +151,20 @@ const ITERATION_BUDGET: u64 = 30_000;
 /// of its pieces, and two more for each of its `MAX_REFINEMENTS` refinements; each rule evaluates the term at the
 /// `2n + 1` nodes of the Kronrod rule, at most 21.
 const fn rules(cuts: u64) -> u64 {
-    use crate::reference::adaptive::{MAX_GAUSS_PANELS, MAX_REFINEMENTS};
+    use crate::integrate::adaptive::{MAX_GAUSS_PANELS, MAX_REFINEMENTS};
     cuts * MAX_GAUSS_PANELS as u64 + 2 * MAX_REFINEMENTS as u64
 }
 /// Loop iterations of one rule of the pair of `order`: its `2n + 1` nodes, the rule's own loop, and the
 /// bisection's walk up after it.
 const fn rule_iterations(order: u32) -> u64 {
-    2 * order as u64 + 2 + crate::reference::adaptive::MAX_DEPTH as u64
+    2 * order as u64 + 2 + crate::integrate::adaptive::MAX_DEPTH as u64
 }
 /// Evaluations of a curve's distance the adaptive integrator spends on its term at most (each a loop over its
 /// segments): the scan, the samples at its ends, the kink search's probes, the Newton steps of its closest
 /// approaches, a sample for each knot cut, and the rules on every cut (at most `MAX_PEAKS` pieces, two closest
 /// approaches and two ends, each cut at its flat top's ends, and the kinks).
 const fn curve_evaluations(order: u32) -> u64 {
-    use crate::reference::adaptive::{MAX_KINKS, MAX_PEAKS};
-    use crate::reference::adaptive_curves::{KINK_ROUNDS, PEAK_NEWTON, SCAN};
+    use crate::integrate::adaptive::{KINK_ROUNDS, MAX_KINKS, MAX_PEAKS, PEAK_NEWTON, SCAN};
     let cuts = 3 * MAX_PEAKS as u64 + MAX_KINKS as u64;
     (SCAN as u64 + 1)
         + 2
@@ -284,7 +283,7 @@ fn pack(scene: &Scene, billboard: &Billboard) -> Packed {
             term_tolerance: (i.tolerance / s.len().max(1) as f64) as f32,
             jitter: i.jitter.is_some() as u32,
             seed: i.jitter.unwrap_or(0),
-            gauss_order: crate::reference::adaptive::kronrod_order(i.tolerance),
+            gauss_order: crate::integrate::adaptive::kronrod_order(i.tolerance),
         },
         points: (s.points.iter())
             .map(|p| PointSource {
@@ -1144,33 +1143,36 @@ mod tests {
         // Mirrored by hand they drifted apart once (8 panels on the CPU against 4 on the GPU, unnoticed): now the
         // module's declarations are written from the twin's definitions, and no WGSL file declares them again.
         use crate::gpu::shaders;
-        use crate::reference::{adaptive as a, adaptive_curves as c, adaptive_smooth as sm};
+        use crate::integrate::adaptive as a;
         let shared: &[(&str, f64)] = &[
-            ("SCAN", c::SCAN as f64),
-            ("JUMP", c::JUMP),
-            ("PARAM_JUMP", c::PARAM_JUMP),
-            ("END_SNAP", c::END_SNAP),
-            ("KINK_ROUNDS", c::KINK_ROUNDS as f64),
-            ("KINK_BRACKET", c::KINK_BRACKET),
-            ("KINK_PROBE", c::KINK_PROBE),
+            ("SCAN", a::SCAN as f64),
+            ("JUMP", a::JUMP),
+            ("PARAM_JUMP", a::PARAM_JUMP),
+            ("END_SNAP", a::END_SNAP),
+            ("KINK_ROUNDS", a::KINK_ROUNDS as f64),
+            ("KINK_BRACKET", a::KINK_BRACKET),
+            ("FINE_KINK_BRACKET", a::FINE_KINK_BRACKET),
+            ("KINK_PROBE", a::KINK_PROBE),
             ("MAX_KINKS", a::MAX_KINKS as f64),
             ("U_PANEL", a::U_PANEL),
             ("MAX_GAUSS_PANELS", a::MAX_GAUSS_PANELS as f64),
             ("MAX_DEPTH", a::MAX_DEPTH as f64),
             ("MAX_REFINEMENTS", a::MAX_REFINEMENTS as f64),
+            ("COARSE_ORDER", a::COARSE_ORDER as f64),
+            ("COARSE_REFINEMENTS", a::COARSE_REFINEMENTS as f64),
             ("MAX_PEAKS", a::MAX_PEAKS as f64),
-            ("PEAK_NEWTON", c::PEAK_NEWTON as f64),
-            ("PEAK_SETTLED", c::PEAK_SETTLED),
+            ("PEAK_NEWTON", a::PEAK_NEWTON as f64),
+            ("PEAK_SETTLED", a::PEAK_SETTLED),
             ("CUT_MERGE", a::CUT_MERGE),
             ("SINGULAR_MERGE", a::SINGULAR_MERGE),
-            ("SWITCH_ROUNDS", c::SWITCH_ROUNDS as f64),
-            ("SWITCH_INSET", c::SWITCH_INSET),
+            ("SWITCH_ROUNDS", a::SWITCH_ROUNDS as f64),
+            ("SWITCH_INSET", a::SWITCH_INSET),
             ("MAX_WIDTH", a::MAX_WIDTH),
             ("MIN_AXIS_WIDTH", a::MIN_AXIS_WIDTH),
-            ("RING_NEWTON", sm::RING_NEWTON as f64),
-            ("RING_STEP", sm::RING_STEP),
+            ("RING_NEWTON", a::RING_NEWTON as f64),
+            ("RING_STEP", a::RING_STEP),
             ("DEGENERATE", crate::field::curve::DEGENERATE),
-            ("CLOSED_FORM_CONDITION", sm::CLOSED_FORM_CONDITION),
+            ("CLOSED_FORM_CONDITION", a::CLOSED_FORM_CONDITION),
             ("TRACK_NEWTON", TRACK_NEWTON as f64),
             ("KRONROD_ROWS", a::KRONROD.len() as f64),
         ];

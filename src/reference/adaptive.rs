@@ -73,173 +73,11 @@
 //! point, to f32 rounding there. And in f32 two rules agreeing within 4e-6 of their value count as agreeing
 //! (`ROUNDING` here is 1e-13). The tests hold the GPU to this twin.
 
+use crate::integrate::adaptive::{
+    CUT_MERGE, KRONROD, KRONROD_ORDERS, KRONROD_START, MAX_DEPTH, MAX_GAUSS_PANELS, MAX_KINKS,
+    MAX_PEAKS, MAX_WIDTH, SINGULAR_MERGE, U_PANEL, kronrod_index, refinement_budget,
+};
 use glam::DVec3;
-
-/// Most kinks cut on one curve's ray.
-pub const MAX_KINKS: usize = 8;
-/// The longest stretch of u one panel (one Gauss-Kronrod pair before refinement) covers.
-pub const U_PANEL: f64 = 4.0;
-/// Most panels on one cut of a piece. This and the other settings here the WGSL twin uses are declared in it
-/// from these definitions (`gpu::shaders::shared_constants`).
-pub const MAX_GAUSS_PANELS: u32 = 8;
-
-/// Gauss-Kronrod pairs on [-1, 1]: the Gauss-Legendre rule of `n` nodes and the Kronrod rule of `2n + 1` nodes
-/// that contains it, for `n` in `KRONROD_ORDERS`. Rule `k` is `n + 1` rows from `KRONROD_START[k]`: each a node
-/// `x >= 0` (the first is 0) with its Kronrod weight and its Gauss weight (0 where `x` is a Kronrod node only). The
-/// difference of the two rules on an interval bounds the error of the Kronrod value there, which the integrator
-/// refines until it is within its share of the tolerance (`integrate_panel`). Computed to 60 digits (the
-/// Stieltjes polynomial's roots, then the weights from the moments) and printed to 17; `tests` below check that
-/// the Kronrod rule of `n` is exact to degree `3n + 1` and the Gauss rule to `2n - 1`. The WGSL twin's table is
-/// written from this one (`gpu::shaders::shared_constants`).
-pub const KRONROD_ORDERS: [u32; 7] = [3, 4, 5, 6, 7, 8, 10];
-pub const KRONROD_START: [usize; 7] = [0, 4, 9, 15, 22, 30, 39];
-#[allow(clippy::excessive_precision)]
-pub const KRONROD: [(f64, f64, f64); 50] = [
-    (0.0, 0.45091653865847414, 0.88888888888888889), // 3
-    (0.43424374934680256, 0.40139741477596222, 0.0), // 3
-    (
-        0.77459666924148338,
-        0.26848808986833344,
-        0.55555555555555556,
-    ), // 3
-    (0.96049126870802028, 0.10465622602646727, 0.0), // 3
-    (0.0, 0.34644298189013636, 0.0),                 // 4
-    (
-        0.33998104358485626,
-        0.32694918960145163,
-        0.65214515486254614,
-    ), // 4
-    (0.64028621749630998, 0.26679834045228445, 0.0), // 4
-    (
-        0.86113631159405258,
-        0.17005360533572273,
-        0.34785484513745386,
-    ), // 4
-    (0.97656025073757311, 0.062977373665473015, 0.0), // 4
-    (0.0, 0.28298741785749121, 0.56888888888888889), // 5
-    (0.27963041316178319, 0.27284980191255892, 0.0), // 5
-    (
-        0.53846931010568309,
-        0.24104033922864759,
-        0.47862867049936647,
-    ), // 5
-    (0.75416672657084922, 0.18680079655649266, 0.0), // 5
-    (
-        0.90617984593866399,
-        0.11523331662247339,
-        0.23692688505618909,
-    ), // 5
-    (0.98408536009484246, 0.042582036751081833, 0.0), // 5
-    (0.0, 0.24107258017346476, 0.0),                 // 6
-    (
-        0.23861918608319691,
-        0.23377086411699441,
-        0.46791393457269105,
-    ), // 6
-    (0.46311821247530461, 0.21320965227196228, 0.0), // 6
-    (
-        0.66120938646626451,
-        0.18107199432313762,
-        0.36076157304813861,
-    ), // 6
-    (0.82137334086502794, 0.13732060463444692, 0.0), // 6
-    (
-        0.93246951420315203,
-        0.083694440446906626,
-        0.17132449237917035,
-    ), // 6
-    (0.98870320261267886, 0.030396154119819769, 0.0), // 6
-    (0.0, 0.20948214108472783, 0.41795918367346939), // 7
-    (0.20778495500789847, 0.20443294007529889, 0.0), // 7
-    (
-        0.40584515137739717,
-        0.19035057806478541,
-        0.38183005050511894,
-    ), // 7
-    (0.58608723546769113, 0.1690047266392679, 0.0),  // 7
-    (
-        0.74153118559939444,
-        0.14065325971552592,
-        0.27970539148927667,
-    ), // 7
-    (0.86486442335976907, 0.10479001032225018, 0.0), // 7
-    (
-        0.94910791234275852,
-        0.063092092629978553,
-        0.12948496616886969,
-    ), // 7
-    (0.99145537112081264, 0.022935322010529225, 0.0), // 7
-    (0.0, 0.18444640574469164, 0.0),                 // 8
-    (0.1834346424956498, 0.18140002506803464, 0.36268378337836198), // 8
-    (0.36070109792813196, 0.17207060855521131, 0.0), // 8
-    (0.52553240991632899, 0.1566526061681884, 0.31370664587788729), // 8
-    (0.67235407094515868, 0.13626310925517222, 0.0), // 8
-    (
-        0.79666647741362674,
-        0.11164637082683961,
-        0.22238103445337447,
-    ), // 8
-    (0.89412090684745642, 0.082482298931358331, 0.0), // 8
-    (
-        0.96028985649753623,
-        0.049439395002139309,
-        0.10122853629037626,
-    ), // 8
-    (0.99337987588171616, 0.017822383320710355, 0.0), // 8
-    (0.0, 0.14944555400291691, 0.0),                 // 10
-    (
-        0.14887433898163121,
-        0.14773910490133849,
-        0.29552422471475287,
-    ), // 10
-    (0.2943928627014602, 0.14277593857706008, 0.0),  // 10
-    (
-        0.43339539412924719,
-        0.13470921731147333,
-        0.26926671930999636,
-    ), // 10
-    (0.56275713466860468, 0.12349197626206585, 0.0), // 10
-    (
-        0.67940956829902441,
-        0.10938715880229764,
-        0.21908636251598204,
-    ), // 10
-    (0.7808177265864169, 0.093125454583697606, 0.0), // 10
-    (
-        0.86506336668898451,
-        0.075039674810919953,
-        0.14945134915058059,
-    ), // 10
-    (0.93015749135570823, 0.054755896574351996, 0.0), // 10
-    (
-        0.97390652851717172,
-        0.032558162307964727,
-        0.066671344308688138,
-    ), // 10
-    (0.99565716302580808, 0.011694638867371874, 0.0), // 10
-];
-
-/// The Gauss-Kronrod pair for the scene's tolerance on B: a higher order for a finer tolerance, so that smooth
-/// pieces pass the error test without refinement. B is scale free (coefficient over distance), and so is this
-/// choice.
-pub fn kronrod_order(tolerance: f64) -> u32 {
-    match tolerance {
-        t if t >= 1e-3 => 4,
-        t if t >= 1e-4 => 5,
-        t if t >= 1e-5 => 6,
-        t if t >= 1e-6 => 7,
-        t if t >= 1e-7 => 8,
-        _ => 10,
-    }
-}
-
-/// Index of `order` in `KRONROD_ORDERS` (the last for anything else).
-pub fn kronrod_index(order: u32) -> usize {
-    KRONROD_ORDERS
-        .iter()
-        .position(|&n| n == order)
-        .unwrap_or(KRONROD_ORDERS.len() - 1)
-}
 
 /// The Kronrod and the Gauss value of `g` on `[a, b]` with the pair of `order`.
 fn kronrod(g: &impl Fn(f64) -> f64, a: f64, b: f64, order: u32) -> (f64, f64) {
@@ -259,18 +97,6 @@ fn kronrod(g: &impl Fn(f64) -> f64, a: f64, b: f64, order: u32) -> (f64, f64) {
 /// A part's rules agreeing within this share of its value count as agreeing, whatever the allowance: the f64
 /// rounding of a sum of nodes (the f32 twin's is `4e-6`).
 pub const ROUNDING: f64 = 1e-13;
-
-/// Levels of bisection of a panel at most: its smallest part is `2^-MAX_DEPTH` of it.
-pub const MAX_DEPTH: u32 = 10;
-/// Parts a term may refine beyond its panels at most (each refinement spends two more rules).
-pub const MAX_REFINEMENTS: u32 = 24;
-
-/// The refinements a term may spend with the pair of `order`: 8 at the default tolerance and coarser (lavapipe
-/// stops a shader invocation after 65535 loop iterations, and a term's parts solved on the whole chain cost the
-/// most), `MAX_REFINEMENTS` for a finer one.
-pub fn refinement_budget(order: u32) -> u32 {
-    if order <= 5 { 8 } else { MAX_REFINEMENTS }
-}
 
 /// `g` on `[a, b]`, refined where its Gauss and Kronrod values differ by more than `allowance` per unit of
 /// length: the parts of a dyadic bisection of `[a, b]`, visited in order (without a stack: after a part is
@@ -318,12 +144,6 @@ pub struct Peak {
     pub flat: f64,
 }
 
-/// Widest feature considered: beyond it the map is as good as uniform.
-pub const MAX_WIDTH: f64 = 4.0;
-/// Narrowest axis feature: a ray through the axis itself has a true kink there, which a map this narrow
-/// resolves as well as any.
-pub const MIN_AXIS_WIDTH: f64 = 1e-4;
-
 /// The peak of a term whose squared distance is `d2(s) = d2_min + a (s - s*)^2`.
 pub(super) fn peak(center: f64, d2_min: f64, a: f64, eps: f64) -> Peak {
     let d2 = d2_min.max(eps * eps);
@@ -365,10 +185,6 @@ pub(super) fn line_approach(
     };
     (c, (q_perp + d_perp * c).length_squared(), a)
 }
-
-/// Most features of one term: a torus's two ring passes and its axis, or a chain's two closest approaches and its
-/// two ends.
-pub const MAX_PEAKS: usize = 4;
 
 /// A term's features along the ray, each owning its piece, and the kinks where a curve's nearest point jumps.
 pub(super) struct Features {
@@ -497,11 +313,6 @@ fn cuts(p: &Peak, u0: f64, u1: f64, kinks: &Kinks) -> ([(f64, bool); MAX_CUTS], 
     }
     (out, kept)
 }
-
-/// Cuts of a piece closer than this in u are merged (`cuts`).
-pub const CUT_MERGE: f64 = 1e-6;
-/// Ordinary cuts closer than this in u to a singular one are dropped (`cuts`).
-pub const SINGULAR_MERGE: f64 = 1e-3;
 
 /// `g` on `[a, b]` with the nodes drawn toward an end where the integrand behaves like the square root of the
 /// distance from it (`singular_a`, `singular_b`): `u = a + (b - a) phi(x)` with `phi(x) = x^2` toward a,

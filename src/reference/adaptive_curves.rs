@@ -7,32 +7,13 @@ use std::cell::Cell;
 
 use glam::DVec3;
 
-use super::adaptive::{
-    Features, Kinks, MAX_PEAKS, Peak, integrate_pieces, kronrod_order, peak, share_ray,
-};
+use super::adaptive::{Features, Kinks, Peak, integrate_pieces, peak, share_ray};
 use crate::field::{Curve, Sources, curve, falloff, wseries};
+use crate::integrate::adaptive::{
+    END_SNAP, JUMP, KINK_PROBE, KINK_ROUNDS, MAX_PEAKS, PARAM_JUMP, PEAK_NEWTON, PEAK_SETTLED,
+    SCAN, SWITCH_INSET, SWITCH_ROUNDS, kink_bracket, kronrod_order,
+};
 use crate::integrate::{Integration, zeta};
-
-/// Intervals of the scan along a curve's ray, which finds its closest approaches and kinks.
-pub const SCAN: u32 = 6;
-/// A chain's nearest point jumps between two samples where it lands farther than this many times the distance
-/// from where a smooth motion would have taken it.
-pub const JUMP: f64 = 0.1;
-/// Or where its chain parameter lands farther than this from where its rate would have taken it (`miss`).
-pub const PARAM_JUMP: f64 = 0.05;
-/// Most rounds of the kink search, each one or two probes. (Two are not enough: a kink misplaced by 5e-3 where W
-/// steps across it costs 5e-4 on a ray of the mixed scene.)
-pub const KINK_ROUNDS: u32 = 12;
-/// The kink search stops when its bracket is this short (in t, the ray being 1 long).
-pub const KINK_BRACKET: f64 = 1e-3;
-
-/// How short the kink search's bracket gets with the pair of `order`: `KINK_BRACKET` at the default tolerance
-/// and coarser, 1e-5 for a finer one (a W step misplaced by 1e-3 costs about 3e-5 on the seven-weight preset).
-pub fn kink_bracket(order: u32) -> f64 {
-    if order <= 5 { KINK_BRACKET } else { 1e-5 }
-}
-/// How far either side of its estimate a round of the kink search probes, relative to the bracket.
-pub const KINK_PROBE: f64 = 0.05;
 
 /// The features of a chain along `s -> e` (at most `MAX_PEAKS`), sorted along the ray, each owning its piece,
 /// and its kinks.
@@ -184,9 +165,6 @@ fn with_ends(found: [Peak; 2], count: usize, ends: &[Peak]) -> ([Peak; MAX_PEAKS
 fn at(x: &ChainSample, at_end: f64) -> bool {
     (x.param - at_end).abs() <= END_SNAP
 }
-
-/// How close to an end of the chain (in its parameter) a nearest point counts as at it (`at`).
-pub const END_SNAP: f64 = 1e-4;
 
 /// The cuts where a chain's nearest point crosses a knot of the W series between samples `x` and `y` with no
 /// jump between them: there Sw is continuous with its slope but its curvature steps (a quadratic B-spline), so
@@ -511,12 +489,6 @@ fn find_kink(
     (kink, a, b)
 }
 
-/// Newton steps that refine a chain's closest approach from the scan, at most.
-pub const PEAK_NEWTON: u32 = 2;
-/// Newton stops once its step is this small against the peak's width (a broad peak needs no refinement: the map
-/// is exact whatever its center, and a center off by a fraction of the width costs little accuracy).
-pub const PEAK_SETTLED: f64 = 0.25;
-
 /// The two deepest local minima of d^2 on a scan, offered in order (ties to the left).
 #[derive(Clone, Copy, Debug, Default)]
 struct Minima {
@@ -576,11 +548,6 @@ fn chain_peaks(
     }
     (out, count)
 }
-
-/// Bisection rounds that find where a part's nearest segment changes (`split_at_switch`).
-pub const SWITCH_ROUNDS: u32 = 24;
-/// How far inside a part (a share of its length) `split_at_switch` looks at its ends' segments.
-pub const SWITCH_INSET: f64 = 1e-3;
 
 /// The part `[a, b]` (in u) split where the chain's nearest segment changes, `segment(u)` (`None` at a joint),
 /// where the segments just inside its ends differ (a joint at one end and a segment at the other counts): a
@@ -677,6 +644,7 @@ pub fn brightness(sources: &Sources, settings: &Integration, s: DVec3, e: DVec3)
 mod tests {
     use super::super::adaptive::testing::assert_within_each_tolerance;
     use super::*;
+    use crate::integrate::adaptive::KINK_BRACKET;
 
     /// An arch, one segment from (-1, 0, 0) over (0, 2, 0) to (1, 0, 0), symmetric about x = 0.
     fn arch() -> Curve {

@@ -6,11 +6,12 @@
 
 use glam::DVec3;
 
-use super::adaptive::{
-    Features, Kinks, MAX_PEAKS, MAX_WIDTH, MIN_AXIS_WIDTH, Peak, integrate_pieces, kronrod_order,
-    line_approach, peak, share_ray,
-};
+use super::adaptive::{Features, Kinks, Peak, integrate_pieces, line_approach, peak, share_ray};
 use crate::field::{Line, Point, Sources, Torus, falloff, line_distance, torus_distance};
+use crate::integrate::adaptive::{
+    CLOSED_FORM_CONDITION, MAX_PEAKS, MAX_WIDTH, MIN_AXIS_WIDTH, RING_NEWTON, RING_STEP,
+    kronrod_order,
+};
 use crate::integrate::{Integration, zeta};
 
 /// One smooth source's term along a ray.
@@ -119,22 +120,12 @@ impl Ring {
     }
 }
 
-/// Newton steps that find a ring's closest approach, and the longest of them (in t).
-pub const RING_NEWTON: u32 = 6;
-pub const RING_STEP: f64 = 0.125;
-
 /// The closest approach of the ray `s + t dir` to the point `p`: `(t*, d*^2, a)` with `d^2(t) = d*^2 + a (t - t*)^2`.
 fn point_approach(s: DVec3, dir: DVec3, p: DVec3) -> (f64, f64, f64) {
     let a = dir.length_squared();
     let c = if a > 0.0 { (p - s).dot(dir) / a } else { 0.0 };
     (c, (s + dir * c - p).length_squared(), a)
 }
-
-/// Most cancellation the closed form of a point's or a line's term may suffer before the integrator takes it
-/// numerically instead (`falloff_integral`'s `condition`): in f32 (the shader, which uses the same
-/// bound) a term's error stays within about 2e-5 of it, measured over 200 000 random rays; the terms declined
-/// are those of a source close to the decay's pole at s = -beta.
-pub const CLOSED_FORM_CONDITION: f64 = 16.0;
 
 /// The term of a point or a line in closed form: the integral over s in [0, 1] of `zeta(s) / max(eps, d(s))`
 /// for a squared distance along the ray `d(s)^2 = h2 + a (s - c)^2` (closest approach `c`, its squared distance

@@ -1,7 +1,9 @@
 //! How a scene integrates B along a texel's ray: the integrator and its settings (the scene file's
 //! `[integration]`), and the decay zeta every integrator weighs the field with (METHOD.md section 3, thesis 3.31).
 //! The integrators themselves are the GPU's field passes (`gpu::field_pass`) and their f64 twins
-//! (`crate::reference`).
+//! (`crate::reference`), which share the adaptive integrator's settings in [`adaptive`].
+
+pub mod adaptive;
 
 /// How B is integrated along a ray.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
