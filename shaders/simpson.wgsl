@@ -9,7 +9,7 @@ fn curve_field(c: CurveSource, p: vec3<f32>, eps: f32) -> f32 {
     return c.coefficient * wseries(c, best.x) * falloff(best.y, eps);
 }
 
-// The PCG hash (Jarzynski and Olano 2020). Twin of integrate::pcg_hash.
+// The PCG hash (Jarzynski and Olano 2020). Twin of reference::simpson::pcg_hash.
 fn pcg_hash(x: u32) -> u32 {
     let state = x * 747796405u + 2891336453u;
     let word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
