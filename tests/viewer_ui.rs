@@ -1,90 +1,17 @@
 //! The viewer's interface, driven through egui_kittest like a user: the real `ViewerApp::ui`, rendered by
 //! egui-wgpu on the same GPU passes as the window (lavapipe in CI).
 
-use std::sync::{Arc, Mutex};
+mod common;
 
+use common::viewer::{harness, light_scene, mean_abs_difference, viewport_pixels};
 use egui::accesskit::Role;
 use egui::{Key, Modifiers, Pos2, Vec2};
+use egui_kittest::Harness;
 use egui_kittest::kittest::{NodeT, Queryable};
-use egui_kittest::{Harness, wgpu::WgpuTestRenderer};
-use energywave::gpu::GpuContext;
 use energywave::integrate::Integrator;
 use energywave::scene::Scene;
+use energywave::viewer::ViewerApp;
 use energywave::viewer::handles::{self, HandleId};
-use energywave::viewer::viewport::{ViewportGpu, ViewportReport};
-use energywave::viewer::{Document, ViewerApp};
-
-const SIZE: Vec2 = Vec2::new(1000.0, 700.0);
-const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
-
-/// The default scene at a resolution and division count that render quickly on a software rasteriser.
-fn light_scene() -> Scene {
-    let mut s = Scene::default_scene();
-    s.billboard.resolution = 96;
-    s.integration.integrator = Integrator::Simpson;
-    s.integration.divisions = 64;
-    s
-}
-
-/// A harness around a viewer on `scene`, its renderer on our own device with the viewport installed.
-fn harness(scene: Scene) -> Harness<'static, ViewerApp> {
-    let ctx = GpuContext::new().expect("a GPU adapter (lavapipe in CI)");
-    let report = Arc::new(Mutex::new(ViewportReport::default()));
-    let mut renderer =
-        egui_wgpu::Renderer::new(&ctx.device, FORMAT, egui_wgpu::RendererOptions::PREDICTABLE);
-    renderer
-        .callback_resources
-        .insert(ViewportGpu::new(&ctx.device, FORMAT, report.clone()));
-    let app = ViewerApp::new(
-        Document::new(scene, None),
-        ctx.adapter_summary(),
-        ctx.device.limits().max_texture_dimension_2d,
-        report,
-    );
-    let render_state = egui_wgpu::RenderState {
-        available_adapters: vec![ctx.adapter.clone()],
-        adapter: ctx.adapter,
-        instance: ctx.instance,
-        device: ctx.device,
-        queue: ctx.queue,
-        target_format: FORMAT,
-        renderer: Arc::new(egui::mutex::RwLock::new(renderer)),
-    };
-    let mut h = Harness::builder()
-        .with_size(SIZE)
-        .renderer(WgpuTestRenderer::from_render_state(render_state))
-        .build_ui_state(|ui, app: &mut ViewerApp| app.ui(ui), app);
-    h.run();
-    h
-}
-
-/// The viewport's pixels of a rendered frame, as an average color and the image.
-fn viewport_pixels(h: &mut Harness<'static, ViewerApp>) -> Vec<[u8; 4]> {
-    let rect = h.state().viewport_rect();
-    let image = h.render().expect("the frame renders");
-    let ppp = image.width() as f32 / SIZE.x;
-    let mut v = Vec::new();
-    for y in (rect.top() * ppp) as u32..(rect.bottom() * ppp) as u32 {
-        for x in (rect.left() * ppp) as u32..(rect.right() * ppp) as u32 {
-            v.push(image.get_pixel(x, y).0);
-        }
-    }
-    v
-}
-
-fn mean_abs_difference(a: &[[u8; 4]], b: &[[u8; 4]]) -> f64 {
-    assert_eq!(a.len(), b.len());
-    let sum: f64 = a
-        .iter()
-        .zip(b)
-        .map(|(p, q)| {
-            (0..3)
-                .map(|c| (p[c] as f64 - q[c] as f64).abs())
-                .sum::<f64>()
-        })
-        .sum();
-    sum / (a.len() * 3) as f64
-}
 
 #[test]
 fn the_viewport_shows_the_glow_not_a_flat_image() {

@@ -59,6 +59,21 @@ enum Gesture {
     },
 }
 
+/// How long a message that is not an error stays in the status bar, seconds. Any message also clears at the
+/// user's next action; an error about the file on disk clears once the file is fine again.
+pub const NOTICE_SECONDS: f64 = 5.0;
+
+/// A message in the status bar.
+#[derive(Clone, Debug)]
+struct Notice {
+    /// The text and whether it is an error.
+    message: (String, bool),
+    /// When it was given (the UI's clock).
+    at: f64,
+    /// About the file on disk: cleared once the file loads and no reload waits.
+    from_disk: bool,
+}
+
 /// The viewer's state.
 pub struct ViewerApp {
     doc: Document,
@@ -78,8 +93,10 @@ pub struct ViewerApp {
     /// The camera as loaded, for "Reset view".
     home_camera: Camera,
     pending: Option<Pending>,
-    /// The last message for the user (and whether it is an error).
-    notice: Option<(String, bool)>,
+    /// The last message for the user.
+    notice: Option<Notice>,
+    /// The UI's clock at this frame (egui's time, seconds).
+    now: f64,
     report: Arc<Mutex<ViewportReport>>,
     gesture: Option<Gesture>,
     hovered: Option<HandleId>,
@@ -122,6 +139,7 @@ impl ViewerApp {
             viewport_rect: egui::Rect::NOTHING,
             pending: None,
             notice: None,
+            now: 0.0,
             report,
             gesture: None,
             hovered: None,
@@ -253,7 +271,7 @@ impl ViewerApp {
 
     /// The last message for the user, and whether it is an error.
     pub fn notice(&self) -> Option<&(String, bool)> {
-        self.notice.as_ref()
+        self.notice.as_ref().map(|n| &n.message)
     }
 
     /// Largest billboard resolution the device allows.
@@ -293,7 +311,39 @@ impl ViewerApp {
     }
 
     pub fn notify(&mut self, text: impl Into<String>, is_error: bool) {
-        self.notice = Some((text.into(), is_error));
+        self.notice = Some(Notice {
+            message: (text.into(), is_error),
+            at: self.now,
+            from_disk: false,
+        });
+    }
+
+    /// A message about the file on disk (cleared when the file is fine again).
+    fn notify_disk(&mut self, text: impl Into<String>, is_error: bool) {
+        self.notify(text, is_error);
+        if let Some(n) = &mut self.notice {
+            n.from_disk = true;
+        }
+    }
+
+    /// The window's title: the file's name, `*` with unsaved changes, and the program's.
+    pub fn window_title(&self) -> String {
+        format!("{} \u{2014} energywave", self.doc.title())
+    }
+
+    /// Drops a message whose time is up or whose cause is gone, and asks for a frame when the one shown will
+    /// expire.
+    fn expire_notice(&mut self, ctx: &egui::Context) {
+        let Some(n) = &self.notice else {
+            return;
+        };
+        let disk_fine = self.doc.disk_error.is_none() && self.doc.pending_reload.is_none();
+        let left = NOTICE_SECONDS - (self.now - n.at);
+        if (n.from_disk && disk_fine) || (!n.message.1 && left <= 0.0) {
+            self.notice = None;
+        } else if !n.message.1 {
+            ctx.request_repaint_after(std::time::Duration::from_secs_f64(left));
+        }
     }
 
     /// Median frame time in seconds over the last frames.
@@ -309,6 +359,10 @@ impl ViewerApp {
     /// Carries out what the user asked for: every action of the panels, the viewport, the shortcuts and the
     /// prompts comes through here.
     pub fn apply(&mut self, action: Action) {
+        // A message is about what came before: the next action clears it.
+        if !matches!(action, Action::Notify { .. }) {
+            self.notice = None;
+        }
         match action {
             Action::Open(path) => {
                 if self.doc.is_dirty() {
@@ -439,6 +493,7 @@ impl ViewerApp {
 
     /// The whole interface for one frame.
     pub fn ui(&mut self, ui: &mut egui::Ui) {
+        self.now = ui.input(|i| i.time);
         let now = Instant::now();
         if let Some(last) = self.last_frame.replace(now) {
             self.frame_times
@@ -449,19 +504,20 @@ impl ViewerApp {
         }
         match self.doc.poll_disk(now) {
             Some(DiskChange::Reloaded) => self.notify("Reloaded: the file changed on disk", false),
-            Some(DiskChange::Invalid(e)) => self.notify(
+            Some(DiskChange::Invalid(e)) => self.notify_disk(
                 format!(
                     "The file changed on disk but does not load; keeping the last good scene.\n{e}"
                 ),
                 true,
             ),
             Some(DiskChange::Conflict) => {
-                self.notify("The file changed on disk; you have unsaved changes", true)
+                self.notify_disk("The file changed on disk; you have unsaved changes", true)
             }
             None => {}
         }
         let actions = self.shortcuts(ui.ctx());
         self.apply_all(actions);
+        self.expire_notice(ui.ctx());
 
         egui::Panel::bottom("energywave.status").show(ui, |ui| self.status_bar(ui));
         self.animation_ui(ui);
@@ -566,15 +622,22 @@ impl ViewerApp {
                 );
             ui.separator();
             ui.label(self.doc.title());
-            if let Some((text, is_error)) = &self.notice {
+            if let Some((text, is_error)) = self.notice() {
                 ui.separator();
+                // One line, cut to the bar's width; the whole message on hover.
                 let first_line = text.lines().next().unwrap_or_default();
                 let color = if *is_error {
                     Color32::from_rgb(255, 110, 90)
                 } else {
                     ui.visuals().weak_text_color()
                 };
-                ui.colored_label(color, first_line)
+                let more = first_line.len() < text.len();
+                let shown = if more {
+                    format!("{first_line} \u{2026}")
+                } else {
+                    first_line.to_owned()
+                };
+                ui.add(egui::Label::new(egui::RichText::new(shown).color(color)).truncate())
                     .on_hover_text(text.as_str());
             }
         });

@@ -70,9 +70,15 @@ impl Document {
         &self.saved
     }
 
-    /// True when the scene differs from its file.
+    /// True when the effect differs from its file. The view does not count: looking is not editing. (The
+    /// camera is saved with the scene when the user saves, and a reload keeps a view the user moved.)
     pub fn is_dirty(&self) -> bool {
-        self.scene != self.saved
+        !same_effect(&self.scene, &self.saved)
+    }
+
+    /// True when the camera differs from the file's: the user moved the view.
+    pub fn view_moved(&self) -> bool {
+        self.scene.camera != self.saved.camera
     }
 
     /// The name to show: the file name (or "default scene") with `*` when there are unsaved changes.
@@ -155,8 +161,7 @@ impl Document {
                     self.pending_reload = Some(scene);
                     Some(DiskChange::Conflict)
                 } else {
-                    self.saved = scene.clone();
-                    self.scene = scene;
+                    self.take_from_disk(scene);
                     Some(DiskChange::Reloaded)
                 }
             }
@@ -166,8 +171,17 @@ impl Document {
     /// Takes the version waiting on disk, dropping unsaved edits.
     pub fn accept_reload(&mut self) {
         if let Some(scene) = self.pending_reload.take() {
-            self.saved = scene.clone();
-            self.scene = scene;
+            self.take_from_disk(scene);
+        }
+    }
+
+    /// The file's new content becomes the document's, keeping the view where the user moved it.
+    fn take_from_disk(&mut self, scene: Scene) {
+        let view = self.view_moved().then(|| self.scene.camera.clone());
+        self.saved = scene.clone();
+        self.scene = scene;
+        if let Some(camera) = view {
+            self.scene.camera = camera;
         }
     }
 
@@ -187,6 +201,16 @@ impl Document {
         };
         unused_path(&dir, &format!("{stem}-{}", timestamp(now)), "png")
     }
+}
+
+/// True when `a` and `b` are the same effect, whatever their cameras.
+fn same_effect(a: &Scene, b: &Scene) -> bool {
+    if a.camera == b.camera {
+        return a == b;
+    }
+    let mut b = b.clone();
+    b.camera = a.camera.clone();
+    *a == b
 }
 
 /// `dir/base.ext`, or `dir/base-2.ext`, `dir/base-3.ext`, ... the first that does not exist.
@@ -263,6 +287,51 @@ mod tests {
             doc.screenshot_path(now),
             dir.join("ring-20261122-021155-2.png")
         );
+    }
+
+    #[test]
+    fn looking_is_not_editing_and_a_reload_keeps_the_view() {
+        let dir = tmp("view");
+        let path = dir.join("look.toml");
+        std::fs::write(&path, Scene::default_scene().to_toml()).unwrap();
+        let mut doc = Document::open(&path).unwrap();
+        doc.scene.camera.eye.x += 1.5;
+        assert!(!doc.is_dirty() && !doc.title().ends_with('*'), "an orbit is no edit");
+        assert!(doc.view_moved());
+        // The file changes on disk: it reloads (no edits to lose), and the view stays where it was moved.
+        let eye = doc.scene.camera.eye;
+        let mut edited = Scene::default_scene();
+        edited.sources.tori.clear();
+        edited.camera.eye.y += 3.0;
+        std::thread::sleep(Duration::from_millis(20));
+        std::fs::write(&path, edited.to_toml()).unwrap();
+        let t = std::time::SystemTime::now() + Duration::from_secs(5);
+        std::fs::File::options()
+            .write(true)
+            .open(&path)
+            .unwrap()
+            .set_modified(t)
+            .unwrap();
+        assert!(matches!(doc.check_disk(), Some(DiskChange::Reloaded)));
+        assert_eq!(doc.scene.sources, edited.sources);
+        assert_eq!(doc.scene.camera.eye, eye, "the view the user moved");
+        assert!(!doc.is_dirty());
+        // Saving writes the view with the effect.
+        doc.save().unwrap();
+        assert_eq!(Scene::load(&path).unwrap().camera.eye, eye);
+        // An untouched view follows the file.
+        let mut again = Document::open(&path).unwrap();
+        let mut moved = again.scene.clone();
+        moved.camera.eye.z += 2.0;
+        std::fs::write(&path, moved.to_toml()).unwrap();
+        std::fs::File::options()
+            .write(true)
+            .open(&path)
+            .unwrap()
+            .set_modified(t + Duration::from_secs(5))
+            .unwrap();
+        assert!(matches!(again.check_disk(), Some(DiskChange::Reloaded)));
+        assert_eq!(again.scene.camera, moved.camera);
     }
 
     #[test]

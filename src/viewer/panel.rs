@@ -141,18 +141,35 @@ fn file_section(
         }
     });
     if let Some(error) = &cx.doc.disk_error {
-        ui.colored_label(
-            ERROR_COLOR,
-            format!("Not reloaded, keeping the last good scene:\n{error}"),
+        ui.add(
+            egui::Label::new(
+                egui::RichText::new(format!(
+                    "Not reloaded, keeping the last good scene:\n{error}"
+                ))
+                .color(ERROR_COLOR),
+            )
+            .wrap(),
         );
     }
     if cx.doc.pending_reload.is_some() {
-        ui.horizontal(|ui| {
-            ui.colored_label(egui::Color32::from_rgb(255, 200, 90), "Changed on disk.");
-            if ui.button("Reload (drop my edits)").clicked() {
+        ui.colored_label(
+            egui::Color32::from_rgb(255, 200, 90),
+            "The file changed on disk, and you have unsaved edits.",
+        );
+        // Wrapped, so that the buttons never widen the panel (and push the viewport aside).
+        ui.horizontal_wrapped(|ui| {
+            if ui
+                .button("Reload")
+                .on_hover_text("Take the file's new content; your edits are dropped")
+                .clicked()
+            {
                 out.push(Action::AcceptReload);
             }
-            if ui.button("Keep mine").clicked() {
+            if ui
+                .button("Keep mine")
+                .on_hover_text("Keep your edits; saving overwrites the file")
+                .clicked()
+            {
                 out.push(Action::KeepMine);
             }
         });

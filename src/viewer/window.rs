@@ -116,6 +116,8 @@ struct Gfx {
     surface: WindowSurface,
     gpu: ViewerGpu,
     egui_state: egui_winit::State,
+    /// The window's title as last set.
+    title: String,
 }
 
 struct Handler {
@@ -172,6 +174,7 @@ impl Gfx {
             },
             gpu,
             egui_state,
+            title: String::new(),
         })
     }
 
@@ -254,6 +257,11 @@ impl Handler {
         };
         gfx.egui_state
             .handle_platform_output(&gfx.surface.window, presented.platform_output);
+        let title = app.window_title();
+        if title != gfx.title {
+            gfx.surface.window.set_title(&title);
+            gfx.title = title;
+        }
         if let Some(e) = presented.gpu_error {
             app.notify(format!("GPU error: {e}"), true);
         }

@@ -1,10 +1,12 @@
-//! What several test files share: the shipped scenes.
+//! What several test files share: the shipped scenes, and the viewer under egui_kittest (`viewer`).
 // Each test file compiles this module on its own and uses part of it.
 #![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
 
 use energywave::scene::Scene;
+
+pub mod viewer;
 
 /// `assets/scenes`.
 pub fn scenes_dir() -> PathBuf {
