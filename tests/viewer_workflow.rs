@@ -35,7 +35,11 @@ fn orbiting_is_not_an_edit() {
     );
     assert_ne!(h.state().scene().camera, camera, "the view moved");
     assert!(!h.state().document().is_dirty());
-    assert!(!h.state().window_title().contains('*'), "{}", h.state().window_title());
+    assert!(
+        !h.state().window_title().contains('*'),
+        "{}",
+        h.state().window_title()
+    );
     // Closing asks nothing.
     h.state_mut().request_quit();
     h.run();
@@ -70,7 +74,11 @@ fn messages_clear_at_the_next_action_and_expire() {
     // An error stays until the next action.
     h.get_by_label("Save As").click();
     h.run();
-    assert!(h.state().notice().is_some_and(|n| n.1), "{:?}", h.state().notice());
+    assert!(
+        h.state().notice().is_some_and(|n| n.1),
+        "{:?}",
+        h.state().notice()
+    );
     for _ in 0..steps {
         h.step();
     }
@@ -89,7 +97,8 @@ fn a_fixed_file_clears_its_error_and_the_reload_prompt_fits_the_panel() {
     let scene = light_scene();
     std::fs::write(&path, scene.to_toml()).unwrap();
     let mut h = harness(scene.clone());
-    h.state_mut().apply(energywave::viewer::Action::Open(path.clone()));
+    h.state_mut()
+        .apply(energywave::viewer::Action::Open(path.clone()));
     h.run();
     let touch = |k: u64| {
         let t = std::time::SystemTime::now() + std::time::Duration::from_secs(10 * k);
@@ -105,7 +114,11 @@ fn a_fixed_file_clears_its_error_and_the_reload_prompt_fits_the_panel() {
     touch(1);
     std::thread::sleep(std::time::Duration::from_millis(450));
     h.run();
-    assert!(h.state().notice().is_some_and(|n| n.1), "{:?}", h.state().notice());
+    assert!(
+        h.state().notice().is_some_and(|n| n.1),
+        "{:?}",
+        h.state().notice()
+    );
     // Fixed: the error goes.
     std::fs::write(&path, scene.to_toml()).unwrap();
     touch(2);
@@ -125,11 +138,107 @@ fn a_fixed_file_clears_its_error_and_the_reload_prompt_fits_the_panel() {
     for label in ["Reload", "Keep mine"] {
         let button = h.get_by_label(label);
         let r = button.rect();
-        assert!(r.right() <= panel_right, "{label} ends at {} beyond {panel_right}", r.right());
+        assert!(
+            r.right() <= panel_right,
+            "{label} ends at {} beyond {panel_right}",
+            r.right()
+        );
     }
     h.get_by_label("Reload").click();
     h.run();
     assert_eq!(h.state().notice(), None, "the conflict is resolved");
     assert!(h.state().scene().sources.tori.is_empty());
     assert!(!h.state().document().is_dirty());
+}
+
+#[test]
+fn key_buttons_key_the_value_shown_and_the_i_key_does_too() {
+    use egui::accesskit::Role;
+    use energywave::animation::{Parameter, SourceKind, Value};
+    let mut h = harness(light_scene());
+    assert!(!h.state().scene().is_animated());
+    // A still scene: keying a value gives it a timeline, with the key at frame 0.
+    h.get_by_label("key tori[0].coefficient").click();
+    h.run();
+    let track = |h: &Harness<'static, ViewerApp>, p: Parameter| {
+        h.state()
+            .scene()
+            .animation
+            .as_ref()
+            .and_then(|a| a.tracks.iter().find(|t| t.parameter == p).cloned())
+    };
+    let coefficient = Parameter::Coefficient(SourceKind::Tori, 0);
+    let c0 = h.state().scene().sources.tori[0].coefficient;
+    let keys = track(&h, coefficient).expect("a track").keys;
+    assert_eq!(keys.len(), 1);
+    assert_eq!((keys[0].frame, keys[0].value), (0.0, Value::Number(c0)));
+    // At frame 40 an edit of the keyed value is a key there.
+    h.get_by_role_and_label(Role::Slider, "frame")
+        .set_value_accesskit(40.0);
+    h.run();
+    h.get_all_by_role_and_label(Role::SpinButton, "coefficient")
+        .next()
+        .unwrap()
+        .set_value_accesskit(5.0);
+    h.run();
+    let frames: Vec<f64> = track(&h, coefficient)
+        .unwrap()
+        .keys
+        .iter()
+        .map(|k| k.frame)
+        .collect();
+    assert_eq!(frames, [0.0, 40.0]);
+    // The button at a key removes it.
+    h.get_by_label("key tori[0].coefficient").click();
+    h.run();
+    let frames: Vec<f64> = track(&h, coefficient)
+        .unwrap()
+        .keys
+        .iter()
+        .map(|k| k.frame)
+        .collect();
+    assert_eq!(frames, [0.0]);
+    // I over a field keys it, as in Blender.
+    let radius = h.get_by_role_and_label(Role::SpinButton, "radius R").rect();
+    h.hover_at(radius.center());
+    h.run();
+    h.key_press(egui::Key::I);
+    h.run();
+    let r = track(&h, Parameter::MajorRadius(0)).expect("keyed by I");
+    assert_eq!(r.keys[0].frame, 40.0);
+    assert!(h.state().history().can_undo(), "keys are edits");
+}
+
+#[test]
+fn the_scrubber_gives_each_frame_pixels_of_its_own() {
+    use egui::accesskit::Role;
+    let mut scene = light_scene();
+    scene.animation = Some(energywave::animation::Animation {
+        frames: 92,
+        ..Default::default()
+    });
+    let h = harness(scene);
+    let slider = h.get_by_role_and_label(Role::Slider, "frame").rect();
+    assert!(
+        slider.width() >= 92.0 * 3.0,
+        "the scrubber is {} wide for 92 frames",
+        slider.width()
+    );
+}
+
+#[test]
+fn the_panel_keeps_its_width_whatever_it_shows() {
+    let mut h = harness(light_scene());
+    let left = h.state().viewport_rect().left();
+    // Simpson with jitter shows the most rows; an animation adds key buttons everywhere.
+    h.get_by_label("jitter (noise instead of bands)").click();
+    h.run();
+    h.get_by_label("key tori[0].coefficient").click();
+    h.run();
+    assert!(h.state().scene().is_animated());
+    assert_eq!(
+        h.state().viewport_rect().left(),
+        left,
+        "the viewport did not move"
+    );
 }

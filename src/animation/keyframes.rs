@@ -100,7 +100,7 @@ impl SourceKind {
 }
 
 /// A parameter that can be keyed: a path into the scene, as the scene file names it.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Parameter {
     /// `colors.energy`
     EnergyColor,
@@ -243,7 +243,7 @@ impl Parameter {
             Parameter::MajorRadius(_) => Parameter::MajorRadius(index),
             Parameter::ControlPoint(_, j) => Parameter::ControlPoint(index, j),
             Parameter::Weight(_, j) => Parameter::Weight(index, j),
-            ref other => other.clone(),
+            other => other,
         }
     }
 }

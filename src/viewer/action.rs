@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use glam::DVec3;
 
-use crate::animation::{Animation, Parameter, SourceKind, Value};
+use crate::animation::{Animation, Key, Parameter, SourceKind, Track, Value};
 use crate::export::Target;
 use crate::field::{Curve, Line, Point, Torus};
 use crate::geometry::Camera;
@@ -82,6 +82,11 @@ pub enum Edit {
     RemoveWeight(usize, usize),
     /// A curve's W series removed (uniform intensity).
     UniformWeights(usize),
+    /// A key of a parameter at the current frame, to a value: its track's, or a new track's (a still scene gets
+    /// an animation).
+    Key(Parameter, Value),
+    /// A parameter's key at the current frame removed (its track with it when it was the last).
+    Unkey(Parameter),
     /// The animation as a whole: timeline, pulses and keys (`None`: a still scene).
     Animation(Option<Animation>),
 }
@@ -226,6 +231,24 @@ impl Edit {
                     c.weights.clear();
                 }
             }
+            Edit::Key(parameter, value) => {
+                let a = scene.animation.get_or_insert_with(Animation::default);
+                match a.tracks.iter_mut().find(|t| t.parameter == parameter) {
+                    Some(track) => track.set_key(frame, value),
+                    None => a.tracks.push(Track {
+                        parameter,
+                        keys: vec![Key { frame, value }],
+                    }),
+                }
+            }
+            Edit::Unkey(parameter) => {
+                if let Some(a) = &mut scene.animation {
+                    for track in a.tracks.iter_mut().filter(|t| t.parameter == parameter) {
+                        track.keys.retain(|k| k.frame != frame);
+                    }
+                    a.tracks.retain(|t| !t.keys.is_empty());
+                }
+            }
             Edit::Animation(animation) => scene.animation = animation,
         }
         // Keys and pulses on what an edit removed go with it, so that the scene still saves as a valid file.
@@ -256,7 +279,6 @@ fn remove<T>(items: &mut Vec<T>, i: usize) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::animation::{Key, Track};
 
     /// The default scene with the torus's radius keyed at frames 0 (1.0) and 20 (2.0).
     fn keyed() -> Scene {

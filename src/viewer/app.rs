@@ -200,8 +200,13 @@ impl ViewerApp {
         // Real time, but at most half a second per UI frame, so a slow frame skips ahead but never far.
         let dt = ui.input(|i| i.stable_dt).min(0.5) as f64;
         self.playback.advance(dt, frame_rate, frames);
+        let mut keys: Vec<f64> = (animation.tracks.iter())
+            .flat_map(|t| t.keys.iter().map(|k| k.frame))
+            .collect();
+        keys.sort_by(f64::total_cmp);
+        keys.dedup();
         egui::Panel::bottom("energywave.timeline").show(ui, |ui| {
-            timeline::bar(ui, &mut self.playback, frames, frame_rate)
+            timeline::bar(ui, &mut self.playback, frames, frame_rate, &keys)
         });
         if self.playback.playing {
             ui.ctx().request_repaint();
@@ -534,6 +539,7 @@ impl ViewerApp {
                             history: &self.history,
                             max_resolution: self.max_resolution,
                             aspect: self.aspect(),
+                            frame: self.playback.frame,
                         };
                         let mut actions =
                             panel::show(ui, &cx, &mut self.path_input, &mut self.view);

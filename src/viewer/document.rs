@@ -296,7 +296,10 @@ mod tests {
         std::fs::write(&path, Scene::default_scene().to_toml()).unwrap();
         let mut doc = Document::open(&path).unwrap();
         doc.scene.camera.eye.x += 1.5;
-        assert!(!doc.is_dirty() && !doc.title().ends_with('*'), "an orbit is no edit");
+        assert!(
+            !doc.is_dirty() && !doc.title().ends_with('*'),
+            "an orbit is no edit"
+        );
         assert!(doc.view_moved());
         // The file changes on disk: it reloads (no edits to lose), and the view stays where it was moved.
         let eye = doc.scene.camera.eye;

@@ -4,12 +4,13 @@
 //! directions, ...), so the GPU never sees them.
 
 use egui::{DragValue, Slider, Ui};
+use glam::DVec3;
 
 use super::action::{Action, Edit};
 use super::document::Document;
 use super::history::History;
-use super::widgets::{ERROR_COLOR, color, direction, labelled, vec3, wseries_plot};
-use crate::animation::{IntegrationSetting, Parameter, SourceKind};
+use super::widgets::{ERROR_COLOR, KEY_COLOR, color, direction, labelled, vec3, wseries_plot};
+use crate::animation::{Animation, IntegrationSetting, Parameter, SourceKind, Value};
 use crate::field::Curve;
 use crate::integrate::Integrator;
 use crate::scene::{Scene, limits};
@@ -71,12 +72,18 @@ pub struct Context<'a> {
     pub max_resolution: u32,
     /// The viewport's width over its height.
     pub aspect: f64,
+    /// The animation's current frame (where a key goes).
+    pub frame: u32,
 }
 
 /// The panel's file, view, rendering and sources sections (the Animation section is `animation_panel`).
 /// `path` is the file name typed in the file section.
 pub fn show(ui: &mut Ui, cx: &Context, path: &mut String, view: &mut ViewSettings) -> Vec<Action> {
-    let mut out = Vec::new();
+    let mut out = Edits {
+        actions: Vec::new(),
+        animation: cx.shown.animation.as_ref(),
+        frame: cx.frame,
+    };
     file_section(ui, cx, path, view, &mut out);
     ui.separator();
     view_section(ui, cx.shown, view, &mut out);
@@ -84,7 +91,78 @@ pub fn show(ui: &mut Ui, cx: &Context, path: &mut String, view: &mut ViewSetting
     render_section(ui, cx, view, &mut out);
     ui.separator();
     sources_section(ui, cx.shown, &mut out);
-    out
+    out.actions
+}
+
+/// Where the panel's editors put what the user asked for, with what their key buttons need.
+struct Edits<'a> {
+    actions: Vec<Action>,
+    /// The scene's animation, if any: which parameters are keyed, and where.
+    animation: Option<&'a Animation>,
+    /// The current frame: where a key goes.
+    frame: u32,
+}
+
+impl Edits<'_> {
+    fn push(&mut self, action: Action) {
+        self.actions.push(action);
+    }
+
+    /// The key button beside an animatable field showing `value`, and the I key over the field's `row`: a key at
+    /// the current frame with the value shown (the scene becomes animated if it was still). The button marks a
+    /// keyed parameter (outlined) and a key at this frame (filled, and a click removes it).
+    fn key_button(&mut self, ui: &mut Ui, parameter: Parameter, value: Value, row: egui::Rect) {
+        let frame = self.frame as f64;
+        let track = self
+            .animation
+            .and_then(|a| a.tracks.iter().find(|t| t.parameter == parameter));
+        let here = track.is_some_and(|t| t.keys.iter().any(|k| k.frame == frame));
+        let side = ui.spacing().interact_size.y * 0.8;
+        let (rect, response) = ui.allocate_exact_size(egui::vec2(side, side), egui::Sense::click());
+        let name = format!("key {parameter}");
+        response
+            .widget_info(|| egui::WidgetInfo::labeled(egui::Role::Button, ui.is_enabled(), &name));
+        let color = if track.is_some() {
+            KEY_COLOR
+        } else if response.hovered() {
+            ui.visuals().strong_text_color()
+        } else {
+            ui.visuals().weak_text_color()
+        };
+        let c = rect.center();
+        let r = side * 0.38;
+        let diamond = vec![
+            c + egui::vec2(0.0, -r),
+            c + egui::vec2(r, 0.0),
+            c + egui::vec2(0.0, r),
+            c + egui::vec2(-r, 0.0),
+        ];
+        let fill = if here {
+            color
+        } else {
+            egui::Color32::TRANSPARENT
+        };
+        ui.painter().add(egui::Shape::convex_polygon(
+            diamond,
+            fill,
+            egui::Stroke::new(1.3, color),
+        ));
+        let at = self.frame;
+        let hover = if here {
+            format!("{parameter}: remove its key at frame {at}")
+        } else {
+            format!("{parameter}: key the value shown at frame {at} (or press I over the field)")
+        };
+        let clicked = response.on_hover_text(hover).clicked();
+        let typed = !ui.ctx().egui_wants_keyboard_input()
+            && ui.rect_contains_pointer(row)
+            && ui.input_mut(|i| i.consume_key(egui::Modifiers::NONE, egui::Key::I));
+        if clicked && here {
+            self.push(Action::Edit(Edit::Unkey(parameter)));
+        } else if clicked || typed {
+            self.push(Action::Edit(Edit::Key(parameter, value)));
+        }
+    }
 }
 
 fn file_section(
@@ -92,7 +170,7 @@ fn file_section(
     cx: &Context,
     path: &mut String,
     view: &mut ViewSettings,
-    out: &mut Vec<Action>,
+    out: &mut Edits<'_>,
 ) {
     ui.heading(cx.doc.title());
     ui.horizontal(|ui| {
@@ -193,7 +271,7 @@ fn file_section(
     });
 }
 
-fn view_section(ui: &mut Ui, shown: &Scene, view: &mut ViewSettings, out: &mut Vec<Action>) {
+fn view_section(ui: &mut Ui, shown: &Scene, view: &mut ViewSettings, out: &mut Edits<'_>) {
     egui::CollapsingHeader::new("View").default_open(false).show(ui, |ui| {
         ui.horizontal(|ui| {
             ui.checkbox(&mut view.show_grid, "grid");
@@ -212,14 +290,14 @@ fn view_section(ui: &mut Ui, shown: &Scene, view: &mut ViewSettings, out: &mut V
         let mut cam = shown.camera.clone();
         let mut eye = cam.eye;
         let mut target = cam.target;
-        let moved = vec3(ui, "eye", &mut eye, 0.05) | vec3(ui, "target", &mut target, 0.05);
+        let moved = vec3(ui, "eye", &mut eye, 0.05).0 | vec3(ui, "target", &mut target, 0.05).0;
         // The eye must not sit on the target.
         let mut changed = moved && (eye - target).length() > 1e-6;
         if changed {
             cam.eye = eye;
             cam.target = target;
         }
-        if let Some(up) = direction(ui, "up", cam.up)
+        if let (Some(up), _) = direction(ui, "up", cam.up)
             && up.cross((cam.target - cam.eye).normalize()).length() > 1e-6
         {
             cam.up = up;
@@ -235,27 +313,69 @@ fn view_section(ui: &mut Ui, shown: &Scene, view: &mut ViewSettings, out: &mut V
     });
 }
 
-/// A drag value for an animatable number: a `Set` when the user changed it.
+/// A drag value for an animatable number, with its key button: a `Set` when the user changed it.
 fn number(
     ui: &mut Ui,
-    out: &mut Vec<Action>,
+    out: &mut Edits<'_>,
     label: &str,
     parameter: Parameter,
     value: f64,
     widget: impl FnOnce(&mut f64) -> DragValue<'_>,
 ) -> egui::Response {
     let mut x = value;
-    let response = labelled(ui, label, widget(&mut x));
+    let name = ui.label(label);
+    // The field and its key button share one cell (of a grid's second column).
+    let response = ui
+        .horizontal(|ui| {
+            let response = ui.add(widget(&mut x)).labelled_by(name.id);
+            out.key_button(ui, parameter, Value::Number(value), response.rect);
+            response
+        })
+        .inner;
     if response.changed() && x != value {
         out.push(Action::set_number(parameter, x));
     }
     response
 }
 
-fn render_section(ui: &mut Ui, cx: &Context, view: &mut ViewSettings, out: &mut Vec<Action>) {
+/// A vector editor for an animatable position, with its key button on the same row.
+fn position(ui: &mut Ui, out: &mut Edits<'_>, label: &str, parameter: Parameter, p: DVec3) {
+    ui.horizontal(|ui| {
+        let mut q = p;
+        let (changed, row) = vec3(ui, label, &mut q, 0.02);
+        if changed {
+            out.push(Action::set_vector(parameter, q));
+        }
+        out.key_button(ui, parameter, Value::Vector(p.to_array()), row);
+    });
+}
+
+/// A direction editor for an animatable axis, with its key button on the same row.
+fn axis(ui: &mut Ui, out: &mut Edits<'_>, label: &str, parameter: Parameter, d: DVec3) {
+    ui.horizontal(|ui| {
+        let (edited, row) = direction(ui, label, d);
+        if let Some(d) = edited {
+            out.push(Action::set_vector(parameter, d));
+        }
+        out.key_button(ui, parameter, Value::Vector(d.to_array()), row);
+    });
+}
+
+/// A color editor for an animatable color, with its key button on the same row.
+fn color_field(ui: &mut Ui, out: &mut Edits<'_>, label: &str, parameter: Parameter, c: [f64; 3]) {
+    ui.horizontal(|ui| {
+        let (edited, row) = color(ui, label, c);
+        if let Some(c) = edited {
+            out.push(Action::set_vector(parameter, DVec3::from_array(c)));
+        }
+        out.key_button(ui, parameter, Value::Vector(c), row);
+    });
+}
+
+fn render_section(ui: &mut Ui, cx: &Context, view: &mut ViewSettings, out: &mut Edits<'_>) {
     let scene = cx.shown;
     let i = &scene.integration;
-    let edit = |out: &mut Vec<Action>, e: Edit| out.push(Action::Edit(e));
+    let edit = |out: &mut Edits<'_>, e: Edit| out.push(Action::Edit(e));
     egui::CollapsingHeader::new("Rendering")
         .default_open(true)
         .show(ui, |ui| {
@@ -385,20 +505,19 @@ fn render_section(ui: &mut Ui, cx: &Context, view: &mut ViewSettings, out: &mut 
                     ui.end_row();
                 });
             billboard_editor(ui, cx, out);
-            if let Some(c) = color(ui, "energy Ce", scene.colors.energy) {
-                out.push(Action::set_vector(Parameter::EnergyColor, glam::DVec3::from_array(c)));
-            }
-            if let Some(c) = color(ui, "background Cb", scene.colors.background) {
-                out.push(Action::set_vector(
-                    Parameter::BackgroundColor,
-                    glam::DVec3::from_array(c),
-                ));
-            }
+            color_field(ui, out, "energy Ce", Parameter::EnergyColor, scene.colors.energy);
+            color_field(
+                ui,
+                out,
+                "background Cb",
+                Parameter::BackgroundColor,
+                scene.colors.background,
+            );
         });
 }
 
 /// Fixed or automatic placement of the billboard; a fixed one's center and size.
-fn billboard_editor(ui: &mut Ui, cx: &Context, out: &mut Vec<Action>) {
+fn billboard_editor(ui: &mut Ui, cx: &Context, out: &mut Edits<'_>) {
     let scene = cx.shown;
     let b = &scene.billboard;
     let mut fixed = b.center.is_some();
@@ -422,7 +541,7 @@ fn billboard_editor(ui: &mut Ui, cx: &Context, out: &mut Vec<Action>) {
     if let (Some(center), Some(size)) = (b.center, b.size) {
         let mut c = center;
         // The billboard must not contain the eye.
-        if vec3(ui, "center", &mut c, 0.05) && (c - scene.camera.eye).length() > 1e-6 {
+        if vec3(ui, "center", &mut c, 0.05).0 && (c - scene.camera.eye).length() > 1e-6 {
             out.push(Action::Edit(Edit::Billboard(Some((c, size)))));
         }
         ui.horizontal(|ui| {
@@ -439,7 +558,7 @@ fn billboard_editor(ui: &mut Ui, cx: &Context, out: &mut Vec<Action>) {
     }
 }
 
-fn sources_section(ui: &mut Ui, shown: &Scene, out: &mut Vec<Action>) {
+fn sources_section(ui: &mut Ui, shown: &Scene, out: &mut Edits<'_>) {
     let target = shown.camera.target;
     ui.horizontal(|ui| {
         ui.strong("Sources");
@@ -455,17 +574,6 @@ fn sources_section(ui: &mut Ui, shown: &Scene, out: &mut Vec<Action>) {
         }
     });
     let s = &shown.sources;
-    let position = |ui: &mut Ui, out: &mut Vec<Action>, label, parameter, p| {
-        let mut q = p;
-        if vec3(ui, label, &mut q, 0.02) {
-            out.push(Action::set_vector(parameter, q));
-        }
-    };
-    let axis = |ui: &mut Ui, out: &mut Vec<Action>, label, parameter, d| {
-        if let Some(d) = direction(ui, label, d) {
-            out.push(Action::set_vector(parameter, d));
-        }
-    };
     list(
         ui,
         out,
@@ -557,7 +665,7 @@ fn sources_section(ui: &mut Ui, shown: &Scene, out: &mut Vec<Action>) {
     );
 }
 
-fn coefficient(ui: &mut Ui, out: &mut Vec<Action>, kind: SourceKind, i: usize, c: f64) {
+fn coefficient(ui: &mut Ui, out: &mut Edits<'_>, kind: SourceKind, i: usize, c: f64) {
     ui.horizontal(|ui| {
         number(
             ui,
@@ -578,11 +686,11 @@ fn coefficient(ui: &mut Ui, out: &mut Vec<Action>, kind: SourceKind, i: usize, c
 /// A list of sources of one kind, each with its editor and Duplicate / Delete.
 fn list<T>(
     ui: &mut Ui,
-    out: &mut Vec<Action>,
+    out: &mut Edits<'_>,
     label: &str,
     kind: SourceKind,
     items: &[T],
-    mut editor: impl FnMut(&mut Ui, &mut Vec<Action>, usize, &T),
+    mut editor: impl FnMut(&mut Ui, &mut Edits<'_>, usize, &T),
 ) {
     for (i, item) in items.iter().enumerate() {
         egui::CollapsingHeader::new(format!("{label} {}", i + 1))
@@ -604,7 +712,7 @@ fn list<T>(
 
 /// Curve `i`: its coefficient, control points, segments and W series (`pulsed`: the W series is the
 /// animation's travelling pulse, shown and not edited here).
-fn curve_editor(ui: &mut Ui, out: &mut Vec<Action>, i: usize, c: &Curve, pulsed: bool) {
+fn curve_editor(ui: &mut Ui, out: &mut Edits<'_>, i: usize, c: &Curve, pulsed: bool) {
     coefficient(ui, out, SourceKind::Curves, i, c.coefficient);
     let segments = (c.control_points.len() - 1) / 2;
     ui.label(format!(
@@ -612,10 +720,7 @@ fn curve_editor(ui: &mut Ui, out: &mut Vec<Action>, i: usize, c: &Curve, pulsed:
         c.control_points.len()
     ));
     for (k, &p) in c.control_points.iter().enumerate() {
-        let mut q = p;
-        if vec3(ui, &format!("B{k}"), &mut q, 0.02) {
-            out.push(Action::set_vector(Parameter::ControlPoint(i, k), q));
-        }
+        position(ui, out, &format!("B{k}"), Parameter::ControlPoint(i, k), p);
     }
     ui.horizontal(|ui| {
         if ui
@@ -641,13 +746,11 @@ fn curve_editor(ui: &mut Ui, out: &mut Vec<Action>, i: usize, c: &Curve, pulsed:
     for (k, &w) in c.weights.iter().enumerate() {
         ui.horizontal(|ui| {
             let mut x = w;
-            if ui
-                .add(Slider::new(&mut x, 0.0..=2.0).text(format!("w{k}")))
-                .changed()
-                && x != w
-            {
+            let slider = ui.add(Slider::new(&mut x, 0.0..=2.0).text(format!("w{k}")));
+            if slider.changed() && x != w {
                 out.push(Action::set_number(Parameter::Weight(i, k), x));
             }
+            out.key_button(ui, Parameter::Weight(i, k), Value::Number(w), slider.rect);
             if ui
                 .small_button("remove")
                 .on_hover_text(format!("Remove w{k}"))

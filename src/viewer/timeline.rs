@@ -182,8 +182,10 @@ pub fn shortcuts(ctx: &egui::Context, playback: &mut Playback, frames: u32) {
     }
 }
 
-/// The transport bar: play / pause, step back and forward, the scrubber, loop, and the frame number.
-pub fn bar(ui: &mut Ui, playback: &mut Playback, frames: u32, frame_rate: f64) {
+/// The transport bar: play / pause, step back and forward, the scrubber with a tick at every frame that holds a
+/// key (`keys`), loop, and the frame number. The scrubber takes the bar's width left after the buttons and the
+/// frame number, so that each frame is a few pixels of it.
+pub fn bar(ui: &mut Ui, playback: &mut Playback, frames: u32, frame_rate: f64, keys: &[f64]) {
     ui.horizontal(|ui| {
         let last = frames.max(1) - 1;
         if ui.button("First").on_hover_text("First frame").clicked() {
@@ -213,25 +215,70 @@ pub fn bar(ui: &mut Ui, playback: &mut Playback, frames: u32, frame_rate: f64) {
             playback.step(1, frames);
         }
         ui.checkbox(&mut playback.looping, "loop");
+        let readout = format!(
+            "{:>w$} / {last}  {:6.2} s",
+            playback.frame,
+            playback.frame as f64 / frame_rate,
+            w = last.to_string().len()
+        );
+        // What follows the rail: its value field, its label, the readout.
+        let font = egui::TextStyle::Monospace.resolve(ui.style());
+        let readout_width = ui.fonts_mut(|f| {
+            f.layout_no_wrap(readout.clone(), font, egui::Color32::WHITE)
+                .size()
+                .x
+        });
+        let after = readout_width + 140.0;
+        let rail = (ui.available_width() - after).max(MIN_SCRUBBER);
+        ui.spacing_mut().slider_width = rail;
+        let start = ui.cursor().left();
         let mut frame = playback.frame;
         let scrub = ui.add(
             egui::Slider::new(&mut frame, 0..=last)
                 .text("frame")
                 .clamping(egui::SliderClamping::Always),
         );
+        let height = ui.spacing().interact_size.y;
+        let span = tick_span(start, rail, height);
+        let stroke = egui::Stroke::new(2.0, super::widgets::KEY_COLOR);
+        for x in key_ticks(span, keys, last) {
+            ui.painter().line_segment(
+                [
+                    egui::pos2(x, scrub.rect.bottom() - 4.0),
+                    egui::pos2(x, scrub.rect.bottom()),
+                ],
+                stroke,
+            );
+        }
         if scrub.changed() {
             playback.seek(frame, frames);
         }
         if scrub.drag_started() {
             playback.playing = false;
         }
-        ui.monospace(format!(
-            "{:>w$} / {last}  {:6.2} s",
-            playback.frame,
-            playback.frame as f64 / frame_rate,
-            w = last.to_string().len()
-        ));
+        ui.monospace(readout);
     });
+}
+
+/// The scrubber is never narrower than this, points.
+pub const MIN_SCRUBBER: f32 = 160.0;
+
+/// Where the scrubber's handle runs for a rail `width` wide from `left`, `height` tall: egui's slider keeps its
+/// round handle (radius `height / 2.5`) inside the rail.
+pub fn tick_span(left: f32, width: f32, height: f32) -> egui::Rangef {
+    let r = height / 2.5;
+    egui::Rangef::new(left + r, left + width - r)
+}
+
+/// The x of each key's tick along the handle's `span`, for frames `0..=last` (keys outside left out).
+pub fn key_ticks(span: egui::Rangef, keys: &[f64], last: u32) -> Vec<f32> {
+    keys.iter()
+        .filter(|&&k| k >= 0.0 && k <= last as f64)
+        .map(|&k| {
+            let share = if last == 0 { 0.0 } else { k / last as f64 };
+            span.min + span.span() * share as f32
+        })
+        .collect()
 }
 
 #[cfg(test)]
@@ -267,5 +314,13 @@ mod tests {
         let mut paused = Playback::default();
         paused.advance(5.0, 30.0, 92);
         assert_eq!(paused.frame, 0, "paused playback does not move");
+    }
+
+    #[test]
+    fn key_ticks_sit_where_the_handle_shows_their_frame() {
+        let span = super::tick_span(100.0, 500.0, 20.0);
+        assert_eq!((span.min, span.max), (108.0, 592.0));
+        let x = super::key_ticks(span, &[0.0, 45.5, 91.0, 120.0], 91);
+        assert_eq!(x, vec![108.0, 350.0, 592.0]);
     }
 }

@@ -7,11 +7,13 @@ use crate::field::wseries;
 
 /// The color of messages about a value refused.
 pub const ERROR_COLOR: Color32 = Color32::from_rgb(255, 110, 90);
+/// The color of keys: the key buttons of keyed parameters, the ticks on the scrubber.
+pub const KEY_COLOR: Color32 = Color32::from_rgb(255, 185, 60);
 
-/// Three drag values for a vector; returns true when it changed.
-pub fn vec3(ui: &mut Ui, label: &str, v: &mut DVec3, speed: f64) -> bool {
+/// Three drag values for a vector; returns true when it changed, and the row's rectangle.
+pub fn vec3(ui: &mut Ui, label: &str, v: &mut DVec3, speed: f64) -> (bool, egui::Rect) {
     let mut changed = false;
-    ui.horizontal(|ui| {
+    let row = ui.horizontal(|ui| {
         ui.label(label);
         for (axis, c) in ["x", "y", "z"].iter().zip(v.as_mut()) {
             changed |= ui
@@ -24,33 +26,40 @@ pub fn vec3(ui: &mut Ui, label: &str, v: &mut DVec3, speed: f64) -> bool {
                 .changed();
         }
     });
-    changed
+    (changed, row.response.rect)
 }
 
-/// A direction editor: the new direction, normalised, when the user changed it; a zero vector is refused
-/// (and said so).
-pub fn direction(ui: &mut Ui, label: &str, v: DVec3) -> Option<DVec3> {
+/// A direction editor: the new direction, normalised, when the user changed it (a zero vector is refused, and
+/// said so), and the row's rectangle.
+pub fn direction(ui: &mut Ui, label: &str, v: DVec3) -> (Option<DVec3>, egui::Rect) {
     let mut edited = v;
-    if !vec3(ui, label, &mut edited, 0.01) {
-        return None;
+    let (changed, row) = vec3(ui, label, &mut edited, 0.01);
+    if !changed {
+        return (None, row);
     }
     if edited.length() > 1e-6 {
-        Some(edited.normalize())
+        (Some(edited.normalize()), row)
     } else {
         ui.colored_label(ERROR_COLOR, "a direction cannot be zero");
-        None
+        (None, row)
     }
 }
 
-/// A color button; the new color when the user changed it.
-pub fn color(ui: &mut Ui, label: &str, c: [f64; 3]) -> Option<[f64; 3]> {
-    ui.horizontal(|ui| {
+/// A color button; the new color when the user changed it, and the row's rectangle. The picker's f32 channels
+/// come back as the shortest decimals that give the same f32 (a picked 0.97 is 0.97, not 0.9700000286102295).
+pub fn color(ui: &mut Ui, label: &str, c: [f64; 3]) -> (Option<[f64; 3]>, egui::Rect) {
+    let row = ui.horizontal(|ui| {
         let mut rgb = c.map(|x| x as f32);
         let changed = ui.color_edit_button_rgb(&mut rgb).changed();
         ui.label(label);
-        changed.then(|| rgb.map(|x| (x as f64).clamp(0.0, 1.0)))
-    })
-    .inner
+        changed.then(|| rgb.map(|x| shortest_f64(x).clamp(0.0, 1.0)))
+    });
+    (row.inner, row.response.rect)
+}
+
+/// The f64 of the shortest decimal that reads back as `x`.
+pub fn shortest_f64(x: f32) -> f64 {
+    x.to_string().parse().unwrap_or(x as f64)
 }
 
 /// A label and a value widget, the widget named by the label for accessibility (screen readers, UI tests).

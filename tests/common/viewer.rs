@@ -82,4 +82,3 @@ pub fn mean_abs_difference(a: &[[u8; 4]], b: &[[u8; 4]]) -> f64 {
         .sum();
     sum / (a.len() * 3) as f64
 }
-
