@@ -242,3 +242,48 @@ fn the_panel_keeps_its_width_whatever_it_shows() {
         "the viewport did not move"
     );
 }
+
+#[test]
+fn a_scaled_screenshot_integrates_the_field_at_that_scale() {
+    use energywave::gpu::HeadlessRenderer;
+    use energywave::viewer::Document;
+    use energywave::viewer::offscreen::OffscreenViewer;
+    let mut scene = light_scene();
+    scene.billboard.resolution = 40;
+    let mut v = OffscreenViewer::new(Document::new(scene, None), 480, 320).unwrap();
+    v.app.view_mut().show_grid = false;
+    for _ in 0..3 {
+        v.frame().unwrap();
+    }
+    let (pixels, [w, h]) = v.screenshot(4).unwrap();
+    let [vw, vh] = v.app.viewport_px();
+    assert_eq!([w, h], [4 * vw, 4 * vh]);
+    assert_eq!(
+        v.field_values().unwrap().len(),
+        160 * 160,
+        "a field of 4 x 40 texels a side"
+    );
+    // The same frame rendered for export at that size and resolution: what the screenshot must be.
+    let mut want = v.app.frame_scene();
+    want.billboard.resolution = 160;
+    let frame = HeadlessRenderer::new()
+        .unwrap()
+        .render(&want, w, h, false)
+        .unwrap();
+    let mut worst = 0.0f32;
+    for (p, q) in pixels.iter().zip(&frame.pixels) {
+        for c in 0..3 {
+            worst = worst.max((p[c] - q[c]).abs());
+        }
+    }
+    assert!(worst < 2.0 / 255.0, "largest difference {worst}");
+}
+
+#[test]
+fn screenshots_of_a_scene_without_a_file_go_to_a_stated_place() {
+    let h = harness(light_scene());
+    let dir = h.state().document().screenshot_dir();
+    assert!(dir.is_absolute());
+    assert_eq!(dir, std::env::current_dir().unwrap());
+    h.get_by_label(&format!("into {}", dir.display()));
+}

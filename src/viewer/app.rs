@@ -305,6 +305,21 @@ impl ViewerApp {
         }
     }
 
+    /// What a screenshot at `scale` times the viewport draws: the scene as shown, its field integrated at
+    /// `scale` times the billboard's resolution (as far as the device allows), so that a 4x screenshot is 4x
+    /// the detail and not an enlargement; whole, not a preview.
+    pub fn screenshot_view(&self, scale: u32) -> ViewportView {
+        let mut view = self.viewport_view();
+        view.size = view.size.map(|x| x * scale);
+        view.progressive = false;
+        let w = &mut view.scene.billboard.resolution;
+        *w = w
+            .saturating_mul(scale)
+            .min(self.max_resolution)
+            .min(crate::scene::MAX_RESOLUTION);
+        view
+    }
+
     /// Takes what the UI asked of the window since the last call.
     pub fn take_requests(&mut self) -> Vec<Request> {
         std::mem::take(&mut self.requests)

@@ -185,21 +185,34 @@ impl Document {
         }
     }
 
-    /// Where a screenshot taken now goes: beside the scene file (or in the working directory for the default
-    /// scene), named after the scene and the UTC time, never an existing file.
-    pub fn screenshot_path(&self, now: SystemTime) -> PathBuf {
-        let (dir, stem) = match &self.path {
-            Some(p) => (
-                p.parent()
-                    .filter(|d| !d.as_os_str().is_empty())
-                    .unwrap_or(Path::new("."))
-                    .to_owned(),
-                p.file_stem()
-                    .map_or("scene".into(), |s| s.to_string_lossy().into_owned()),
-            ),
-            None => (PathBuf::from("."), "energywave".to_owned()),
+    /// The folder screenshots go to, absolute, so that the UI can say where: beside the scene file, or the working
+    /// directory for a scene without one (the embedded default, a scene not saved yet).
+    pub fn screenshot_dir(&self) -> PathBuf {
+        let dir = match &self.path {
+            Some(p) => p
+                .parent()
+                .filter(|d| !d.as_os_str().is_empty())
+                .unwrap_or(Path::new("."))
+                .to_owned(),
+            None => PathBuf::from("."),
         };
-        unused_path(&dir, &format!("{stem}-{}", timestamp(now)), "png")
+        std::path::absolute(&dir).unwrap_or(dir)
+    }
+
+    /// Where a screenshot taken now goes: into `screenshot_dir`, named after the scene and the UTC time, never an
+    /// existing file.
+    pub fn screenshot_path(&self, now: SystemTime) -> PathBuf {
+        let stem = match &self.path {
+            Some(p) => p
+                .file_stem()
+                .map_or("scene".into(), |s| s.to_string_lossy().into_owned()),
+            None => "energywave".to_owned(),
+        };
+        unused_path(
+            &self.screenshot_dir(),
+            &format!("{stem}-{}", timestamp(now)),
+            "png",
+        )
     }
 }
 

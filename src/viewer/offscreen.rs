@@ -185,6 +185,11 @@ impl OffscreenViewer {
         }
     }
 
+    /// A screenshot as the window takes it (`ViewerGpu::screenshot`): RGBA and its size.
+    pub fn screenshot(&mut self, scale: u32) -> Result<(Vec<[f32; 4]>, [u32; 2]), GpuError> {
+        self.gpu.screenshot(&self.app, scale)
+    }
+
     /// The last presented frame, read back (RGBA8).
     pub fn frame_image(&self) -> Result<Vec<u8>, GpuError> {
         match &self.surface.texture {

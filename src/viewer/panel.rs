@@ -252,10 +252,14 @@ fn file_section(
             }
         });
     }
+    let shots = cx.doc.screenshot_dir();
     ui.horizontal(|ui| {
         if ui
             .button("Screenshot")
-            .on_hover_text("F12: the viewport, as PNG beside the scene")
+            .on_hover_text(format!(
+                "F12: the viewport as PNG, its field integrated at the scale chosen, into {}",
+                shots.display()
+            ))
             .clicked()
         {
             out.push(Action::Screenshot);
@@ -269,6 +273,15 @@ fn file_section(
                 }
             });
     });
+    ui.add(
+        egui::Label::new(
+            egui::RichText::new(format!("into {}", shots.display()))
+                .small()
+                .weak(),
+        )
+        .truncate(),
+    )
+    .on_hover_text(format!("Screenshots go to {}", shots.display()));
 }
 
 fn view_section(ui: &mut Ui, shown: &Scene, view: &mut ViewSettings, out: &mut Edits<'_>) {

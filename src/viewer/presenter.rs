@@ -119,6 +119,23 @@ impl ViewerGpu {
         );
     }
 
+    /// The viewport alone at `scale` times its size, its field integrated at `scale` times the resolution
+    /// (`ViewerApp::screenshot_view`): RGBA and its size.
+    pub fn screenshot(
+        &mut self,
+        app: &ViewerApp,
+        scale: u32,
+    ) -> Result<(Vec<[f32; 4]>, [u32; 2]), GpuError> {
+        let view = app.screenshot_view(scale);
+        let (device, queue) = (&self.ctx.device, &self.ctx.queue);
+        let vp = self
+            .renderer
+            .callback_resources
+            .get_mut::<super::viewport::ViewportGpu>()
+            .ok_or_else(|| GpuError::Validation("the viewport is not installed".into()))?;
+        Ok((vp.render_image(device, queue, &view)?, view.size))
+    }
+
     pub fn max_resolution(&self) -> u32 {
         self.ctx.device.limits().max_texture_dimension_2d
     }

@@ -16,7 +16,6 @@ use winit::window::{Window, WindowId};
 use super::app::{Request, ViewerApp};
 use super::document::Document;
 use super::presenter::{Acquired, FrameSurface, Outcome, ViewerGpu, draw_egui};
-use super::viewport::ViewportGpu;
 use crate::gpu::{GpuContext, GpuError, read_texture, texture_2d};
 use crate::output::{self, OutputError};
 
@@ -304,25 +303,17 @@ impl Handler {
     }
 }
 
-/// Renders the viewport alone at `scale` times its size and saves it to `path`.
+/// Renders the viewport alone at `scale` times its size (its field at `scale` times the resolution) and saves it
+/// to `path`.
 fn save_viewport(
     gpu: &mut ViewerGpu,
     app: &ViewerApp,
     path: &std::path::Path,
     scale: u32,
 ) -> Result<(), ViewerError> {
-    let mut view = app.viewport_view();
-    view.size = view.size.map(|x| x * scale);
-    view.progressive = false;
-    let (device, queue) = (&gpu.ctx.device, &gpu.ctx.queue);
-    let vp = gpu
-        .renderer
-        .callback_resources
-        .get_mut::<ViewportGpu>()
-        .ok_or_else(|| ViewerError::Window("the viewport is not initialised".into()))?;
-    let pixels = vp.render_image(device, queue, &view)?;
+    let (pixels, [w, h]) = gpu.screenshot(app, scale)?;
     let pixels: Vec<[f64; 4]> = pixels.iter().map(|p| p.map(|c| c as f64)).collect();
-    output::write_rgba(path, view.size[0], view.size[1], &pixels, false)?;
+    output::write_rgba(path, w, h, &pixels, false)?;
     Ok(())
 }
 
