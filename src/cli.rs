@@ -569,7 +569,10 @@ fn render_frames(
             (width, height),
             args.transparent,
             |at| compose(at, gpu.as_mut(), width, height, args.transparent),
-            |_, frame| progress.frame_done(frame),
+            |_, frame| {
+                progress.frame_done(frame);
+                std::ops::ControlFlow::Continue(())
+            },
         )?
     };
     if args.verbose {

@@ -140,13 +140,17 @@ fn a_gif_and_a_sprite_sheet_decode_to_the_frames() {
     .unwrap();
     let frames = decoder.into_frames().collect_frames().unwrap();
     assert_eq!(frames.len(), 6);
+    let mut total = 0.0;
     for f in &frames {
         assert_eq!(f.buffer().dimensions(), (48, 40));
         // 30 frames/s; GIF delays are whole hundredths of a second.
         let (num, den) = f.delay().numer_denom_ms();
         let ms = num as f64 / den as f64;
         assert!((30.0..=40.0).contains(&ms), "delay {ms} ms");
+        total += ms;
     }
+    // 3 and 4 hundredths in turn: six frames at 30 frames/s last 0.2 s, not 0.18.
+    assert_eq!(total, 200.0);
     assert_ne!(frames[0].buffer(), frames[5].buffer(), "the pulse moves");
 
     // The sheet: 5 frames in 3 columns, 2 rows, row-major; its cells are the sequence's frames.

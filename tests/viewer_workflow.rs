@@ -287,3 +287,47 @@ fn screenshots_of_a_scene_without_a_file_go_to_a_stated_place() {
     assert_eq!(dir, std::env::current_dir().unwrap());
     h.get_by_label(&format!("into {}", dir.display()));
 }
+
+#[test]
+fn an_export_can_be_cancelled_and_leaves_nothing() {
+    let dir = std::env::temp_dir().join(format!("energywave-ui-cancel-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut scene = light_scene();
+    scene.animation = Some(energywave::animation::Animation {
+        frames: 400,
+        ..Default::default()
+    });
+    let mut h = harness(scene);
+    h.get_by_label("Export").click_accesskit();
+    h.run();
+    {
+        let form = h.state_mut().animation_form_mut();
+        form.export_path = dir.join("frame_####.png").display().to_string();
+        form.size = [160, 120];
+    }
+    h.run();
+    h.get_by_label("Export 400 frames").click_accesskit();
+    h.run();
+    assert!(h.state().is_exporting(), "{:?}", h.state().notice());
+    // Let a few frames land, then stop.
+    let start = std::time::Instant::now();
+    while std::fs::read_dir(&dir).unwrap().count() < 2 && start.elapsed().as_secs() < 60 {
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    h.get_by_label("Cancel").click_accesskit();
+    h.run();
+    while h.state().is_exporting() && start.elapsed().as_secs() < 120 {
+        std::thread::sleep(std::time::Duration::from_millis(50));
+        h.step();
+    }
+    assert_eq!(
+        h.state().notice().map(|n| n.0.as_str()),
+        Some("Export cancelled: nothing written")
+    );
+    assert_eq!(
+        std::fs::read_dir(&dir).unwrap().count(),
+        0,
+        "the frames written are gone"
+    );
+}

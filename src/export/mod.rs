@@ -8,7 +8,7 @@
 pub mod progress;
 pub mod sheet;
 
-use std::ops::Range;
+use std::ops::{ControlFlow, Range};
 use std::path::{Path, PathBuf};
 
 use crate::output::{self, Format, OutputError};
@@ -29,6 +29,9 @@ pub enum ExportError {
     Target { path: PathBuf, why: String },
     #[error("{0}")]
     Output(#[from] OutputError),
+    /// Stopped before the last frame; the files it had written are removed.
+    #[error("cancelled: nothing written")]
+    Cancelled,
 }
 
 impl ExportError {
@@ -37,6 +40,7 @@ impl ExportError {
         match self {
             ExportError::Frames { .. } | ExportError::Target { .. } => true,
             ExportError::Output(e) => e.is_input_error(),
+            ExportError::Cancelled => false,
         }
     }
 }
@@ -235,6 +239,14 @@ pub fn frame_path(pattern: &Path, frame: u32) -> PathBuf {
     pattern.with_file_name(numbered)
 }
 
+/// The delay of GIF frame `k` in hundredths of a second (the format's unit) at `frame_rate`: the frames' ends
+/// rounded to the nearest hundredth, so that the delays average the frame rate's (30 frames a second alternate 3
+/// and 4 hundredths, 100 in 30 frames) instead of each rounding alike (3 each: 33 frames a second). At least 1.
+pub fn gif_delay(k: u32, frame_rate: f64) -> u32 {
+    let end = |k: u32| (k as f64 * 100.0 / frame_rate).round() as i64;
+    (end(k + 1) - end(k)).max(1) as u32
+}
+
 /// Display values in [0, 1] to 8 bits, as the PNG writer rounds them.
 pub fn to_rgba8(pixels: &[[f64; 4]], alpha: bool) -> Vec<u8> {
     pixels
@@ -276,6 +288,8 @@ pub struct FrameSink {
     frames: Range<u32>,
     frame_rate: f64,
     gif: Option<(image::codecs::gif::GifEncoder<SharedBuffer>, SharedBuffer)>,
+    /// Frames in the GIF so far (their delays add up to the frame rate's time).
+    gif_frames: u32,
     sheet: Option<(SheetLayout, Vec<[f64; 4]>)>,
     written: Vec<PathBuf>,
 }
@@ -299,6 +313,7 @@ impl FrameSink {
             frames: frames.clone(),
             frame_rate,
             gif: None,
+            gif_frames: 0,
             sheet: None,
             written: Vec::new(),
         };
@@ -341,9 +356,10 @@ impl FrameSink {
                 let rgba = image::RgbaImage::from_raw(w, h, to_rgba8(pixels, false))
                     .expect("the frame's size matches");
                 let delay = image::Delay::from_numer_denom_ms(
-                    (1.0e6 / self.frame_rate).round().max(1.0) as u32,
-                    1000,
+                    10 * gif_delay(self.gif_frames, self.frame_rate),
+                    1,
                 );
+                self.gif_frames += 1;
                 let (enc, _) = self.gif.as_mut().expect("made with the target");
                 enc.encode_frame(image::Frame::from_parts(rgba, 0, 0, delay))
                     .map_err(|source| OutputError::Encode {
@@ -363,6 +379,13 @@ impl FrameSink {
             }
         }
         Ok(())
+    }
+
+    /// Removes the files written so far (an export stopped before its end leaves nothing half done).
+    pub fn abandon(self) {
+        for path in &self.written {
+            let _ = std::fs::remove_file(path);
+        }
     }
 
     /// Writes the GIF or the sheet (and its layout); returns every file written.
@@ -393,7 +416,9 @@ impl FrameSink {
 
 /// Renders `frames` of `scene`'s animation with `render` (the composed frame of a scene at one frame, RGBA
 /// display values, `size` pixels) into `target`; `on_frame(done, frame)` after each. Returns the files
-/// written. The command line and the viewer's export both run this.
+/// written. `on_frame` may stop the export (`ControlFlow::Break`): the files written so far are then removed
+/// and it ends with `ExportError::Cancelled`, as after a failure. The command line and the viewer's export both
+/// run this.
 pub fn export_frames<E: From<ExportError>>(
     scene: &Scene,
     target: &Target,
@@ -401,7 +426,7 @@ pub fn export_frames<E: From<ExportError>>(
     size: (u32, u32),
     transparent: bool,
     mut render: impl FnMut(&Scene) -> Result<Vec<[f64; 4]>, E>,
-    mut on_frame: impl FnMut(u32, u32),
+    mut on_frame: impl FnMut(u32, u32) -> ControlFlow<()>,
 ) -> Result<Vec<PathBuf>, E> {
     let frame_rate = scene
         .animation
@@ -416,9 +441,21 @@ pub fn export_frames<E: From<ExportError>>(
         transparent,
     )?;
     for (done, frame) in frames.enumerate() {
-        let pixels = render(&scene.at_frame(frame as f64))?;
-        sink.push(frame, &pixels)?;
-        on_frame(done as u32 + 1, frame);
+        let pixels = match render(&scene.at_frame(frame as f64)) {
+            Ok(p) => p,
+            Err(e) => {
+                sink.abandon();
+                return Err(e);
+            }
+        };
+        if let Err(e) = sink.push(frame, &pixels) {
+            sink.abandon();
+            return Err(e.into());
+        }
+        if on_frame(done as u32 + 1, frame).is_break() {
+            sink.abandon();
+            return Err(ExportError::Cancelled.into());
+        }
     }
     Ok(sink.finish()?)
 }
@@ -442,6 +479,95 @@ mod tests {
         for bad in ["", "a..b", "-1..3", "3..-1", "1...2", "..=", "1..2..3"] {
             assert!(FrameSpec::parse(bad).is_err(), "{bad}");
         }
+    }
+
+    #[test]
+    fn a_cancelled_or_failed_export_leaves_nothing_behind() {
+        let dir = std::env::temp_dir().join(format!("energywave-cancel-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut scene = Scene::default_scene();
+        scene.animation = Some(crate::animation::Animation {
+            frames: 10,
+            ..Default::default()
+        });
+        let target = Target::Sequence {
+            pattern: dir.join("f_##.png"),
+            format: crate::output::Format::Png,
+        };
+        let pixels = vec![[0.5, 0.25, 1.0, 1.0]; 8 * 6];
+        let rendered = std::cell::Cell::new(0);
+        let result = export_frames::<ExportError>(
+            &scene,
+            &target,
+            0..10,
+            (8, 6),
+            false,
+            |_| {
+                rendered.set(rendered.get() + 1);
+                Ok(pixels.clone())
+            },
+            |done, _| {
+                if done == 4 {
+                    ControlFlow::Break(())
+                } else {
+                    ControlFlow::Continue(())
+                }
+            },
+        );
+        assert!(matches!(result, Err(ExportError::Cancelled)));
+        assert_eq!(rendered.get(), 4, "no frame after the cancel");
+        assert_eq!(
+            std::fs::read_dir(&dir).unwrap().count(),
+            0,
+            "the 4 frames removed"
+        );
+        // A render failing on frame 3 leaves nothing either.
+        let result = export_frames::<ExportError>(
+            &scene,
+            &target,
+            0..10,
+            (8, 6),
+            false,
+            |_| {
+                if rendered.get() == 7 {
+                    return Err(ExportError::Target {
+                        path: dir.clone(),
+                        why: "the device was lost".into(),
+                    });
+                }
+                rendered.set(rendered.get() + 1);
+                Ok(pixels.clone())
+            },
+            |_, _| ControlFlow::Continue(()),
+        );
+        assert!(result.is_err());
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0);
+        // Whole, it writes every frame.
+        let written = export_frames::<ExportError>(
+            &scene,
+            &target,
+            0..10,
+            (8, 6),
+            false,
+            |_| Ok(pixels.clone()),
+            |_, _| ControlFlow::Continue(()),
+        )
+        .unwrap();
+        assert_eq!(written.len(), 10);
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 10);
+    }
+
+    #[test]
+    fn gif_delays_average_the_frame_rate() {
+        let delays: Vec<u32> = (0..30).map(|k| gif_delay(k, 30.0)).collect();
+        assert_eq!(delays.iter().sum::<u32>(), 100, "30 frames in a second");
+        assert!(delays.iter().all(|&d| d == 3 || d == 4), "{delays:?}");
+        assert_eq!(&delays[..3], &[3, 4, 3]);
+        assert!((0..24).map(|k| gif_delay(k, 24.0)).sum::<u32>() == 100);
+        assert!((0..100).all(|k| gif_delay(k, 25.0) == 4));
+        // Faster than the format can hold: one hundredth each, never none.
+        assert!((0..10).all(|k| gif_delay(k, 500.0) >= 1));
     }
 
     #[test]

@@ -42,6 +42,8 @@ pub enum Action {
         transparent: bool,
         description: String,
     },
+    /// Stop the export running (what it wrote is removed).
+    CancelExport,
     /// Tell the user something (an error when `is_error`).
     Notify {
         text: String,

@@ -413,6 +413,15 @@ fn export_section(
                         ),
                     ),
                 );
+                if job.is_cancelled() {
+                    ui.label("Cancelling\u{2026}");
+                } else if ui
+                    .button("Cancel")
+                    .on_hover_text("Stop the export; the frames it wrote are removed")
+                    .clicked()
+                {
+                    out.push(Action::CancelExport);
+                }
                 return;
             }
             if ui

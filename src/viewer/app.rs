@@ -178,6 +178,10 @@ impl ViewerApp {
                     self.notify(format!("Exported {first}{more}"), false);
                     self.export_job = None;
                 }
+                Some(Err(_)) if job.is_cancelled() => {
+                    self.notify("Export cancelled: nothing written", false);
+                    self.export_job = None;
+                }
                 Some(Err(e)) => {
                     self.notify(format!("Export failed: {e}"), true);
                     self.export_job = None;
@@ -437,6 +441,11 @@ impl ViewerApp {
                         transparent,
                         description,
                     ));
+                }
+            }
+            Action::CancelExport => {
+                if let Some(job) = &self.export_job {
+                    job.cancel();
                 }
             }
             Action::Notify { text, is_error } => self.notify(text, is_error),

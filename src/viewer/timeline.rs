@@ -6,6 +6,7 @@
 
 use std::ops::Range;
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 
 use egui::{Key, Modifiers, Ui};
@@ -90,6 +91,8 @@ pub struct ExportStatus {
 pub struct ExportJob {
     pub status: Arc<Mutex<ExportStatus>>,
     pub description: String,
+    /// Raised to stop it after the frame it is on.
+    cancel: Arc<AtomicBool>,
 }
 
 impl ExportJob {
@@ -108,6 +111,8 @@ impl ExportJob {
             result: None,
         }));
         let shared = status.clone();
+        let cancel = Arc::new(AtomicBool::new(false));
+        let stop = cancel.clone();
         std::thread::spawn(move || {
             let progress = shared.clone();
             let result = (|| -> Result<Vec<PathBuf>, String> {
@@ -130,6 +135,11 @@ impl ExportJob {
                         if let Ok(mut s) = progress.lock() {
                             s.done = done;
                         }
+                        if stop.load(Ordering::Relaxed) {
+                            std::ops::ControlFlow::Break(())
+                        } else {
+                            std::ops::ControlFlow::Continue(())
+                        }
                     },
                 )
                 .map_err(|e| e.0)
@@ -141,7 +151,18 @@ impl ExportJob {
         Self {
             status,
             description,
+            cancel,
         }
+    }
+
+    /// Stops the export after the frame it is on; the files it wrote are removed.
+    pub fn cancel(&self) {
+        self.cancel.store(true, Ordering::Relaxed);
+    }
+
+    /// True once `cancel` was called.
+    pub fn is_cancelled(&self) -> bool {
+        self.cancel.load(Ordering::Relaxed)
     }
 
     pub fn status(&self) -> ExportStatus {
