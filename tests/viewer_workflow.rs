@@ -331,3 +331,60 @@ fn an_export_can_be_cancelled_and_leaves_nothing() {
         "the frames written are gone"
     );
 }
+
+#[test]
+fn a_save_keeps_the_files_comments_and_layout() {
+    use egui::accesskit::Role;
+    use egui_kittest::kittest::NodeT;
+    let dir = std::env::temp_dir().join(format!("energywave-ui-save-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("ring.toml");
+    let text = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/default.toml"),
+    )
+    .unwrap();
+    std::fs::write(&path, &text).unwrap();
+    let mut h = harness(light_scene());
+    h.state_mut()
+        .apply(energywave::viewer::Action::Open(path.clone()));
+    h.run();
+    // Orbit, then one edit in the panel, then Ctrl+S.
+    let rect = h.state().viewport_rect();
+    drag(
+        &mut h,
+        Pos2::new(rect.right() - 40.0, rect.bottom() - 40.0),
+        Vec2::new(-60.0, 0.0),
+    );
+    let radius = h.get_by_role_and_label(Role::SpinButton, "radius R");
+    assert_eq!(radius.accesskit_node().numeric_value(), Some(1.3));
+    radius.set_value_accesskit(0.97);
+    h.run();
+    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::S);
+    h.run();
+    assert!(!h.state().document().is_dirty());
+    let saved = std::fs::read_to_string(&path).unwrap();
+    assert!(saved.starts_with("# The default scene"), "{saved}");
+    assert!(saved.contains("major_radius = 0.97\n"));
+    // The axis typed [1.0, 0.25, 0.0] stays as typed; the orbit moved the eye, and the decay the file derived
+    // from it is written out so that the look stays.
+    assert!(saved.contains("axis = [1.0, 0.25, 0.0]\n"));
+    assert!(saved.contains("decay_length = "));
+    // Every other line as it was: the lines gone and the lines new are those three.
+    let removed: Vec<&str> = text
+        .lines()
+        .filter(|l| !saved.lines().any(|m| m == *l))
+        .collect();
+    let added: Vec<&str> = saved
+        .lines()
+        .filter(|l| !text.lines().any(|m| m == *l))
+        .collect();
+    assert_eq!(removed, ["eye = [2.0, 4.5, 14.0]", "major_radius = 1.3"]);
+    assert_eq!(added.len(), 3, "{added:?}");
+    assert!(added[0].starts_with("eye = ") && added[1].starts_with("decay_length = "));
+    assert_eq!(added[2], "major_radius = 0.97");
+    assert_eq!(
+        energywave::scene::Scene::load(&path).unwrap(),
+        *h.state().scene()
+    );
+}

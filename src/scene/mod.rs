@@ -7,6 +7,7 @@
 mod animation_file;
 mod error;
 mod file;
+pub mod format;
 mod keyed;
 pub mod limits;
 

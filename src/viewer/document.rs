@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 use crate::output::{self, OutputError};
-use crate::scene::{Scene, SceneError};
+use crate::scene::{Scene, SceneError, format};
 
 /// How often the file's modification time is checked for hot reload.
 const POLL_INTERVAL: Duration = Duration::from_millis(400);
@@ -28,10 +28,15 @@ pub struct Document {
     path: Option<PathBuf>,
     /// The scene as it is in the file (or the embedded default): the reference for "unsaved changes".
     saved: Scene,
+    /// The file's text, which loads as `saved`: a save writes the changes into it (`scene::format`), keeping
+    /// its comments and layout. `None` for a scene without a file.
+    source: Option<String>,
     disk_mtime: Option<SystemTime>,
     last_poll: Option<Instant>,
     /// A valid version from disk waiting while the document has unsaved edits.
     pub pending_reload: Option<Scene>,
+    /// The text of the version from disk last read.
+    pending_source: Option<String>,
     /// Why the last change on disk could not be loaded.
     pub disk_error: Option<String>,
 }
@@ -44,13 +49,23 @@ impl Document {
     /// A document for `scene` read from `path` (or the embedded default scene without one).
     pub fn new(scene: Scene, path: Option<PathBuf>) -> Self {
         let disk_mtime = path.as_deref().and_then(mtime);
+        // The file's text, where it still says this scene.
+        let source = path
+            .as_deref()
+            .and_then(|p| std::fs::read_to_string(p).ok())
+            .filter(|text| {
+                Scene::parse(text, path.as_deref().unwrap_or(Path::new("")))
+                    .is_ok_and(|s| s == scene)
+            });
         Self {
             saved: scene.clone(),
+            source,
             scene,
             path,
             disk_mtime,
             last_poll: None,
             pending_reload: None,
+            pending_source: None,
             disk_error: None,
         }
     }
@@ -107,8 +122,15 @@ impl Document {
     }
 
     /// Saves to `path` (atomically: a temporary file beside it, then a rename) and makes it the document's file.
+    /// The file's own text gets the changes written into it, its comments, order and layout kept; a scene
+    /// without a file is written fresh (`scene::format`).
     pub fn save_as(&mut self, path: &Path) -> Result<(), OutputError> {
-        output::write_atomically(path, self.scene.to_toml().as_bytes())?;
+        let text = match &self.source {
+            Some(source) => format::update_text(source, &self.saved, &self.scene),
+            None => format::fresh_text(&self.scene),
+        };
+        output::write_atomically(path, text.as_bytes())?;
+        self.source = Some(text);
         self.path = Some(path.to_owned());
         self.saved = self.scene.clone();
         self.disk_mtime = mtime(path);
@@ -146,6 +168,7 @@ impl Document {
             return None;
         }
         self.disk_mtime = current;
+        let text = std::fs::read_to_string(&path).ok();
         match Scene::load(&path) {
             Err(e) => {
                 self.disk_error = Some(e.to_string());
@@ -157,6 +180,10 @@ impl Document {
             }
             Ok(scene) => {
                 self.disk_error = None;
+                // The text that loads as it (read just before; another write between the two reads would
+                // only cost the layout).
+                self.pending_source =
+                    text.filter(|t| Scene::parse(t, &path).is_ok_and(|s| s == scene));
                 if self.is_dirty() {
                     self.pending_reload = Some(scene);
                     Some(DiskChange::Conflict)
@@ -178,6 +205,7 @@ impl Document {
     /// The file's new content becomes the document's, keeping the view where the user moved it.
     fn take_from_disk(&mut self, scene: Scene) {
         let view = self.view_moved().then(|| self.scene.camera.clone());
+        self.source = self.pending_source.take();
         self.saved = scene.clone();
         self.scene = scene;
         if let Some(camera) = view {
