@@ -388,3 +388,129 @@ fn a_save_keeps_the_files_comments_and_layout() {
         *h.state().scene()
     );
 }
+
+/// Clicks (press and release, no move) at `at`.
+fn click(h: &mut Harness<'static, ViewerApp>, at: Pos2) {
+    h.hover_at(at);
+    h.run();
+    h.event(egui::Event::PointerButton {
+        pos: at,
+        button: egui::PointerButton::Primary,
+        pressed: true,
+        modifiers: egui::Modifiers::NONE,
+    });
+    h.event(egui::Event::PointerButton {
+        pos: at,
+        button: egui::PointerButton::Primary,
+        pressed: false,
+        modifiers: egui::Modifiers::NONE,
+    });
+    h.run();
+}
+
+#[test]
+fn clicking_a_handle_selects_its_source_and_shows_its_entry() {
+    use energywave::animation::SourceKind;
+    use energywave::viewer::handles::{self, HandleId};
+    let mut scene = light_scene();
+    // Twelve points: the last one's entry is far below the panel's fold.
+    for k in 0..12 {
+        scene.sources.points.push(energywave::field::Point {
+            position: glam::DVec3::new(-2.2 + 0.4 * k as f64, 2.0, 0.0),
+            coefficient: 0.5,
+        });
+    }
+    let mut h = harness(scene);
+    let rect = h.state().viewport_rect();
+    let p = handles::get(h.state().scene(), HandleId::Point(11)).unwrap();
+    let at = handles::to_screen(&h.state().scene().camera, rect, p).unwrap();
+    assert!(
+        h.get_by_label("Point 12").rect().top() > 700.0,
+        "below the fold at first"
+    );
+    click(&mut h, at);
+    assert_eq!(h.state().selection(), Some((SourceKind::Points, 11)));
+    h.run();
+    let entry = h.get_by_label("Point 12").rect();
+    assert!(
+        entry.top() >= 0.0 && entry.bottom() <= 700.0,
+        "scrolled to: {entry:?}"
+    );
+    // A click on nothing clears it; a click on an entry's name selects that source.
+    click(&mut h, Pos2::new(rect.right() - 10.0, rect.top() + 10.0));
+    assert_eq!(h.state().selection(), None);
+    h.get_by_label("Torus 1").click();
+    h.run();
+    assert_eq!(h.state().selection(), Some((SourceKind::Tori, 0)));
+    // Deleting the selected source clears the selection.
+    let torus_delete = h.get_all_by_label("Delete").nth(12).unwrap();
+    torus_delete.click();
+    h.run();
+    assert!(h.state().scene().sources.tori.is_empty());
+    assert_eq!(h.state().selection(), None);
+}
+
+#[test]
+fn a_second_click_on_overlapping_handles_picks_the_next() {
+    use energywave::animation::SourceKind;
+    use energywave::viewer::handles;
+    // The default scene's torus is centred on the curve's middle control point.
+    let mut h = harness(light_scene());
+    let rect = h.state().viewport_rect();
+    let scene = h.state().scene().clone();
+    let at = handles::to_screen(&scene.camera, rect, scene.sources.tori[0].center).unwrap();
+    click(&mut h, at);
+    let first = h.state().selection();
+    click(&mut h, at);
+    let second = h.state().selection();
+    let both = [first, second];
+    assert!(both.contains(&Some((SourceKind::Tori, 0))), "{both:?}");
+    assert!(both.contains(&Some((SourceKind::Curves, 0))), "{both:?}");
+    click(&mut h, at);
+    assert_eq!(h.state().selection(), first, "round again");
+}
+
+#[test]
+fn a_torus_radius_and_axis_and_a_line_direction_have_handles() {
+    use energywave::viewer::handles::{self, HandleId};
+    let mut scene = light_scene();
+    scene.sources.lines.push(energywave::field::Line {
+        point: glam::DVec3::new(0.0, 2.5, 0.0),
+        direction: glam::DVec3::X,
+        coefficient: 0.3,
+    });
+    let mut h = harness(scene);
+    let rect = h.state().viewport_rect();
+    let grab = |h: &Harness<'static, ViewerApp>, id| {
+        let s = h.state().scene();
+        handles::to_screen(&s.camera, rect, handles::get(s, id).unwrap()).unwrap()
+    };
+    let before = h.state().scene().clone();
+    // The radius handle dragged outward widens the ring.
+    let at = grab(&h, HandleId::TorusRadius(0));
+    let center = grab(&h, HandleId::TorusCenter(0));
+    drag(&mut h, at, (at - center).normalized() * 30.0);
+    let t = &h.state().scene().sources.tori[0];
+    assert!(
+        t.major_radius > before.sources.tori[0].major_radius * 1.1,
+        "{}",
+        t.major_radius
+    );
+    assert_eq!(t.center, before.sources.tori[0].center);
+    // The axis handle turns the ring.
+    let at = grab(&h, HandleId::TorusAxis(0));
+    drag(&mut h, at, Vec2::new(25.0, 10.0));
+    let axis = h.state().scene().sources.tori[0].axis;
+    assert!(
+        axis.dot(before.sources.tori[0].axis.normalize()) < 0.999,
+        "{axis}"
+    );
+    assert!((axis.length() - 1.0).abs() < 1e-9);
+    // The line's direction handle turns the line about its point.
+    let at = grab(&h, HandleId::LineDirection(0));
+    drag(&mut h, at, Vec2::new(0.0, -40.0));
+    let l = &h.state().scene().sources.lines[0];
+    assert!(l.direction.y > 0.1, "{}", l.direction);
+    assert_eq!(l.point, before.sources.lines[0].point);
+    assert!(h.state().history().can_undo());
+}

@@ -44,6 +44,8 @@ pub enum Action {
     },
     /// Stop the export running (what it wrote is removed).
     CancelExport,
+    /// Select a source (or none): its handles are ringed in the viewport, its entry highlighted in the panel.
+    Select(Option<(SourceKind, usize)>),
     /// Tell the user something (an error when `is_error`).
     Notify {
         text: String,

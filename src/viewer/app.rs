@@ -20,6 +20,7 @@ use super::navigation;
 use super::panel::{self, ViewSettings};
 use super::timeline::{self, ExportJob, Playback};
 use super::viewport::{ViewportCallback, ViewportReport, ViewportView};
+use crate::animation::SourceKind;
 use crate::geometry::Camera;
 use crate::integrate::Integrator;
 use crate::scene::Scene;
@@ -100,6 +101,12 @@ pub struct ViewerApp {
     report: Arc<Mutex<ViewportReport>>,
     gesture: Option<Gesture>,
     hovered: Option<HandleId>,
+    /// The selected source: ringed in the viewport, highlighted in the panel.
+    selection: Option<(SourceKind, usize)>,
+    /// The handle the last click picked, and where: a second click there goes on to the next handle under it.
+    picked: Option<(HandleId, egui::Pos2)>,
+    /// The panel scrolls to the selected source's entry at its next frame (a selection made in the viewport).
+    scroll_to_selection: bool,
     frame_times: VecDeque<f64>,
     last_frame: Option<Instant>,
     requests: Vec<Request>,
@@ -143,6 +150,9 @@ impl ViewerApp {
             report,
             gesture: None,
             hovered: None,
+            selection: None,
+            picked: None,
+            scroll_to_selection: false,
             frame_times: VecDeque::new(),
             last_frame: None,
             requests: Vec::new(),
@@ -266,6 +276,11 @@ impl ViewerApp {
     /// The Animation section's own fields: the parameter path being typed, the export's settings.
     pub fn animation_form_mut(&mut self) -> &mut AnimationForm {
         &mut self.animation_form
+    }
+
+    /// The selected source, if any.
+    pub fn selection(&self) -> Option<(SourceKind, usize)> {
+        self.selection
     }
 
     /// The animation's current frame and transport.
@@ -449,7 +464,43 @@ impl ViewerApp {
                 }
             }
             Action::Notify { text, is_error } => self.notify(text, is_error),
-            Action::Edit(edit) => edit.apply(&mut self.doc.scene, self.playback.frame as f64),
+            Action::Select(selection) => {
+                self.selection = selection;
+                self.picked = None;
+            }
+            Action::Edit(edit) => {
+                self.follow_renumbering(&edit);
+                edit.apply(&mut self.doc.scene, self.playback.frame as f64);
+            }
+        }
+    }
+
+    /// The selection follows its source when an edit renumbers the sources (and goes with it).
+    fn follow_renumbering(&mut self, edit: &Edit) {
+        let Some((kind, j)) = self.selection else {
+            return;
+        };
+        self.selection = match *edit {
+            Edit::DeleteSource(k, i) if k == kind && i == j => None,
+            Edit::DeleteSource(k, i) if k == kind && i < j => Some((kind, j - 1)),
+            Edit::DuplicateSource(k, i) if k == kind && i < j => Some((kind, j + 1)),
+            _ => self.selection,
+        };
+    }
+
+    /// Drops a selection whose source is gone (an undo, a reload, another file).
+    fn check_selection(&mut self) {
+        let s = &self.doc.scene.sources;
+        if let Some((kind, i)) = self.selection {
+            let count = match kind {
+                SourceKind::Points => s.points.len(),
+                SourceKind::Lines => s.lines.len(),
+                SourceKind::Tori => s.tori.len(),
+                SourceKind::Curves => s.curves.len(),
+            };
+            if i >= count {
+                self.selection = None;
+            }
         }
     }
 
@@ -547,6 +598,7 @@ impl ViewerApp {
         let actions = self.shortcuts(ui.ctx());
         self.apply_all(actions);
         self.expire_notice(ui.ctx());
+        self.check_selection();
 
         egui::Panel::bottom("energywave.status").show(ui, |ui| self.status_bar(ui));
         self.animation_ui(ui);
@@ -564,6 +616,8 @@ impl ViewerApp {
                             max_resolution: self.max_resolution,
                             aspect: self.aspect(),
                             frame: self.playback.frame,
+                            selected: self.selection,
+                            scroll_to_selected: std::mem::take(&mut self.scroll_to_selection),
                         };
                         let mut actions =
                             panel::show(ui, &cx, &mut self.path_input, &mut self.view);
@@ -706,6 +760,25 @@ impl ViewerApp {
             (true, Some(p)) if dragged_handle.is_none() => handles::pick(&shown, rect, p),
             _ => self.hovered,
         };
+        if show_handles
+            && response.clicked()
+            && let Some(at) = response.interact_pointer_pos()
+        {
+            // A click selects the source of the handle in front; a second click on the same spot goes on to
+            // the next handle under it; a click on nothing clears the selection.
+            let under = handles::pick_all(&shown, rect, at);
+            let next = match self.picked {
+                Some((last, spot)) if spot.distance(at) <= 4.0 => under
+                    .iter()
+                    .position(|&h| h == last)
+                    .map(|k| under[(k + 1) % under.len()]),
+                _ => None,
+            }
+            .or(under.first().copied());
+            self.picked = next.map(|h| (h, at));
+            self.selection = next.map(HandleId::source);
+            self.scroll_to_selection = next.is_some();
+        }
         if response.drag_started() {
             // A drag is only recognised once the pointer has moved: start from where the button went down.
             let press = ui
@@ -713,9 +786,23 @@ impl ViewerApp {
                 .or(response.interact_pointer_pos())
                 .unwrap_or(rect.center());
             let camera = shown.camera.clone();
-            let handle = show_handles
-                .then(|| handles::pick(&shown, rect, press))
-                .flatten();
+            // The handle picked last if it is under the press (so that cycling then dragging drags it), else the
+            // one in front.
+            let under = if show_handles {
+                handles::pick_all(&shown, rect, press)
+            } else {
+                Vec::new()
+            };
+            let handle = match self.picked {
+                Some((h, _)) if under.contains(&h) => Some(h),
+                _ => under.first().copied(),
+            };
+            if response.dragged_by(PointerButton::Primary)
+                && let Some(id) = handle
+            {
+                self.selection = Some(id.source());
+                self.scroll_to_selection = true;
+            }
             self.gesture = if response.dragged_by(PointerButton::Primary) {
                 Some(
                     match handle.and_then(|id| handles::get(&shown, id).map(|p| (id, p))) {
@@ -743,8 +830,10 @@ impl ViewerApp {
                         *start,
                         now - *press,
                     );
-                    if handles::get(&shown, *id) != Some(q) {
-                        out.push(Action::set_vector(id.parameter(), q));
+                    if handles::get(&shown, *id) != Some(q)
+                        && let Some((parameter, value)) = handles::edit(&shown, *id, q)
+                    {
+                        out.push(Action::Edit(Edit::Set(parameter, value)));
                     }
                 }
                 Gesture::Orbit { start, press } => {
@@ -781,7 +870,13 @@ impl ViewerApp {
 
         let painter = ui.painter_at(rect);
         if show_handles {
-            handles::draw(&painter, rect, &shown, dragged_handle.or(self.hovered));
+            handles::draw(
+                &painter,
+                rect,
+                &shown,
+                dragged_handle.or(self.hovered),
+                self.selection,
+            );
         }
         if let Some(error) = self.report().error {
             painter.text(

@@ -74,6 +74,10 @@ pub struct Context<'a> {
     pub aspect: f64,
     /// The animation's current frame (where a key goes).
     pub frame: u32,
+    /// The selected source: its entry is highlighted.
+    pub selected: Option<(SourceKind, usize)>,
+    /// Scroll the selected source's entry into view (it was selected in the viewport).
+    pub scroll_to_selected: bool,
 }
 
 /// The panel's file, view, rendering and sources sections (the Animation section is `animation_panel`).
@@ -90,7 +94,7 @@ pub fn show(ui: &mut Ui, cx: &Context, path: &mut String, view: &mut ViewSetting
     ui.separator();
     render_section(ui, cx, view, &mut out);
     ui.separator();
-    sources_section(ui, cx.shown, &mut out);
+    sources_section(ui, cx, &mut out);
     out.actions
 }
 
@@ -571,7 +575,8 @@ fn billboard_editor(ui: &mut Ui, cx: &Context, out: &mut Edits<'_>) {
     }
 }
 
-fn sources_section(ui: &mut Ui, shown: &Scene, out: &mut Edits<'_>) {
+fn sources_section(ui: &mut Ui, cx: &Context, out: &mut Edits<'_>) {
+    let shown = cx.shown;
     let target = shown.camera.target;
     ui.horizontal(|ui| {
         ui.strong("Sources");
@@ -589,6 +594,7 @@ fn sources_section(ui: &mut Ui, shown: &Scene, out: &mut Edits<'_>) {
     let s = &shown.sources;
     list(
         ui,
+        cx,
         out,
         "Point",
         SourceKind::Points,
@@ -606,6 +612,7 @@ fn sources_section(ui: &mut Ui, shown: &Scene, out: &mut Edits<'_>) {
     );
     list(
         ui,
+        cx,
         out,
         "Line",
         SourceKind::Lines,
@@ -630,6 +637,7 @@ fn sources_section(ui: &mut Ui, shown: &Scene, out: &mut Edits<'_>) {
     );
     list(
         ui,
+        cx,
         out,
         "Torus",
         SourceKind::Tori,
@@ -670,6 +678,7 @@ fn sources_section(ui: &mut Ui, shown: &Scene, out: &mut Edits<'_>) {
     };
     list(
         ui,
+        cx,
         out,
         "Curve",
         SourceKind::Curves,
@@ -696,9 +705,12 @@ fn coefficient(ui: &mut Ui, out: &mut Edits<'_>, kind: SourceKind, i: usize, c: 
     });
 }
 
-/// A list of sources of one kind, each with its editor and Duplicate / Delete.
+/// A list of sources of one kind, each with its editor and Duplicate / Delete. A source's name selects it (its
+/// handles ringed in the viewport); the selected source's entry is highlighted, and scrolled to when it was
+/// selected in the viewport.
 fn list<T>(
     ui: &mut Ui,
+    cx: &Context,
     out: &mut Edits<'_>,
     label: &str,
     kind: SourceKind,
@@ -706,20 +718,47 @@ fn list<T>(
     mut editor: impl FnMut(&mut Ui, &mut Edits<'_>, usize, &T),
 ) {
     for (i, item) in items.iter().enumerate() {
-        egui::CollapsingHeader::new(format!("{label} {}", i + 1))
-            .id_salt((label, i))
-            .default_open(true)
-            .show(ui, |ui| {
-                editor(ui, out, i, item);
-                ui.horizontal(|ui| {
-                    if ui.small_button("Duplicate").clicked() {
-                        out.push(Action::Edit(Edit::DuplicateSource(kind, i)));
+        let selected = cx.selected == Some((kind, i));
+        let id = ui.make_persistent_id((label, i));
+        let frame = if selected {
+            egui::Frame::NONE
+                .fill(ui.visuals().selection.bg_fill.gamma_multiply(0.25))
+                .stroke(ui.visuals().selection.stroke)
+                .corner_radius(3.0)
+        } else {
+            egui::Frame::NONE
+        };
+        frame.show(ui, |ui| {
+            let state = egui::collapsing_header::CollapsingState::load_with_default_open(
+                ui.ctx(),
+                id,
+                true,
+            );
+            let (_, header, _) = state
+                .show_header(ui, |ui| {
+                    let name = ui
+                        .selectable_label(selected, format!("{label} {}", i + 1))
+                        .on_hover_text("Select: its handles are ringed in the viewport");
+                    if name.clicked() {
+                        out.push(Action::Select((!selected).then_some((kind, i))));
                     }
-                    if ui.small_button("Delete").clicked() {
-                        out.push(Action::Edit(Edit::DeleteSource(kind, i)));
-                    }
+                    name
+                })
+                .body(|ui| {
+                    editor(ui, out, i, item);
+                    ui.horizontal(|ui| {
+                        if ui.small_button("Duplicate").clicked() {
+                            out.push(Action::Edit(Edit::DuplicateSource(kind, i)));
+                        }
+                        if ui.small_button("Delete").clicked() {
+                            out.push(Action::Edit(Edit::DeleteSource(kind, i)));
+                        }
+                    });
                 });
-            });
+            if selected && cx.scroll_to_selected {
+                header.inner.scroll_to_me(Some(egui::Align::TOP));
+            }
+        });
     }
 }
 
