@@ -11,7 +11,7 @@ struct BillboardParams {
     right: vec3<f32>,
     resolution: u32,   // W of the brightness texture
     up: vec3<f32>,
-    transparent: u32,  // 1: write straight color and alpha = min(B, 1) instead of blending
+    transparent: u32,  // 1: write premultiplied color B Ce and alpha = min(B, 1) instead of blending
     energy: vec4<f32>, // Ce in rgb
 }
 
@@ -56,11 +56,10 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     let b = sample_brightness(in.uv);
     let ce = params.energy.rgb;
     if params.transparent != 0u {
-        // Straight alpha: over any background this gives (1 - B) Cb + B Ce wherever B <= 1, and over black
-        // clamp(B Ce) everywhere, as the opaque blend does.
-        let alpha = clamp(b, 0.0, 1.0);
-        let color = select(ce, clamp(b * ce, vec3<f32>(0.0), vec3<f32>(1.0)), b > 1.0);
-        return vec4<f32>(color, alpha);
+        // Associated (premultiplied) alpha, unclamped: "over" any background Cb gives (1 - B) Cb + B Ce wherever
+        // B <= 1, and over black B Ce everywhere (clamped on display, as the opaque blend). B < 0 is transparent.
+        let bp = max(b, 0.0);
+        return vec4<f32>(bp * ce, min(bp, 1.0));
     }
     let cb = textureLoad(background, vec2<i32>(in.position.xy), 0);
     return vec4<f32>(clamp((1.0 - b) * cb.rgb + b * ce, vec3<f32>(0.0), vec3<f32>(1.0)), cb.a);

@@ -79,10 +79,16 @@ pub struct RenderArgs {
     /// core).
     #[arg(long, value_enum, default_value_t = Backend::Gpu)]
     pub backend: Backend,
-    /// Export the glow over a transparent background: straight color with alpha = min(B, 1), for
-    /// compositing (PNG with alpha, or EXR RGBA).
+    /// Export the glow over a transparent background, alpha = min(B, 1), for compositing: a PNG with straight
+    /// color (or premultiplied with `--premultiplied`), an EXR associated (premultiplied, the OpenEXR convention)
+    /// and unclamped. Composited "over" a background in display values (not scene-linear) it is the viewer's blend
+    /// wherever B <= 1.
     #[arg(long, conflicts_with = "brightness")]
     pub transparent: bool,
+    /// With `--transparent`, write a PNG's color premultiplied by its alpha, for engines' premultiplied blend
+    /// modes (Unity URP "Premultiply", Godot `BLEND_MODE_PREMULT_ALPHA`). An EXR is associated either way.
+    #[arg(long, requires = "transparent")]
+    pub premultiplied: bool,
     /// Write the billboard's brightness B itself (W x W, before the blend, unclamped, rows from the top) as a
     /// float EXR (R = G = B = brightness) instead of the composed frame.
     #[arg(long)]
@@ -361,6 +367,7 @@ fn check_device_limits(
 
 fn render(args: &RenderArgs) -> Result<(), CliError> {
     let target = Target::for_output(&args.output, args.sheet, args.columns)?;
+    let alpha = output::Alpha::of(args.transparent, args.premultiplied);
     let format = match &target {
         Target::Single { format, .. } | Target::Sequence { format, .. } => *format,
         Target::Gif { .. } | Target::Sheet { .. } => Format::Png,
@@ -461,7 +468,7 @@ fn render(args: &RenderArgs) -> Result<(), CliError> {
                     height,
                     args.transparent,
                 );
-                output::write_rgba(&args.output, width, height, &pixels, args.transparent)?;
+                output::write_rgba(&args.output, width, height, &pixels, alpha)?;
             }
         }
         Backend::Gpu => {
@@ -478,7 +485,7 @@ fn render(args: &RenderArgs) -> Result<(), CliError> {
                 let frame = gpu.render(&scene, width, height, args.transparent)?;
                 let pixels: Vec<[f64; 4]> =
                     frame.pixels.iter().map(|p| p.map(|c| c as f64)).collect();
-                output::write_rgba(&args.output, width, height, &pixels, args.transparent)?;
+                output::write_rgba(&args.output, width, height, &pixels, alpha)?;
             }
             if args.verbose {
                 eprintln!(
@@ -567,7 +574,7 @@ fn render_frames(
             target,
             frames.clone(),
             (width, height),
-            args.transparent,
+            output::Alpha::of(args.transparent, args.premultiplied),
             |at| compose(at, gpu.as_mut(), width, height, args.transparent),
             |_, frame| {
                 progress.frame_done(frame);

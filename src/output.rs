@@ -103,60 +103,148 @@ fn parent_dir(path: &Path) -> &Path {
     }
 }
 
-/// Writes an RGBA image (rows from the top, channels in [0, 1]) as PNG (8-bit) or EXR (32-bit float) by the
-/// path's extension; `alpha` keeps the alpha channel, otherwise RGB is written.
+/// How an image's alpha is written.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Alpha {
+    /// No alpha channel: RGB.
+    Opaque,
+    /// Alpha with the color not multiplied by it (PNG's convention, and what most viewers expect of a PNG). An
+    /// EXR is written associated all the same: that is the OpenEXR convention.
+    Straight,
+    /// Alpha with the color multiplied by it (associated), for engines' premultiplied blend modes.
+    Premultiplied,
+}
+
+impl Alpha {
+    /// The alpha of an export: opaque, or transparent straight or premultiplied.
+    pub fn of(transparent: bool, premultiplied: bool) -> Alpha {
+        match (transparent, premultiplied) {
+            (false, _) => Alpha::Opaque,
+            (true, false) => Alpha::Straight,
+            (true, true) => Alpha::Premultiplied,
+        }
+    }
+}
+
+/// The chromaticities of the exported colors, stated in every EXR: sRGB's primaries (those of Rec. 709) and its
+/// D65 white.
+pub const SRGB_PRIMARIES: [[f32; 2]; 4] =
+    [[0.64, 0.33], [0.30, 0.60], [0.15, 0.06], [0.3127, 0.3290]];
+
+/// What an EXR's values are, in its header (attribute `energywave:values`), and OpenImageIO's colour space
+/// attribute (`oiio:ColorSpace`) to the same effect.
+pub const EXR_VALUES_NOTE: &str = "display-referred: the viewer's colors and blend as they are (sRGB-encoded, \
+     not linear); alpha associated; composite in this space, not in scene-linear";
+
+/// Writes an RGBA image (rows from the top) as PNG (8-bit) or EXR (32-bit float) by the path's extension. With
+/// an alpha the pixels are premultiplied (associated), as the transparent export makes them: a PNG gets them
+/// straight or premultiplied as `alpha` says (clamped to [0, 1]), an EXR associated and unclamped (B > 1 keeps its
+/// HDR color), with its color space stated (`SRGB_PRIMARIES`, `EXR_VALUES_NOTE`). Opaque: RGB, a PNG clamped.
 pub fn write_rgba(
     path: &Path,
     width: u32,
     height: u32,
     pixels: &[[f64; 4]],
-    alpha: bool,
+    alpha: Alpha,
 ) -> Result<(), OutputError> {
     let format = check_destination(path)?;
-    let channels = if alpha { 4 } else { 3 };
-    let img = match format {
-        Format::Png => {
-            let bytes: Vec<u8> = pixels
-                .iter()
-                .flat_map(|p| {
-                    p[..channels]
-                        .iter()
-                        .map(|c| (c.clamp(0.0, 1.0) * 255.0).round() as u8)
-                        .collect::<Vec<_>>()
-                })
-                .collect();
-            if alpha {
-                image::DynamicImage::ImageRgba8(
-                    image::RgbaImage::from_raw(width, height, bytes).expect("size matches"),
-                )
-            } else {
-                image::DynamicImage::ImageRgb8(
-                    image::RgbImage::from_raw(width, height, bytes).expect("size matches"),
-                )
-            }
-        }
-        Format::Exr => {
-            let floats: Vec<f32> = pixels
-                .iter()
-                .flat_map(|p| p[..channels].iter().map(|&c| c as f32).collect::<Vec<_>>())
-                .collect();
-            if alpha {
-                image::DynamicImage::ImageRgba32F(
-                    image::Rgba32FImage::from_raw(width, height, floats).expect("size matches"),
-                )
-            } else {
-                image::DynamicImage::ImageRgb32F(
-                    image::Rgb32FImage::from_raw(width, height, floats).expect("size matches"),
-                )
-            }
-        }
+    if format == Format::Exr {
+        let encoded = encode_exr(path, width, height, pixels, alpha != Alpha::Opaque)?;
+        return write_atomically(path, &encoded);
+    }
+    let bytes: Vec<u8> = pixels
+        .iter()
+        .flat_map(|&p| {
+            let p = match alpha {
+                Alpha::Straight if p[3] > 0.0 => [p[0] / p[3], p[1] / p[3], p[2] / p[3], p[3]],
+                Alpha::Straight => [0.0; 4],
+                _ => p,
+            };
+            let channels = if alpha == Alpha::Opaque { 3 } else { 4 };
+            p.into_iter()
+                .take(channels)
+                .map(|c| (c.clamp(0.0, 1.0) * 255.0).round() as u8)
+                .collect::<Vec<_>>()
+        })
+        .collect();
+    let img = if alpha == Alpha::Opaque {
+        image::DynamicImage::ImageRgb8(
+            image::RgbImage::from_raw(width, height, bytes).expect("size matches"),
+        )
+    } else {
+        image::DynamicImage::ImageRgba8(
+            image::RgbaImage::from_raw(width, height, bytes).expect("size matches"),
+        )
     };
-    let image_format = match format {
-        Format::Png => image::ImageFormat::Png,
-        Format::Exr => image::ImageFormat::OpenExr,
-    };
-    let encoded = encode(path, img, image_format)?;
+    let encoded = encode(path, img, image::ImageFormat::Png)?;
     write_atomically(path, &encoded)
+}
+
+/// An EXR of `pixels` (f32, lossless ZIP), RGBA when `alpha`, with the header's chromaticities and notes.
+fn encode_exr(
+    path: &Path,
+    width: u32,
+    height: u32,
+    pixels: &[[f64; 4]],
+    alpha: bool,
+) -> Result<Vec<u8>, OutputError> {
+    use exr::meta::attribute::{AttributeValue, Chromaticities, Text};
+    use exr::prelude::*;
+    let (w, h) = (width as usize, height as usize);
+    let at = |p: Vec2<usize>| pixels[p.y() * w + p.x()].map(|c| c as f32);
+    let mut attributes = LayerAttributes::named("");
+    attributes.software_name = Some(Text::from("energywave"));
+    attributes.other.insert(
+        Text::from("energywave:values"),
+        AttributeValue::Text(Text::from(EXR_VALUES_NOTE)),
+    );
+    attributes.other.insert(
+        Text::from("oiio:ColorSpace"),
+        AttributeValue::Text(Text::from("sRGB")),
+    );
+    let [r, g, b, white] = SRGB_PRIMARIES.map(|[x, y]| Vec2(x, y));
+    let chromaticities = Some(Chromaticities {
+        red: r,
+        green: g,
+        blue: b,
+        white,
+    });
+    let mut buf = std::io::Cursor::new(Vec::new());
+    let failed = |e: exr::error::Error| OutputError::Encode {
+        path: path.to_owned(),
+        source: image::ImageError::Encoding(image::error::EncodingError::new(
+            image::error::ImageFormatHint::Exact(image::ImageFormat::OpenExr),
+            e,
+        )),
+    };
+    if alpha {
+        let layer = Layer::new(
+            (w, h),
+            attributes,
+            Encoding::SMALL_LOSSLESS,
+            SpecificChannels::rgba(|p| {
+                let [r, g, b, a] = at(p);
+                (r, g, b, a)
+            }),
+        );
+        let mut image = Image::from_layer(layer);
+        image.attributes.chromaticities = chromaticities;
+        image.write().to_buffered(&mut buf).map_err(failed)?;
+    } else {
+        let layer = Layer::new(
+            (w, h),
+            attributes,
+            Encoding::SMALL_LOSSLESS,
+            SpecificChannels::rgb(|p| {
+                let [r, g, b, _] = at(p);
+                (r, g, b)
+            }),
+        );
+        let mut image = Image::from_layer(layer);
+        image.attributes.chromaticities = chromaticities;
+        image.write().to_buffered(&mut buf).map_err(failed)?;
+    }
+    Ok(buf.into_inner())
 }
 
 /// Writes a `w` x `w` field of unclamped floats (the brightness B) as a float EXR with R = G = B = value.

@@ -430,3 +430,143 @@ fn bad_requests_exit_2_before_rendering_and_write_nothing() {
     ok(&render(&still, &["-o", &p("still_####.png")]));
     assert_eq!(files(&dir), ["still_0000.png"]);
 }
+
+/// `oiiotool` (OpenImageIO, Debian `openimageio-tools`) with `args`; panics with its message when it fails.
+fn oiiotool(args: &[&str]) {
+    let o = Command::new("oiiotool")
+        .args(args)
+        .output()
+        .expect("oiiotool runs (Debian: apt-get install openimageio-tools)");
+    assert!(
+        o.status.success(),
+        "oiiotool {args:?}: {}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+}
+
+#[test]
+fn a_compositor_puts_the_transparent_exr_and_png_over_a_plate_as_the_viewer_blends() {
+    let dir = tmpdir("over");
+    let scene_text = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/default.toml"),
+    )
+    .unwrap();
+    let scene = dir.join("glow.toml");
+    std::fs::write(&scene, &scene_text).unwrap();
+    let s = scene.to_str().unwrap();
+    let size = ["--size", "96x64"];
+    let exr = dir.join("glow.exr");
+    let png = dir.join("glow.png");
+    for out in [&exr, &png] {
+        ok(&render(
+            s,
+            &[&size[..], &["--transparent", "-o", out.to_str().unwrap()]].concat(),
+        ));
+    }
+    let glow = image::open(&exr).unwrap().to_rgba32f();
+    let straight = image::open(&png).unwrap().to_rgba8();
+    let mut compared = 0;
+    for (k, background) in [[0.9, 0.4, 0.1], [0.1, 0.6, 0.2], [0.5, 0.5, 0.5]]
+        .iter()
+        .enumerate()
+    {
+        let [r, g, b] = background;
+        // What the viewer shows on that background.
+        let on = dir.join(format!("on{k}.toml"));
+        std::fs::write(
+            &on,
+            scene_text.replace(
+                "background = [0.0, 0.0, 0.02]",
+                &format!("background = [{r}, {g}, {b}]"),
+            ),
+        )
+        .unwrap();
+        let want_path = dir.join(format!("want{k}.exr"));
+        ok(&render(
+            on.to_str().unwrap(),
+            &[&size[..], &["-o", want_path.to_str().unwrap()]].concat(),
+        ));
+        let want = image::open(&want_path).unwrap().to_rgb32f();
+        // A plate of that color, and the compositor's "over".
+        let plate = dir.join(format!("plate{k}.exr"));
+        let plate_str = plate.to_str().unwrap().to_owned();
+        oiiotool(&[
+            "--pattern",
+            &format!("constant:color={r},{g},{b},1"),
+            "96x64",
+            "4",
+            "-o",
+            &plate_str,
+        ]);
+        for (input, tolerance) in [(&exr, 2.0 / 255.0), (&png, 2.0 / 255.0)] {
+            let out = dir.join(format!("over{k}.exr"));
+            oiiotool(&[
+                input.to_str().unwrap(),
+                &plate_str,
+                "--over",
+                "-o",
+                out.to_str().unwrap(),
+            ]);
+            let got = image::open(&out).unwrap().to_rgba32f();
+            let mut worst = 0.0f32;
+            for (x, y, p) in got.enumerate_pixels() {
+                // B > 1 cannot be alpha: the comparison holds wherever B <= 1.
+                if glow.get_pixel(x, y)[3] >= 0.999 {
+                    continue;
+                }
+                let w = want.get_pixel(x, y);
+                for c in 0..3 {
+                    worst = worst.max((p[c] - w[c]).abs());
+                }
+                compared += 1;
+            }
+            assert!(
+                worst <= tolerance,
+                "{} over {background:?}: off by {worst} from the viewer's blend",
+                input.display()
+            );
+        }
+    }
+    assert!(
+        compared > 3 * 2 * 96 * 64 / 2,
+        "most pixels have B <= 1: {compared}"
+    );
+    // The PNG holds straight color, the EXR associated color: the same glow.
+    let (p, e) = (straight.get_pixel(48, 32), glow.get_pixel(48, 32));
+    if e[3] > 0.05 && e[3] < 0.999 {
+        for c in 0..3 {
+            assert!((p[c] as f32 / 255.0 * e[3] - e[c]).abs() < 2.0 / 255.0);
+        }
+    }
+}
+
+#[test]
+fn a_transparent_exr_keeps_hdr_and_says_its_color_space() {
+    let dir = tmpdir("exr-hdr");
+    let exr = dir.join("glow.exr");
+    ok(&render(
+        &preset(),
+        &["--transparent", "-o", exr.to_str().unwrap()],
+    ));
+    let glow = image::open(&exr).unwrap().to_rgba32f();
+    let brightest = glow.pixels().map(|p| p[2]).fold(0.0f32, f32::max);
+    assert!(brightest > 1.0, "B > 1 keeps B Ce unclamped: {brightest}");
+    assert!(
+        glow.pixels()
+            .all(|p| p[3] <= 1.0 && p.0.iter().take(3).all(|&c| c <= p[3].max(1e-6) * 100.0))
+    );
+    let o = Command::new("oiiotool")
+        .args(["--info", "-v", exr.to_str().unwrap()])
+        .output()
+        .expect("oiiotool runs");
+    let info = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        info.contains("chromaticities: 0.64, 0.33, 0.3, 0.6, 0.15, 0.06, 0.3127, 0.329"),
+        "{info}"
+    );
+    assert!(
+        info.contains("energywave:values: \"display-referred"),
+        "{info}"
+    );
+}

@@ -11,7 +11,7 @@ pub mod sheet;
 use std::ops::{ControlFlow, Range};
 use std::path::{Path, PathBuf};
 
-use crate::output::{self, Format, OutputError};
+use crate::output::{self, Alpha, Format, OutputError};
 use crate::scene::Scene;
 
 pub use progress::Progress;
@@ -284,7 +284,7 @@ pub struct FrameSink {
     target: Target,
     width: u32,
     height: u32,
-    alpha: bool,
+    alpha: Alpha,
     frames: Range<u32>,
     frame_rate: f64,
     gif: Option<(image::codecs::gif::GifEncoder<SharedBuffer>, SharedBuffer)>,
@@ -295,15 +295,15 @@ pub struct FrameSink {
 }
 
 impl FrameSink {
-    /// A sink for `frames` of `width` x `height` pixels at `frame_rate`; `alpha` keeps the alpha channel
-    /// (`--transparent`; a GIF cannot, and the caller refuses that beforehand).
+    /// A sink for `frames` of `width` x `height` pixels at `frame_rate`; `alpha` says how the alpha channel of
+    /// a transparent export is kept (a GIF keeps none, and the caller refuses a transparent one beforehand).
     pub fn new(
         target: &Target,
         width: u32,
         height: u32,
         frames: Range<u32>,
         frame_rate: f64,
-        alpha: bool,
+        alpha: Alpha,
     ) -> Result<Self, ExportError> {
         let mut sink = Self {
             target: target.clone(),
@@ -424,7 +424,7 @@ pub fn export_frames<E: From<ExportError>>(
     target: &Target,
     frames: Range<u32>,
     size: (u32, u32),
-    transparent: bool,
+    alpha: Alpha,
     mut render: impl FnMut(&Scene) -> Result<Vec<[f64; 4]>, E>,
     mut on_frame: impl FnMut(u32, u32) -> ControlFlow<()>,
 ) -> Result<Vec<PathBuf>, E> {
@@ -432,14 +432,7 @@ pub fn export_frames<E: From<ExportError>>(
         .animation
         .as_ref()
         .map_or(crate::animation::DEFAULT_FRAME_RATE, |a| a.frame_rate);
-    let mut sink = FrameSink::new(
-        target,
-        size.0,
-        size.1,
-        frames.clone(),
-        frame_rate,
-        transparent,
-    )?;
+    let mut sink = FrameSink::new(target, size.0, size.1, frames.clone(), frame_rate, alpha)?;
     for (done, frame) in frames.enumerate() {
         let pixels = match render(&scene.at_frame(frame as f64)) {
             Ok(p) => p,
@@ -502,7 +495,7 @@ mod tests {
             &target,
             0..10,
             (8, 6),
-            false,
+            Alpha::Opaque,
             |_| {
                 rendered.set(rendered.get() + 1);
                 Ok(pixels.clone())
@@ -528,7 +521,7 @@ mod tests {
             &target,
             0..10,
             (8, 6),
-            false,
+            Alpha::Opaque,
             |_| {
                 if rendered.get() == 7 {
                     return Err(ExportError::Target {
@@ -549,7 +542,7 @@ mod tests {
             &target,
             0..10,
             (8, 6),
-            false,
+            Alpha::Opaque,
             |_| Ok(pixels.clone()),
             |_, _| ControlFlow::Continue(()),
         )

@@ -15,17 +15,14 @@ pub fn blend(b: f64, energy: [f64; 3], background: [f64; 3]) -> [f64; 3] {
     std::array::from_fn(|c| ((1.0 - b) * background[c] + b * energy[c]).clamp(0.0, 1.0))
 }
 
-/// The transparent export of one billboard pixel: straight (not premultiplied) color and alpha = min(B, 1).
-/// Composited "over" any background Cb it gives `(1 - B) Cb + B Ce` wherever B <= 1, and over black it
-/// gives `clamp(B Ce)` everywhere, as the opaque blend does.
+/// The transparent export of one billboard pixel: associated (premultiplied) color `B Ce`, unclamped, and
+/// alpha = min(B, 1). Composited "over" any background Cb (`color + (1 - alpha) Cb`) it gives `(1 - B) Cb + B Ce`
+/// wherever B <= 1, and over black `B Ce` everywhere, which the display clamps as the opaque blend does. B > 1
+/// cannot be an alpha: there the glow covers the background (the opaque blend's `(1 - B) Cb` would subtract
+/// it). B < 0 (negative coefficients) is transparent.
 pub fn blend_transparent(b: f64, energy: [f64; 3]) -> [f64; 4] {
-    let alpha = b.clamp(0.0, 1.0);
-    let color = if b > 1.0 {
-        energy.map(|c| (b * c).clamp(0.0, 1.0))
-    } else {
-        energy
-    };
-    [color[0], color[1], color[2], alpha]
+    let b = b.max(0.0);
+    [b * energy[0], b * energy[1], b * energy[2], b.min(1.0)]
 }
 
 /// Samples a `w` x `w` row-major texture (rows from the top) bilinearly at texture coordinates `(u, v)` in
@@ -52,8 +49,8 @@ pub fn sample_bilinear(texture: &[f64], w: u32, u: f64, v: f64) -> f64 {
 
 /// The frame the camera sees, RGBA, rows from the top: the background color everywhere, and over the
 /// billboard the blend of B (sampled bilinearly, as the GPU's pass does) `clamp((1 - B) Cb + B Ce)`, alpha 1.
-/// With `transparent`, the background is transparent and the billboard carries straight color with
-/// alpha = min(B, 1) (`blend_transparent`).
+/// With `transparent`, the background is transparent and the billboard carries associated (premultiplied) color
+/// `B Ce` with alpha = min(B, 1) (`blend_transparent`).
 pub fn compose_frame(
     scene: &Scene,
     billboard: &Billboard,
@@ -115,8 +112,9 @@ mod tests {
         let ce = [0.2, 0.5, 1.0];
         for b in [0.0, 0.3, 1.0] {
             for cb in [[0.0, 0.0, 0.0], [0.9, 0.4, 0.1]] {
+                // Associated alpha: "over" adds the color as it is.
                 let [r, g, bl, a] = blend_transparent(b, ce);
-                let over: [f64; 3] = std::array::from_fn(|c| [r, g, bl][c] * a + cb[c] * (1.0 - a));
+                let over: [f64; 3] = std::array::from_fn(|c| [r, g, bl][c] + cb[c] * (1.0 - a));
                 let want = blend(b, ce, cb);
                 assert!(
                     over.iter().zip(want).all(|(x, y)| (x - y).abs() < 1e-12),
@@ -124,10 +122,14 @@ mod tests {
                 );
             }
         }
-        // Over black, blown-out values too.
+        // Over black, blown-out values too, once the display clamps them; unclamped they keep B Ce.
         let [r, g, bl, a] = blend_transparent(3.0, ce);
         assert_eq!(a, 1.0);
-        assert_eq!([r, g, bl], blend(3.0, ce, [0.0; 3]));
+        assert_eq!([r, g, bl], [0.6000000000000001, 1.5, 3.0]);
+        assert_eq!(
+            [r, g, bl].map(|c| c.clamp(0.0, 1.0)),
+            blend(3.0, ce, [0.0; 3])
+        );
     }
 
     #[test]

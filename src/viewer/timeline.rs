@@ -126,7 +126,7 @@ impl ExportJob {
                     &target,
                     frames,
                     size,
-                    transparent,
+                    crate::output::Alpha::of(transparent, false),
                     |at| -> Result<Vec<[f64; 4]>, ExportFailure> {
                         let frame = gpu.render(at, size.0, size.1, transparent)?;
                         Ok(frame.pixels.iter().map(|p| p.map(|c| c as f64)).collect())

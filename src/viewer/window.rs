@@ -313,7 +313,7 @@ fn save_viewport(
 ) -> Result<(), ViewerError> {
     let (pixels, [w, h]) = gpu.screenshot(app, scale)?;
     let pixels: Vec<[f64; 4]> = pixels.iter().map(|p| p.map(|c| c as f64)).collect();
-    output::write_rgba(path, w, h, &pixels, false)?;
+    output::write_rgba(path, w, h, &pixels, output::Alpha::Opaque)?;
     Ok(())
 }
 
@@ -357,7 +357,7 @@ fn capture_window(
             [r, p[1], b, 255].map(|c| c as f64 / 255.0)
         })
         .collect();
-    output::write_rgba(path, width, height, &pixels, false)?;
+    output::write_rgba(path, width, height, &pixels, output::Alpha::Opaque)?;
     Ok(())
 }
 
