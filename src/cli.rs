@@ -125,6 +125,12 @@ pub struct RenderArgs {
     /// Columns of the sprite sheet (default: as square as it gets).
     #[arg(long, requires = "sheet")]
     pub columns: Option<u32>,
+    /// Transparent pixels between the sheet's cells, so that mipmaps do not bleed one frame into the next.
+    #[arg(long, default_value_t = 0, requires = "sheet")]
+    pub padding: u32,
+    /// Round the sheet's width and height up to powers of two (for engines and GPUs that want them).
+    #[arg(long, requires = "sheet")]
+    pub power_of_two: bool,
 }
 
 /// The renderer behind `render`.
@@ -366,7 +372,14 @@ fn check_device_limits(
 }
 
 fn render(args: &RenderArgs) -> Result<(), CliError> {
-    let target = Target::for_output(&args.output, args.sheet, args.columns)?;
+    let target = Target::for_output(
+        &args.output,
+        args.sheet.then_some(export::SheetOptions {
+            columns: args.columns,
+            padding: args.padding,
+            power_of_two: args.power_of_two,
+        }),
+    )?;
     let alpha = output::Alpha::of(args.transparent, args.premultiplied);
     let format = match &target {
         Target::Single { format, .. } | Target::Sequence { format, .. } => *format,
@@ -514,9 +527,13 @@ fn render_frames(
         .animation
         .as_ref()
         .map_or(crate::animation::DEFAULT_FRAME_RATE, |a| a.frame_rate);
-    // A sheet too large for image tools is refused before the GPU starts.
-    if let Target::Sheet { path, columns } = target {
-        export::sheet_grid(path, width, height, frames.clone(), *columns, frame_rate)?;
+    // A sheet too large for image tools is refused before the GPU starts; one past what mobile GPUs load is
+    // said.
+    if let Target::Sheet { path, options } = target {
+        let layout = export::sheet_grid(path, width, height, frames.clone(), options, frame_rate)?;
+        if let Some(warning) = export::sheet::mobile_warning(&layout) {
+            eprintln!("warning: {}: {warning}", path.display());
+        }
     }
     let mut gpu = match args.backend {
         Backend::Gpu => Some(HeadlessRenderer::new()?),

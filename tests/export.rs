@@ -171,14 +171,12 @@ fn a_gif_and_a_sprite_sheet_decode_to_the_frames() {
     assert_eq!(img.dimensions(), (3 * 48, 2 * 40));
     let layout: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("sheet.json")).unwrap()).unwrap();
-    assert_eq!(layout["columns"], 3);
-    assert_eq!(layout["rows"], 2);
-    assert_eq!(layout["frame_count"], 5);
-    assert_eq!(layout["frame_width"], 48);
-    assert_eq!(layout["frame_height"], 40);
-    assert_eq!(layout["image"], "sheet.png");
+    let grid = &layout["meta"]["energywave"];
+    assert_eq!(grid["columns"], 3);
+    assert_eq!(grid["rows"], 2);
+    assert_eq!(grid["frame_count"], 5);
     assert_eq!(
-        layout["frames"][4],
+        grid["frames"][4],
         serde_json::json!({ "frame": 24, "x": 48, "y": 40 })
     );
     let seq = tmpdir("gif-seq");
@@ -191,12 +189,28 @@ fn a_gif_and_a_sprite_sheet_decode_to_the_frames() {
             seq.join("f_####.png").to_str().unwrap(),
         ],
     ));
+    // Decoded with the TexturePacker layout alone, as an engine's importer does: each frame's rectangle is the
+    // sequence's frame.
+    assert_eq!(layout["meta"]["image"], "sheet.png");
+    assert_eq!(
+        layout["meta"]["size"],
+        serde_json::json!({"w": 3 * 48, "h": 2 * 40})
+    );
+    let frames_json = layout["frames"].as_object().unwrap();
+    assert_eq!(frames_json.len(), 5);
     for k in 0..5u32 {
+        let f = &frames_json[&format!("sheet_{:04}", 20 + k)];
+        let r = &f["frame"];
+        let (x, y, w, h) = (
+            r["x"].as_u64().unwrap() as u32,
+            r["y"].as_u64().unwrap() as u32,
+            r["w"].as_u64().unwrap() as u32,
+            r["h"].as_u64().unwrap() as u32,
+        );
+        assert_eq!(f["sourceSize"], serde_json::json!({"w": w, "h": h}));
+        let cell = image::imageops::crop_imm(&img, x, y, w, h).to_image();
         let frame = rgba(&seq.join(format!("f_{:04}.png", 20 + k)));
-        let (x0, y0) = ((k % 3) * 48, (k / 3) * 40);
-        let cell = image::imageops::crop_imm(&img, x0, y0, 48, 40).to_image();
-        assert_eq!(cell, frame, "cell {k}");
-        // The GIF's palette is close to the true colors (frames 10..16 there; compare one of each).
+        assert_eq!(cell, frame, "frame {}", 20 + k);
     }
     // The unused sixth cell is black.
     assert!(
@@ -442,6 +456,85 @@ fn oiiotool(args: &[&str]) {
         "oiiotool {args:?}: {}{}",
         String::from_utf8_lossy(&o.stdout),
         String::from_utf8_lossy(&o.stderr)
+    );
+}
+
+#[test]
+fn a_padded_power_of_two_premultiplied_sheet_decodes_from_its_json() {
+    let dir = tmpdir("sheet-pad");
+    let sheet = dir.join("beam.png");
+    let o = render(
+        &preset(),
+        &[
+            "--frames",
+            "30..37",
+            "--sheet",
+            "--padding",
+            "3",
+            "--power-of-two",
+            "--transparent",
+            "--premultiplied",
+            "-o",
+            sheet.to_str().unwrap(),
+        ],
+    );
+    ok(&o);
+    let img = image::open(&sheet).unwrap().to_rgba8();
+    // Seven frames of 48 x 40: 3 columns, 3 rows, 3 between: 150 x 126, rounded up to 256 x 128.
+    assert_eq!(img.dimensions(), (256, 128));
+    let layout: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("beam.json")).unwrap()).unwrap();
+    assert_eq!(
+        layout["meta"]["size"],
+        serde_json::json!({"w": 256, "h": 128})
+    );
+    assert_eq!(layout["meta"]["premultipliedAlpha"], true);
+    // Each cell is the premultiplied single frame; the padding between cells is transparent.
+    let seq = tmpdir("sheet-pad-seq");
+    ok(&render(
+        &preset(),
+        &[
+            "--frames",
+            "30..37",
+            "--transparent",
+            "--premultiplied",
+            "-o",
+            seq.join("f_##.png").to_str().unwrap(),
+        ],
+    ));
+    for (name, f) in layout["frames"].as_object().unwrap() {
+        let r = &f["frame"];
+        let at = |k: &str| r[k].as_u64().unwrap() as u32;
+        let frame: u32 = name.trim_start_matches("beam_").parse().unwrap();
+        let cell = image::imageops::crop_imm(&img, at("x"), at("y"), at("w"), at("h")).to_image();
+        assert_eq!(cell, rgba(&seq.join(format!("f_{frame}.png"))), "{name}");
+        // Premultiplied: no channel above its alpha.
+        assert!(cell.pixels().all(|p| p.0[..3].iter().all(|&c| c <= p.0[3])));
+    }
+    for x in 48..51 {
+        assert!(
+            (0..40).all(|y| img.get_pixel(x, y).0[3] == 0),
+            "padding column {x}"
+        );
+    }
+    // Past what mobile GPUs load, the command line says so.
+    let big = render(
+        &preset(),
+        &[
+            "--frames",
+            "0..4",
+            "--sheet",
+            "--size",
+            "2100x64",
+            "-o",
+            dir.join("big.png").to_str().unwrap(),
+        ],
+    );
+    ok(&big);
+    assert!(
+        String::from_utf8_lossy(&big.stderr).contains("over 4096 pixels a side"),
+        "{}",
+        String::from_utf8_lossy(&big.stderr)
     );
 }
 

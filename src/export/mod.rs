@@ -15,7 +15,7 @@ use crate::output::{self, Alpha, Format, OutputError};
 use crate::scene::Scene;
 
 pub use progress::Progress;
-pub use sheet::{SheetLayout, sheet_grid};
+pub use sheet::{SheetLayout, SheetOptions, sheet_grid};
 
 /// Widest sprite sheet, in pixels per side (what game engines and image tools load without trouble).
 pub const MAX_SHEET_SIDE: u64 = 16384;
@@ -134,17 +134,16 @@ pub enum Target {
     /// An animated GIF, looping.
     Gif { path: PathBuf },
     /// A flipbook grid PNG, with its layout as JSON beside it.
-    Sheet { path: PathBuf, columns: Option<u32> },
+    Sheet {
+        path: PathBuf,
+        options: SheetOptions,
+    },
 }
 
 impl Target {
-    /// Works out the target from the output path and `--sheet`, checking it (extension, directory, pattern)
-    /// before anything is rendered.
-    pub fn for_output(
-        path: &Path,
-        sheet: bool,
-        columns: Option<u32>,
-    ) -> Result<Target, ExportError> {
+    /// Works out the target from the output path and `--sheet` (its layout's options), checking it
+    /// (extension, directory, pattern) before anything is rendered.
+    pub fn for_output(path: &Path, sheet: Option<SheetOptions>) -> Result<Target, ExportError> {
         let fail = |why: &str| ExportError::Target {
             path: path.to_owned(),
             why: why.to_owned(),
@@ -165,7 +164,7 @@ impl Target {
             ));
         }
         if ext == "gif" {
-            if sheet {
+            if sheet.is_some() {
                 return Err(fail("a sprite sheet is a .png"));
             }
             if hashes > 0 {
@@ -179,13 +178,13 @@ impl Target {
             });
         }
         let format = output::check_destination(path)?;
-        if sheet {
+        if let Some(options) = sheet {
             if format != Format::Png || hashes > 0 {
                 return Err(fail(
                     "a sprite sheet is one .png file (its layout goes beside it as .json)",
                 ));
             }
-            if columns == Some(0) {
+            if options.columns == Some(0) {
                 return Err(fail("--columns must be at least 1"));
             }
             let layout = sheet::layout_path(path);
@@ -197,7 +196,7 @@ impl Target {
             }
             return Ok(Target::Sheet {
                 path: path.to_owned(),
-                columns,
+                options,
             });
         }
         Ok(if hashes == 1 {
@@ -329,8 +328,10 @@ impl FrameSink {
                     })?;
                 sink.gif = Some((enc, buffer));
             }
-            Target::Sheet { path, columns } => {
-                let layout = sheet_grid(path, width, height, frames.clone(), *columns, frame_rate)?;
+            Target::Sheet { path, options } => {
+                let mut layout =
+                    sheet_grid(path, width, height, frames.clone(), options, frame_rate)?;
+                layout.premultiplied = alpha == Alpha::Premultiplied;
                 let pixels = vec![[0.0; 4]; layout.width() as usize * layout.height() as usize];
                 sink.sheet = Some((layout, pixels));
             }

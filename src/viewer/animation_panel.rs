@@ -432,40 +432,53 @@ fn export_section(
                 let path = form.export_target_path(scene_path);
                 let sheet = form.export_kind == ExportKind::Sheet;
                 let transparent = form.transparent && form.export_kind != ExportKind::Gif;
-                let checked = Target::for_output(&path, sheet, None).and_then(|target| {
-                    let expected = match form.export_kind {
-                        ExportKind::Sequence => matches!(target, Target::Sequence { .. }),
-                        ExportKind::Gif => matches!(target, Target::Gif { .. }),
-                        ExportKind::Sheet => matches!(target, Target::Sheet { .. }),
-                    };
-                    if !expected {
-                        return Err(crate::export::ExportError::Target {
-                            path: path.clone(),
-                            why: "does not fit the kind chosen: a sequence needs a run of # \
+                let mut warning = None;
+                let checked =
+                    Target::for_output(&path, sheet.then(crate::export::SheetOptions::default))
+                        .and_then(|target| {
+                            let expected = match form.export_kind {
+                                ExportKind::Sequence => matches!(target, Target::Sequence { .. }),
+                                ExportKind::Gif => matches!(target, Target::Gif { .. }),
+                                ExportKind::Sheet => matches!(target, Target::Sheet { .. }),
+                            };
+                            if !expected {
+                                return Err(crate::export::ExportError::Target {
+                                    path: path.clone(),
+                                    why:
+                                        "does not fit the kind chosen: a sequence needs a run of # \
                                   (name_####.png), a GIF ends in .gif, a sheet in .png"
-                                .into(),
+                                            .into(),
+                                });
+                            }
+                            if let Target::Sheet { path, options } = &target {
+                                let layout = crate::export::sheet_grid(
+                                    path,
+                                    form.size[0],
+                                    form.size[1],
+                                    0..frames,
+                                    options,
+                                    30.0,
+                                )?;
+                                warning = crate::export::sheet::mobile_warning(&layout);
+                            }
+                            Ok(target)
                         });
-                    }
-                    if let Target::Sheet { path, columns } = &target {
-                        crate::export::sheet_grid(
-                            path,
-                            form.size[0],
-                            form.size[1],
-                            0..frames,
-                            *columns,
-                            30.0,
-                        )?;
-                    }
-                    Ok(target)
-                });
                 match checked {
-                    Ok(target) => out.push(Action::Export {
-                        target,
-                        frames: 0..frames,
-                        size: (form.size[0], form.size[1]),
-                        transparent,
-                        description: path.display().to_string(),
-                    }),
+                    Ok(target) => {
+                        out.push(Action::Export {
+                            target,
+                            frames: 0..frames,
+                            size: (form.size[0], form.size[1]),
+                            transparent,
+                            description: path.display().to_string(),
+                        });
+                        if let Some(w) = warning {
+                            out.push(Action::Notify {
+                                text: w,
+                                is_error: false,
+                            });
+                        }
+                    }
                     Err(e) => out.push(Action::error(e.to_string())),
                 }
             }
