@@ -69,7 +69,8 @@ pub struct ViewArgs {
 pub struct RenderArgs {
     /// Scene file (TOML); the embedded default scene without one.
     pub scene: Option<PathBuf>,
-    /// Output image: .png (8-bit) or .exr (32-bit float), by extension.
+    /// Output: an image, .png (8-bit) or .exr (32-bit float), by extension; for an animation also a sequence
+    /// (name_####.png), a .gif, a --sheet, or a video, .mp4 (H.264) or .webm (VP9), through ffmpeg.
     #[arg(short, long)]
     pub output: PathBuf,
     /// Frame size in pixels, WIDTHxHEIGHT.
@@ -383,8 +384,23 @@ fn render(args: &RenderArgs) -> Result<(), CliError> {
     let alpha = output::Alpha::of(args.transparent, args.premultiplied);
     let format = match &target {
         Target::Single { format, .. } | Target::Sequence { format, .. } => *format,
-        Target::Gif { .. } | Target::Sheet { .. } => Format::Png,
+        Target::Gif { .. } | Target::Sheet { .. } | Target::Video { .. } => Format::Png,
     };
+    if let Target::Video { container, .. } = &target {
+        if args.transparent && *container == export::video::Container::Mp4 {
+            return Err(CliError::Usage(format!(
+                "{}: H.264 in MP4 has no alpha, so it cannot carry alpha = min(B, 1); write a .webm (VP9 \
+                 with alpha) or a PNG sequence (name_####.png) with --transparent instead",
+                args.output.display()
+            )));
+        }
+        if args.premultiplied {
+            return Err(CliError::Usage(format!(
+                "{}: --premultiplied is for PNG; a video's alpha is straight",
+                args.output.display()
+            )));
+        }
+    }
     if args.transparent && matches!(target, Target::Gif { .. }) {
         return Err(CliError::Usage(format!(
             "{}: a GIF has no partial transparency, so it cannot carry alpha = min(B, 1); export a PNG \
@@ -392,7 +408,7 @@ fn render(args: &RenderArgs) -> Result<(), CliError> {
             args.output.display()
         )));
     }
-    if args.brightness && matches!(target, Target::Gif { .. }) {
+    if args.brightness && matches!(target, Target::Gif { .. } | Target::Video { .. }) {
         return Err(CliError::Usage(format!(
             "{}: --brightness writes floating-point EXR; give an .exr output (name_####.exr for frames)",
             args.output.display()

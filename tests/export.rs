@@ -663,3 +663,142 @@ fn a_transparent_exr_keeps_hdr_and_says_its_color_space() {
         "{info}"
     );
 }
+
+/// ffprobe's `key=value` lines about the video stream of `path`.
+fn probe(path: &Path) -> String {
+    let o = Command::new("ffprobe")
+        .args([
+            "-v",
+            "error",
+            "-count_frames",
+            "-select_streams",
+            "v:0",
+            "-show_entries",
+            "stream=nb_read_frames,width,height,codec_name,r_frame_rate:stream_tags=alpha_mode",
+            "-of",
+            "default=nw=1",
+        ])
+        .arg(path)
+        .output()
+        .expect("ffprobe runs (Debian: apt-get install ffmpeg)");
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+#[test]
+fn a_video_decodes_back_to_its_frames() {
+    let dir = tmpdir("video");
+    let mp4 = dir.join("pulse.mp4");
+    ok(&render(
+        &preset(),
+        &[
+            "--frames",
+            "0..12",
+            "--size",
+            "96x64",
+            "-o",
+            mp4.to_str().unwrap(),
+        ],
+    ));
+    let info = probe(&mp4);
+    for line in [
+        "codec_name=h264",
+        "width=96",
+        "height=64",
+        "r_frame_rate=30/1",
+        "nb_read_frames=12",
+    ] {
+        assert!(info.lines().any(|l| l == line), "{line} in\n{info}");
+    }
+    // Frame 5 decoded is the frame rendered alone, but for the codec's loss.
+    let decoded = dir.join("five.png");
+    let o = Command::new("ffmpeg")
+        .args(["-v", "error", "-i"])
+        .arg(&mp4)
+        .args(["-vf", "select=eq(n\\,5)", "-frames:v", "1"])
+        .arg(&decoded)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let single = dir.join("single.png");
+    ok(&render(
+        &preset(),
+        &[
+            "--frames",
+            "5",
+            "--size",
+            "96x64",
+            "-o",
+            single.to_str().unwrap(),
+        ],
+    ));
+    let (a, b) = (rgba(&decoded), rgba(&single));
+    let mean: f64 = a
+        .pixels()
+        .zip(b.pixels())
+        .map(|(p, q)| {
+            (0..3)
+                .map(|c| (p[c] as f64 - q[c] as f64).abs())
+                .sum::<f64>()
+                / 3.0
+        })
+        .sum::<f64>()
+        / (96.0 * 64.0);
+    assert!(mean < 4.0, "mean difference {mean} of 255");
+    // WebM carries the transparent export's alpha.
+    let webm = dir.join("pulse.webm");
+    ok(&render(
+        &preset(),
+        &[
+            "--frames",
+            "0..12",
+            "--size",
+            "96x64",
+            "--transparent",
+            "-o",
+            webm.to_str().unwrap(),
+        ],
+    ));
+    let info = probe(&webm);
+    for line in [
+        "codec_name=vp9",
+        "width=96",
+        "height=64",
+        "nb_read_frames=12",
+        "TAG:alpha_mode=1",
+    ] {
+        assert!(info.lines().any(|l| l == line), "{line} in\n{info}");
+    }
+    assert_eq!(
+        files(&dir).iter().filter(|f| f.contains("partial")).count(),
+        0
+    );
+}
+
+#[test]
+fn without_ffmpeg_a_video_is_refused_with_the_install_command() {
+    let dir = tmpdir("no-ffmpeg");
+    let mp4 = dir.join("pulse.mp4");
+    let o = Command::new(env!("CARGO_BIN_EXE_energywave"))
+        .args([
+            "render",
+            &preset(),
+            "--size",
+            "32x32",
+            "-o",
+            mp4.to_str().unwrap(),
+        ])
+        .env("ENERGYWAVE_FFMPEG", dir.join("no-such-ffmpeg"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("pulse.mp4") && err.contains("apt-get install ffmpeg"),
+        "{err}"
+    );
+    assert!(files(&dir).is_empty(), "nothing written");
+    // H.264 has no alpha.
+    let o = render(&preset(), &["--transparent", "-o", mp4.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains(".webm"));
+}

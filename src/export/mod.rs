@@ -7,6 +7,7 @@
 
 pub mod progress;
 pub mod sheet;
+pub mod video;
 
 use std::ops::{ControlFlow, Range};
 use std::path::{Path, PathBuf};
@@ -138,6 +139,11 @@ pub enum Target {
         path: PathBuf,
         options: SheetOptions,
     },
+    /// A video through the ffmpeg executable: MP4 (H.264) or WebM (VP9).
+    Video {
+        path: PathBuf,
+        container: video::Container,
+    },
 }
 
 impl Target {
@@ -175,6 +181,22 @@ impl Target {
             output::check_directory(path)?;
             return Ok(Target::Gif {
                 path: path.to_owned(),
+            });
+        }
+        if let Some(container) = video::Container::of(path) {
+            if sheet.is_some() {
+                return Err(fail("a sprite sheet is a .png"));
+            }
+            if hashes > 0 {
+                return Err(fail(
+                    "a video holds every frame in one file: remove the # from its name",
+                ));
+            }
+            output::check_directory(path)?;
+            video::check_ffmpeg(path)?;
+            return Ok(Target::Video {
+                path: path.to_owned(),
+                container,
             });
         }
         let format = output::check_destination(path)?;
@@ -290,6 +312,7 @@ pub struct FrameSink {
     /// Frames in the GIF so far (their delays add up to the frame rate's time).
     gif_frames: u32,
     sheet: Option<(SheetLayout, Vec<[f64; 4]>)>,
+    video: Option<video::VideoWriter>,
     written: Vec<PathBuf>,
 }
 
@@ -314,6 +337,7 @@ impl FrameSink {
             gif: None,
             gif_frames: 0,
             sheet: None,
+            video: None,
             written: Vec::new(),
         };
         match target {
@@ -327,6 +351,16 @@ impl FrameSink {
                         source,
                     })?;
                 sink.gif = Some((enc, buffer));
+            }
+            Target::Video { path, container } => {
+                sink.video = Some(video::VideoWriter::start(
+                    path,
+                    *container,
+                    width,
+                    height,
+                    frame_rate,
+                    alpha != Alpha::Opaque,
+                )?);
             }
             Target::Sheet { path, options } => {
                 let mut layout =
@@ -368,6 +402,12 @@ impl FrameSink {
                         source,
                     })?;
             }
+            Target::Video { .. } => {
+                self.video
+                    .as_mut()
+                    .expect("made with the target")
+                    .push(pixels)?;
+            }
             Target::Sheet { .. } => {
                 let (layout, sheet) = self.sheet.as_mut().expect("made with the target");
                 let (x0, y0) = layout.cell(frame - self.frames.start);
@@ -383,7 +423,10 @@ impl FrameSink {
     }
 
     /// Removes the files written so far (an export stopped before its end leaves nothing half done).
-    pub fn abandon(self) {
+    pub fn abandon(mut self) {
+        if let Some(v) = self.video.take() {
+            v.abandon();
+        }
         for path in &self.written {
             let _ = std::fs::remove_file(path);
         }
@@ -399,6 +442,10 @@ impl FrameSink {
                 let bytes = buffer.take();
                 output::write_atomically(path, &bytes)?;
                 self.written.push(path.clone());
+            }
+            Target::Video { .. } => {
+                let v = self.video.take().expect("made with the target");
+                self.written.push(v.finish()?);
             }
             Target::Sheet { path, .. } => {
                 let (layout, pixels) = self.sheet.take().expect("made with the target");
