@@ -316,7 +316,10 @@ fn unsaved_changes_are_not_lost_without_asking() {
     let mut other_scene = light_scene();
     other_scene.sources.curves.clear();
     std::fs::write(&other, other_scene.to_toml()).unwrap();
+    // The file dialog opens beside the typed path, with its name picked.
     *h.state_mut().path_input_mut() = other.display().to_string();
+    h.get_by_label("Open\u{2026}").click();
+    h.run();
     h.get_by_label("Open").click();
     h.run();
     assert!(

@@ -71,8 +71,8 @@ fn messages_clear_at_the_next_action_and_expire() {
         h.step();
     }
     assert_eq!(h.state().notice(), None, "expired");
-    // An error stays until the next action.
-    h.get_by_label("Save As").click();
+    // An error stays until the next action (Save with no file and no name to save to).
+    h.get_by_label("Save").click();
     h.run();
     assert!(
         h.state().notice().is_some_and(|n| n.1),
@@ -513,4 +513,106 @@ fn a_torus_radius_and_axis_and_a_line_direction_have_handles() {
     assert!(l.direction.y > 0.1, "{}", l.direction);
     assert_eq!(l.point, before.sources.lines[0].point);
     assert!(h.state().history().can_undo());
+}
+
+/// A file dropped onto the window, as egui-winit hands it over.
+#[derive(Debug)]
+struct Dropped(std::path::PathBuf);
+
+impl egui::DroppedFile for Dropped {
+    fn path(&self) -> &std::path::Path {
+        &self.0
+    }
+
+    fn bytes(&self) -> Result<Vec<u8>, String> {
+        std::fs::read(&self.0).map_err(|e| e.to_string())
+    }
+}
+
+#[test]
+fn files_open_and_save_through_the_dialog_by_dropping_and_from_the_recent_list() {
+    let dir = std::env::temp_dir().join(format!("energywave-ui-files-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(dir.join("shots")).unwrap();
+    let mut ring = light_scene();
+    ring.sources.curves.clear();
+    std::fs::write(dir.join("ring.toml"), ring.to_toml()).unwrap();
+    std::fs::write(dir.join("notes.txt"), "not a scene").unwrap();
+    let mut h = harness(light_scene());
+    h.state_mut()
+        .set_recent(energywave::viewer::recent::RecentFiles::load(
+            dir.join("recent.txt"),
+        ));
+    // Open through the dialog: it starts beside the typed path, lists the folder's scenes, a click picks one.
+    *h.state_mut().path_input_mut() = dir.join("shots").display().to_string();
+    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::O);
+    h.run();
+    assert!(h.state().file_dialog().is_some());
+    h.get_by_label("Up").click();
+    h.run();
+    assert!(
+        h.query_by_label("notes.txt").is_none(),
+        "only scene files are listed"
+    );
+    h.get_by_label("ring.toml").click();
+    h.run();
+    h.get_by_label("Open").click();
+    h.run();
+    assert!(h.state().file_dialog().is_none());
+    assert_eq!(*h.state().scene(), ring);
+    // Save As through the dialog, a new name: `.toml` is added.
+    h.get_by_label("+ point").click();
+    h.run();
+    h.get_by_label("Save As\u{2026}").click();
+    h.run();
+    let name = h.get_by_label("name");
+    name.focus();
+    h.run();
+    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::A);
+    h.get_by_label("name").type_text("ring with a point");
+    h.run();
+    // The dialog's Save (the panel has one too, behind the dialog).
+    h.get_all_by_label("Save").last().unwrap().click();
+    h.run();
+    let saved = dir.join("ring with a point.toml");
+    assert!(saved.is_file(), "{:?}", h.state().notice());
+    assert!(!h.state().document().is_dirty());
+    // Dropping a scene onto the window opens it (asking first when there are unsaved changes).
+    h.get_by_label("+ torus").click();
+    h.run();
+    h.input_mut()
+        .dropped_files
+        .push(std::sync::Arc::new(Dropped(dir.join("ring.toml"))));
+    h.run();
+    assert!(
+        h.query_by_label("Unsaved changes").is_some(),
+        "the prompt covers a drop"
+    );
+    h.get_by_label("Discard").click();
+    h.run();
+    assert_eq!(*h.state().scene(), ring);
+    // A file that is not a scene is refused, and said so.
+    h.input_mut()
+        .dropped_files
+        .push(std::sync::Arc::new(Dropped(dir.join("notes.txt"))));
+    h.run();
+    assert!(
+        h.state()
+            .notice()
+            .is_some_and(|n| n.1 && n.0.contains("notes.txt"))
+    );
+    // The recent list, newest first, kept in its file; a click opens.
+    let recent = h.state().recent_files().to_vec();
+    assert_eq!(recent[0], dir.join("ring.toml"));
+    assert_eq!(recent[1], saved);
+    assert_eq!(
+        energywave::viewer::recent::RecentFiles::load(dir.join("recent.txt")).files(),
+        recent.as_slice()
+    );
+    h.get_by_label("Recent").click();
+    h.run();
+    h.get_by_label("ring with a point.toml").click();
+    h.run();
+    assert_eq!(h.state().document().path(), Some(saved.as_path()));
+    assert_eq!(h.state().scene().sources.points.len(), 1);
 }

@@ -22,6 +22,10 @@ pub enum Action {
     Save,
     /// Save to this path.
     SaveAs(PathBuf),
+    /// Choose a scene file to open in the file dialog.
+    OpenDialog,
+    /// Choose where to save in the file dialog.
+    SaveAsDialog,
     Undo,
     Redo,
     /// Take the file's new content from disk, dropping the edits since.

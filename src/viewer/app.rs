@@ -5,7 +5,7 @@
 //! the user asked for as [`Action`]s; `ViewerApp::apply` carries each out, here and nowhere else.
 
 use std::collections::VecDeque;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 use std::time::{Instant, SystemTime};
 
@@ -14,10 +14,12 @@ use egui::{Color32, Key, KeyboardShortcut, Modifiers, PointerButton, Sense};
 use super::action::{Action, Edit};
 use super::animation_panel::{self, AnimationForm};
 use super::document::{DiskChange, Document};
+use super::file_dialog::{DialogMode, DialogOutcome, FileDialog};
 use super::handles::{self, HandleId};
 use super::history::History;
 use super::navigation;
 use super::panel::{self, ViewSettings};
+use super::recent::RecentFiles;
 use super::timeline::{self, ExportJob, Playback};
 use super::viewport::{ViewportCallback, ViewportReport, ViewportView};
 use crate::animation::SourceKind;
@@ -107,6 +109,10 @@ pub struct ViewerApp {
     picked: Option<(HandleId, egui::Pos2)>,
     /// The panel scrolls to the selected source's entry at its next frame (a selection made in the viewport).
     scroll_to_selection: bool,
+    /// The file dialog, while it is open.
+    dialog: Option<FileDialog>,
+    /// The files opened and saved lately.
+    recent: RecentFiles,
     frame_times: VecDeque<f64>,
     last_frame: Option<Instant>,
     requests: Vec<Request>,
@@ -123,6 +129,9 @@ const UNDO: KeyboardShortcut = KeyboardShortcut::new(Modifiers::COMMAND, Key::Z)
 const REDO: KeyboardShortcut =
     KeyboardShortcut::new(Modifiers::COMMAND.plus(Modifiers::SHIFT), Key::Z);
 const REDO_Y: KeyboardShortcut = KeyboardShortcut::new(Modifiers::COMMAND, Key::Y);
+const OPEN: KeyboardShortcut = KeyboardShortcut::new(Modifiers::COMMAND, Key::O);
+const SAVE_AS: KeyboardShortcut =
+    KeyboardShortcut::new(Modifiers::COMMAND.plus(Modifiers::SHIFT), Key::S);
 
 impl ViewerApp {
     /// The viewer on `doc`; `report` is shared with the viewport's GPU side.
@@ -153,6 +162,8 @@ impl ViewerApp {
             selection: None,
             picked: None,
             scroll_to_selection: false,
+            dialog: None,
+            recent: RecentFiles::default(),
             frame_times: VecDeque::new(),
             last_frame: None,
             requests: Vec::new(),
@@ -276,6 +287,21 @@ impl ViewerApp {
     /// The Animation section's own fields: the parameter path being typed, the export's settings.
     pub fn animation_form_mut(&mut self) -> &mut AnimationForm {
         &mut self.animation_form
+    }
+
+    /// Keeps the recent files in `recent` (the window uses the user's list; a viewer under test keeps its own).
+    pub fn set_recent(&mut self, recent: RecentFiles) {
+        self.recent = recent;
+    }
+
+    /// The files opened and saved lately, newest first.
+    pub fn recent_files(&self) -> &[PathBuf] {
+        self.recent.files()
+    }
+
+    /// The file dialog, while it is open.
+    pub fn file_dialog(&self) -> Option<&FileDialog> {
+        self.dialog.as_ref()
     }
 
     /// The selected source, if any.
@@ -412,9 +438,19 @@ impl ViewerApp {
             }
             Action::Save => self.save(),
             Action::SaveAs(path) => match self.doc.save_as(&path) {
-                Ok(()) => self.notify(format!("Saved {}", path.display()), false),
+                Ok(()) => {
+                    self.recent.add(&path);
+                    self.path_input = path.display().to_string();
+                    self.notify(format!("Saved {}", path.display()), false);
+                }
                 Err(e) => self.notify(e.to_string(), true),
             },
+            Action::OpenDialog => {
+                self.dialog = Some(FileDialog::beside(DialogMode::Open, &self.dialog_start()))
+            }
+            Action::SaveAsDialog => {
+                self.dialog = Some(FileDialog::beside(DialogMode::SaveAs, &self.dialog_start()))
+            }
             Action::Undo => {
                 if self.history.undo(&mut self.doc.scene) {
                     self.notify("Undone", false);
@@ -532,17 +568,23 @@ impl ViewerApp {
             Err(e) => Err(e),
         };
         match result {
-            Ok(()) => self.notify(
-                format!(
-                    "Saved {}",
-                    self.doc
-                        .path()
-                        .map_or(String::new(), |p| p.display().to_string())
-                ),
-                false,
-            ),
+            Ok(()) => {
+                let path = self.doc.path().map(Path::to_owned).unwrap_or_default();
+                self.recent.add(&path);
+                self.notify(format!("Saved {}", path.display()), false);
+            }
             Err(e) => self.notify(e.to_string(), true),
         }
+    }
+
+    /// Where the file dialog starts: the typed path, else the document's file, else the working directory.
+    fn dialog_start(&self) -> String {
+        if !self.path_input.trim().is_empty() {
+            return self.path_input.clone();
+        }
+        self.doc
+            .path()
+            .map_or(String::new(), |p| p.display().to_string())
     }
 
     fn open_now(&mut self, path: PathBuf) {
@@ -551,6 +593,8 @@ impl ViewerApp {
                 self.history.reset(&doc.scene);
                 self.home_camera = doc.scene.camera.clone();
                 self.doc = doc;
+                self.recent.add(&path);
+                self.path_input = path.display().to_string();
                 self.notify(format!("Opened {}", path.display()), false);
             }
             Err(e) => self.notify(e.to_string(), true),
@@ -618,6 +662,7 @@ impl ViewerApp {
                             frame: self.playback.frame,
                             selected: self.selection,
                             scroll_to_selected: std::mem::take(&mut self.scroll_to_selection),
+                            recent: self.recent.files(),
                         };
                         let mut actions =
                             panel::show(ui, &cx, &mut self.path_input, &mut self.view);
@@ -641,6 +686,8 @@ impl ViewerApp {
             .show(ui, |ui| self.viewport(ui))
             .inner;
         self.apply_all(actions);
+        self.files_dropped(ui);
+        self.file_dialog_ui(ui.ctx());
         self.unsaved_prompt(ui.ctx());
 
         // An edit is committed when it settles: no button held (a drag is one step).
@@ -651,8 +698,14 @@ impl ViewerApp {
 
     fn shortcuts(&mut self, ctx: &egui::Context) -> Vec<Action> {
         let mut out = Vec::new();
+        if ctx.input_mut(|i| i.consume_shortcut(&SAVE_AS)) {
+            out.push(Action::SaveAsDialog);
+        }
         if ctx.input_mut(|i| i.consume_shortcut(&SAVE)) {
             out.push(Action::Save);
+        }
+        if ctx.input_mut(|i| i.consume_shortcut(&OPEN)) {
+            out.push(Action::OpenDialog);
         }
         if ctx.input_mut(|i| i.consume_shortcut(&REDO) || i.consume_shortcut(&REDO_Y)) {
             out.push(Action::Redo);
@@ -888,6 +941,68 @@ impl ViewerApp {
             );
         }
         out
+    }
+
+    /// A scene file dropped onto the window opens (asking first about unsaved changes); while files hover over
+    /// the window, it says what a drop does.
+    fn files_dropped(&mut self, ui: &egui::Ui) {
+        let (dropped, hovering) =
+            ui.input(|i| (i.raw.dropped_files.clone(), !i.raw.hovered_files.is_empty()));
+        if hovering {
+            let rect = ui.ctx().content_rect();
+            let painter = ui.ctx().layer_painter(egui::LayerId::new(
+                egui::Order::Foreground,
+                egui::Id::unique("energywave.drop"),
+            ));
+            painter.rect_filled(rect, 0.0, Color32::from_black_alpha(160));
+            painter.text(
+                rect.center(),
+                egui::Align2::CENTER_CENTER,
+                "Drop a .toml scene to open it",
+                egui::FontId::proportional(22.0),
+                Color32::WHITE,
+            );
+        }
+        let Some(file) = dropped.into_iter().next() else {
+            return;
+        };
+        let path = file.path().to_owned();
+        if path.as_os_str().is_empty() {
+            self.notify("The dropped file has no path to open", true);
+        } else if path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("toml"))
+        {
+            self.apply(Action::Open(path));
+        } else {
+            self.notify(
+                format!(
+                    "{}: only scene files (.toml) open by dropping them here",
+                    path.display()
+                ),
+                true,
+            );
+        }
+    }
+
+    /// The file dialog, while open: a choice opens or saves (through the same actions as the panel, so the
+    /// unsaved-changes prompt covers it).
+    fn file_dialog_ui(&mut self, ctx: &egui::Context) {
+        let Some(dialog) = &mut self.dialog else {
+            return;
+        };
+        let mode = dialog.mode();
+        match dialog.show(ctx) {
+            DialogOutcome::Open => {}
+            DialogOutcome::Cancelled => self.dialog = None,
+            DialogOutcome::Chosen(path) => {
+                self.dialog = None;
+                self.apply(match mode {
+                    DialogMode::Open => Action::Open(path),
+                    DialogMode::SaveAs => Action::SaveAs(path),
+                });
+            }
+        }
     }
 
     /// The prompt about unsaved changes before an open or a quit, while one waits.

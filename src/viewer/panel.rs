@@ -78,6 +78,8 @@ pub struct Context<'a> {
     pub selected: Option<(SourceKind, usize)>,
     /// Scroll the selected source's entry into view (it was selected in the viewport).
     pub scroll_to_selected: bool,
+    /// The files opened and saved lately, newest first.
+    pub recent: &'a [std::path::PathBuf],
 }
 
 /// The panel's file, view, rendering and sources sections (the Animation section is `animation_panel`).
@@ -178,36 +180,58 @@ fn file_section(
 ) {
     ui.heading(cx.doc.title());
     ui.horizontal(|ui| {
-        ui.label("File");
-        ui.add(
-            egui::TextEdit::singleline(path)
-                .hint_text("scene.toml")
-                .desired_width(f32::INFINITY),
-        );
+        let l = ui.label("File");
+        let field = ui
+            .add(
+                egui::TextEdit::singleline(path)
+                    .hint_text("scene.toml")
+                    .desired_width(f32::INFINITY),
+            )
+            .labelled_by(l.id)
+            .on_hover_text("A scene file's path; Enter opens it");
+        if field.lost_focus()
+            && ui.input(|i| i.key_pressed(egui::Key::Enter))
+            && !path.trim().is_empty()
+        {
+            out.push(Action::Open(std::path::PathBuf::from(path.trim())));
+        }
     });
-    let typed = || std::path::PathBuf::from(path.trim());
-    ui.horizontal(|ui| {
+    ui.horizontal_wrapped(|ui| {
         if ui
-            .button("Open")
-            .on_hover_text("Open the file named above")
+            .button("Open\u{2026}")
+            .on_hover_text("Ctrl+O: choose a scene file (or drop one onto the window)")
             .clicked()
         {
-            out.push(Action::Open(typed()));
+            out.push(Action::OpenDialog);
         }
         if ui.button("Save").on_hover_text("Ctrl+S").clicked() {
             out.push(Action::Save);
         }
         if ui
-            .button("Save As")
-            .on_hover_text("Save to the file named above")
+            .button("Save As\u{2026}")
+            .on_hover_text("Ctrl+Shift+S: choose where to save")
             .clicked()
         {
-            out.push(if path.trim().is_empty() {
-                Action::error("Type a file name to save to")
-            } else {
-                Action::SaveAs(typed())
-            });
+            out.push(Action::SaveAsDialog);
         }
+        ui.menu_button("Recent", |ui| {
+            if cx.recent.is_empty() {
+                ui.weak("(none yet)");
+            }
+            for p in cx.recent {
+                let name = p.file_name().map_or(p.display().to_string(), |n| {
+                    n.to_string_lossy().into_owned()
+                });
+                if ui
+                    .button(name)
+                    .on_hover_text(p.display().to_string())
+                    .clicked()
+                {
+                    out.push(Action::Open(p.clone()));
+                    ui.close();
+                }
+            }
+        });
         ui.separator();
         let undo = ui
             .add_enabled(cx.history.can_undo(), egui::Button::new("Undo"))

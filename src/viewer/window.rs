@@ -201,7 +201,15 @@ impl Handler {
         let gfx = Gfx::new(event_loop, window)?;
         match (&mut self.app, self.doc.take()) {
             (Some(app), _) => gfx.gpu.adopt(app),
-            (None, Some(doc)) => self.app = Some(gfx.gpu.app(doc)),
+            (None, Some(doc)) => {
+                let mut recent = super::recent::RecentFiles::for_user();
+                if let Some(path) = doc.path() {
+                    recent.add(path);
+                }
+                let mut app = gfx.gpu.app(doc);
+                app.set_recent(recent);
+                self.app = Some(app);
+            }
             (None, None) => unreachable!("the document is kept until the app exists"),
         }
         gfx.window().request_redraw();
