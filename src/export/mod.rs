@@ -169,30 +169,26 @@ impl Target {
                 "the file name has more than one run of #; use one, as in name_####.png",
             ));
         }
-        if ext == "gif" {
+        // An animation in one file (a GIF, a video): no sheet, no run of #.
+        let one_file = |what: &str| {
             if sheet.is_some() {
                 return Err(fail("a sprite sheet is a .png"));
             }
             if hashes > 0 {
-                return Err(fail(
-                    "a GIF holds every frame in one file: remove the # from its name",
-                ));
+                return Err(fail(&format!(
+                    "{what} holds every frame in one file: remove the # from its name"
+                )));
             }
-            output::check_directory(path)?;
+            Ok(output::check_directory(path)?)
+        };
+        if ext == "gif" {
+            one_file("a GIF")?;
             return Ok(Target::Gif {
                 path: path.to_owned(),
             });
         }
         if let Some(container) = video::Container::of(path) {
-            if sheet.is_some() {
-                return Err(fail("a sprite sheet is a .png"));
-            }
-            if hashes > 0 {
-                return Err(fail(
-                    "a video holds every frame in one file: remove the # from its name",
-                ));
-            }
-            output::check_directory(path)?;
+            one_file("a video")?;
             video::check_ffmpeg(path)?;
             return Ok(Target::Video {
                 path: path.to_owned(),

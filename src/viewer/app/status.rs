@@ -1,0 +1,108 @@
+//! The status line: frame time, adapter, resolution and integrator, the file, and the messages for the user
+//! (which clear at the next action, and expire unless they are errors); the window's title.
+
+use super::*;
+
+impl ViewerApp {
+    pub fn notify(&mut self, text: impl Into<String>, is_error: bool) {
+        self.notice = Some(Notice {
+            message: (text.into(), is_error),
+            at: self.now,
+            from_disk: false,
+        });
+    }
+
+    /// A message about the file on disk (cleared when the file is fine again).
+    pub(super) fn notify_disk(&mut self, text: impl Into<String>, is_error: bool) {
+        self.notify(text, is_error);
+        if let Some(n) = &mut self.notice {
+            n.from_disk = true;
+        }
+    }
+
+    /// The window's title: the file's name, `*` with unsaved changes, and the program's.
+    pub fn window_title(&self) -> String {
+        format!("{} \u{2014} energywave", self.doc.title())
+    }
+
+    /// Drops a message whose time is up or whose cause is gone, and asks for a frame when the one shown will
+    /// expire.
+    pub(super) fn expire_notice(&mut self, ctx: &egui::Context) {
+        let Some(n) = &self.notice else {
+            return;
+        };
+        let disk_fine = self.doc.disk_error.is_none() && self.doc.pending_reload.is_none();
+        let left = NOTICE_SECONDS - (self.now - n.at);
+        if (n.from_disk && disk_fine) || (!n.message.1 && left <= 0.0) {
+            self.notice = None;
+        } else if !n.message.1 {
+            ctx.request_repaint_after(std::time::Duration::from_secs_f64(left));
+        }
+    }
+
+    /// Median frame time in seconds over the last frames.
+    pub fn frame_time(&self) -> Option<f64> {
+        if self.frame_times.is_empty() {
+            return None;
+        }
+        let mut v: Vec<f64> = self.frame_times.iter().copied().collect();
+        v.sort_by(f64::total_cmp);
+        Some(v[v.len() / 2])
+    }
+
+    pub(super) fn status_bar(&mut self, ui: &mut egui::Ui) {
+        ui.horizontal(|ui| {
+            match self.frame_time() {
+                Some(t) if t > 0.0 => {
+                    ui.monospace(format!("{:6.1} ms  {:5.1} FPS", t * 1e3, 1.0 / t))
+                }
+                _ => ui.monospace("   -- ms     -- FPS"),
+            };
+            ui.separator();
+            ui.label(&self.adapter);
+            ui.separator();
+            let w = self.doc.scene.billboard.resolution;
+            let i = &self.doc.scene.integration;
+            let integrator = match i.integrator {
+                Integrator::Adaptive => format!("adaptive, tolerance {:e}", i.tolerance),
+                Integrator::Simpson if i.jitter.is_some() => {
+                    let averaged = match self.report().averaged {
+                        Some((k, most)) => format!(", mean of {k}/{most} frames"),
+                        None => String::new(),
+                    };
+                    format!("simpson, n = {}, jittered{averaged}", i.divisions)
+                }
+                Integrator::Simpson => format!("simpson, n = {}", i.divisions),
+            };
+            let moving = match self.report().preview {
+                Some(r) if r < w => format!(" (moving: {r}\u{d7}{r})"),
+                _ => String::new(),
+            };
+            ui.label(format!("billboard {w}\u{d7}{w}{moving}, {integrator}"))
+                .on_hover_text(
+                    "While the view moves, a coarser field sized to hold the frame rate, refined to \
+                     the full one within about a second once it holds still (View: fast preview)",
+                );
+            ui.separator();
+            ui.label(self.doc.title());
+            if let Some((text, is_error)) = self.notice() {
+                ui.separator();
+                // One line, cut to the bar's width; the whole message on hover.
+                let first_line = text.lines().next().unwrap_or_default();
+                let color = if *is_error {
+                    Color32::from_rgb(255, 110, 90)
+                } else {
+                    ui.visuals().weak_text_color()
+                };
+                let more = first_line.len() < text.len();
+                let shown = if more {
+                    format!("{first_line} \u{2026}")
+                } else {
+                    first_line.to_owned()
+                };
+                ui.add(egui::Label::new(egui::RichText::new(shown).color(color)).truncate())
+                    .on_hover_text(text.as_str());
+            }
+        });
+    }
+}
