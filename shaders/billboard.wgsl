@@ -11,7 +11,8 @@ struct BillboardParams {
     right: vec3<f32>,
     resolution: u32,   // W of the brightness texture
     up: vec3<f32>,
-    transparent: u32,  // 1: write premultiplied color B Ce and alpha = min(B, 1) instead of blending
+    mode: u32,         // 0: clamp((1 - B) Cb + B Ce); 1: premultiplied B Ce and alpha min(B, 1), unclamped;
+                       // 2: clamp(B Ce + (1 - min(B, 1)) Cb) (gpu::billboard_pass::BlendMode)
     energy: vec4<f32>, // Ce in rgb
 }
 
@@ -55,12 +56,17 @@ fn sample_brightness(uv: vec2<f32>) -> f32 {
 fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     let b = sample_brightness(in.uv);
     let ce = params.energy.rgb;
-    if params.transparent != 0u {
+    if params.mode == 1u {
         // Associated (premultiplied) alpha, unclamped: "over" any background Cb gives (1 - B) Cb + B Ce wherever
         // B <= 1, and over black B Ce everywhere (clamped on display, as the opaque blend). B < 0 is transparent.
         let bp = max(b, 0.0);
         return vec4<f32>(bp * ce, min(bp, 1.0));
     }
     let cb = textureLoad(background, vec2<i32>(in.position.xy), 0);
+    if params.mode == 2u {
+        // The transparent export composited over the background, for every B.
+        let bp = max(b, 0.0);
+        return vec4<f32>(clamp(bp * ce + (1.0 - min(bp, 1.0)) * cb.rgb, vec3<f32>(0.0), vec3<f32>(1.0)), cb.a);
+    }
     return vec4<f32>(clamp((1.0 - b) * cb.rgb + b * ce, vec3<f32>(0.0), vec3<f32>(1.0)), cb.a);
 }

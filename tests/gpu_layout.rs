@@ -192,7 +192,7 @@ fn rust_mirrors_match_the_wgsl_layouts() {
         &billboard,
         "BillboardParams",
         size_of::<BillboardParams>(),
-        fields!(BillboardParams: view_proj, center, size, right, resolution, up, transparent, energy),
+        fields!(BillboardParams: view_proj, center, size, right, resolution, up, mode, energy),
     );
     let average = parse_and_validate("average", shaders::AVERAGE_PASS);
     check_struct(

@@ -424,6 +424,52 @@ fn transparent_frames_match_the_cpu_reference() {
 }
 
 #[test]
+fn the_over_blend_matches_the_cpu_and_is_the_transparent_frame_composited() {
+    // A light-blue core with B well above 1 over green: the papers' blend turns it magenta, "over" does not.
+    let green = [0.0, 1.0, 0.0];
+    let mut scene = single_point(40.0, green, [0.3, 0.55, 1.0]);
+    scene.colors.blend = energywave::scene::Blend::Over;
+    let (w, h) = (64, 48);
+    let bb = scene.place_billboard(w as f64 / h as f64);
+    let cpu = reference::compose_frame(
+        &scene,
+        &bb,
+        &reference::render_brightness(&scene, &bb),
+        w,
+        h,
+        false,
+    );
+    let over = gpu().render(&scene, w, h, false).unwrap();
+    let glow = gpu().render(&scene, w, h, true).unwrap();
+    let mut hot = 0;
+    for ((o, c), t) in over.pixels.iter().zip(&cpu).zip(&glow.pixels) {
+        for k in 0..3 {
+            assert!(
+                (o[k] as f64 - c[k]).abs() < 2e-3,
+                "{o:?} vs the CPU's {c:?}"
+            );
+            // The transparent frame "over" green, clamped: the same picture, for every B.
+            let composited = (t[k] + green[k] as f32 * (1.0 - t[3])).clamp(0.0, 1.0);
+            assert!(
+                (o[k] - composited).abs() < 2e-3,
+                "{o:?} vs composited {t:?}"
+            );
+        }
+        // Nowhere does the glow take the green away.
+        assert!(o[1] >= 0.999 * green[1] as f32 - 1e-3, "{o:?}");
+        hot += (t[3] >= 1.0) as usize;
+    }
+    assert!(hot > 4, "the core has B > 1: {hot} pixels");
+    // The papers' blend there subtracts the green.
+    scene.colors.blend = energywave::scene::Blend::Papers;
+    let papers = gpu().render(&scene, w, h, false).unwrap();
+    assert!(
+        papers.pixels.iter().any(|p| p[1] < 0.5),
+        "magenta where B > 1"
+    );
+}
+
+#[test]
 fn the_texture_is_rendered_again_only_when_something_changed() {
     let mut g = gpu();
     let mut scene = single_point(2.0, [0.0; 3], [1.0; 3]);

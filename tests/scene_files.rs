@@ -306,6 +306,12 @@ fn each_malformed_kind_gets_its_own_error() {
             "0..1",
         ),
         (
+            "[colors]\nblend = \"add\"\n",
+            "colors.blend",
+            2,
+            "is not a blend",
+        ),
+        (
             "[[tori]]\nmajor_radius = -1\ncoefficient = 1\n",
             "tori[0].major_radius",
             2,

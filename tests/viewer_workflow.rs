@@ -616,3 +616,24 @@ fn files_open_and_save_through_the_dialog_by_dropping_and_from_the_recent_list()
     assert_eq!(h.state().document().path(), Some(saved.as_path()));
     assert_eq!(h.state().scene().sources.points.len(), 1);
 }
+
+#[test]
+fn the_blend_is_chosen_in_the_panel_and_is_an_undo_step() {
+    use common::viewer::{mean_abs_difference, viewport_pixels};
+    use energywave::scene::Blend;
+    let mut scene = light_scene();
+    scene.colors.background = [0.0, 0.7, 0.1];
+    let mut h = harness(scene);
+    let papers = viewport_pixels(&mut h);
+    h.get_by_label("over").click();
+    h.run();
+    assert_eq!(h.state().scene().colors.blend, Blend::Over);
+    let over = viewport_pixels(&mut h);
+    assert!(
+        mean_abs_difference(&papers, &over) > 0.05,
+        "the core no longer subtracts the green"
+    );
+    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+    h.run();
+    assert_eq!(h.state().scene().colors.blend, Blend::Papers);
+}

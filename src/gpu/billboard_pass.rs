@@ -5,6 +5,7 @@ use glam::DMat4;
 
 use super::context::{RenderPipelineSpec, pass_layouts, render_pipeline, uniform_buffer};
 use crate::geometry::{Billboard, Camera};
+use crate::scene::Blend;
 
 /// Rust mirror of `BillboardParams` in `shaders/billboard.wgsl` (keep in sync; `tests/gpu_layout.rs` checks
 /// it against naga's layout).
@@ -20,7 +21,7 @@ pub mod gpu_data {
         pub right: [f32; 3],          // 80
         pub resolution: u32,          // 92
         pub up: [f32; 3],             // 96
-        pub transparent: u32,         // 108
+        pub mode: u32,                // 108: BlendMode
         pub energy: [f32; 4],         // 112
     }
     const _: () = assert!(size_of::<BillboardParams>() == 128);
@@ -39,6 +40,28 @@ pub fn view_projection(camera: &Camera, billboard: &Billboard, aspect: f64) -> D
     proj * DMat4::look_at_rh(camera.eye, camera.eye + frame.forward, frame.up)
 }
 
+/// What the billboard pass writes: the glow blended over the background, or the glow alone for compositing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BlendMode {
+    /// `clamp((1 - B) Cb + B Ce)` (the papers').
+    Papers = 0,
+    /// Premultiplied `B Ce` with alpha `min(B, 1)`, unclamped.
+    Transparent = 1,
+    /// `clamp(B Ce + (1 - min(B, 1)) Cb)`.
+    Over = 2,
+}
+
+impl BlendMode {
+    /// The transparent export, or the scene's blend.
+    pub fn of(transparent: bool, blend: Blend) -> BlendMode {
+        match (transparent, blend) {
+            (true, _) => BlendMode::Transparent,
+            (false, Blend::Papers) => BlendMode::Papers,
+            (false, Blend::Over) => BlendMode::Over,
+        }
+    }
+}
+
 /// The pass's parameters for one frame.
 pub fn billboard_params(
     camera: &Camera,
@@ -46,7 +69,7 @@ pub fn billboard_params(
     resolution: u32,
     energy: [f64; 3],
     aspect: f64,
-    transparent: bool,
+    mode: BlendMode,
 ) -> BillboardParams {
     BillboardParams {
         view_proj: view_projection(camera, billboard, aspect)
@@ -57,7 +80,7 @@ pub fn billboard_params(
         right: billboard.right.as_vec3().to_array(),
         resolution,
         up: billboard.up.as_vec3().to_array(),
-        transparent: transparent as u32,
+        mode: mode as u32,
         energy: [energy[0] as f32, energy[1] as f32, energy[2] as f32, 1.0],
     }
 }

@@ -2,7 +2,7 @@
 //! over it. Headless rendering and the viewer's viewport both draw through `SceneRenderer::record`; the viewer
 //! adds its grid behind the glow through the `behind` hook.
 
-use super::billboard_pass::{BillboardRenderer, billboard_params, view_projection};
+use super::billboard_pass::{BillboardRenderer, BlendMode, billboard_params, view_projection};
 use super::context::{GpuError, checked, read_texture, texture_2d};
 use super::field_pass::FieldRenderer;
 use crate::scene::Scene;
@@ -161,7 +161,7 @@ impl SceneRenderer {
                 resolution,
                 scene.colors.energy,
                 aspect,
-                transparent,
+                BlendMode::of(transparent, scene.colors.blend),
             );
             self.billboard.draw(
                 device,

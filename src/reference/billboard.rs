@@ -8,11 +8,18 @@ use rayon::prelude::*;
 
 use super::field_pass::BrightnessTexture;
 use crate::geometry::Billboard;
-use crate::scene::Scene;
+use crate::scene::{Blend, Scene};
 
 /// `clamp((1 - B) Cb + B Ce, 0, 1)` per channel.
 pub fn blend(b: f64, energy: [f64; 3], background: [f64; 3]) -> [f64; 3] {
     std::array::from_fn(|c| ((1.0 - b) * background[c] + b * energy[c]).clamp(0.0, 1.0))
+}
+
+/// `clamp(B Ce + (1 - min(B, 1)) Cb)` per channel, B below 0 taken as 0 (`Blend::Over`): the transparent export
+/// composited over Cb, clamped, for every B.
+pub fn blend_over(b: f64, energy: [f64; 3], background: [f64; 3]) -> [f64; 3] {
+    let b = b.max(0.0);
+    std::array::from_fn(|c| (b * energy[c] + (1.0 - b.min(1.0)) * background[c]).clamp(0.0, 1.0))
 }
 
 /// The transparent export of one billboard pixel: associated (premultiplied) color `B Ce`, unclamped, and
@@ -79,7 +86,11 @@ pub fn compose_frame(
                     *out = if transparent {
                         blend_transparent(b, scene.colors.energy)
                     } else {
-                        let [r, g, b] = blend(b, scene.colors.energy, scene.colors.background);
+                        let (ce, cb) = (scene.colors.energy, scene.colors.background);
+                        let [r, g, b] = match scene.colors.blend {
+                            Blend::Papers => blend(b, ce, cb),
+                            Blend::Over => blend_over(b, ce, cb),
+                        };
                         [r, g, b, 1.0]
                     };
                 }
@@ -130,6 +141,32 @@ mod tests {
             [r, g, bl].map(|c| c.clamp(0.0, 1.0)),
             blend(3.0, ce, [0.0; 3])
         );
+    }
+
+    #[test]
+    fn the_over_blend_is_the_transparent_export_composited_for_every_b() {
+        let ce = [0.6, 0.9, 1.0];
+        for cb in [[0.0, 0.8, 0.1], [0.9, 0.4, 0.1], [0.0; 3], [1.0; 3]] {
+            for b in [-0.5, 0.0, 0.25, 0.7, 1.0, 1.3, 4.0, 40.0] {
+                let [r, g, bl, a] = blend_transparent(b, ce);
+                let composited: [f64; 3] =
+                    std::array::from_fn(|c| ([r, g, bl][c] + cb[c] * (1.0 - a)).clamp(0.0, 1.0));
+                assert_eq!(blend_over(b, ce, cb), composited, "B {b} over {cb:?}");
+                // The papers' blend wherever 0 <= B <= 1.
+                if (0.0..=1.0).contains(&b) {
+                    let papers = blend(b, ce, cb);
+                    assert!((0..3).all(|c| (papers[c] - composited[c]).abs() < 1e-12));
+                }
+            }
+        }
+        // Where the papers' blend subtracts the background, "over" keeps the core white-hot: the default
+        // light-blue core over green turns magenta in the papers' blend (by hand: 0.3 x 2, 1 - 0.45 x 2, 1).
+        let (blue, green) = ([0.3, 0.55, 1.0], [0.0, 1.0, 0.0]);
+        let papers = blend(2.0, blue, green);
+        assert!(
+            (papers[0] - 0.6).abs() < 1e-12 && (papers[1] - 0.1).abs() < 1e-12 && papers[2] == 1.0
+        );
+        assert_eq!(blend_over(2.0, blue, green), [0.6, 1.0, 1.0]);
     }
 
     #[test]

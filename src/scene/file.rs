@@ -78,6 +78,7 @@ pub(crate) struct IntegrationFile {
 pub(crate) struct ColorsFile {
     pub energy: Option<[f64; 3]>,
     pub background: Option<[f64; 3]>,
+    pub blend: Option<String>,
 }
 
 #[derive(Debug, Deserialize, Serialize)]

@@ -45,11 +45,35 @@ pub struct BillboardSettings {
     pub resolution: u32,
 }
 
-/// The energy color Ce and the background color Cb, display values in [0, 1].
+/// The energy color Ce and the background color Cb, display values in [0, 1], and how the glow goes over the
+/// background.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Colors {
     pub energy: [f64; 3],
     pub background: [f64; 3],
+    pub blend: Blend,
+}
+
+/// How the glow's brightness B puts Ce over Cb.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Blend {
+    /// The papers' `clamp((1 - B) Cb + B Ce)`: where B > 1, `(1 - B) Cb` is negative and subtracts the
+    /// background (a light-blue core turns magenta over green).
+    #[default]
+    Papers,
+    /// `clamp(B Ce + (1 - min(B, 1)) Cb)` (B below 0 taken as 0): the papers' blend wherever 0 <= B <= 1,
+    /// white-hot cores over any background, and exactly what the transparent export composites to, for every B.
+    Over,
+}
+
+impl Blend {
+    /// The name in scene files and the panel.
+    pub fn name(self) -> &'static str {
+        match self {
+            Blend::Papers => "papers",
+            Blend::Over => "over",
+        }
+    }
 }
 
 /// A whole scene.
@@ -90,6 +114,7 @@ impl Default for Colors {
         Self {
             energy: [0.35, 0.65, 1.0],
             background: [0.0, 0.0, 0.0],
+            blend: Blend::Papers,
         }
     }
 }
@@ -206,6 +231,7 @@ impl Scene {
             colors: Some(file::ColorsFile {
                 energy: Some(self.colors.energy),
                 background: Some(self.colors.background),
+                blend: Some(self.colors.blend.name().to_owned()),
             }),
             points: (self.sources.points.iter())
                 .map(|s| file::PointFile {
@@ -592,7 +618,23 @@ fn check_colors(c: &mut Checker<'_, '_>, file: &SceneFile) -> Colors {
         .map_or(default_colors.background, |a| {
             c.color(&col_path.key("background"), a)
         });
-    Colors { energy, background }
+    let blend = match col.and_then(|x| x.blend.as_deref()) {
+        None => default_colors.blend,
+        Some("papers") => Blend::Papers,
+        Some("over") => Blend::Over,
+        Some(other) => {
+            c.fail(
+                &col_path.key("blend"),
+                format!("{other:?} is not a blend: use \"papers\" (clamp((1 - B) Cb + B Ce), the default) or \"over\" (clamp(B Ce + (1 - min(B, 1)) Cb): the same wherever B <= 1, and what the transparent export composites to)"),
+            );
+            default_colors.blend
+        }
+    };
+    Colors {
+        energy,
+        background,
+        blend,
+    }
 }
 
 /// The sources, each kind in its array of tables.

@@ -11,7 +11,7 @@ use crate::export::Target;
 use crate::field::{Curve, Line, Point, Torus};
 use crate::geometry::Camera;
 use crate::integrate::Integrator;
-use crate::scene::Scene;
+use crate::scene::{Blend, Scene};
 
 /// One request from the UI.
 #[derive(Clone, Debug, PartialEq)]
@@ -90,6 +90,8 @@ pub enum Edit {
     RemoveWeight(usize, usize),
     /// A curve's W series removed (uniform intensity).
     UniformWeights(usize),
+    /// How the glow goes over the background.
+    Blend(Blend),
     /// A key of a parameter at the current frame, to a value: its track's, or a new track's (a still scene gets
     /// an animation).
     Key(Parameter, Value),
@@ -146,6 +148,7 @@ impl Edit {
             Edit::Divisions(n) => scene.integration.divisions = n,
             Edit::Jitter(seed) => scene.integration.jitter = seed,
             Edit::Resolution(w) => scene.billboard.resolution = w,
+            Edit::Blend(b) => scene.colors.blend = b,
             Edit::Billboard(fixed) => {
                 scene.billboard.center = fixed.map(|(c, _)| c);
                 scene.billboard.size = fixed.map(|(_, l)| l);

@@ -13,7 +13,7 @@ use super::widgets::{ERROR_COLOR, KEY_COLOR, color, direction, labelled, vec3, w
 use crate::animation::{Animation, IntegrationSetting, Parameter, SourceKind, Value};
 use crate::field::Curve;
 use crate::integrate::Integrator;
-use crate::scene::{Scene, limits};
+use crate::scene::{Blend, Scene, limits};
 
 /// Largest Simpson division count the panel offers (the file format allows more, for batch renders).
 const PANEL_MAX_DIVISIONS: u32 = 4096;
@@ -554,6 +554,29 @@ fn render_section(ui: &mut Ui, cx: &Context, view: &mut ViewSettings, out: &mut 
                 Parameter::BackgroundColor,
                 scene.colors.background,
             );
+            ui.horizontal(|ui| {
+                ui.label("blend");
+                for (blend, hint) in [
+                    (
+                        Blend::Papers,
+                        "The papers' clamp((1 - B) Cb + B Ce): where B > 1 it subtracts the background",
+                    ),
+                    (
+                        Blend::Over,
+                        "clamp(B Ce + (1 - min(B, 1)) Cb): the same wherever B <= 1, white-hot cores over any \
+                         background, and what the transparent export composites to",
+                    ),
+                ] {
+                    if ui
+                        .selectable_label(scene.colors.blend == blend, blend.name())
+                        .on_hover_text(hint)
+                        .clicked()
+                        && scene.colors.blend != blend
+                    {
+                        out.push(Action::Edit(Edit::Blend(blend)));
+                    }
+                }
+            });
         });
 }
 
