@@ -637,3 +637,80 @@ fn the_blend_is_chosen_in_the_panel_and_is_an_undo_step() {
     h.run();
     assert_eq!(h.state().scene().colors.blend, Blend::Papers);
 }
+
+#[test]
+fn the_viewer_exports_a_video_and_a_padded_sheet() {
+    use energywave::viewer::animation_panel::ExportKind;
+    let dir = std::env::temp_dir().join(format!("energywave-ui-video-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut scene = light_scene();
+    scene.billboard.resolution = 24;
+    scene.animation = Some(energywave::animation::Animation {
+        frames: 8,
+        ..Default::default()
+    });
+    let mut h = harness(scene);
+    h.get_by_label("Export").click_accesskit();
+    h.run();
+    let export = |h: &mut Harness<'static, ViewerApp>| {
+        h.get_by_label("Export 8 frames").click_accesskit();
+        h.run();
+        let start = std::time::Instant::now();
+        while h.state().is_exporting() && start.elapsed().as_secs() < 120 {
+            std::thread::sleep(std::time::Duration::from_millis(50));
+            h.step();
+        }
+        h.state().notice().cloned()
+    };
+    // H.264 has no alpha: a transparent MP4 is refused, and said so.
+    {
+        let form = h.state_mut().animation_form_mut();
+        form.export_kind = ExportKind::Video;
+        form.transparent = true;
+        form.export_path = dir.join("glow.mp4").display().to_string();
+        form.size = [64, 48];
+    }
+    h.run();
+    let notice = export(&mut h);
+    assert!(
+        notice
+            .as_ref()
+            .is_some_and(|(t, e)| *e && t.contains(".webm")),
+        "{notice:?}"
+    );
+    h.state_mut().animation_form_mut().transparent = false;
+    h.run();
+    let notice = export(&mut h);
+    assert!(
+        notice
+            .as_ref()
+            .is_some_and(|(t, e)| !e && t.starts_with("Exported")),
+        "{notice:?}"
+    );
+    let probe = std::process::Command::new("ffprobe")
+        .args(["-v", "error", "-count_frames", "-select_streams", "v:0"])
+        .args([
+            "-show_entries",
+            "stream=nb_read_frames,width,height",
+            "-of",
+            "csv=p=0",
+        ])
+        .arg(dir.join("glow.mp4"))
+        .output()
+        .expect("ffprobe runs");
+    assert_eq!(String::from_utf8_lossy(&probe.stdout).trim(), "64,48,8");
+    // A sheet with padding and power-of-two sides.
+    {
+        let form = h.state_mut().animation_form_mut();
+        form.export_kind = ExportKind::Sheet;
+        form.export_path = dir.join("sheet.png").display().to_string();
+        form.sheet.padding = 2;
+        form.sheet.power_of_two = true;
+    }
+    h.run();
+    export(&mut h);
+    let sheet = image::open(dir.join("sheet.png")).unwrap();
+    // 8 frames of 64 x 48 in 3 columns and 3 rows, 2 between: 196 x 148, up to 256 x 256.
+    assert_eq!((sheet.width(), sheet.height()), (256, 256));
+}

@@ -18,6 +18,8 @@ pub enum ExportKind {
     Gif,
     /// A flipbook grid PNG with its layout as JSON beside it.
     Sheet,
+    /// MP4 (H.264) or WebM (VP9, with alpha) through ffmpeg.
+    Video,
 }
 
 /// The Animation section's fields that are not the document's: the parameter path being typed and the
@@ -32,6 +34,8 @@ pub struct AnimationForm {
     pub transparent: bool,
     /// Width and height of exported frames, pixels.
     pub size: [u32; 2],
+    /// A sheet's padding and power-of-two sides (its columns are as square as they get).
+    pub sheet: crate::export::SheetOptions,
 }
 
 impl Default for AnimationForm {
@@ -42,6 +46,7 @@ impl Default for AnimationForm {
             export_kind: ExportKind::Sequence,
             transparent: false,
             size: [256, 256],
+            sheet: crate::export::SheetOptions::default(),
         }
     }
 }
@@ -62,6 +67,8 @@ impl AnimationForm {
             ExportKind::Sequence => format!("{stem}_####.png"),
             ExportKind::Gif => format!("{stem}.gif"),
             ExportKind::Sheet => format!("{stem}_sheet.png"),
+            ExportKind::Video if self.transparent => format!("{stem}.webm"),
+            ExportKind::Video => format!("{stem}.mp4"),
         };
         match scene_path.and_then(|p| p.parent()) {
             Some(dir) if !dir.as_os_str().is_empty() => dir.join(name),
@@ -371,6 +378,8 @@ fn export_section(
                 ui.selectable_value(&mut form.export_kind, ExportKind::Sequence, "PNG sequence");
                 ui.selectable_value(&mut form.export_kind, ExportKind::Gif, "GIF");
                 ui.selectable_value(&mut form.export_kind, ExportKind::Sheet, "sprite sheet");
+                ui.selectable_value(&mut form.export_kind, ExportKind::Video, "video")
+                    .on_hover_text("MP4 (H.264), or WebM (VP9) with alpha when transparent; needs ffmpeg");
             });
             let default_path = AnimationForm {
                 export_path: String::new(),
@@ -401,8 +410,24 @@ fn export_section(
                     form.export_kind != ExportKind::Gif,
                     egui::Checkbox::new(&mut form.transparent, "transparent"),
                 )
-                .on_hover_text("alpha = min(B, 1), to composite over anything (not in a GIF)");
+                .on_hover_text(
+                    "alpha = min(B, 1), to composite over anything (not in a GIF; in a video, WebM only)",
+                );
             });
+            if form.export_kind == ExportKind::Sheet {
+                ui.horizontal(|ui| {
+                    labelled(
+                        ui,
+                        "padding",
+                        DragValue::new(&mut form.sheet.padding)
+                            .range(0..=64)
+                            .suffix(" px"),
+                    )
+                    .on_hover_text("Transparent pixels between cells, so that mipmaps do not bleed");
+                    ui.checkbox(&mut form.sheet.power_of_two, "power of two")
+                        .on_hover_text("Round the sheet's sides up to powers of two");
+                });
+            }
             if let Some(job) = export {
                 let status = job.status();
                 ui.add(
@@ -434,19 +459,32 @@ fn export_section(
                 let transparent = form.transparent && form.export_kind != ExportKind::Gif;
                 let mut warning = None;
                 let checked =
-                    Target::for_output(&path, sheet.then(crate::export::SheetOptions::default))
+                    Target::for_output(&path, sheet.then_some(form.sheet))
                         .and_then(|target| {
                             let expected = match form.export_kind {
                                 ExportKind::Sequence => matches!(target, Target::Sequence { .. }),
                                 ExportKind::Gif => matches!(target, Target::Gif { .. }),
                                 ExportKind::Sheet => matches!(target, Target::Sheet { .. }),
+                                ExportKind::Video => matches!(target, Target::Video { .. }),
                             };
+                            if let Target::Video { container, .. } = &target
+                                && transparent
+                                && *container == crate::export::video::Container::Mp4
+                            {
+                                return Err(crate::export::ExportError::Target {
+                                    path: path.clone(),
+                                    why: "H.264 in MP4 has no alpha: name the file .webm for a \
+                                          transparent video"
+                                        .into(),
+                                });
+                            }
                             if !expected {
                                 return Err(crate::export::ExportError::Target {
                                     path: path.clone(),
                                     why:
                                         "does not fit the kind chosen: a sequence needs a run of # \
-                                  (name_####.png), a GIF ends in .gif, a sheet in .png"
+                                  (name_####.png), a GIF ends in .gif, a sheet in .png, a video in \
+                                  .mp4 or .webm"
                                             .into(),
                                 });
                             }
