@@ -244,14 +244,22 @@ impl Document {
     }
 }
 
-/// True when `a` and `b` are the same effect, whatever their cameras.
+/// True when `a` and `b` are the same effect, whatever their cameras: every other part equal (written out, so
+/// that a part added to the scene is not forgotten here), nothing cloned (the title asks every frame).
 fn same_effect(a: &Scene, b: &Scene) -> bool {
-    if a.camera == b.camera {
-        return a == b;
-    }
-    let mut b = b.clone();
-    b.camera = a.camera.clone();
-    *a == b
+    let Scene {
+        camera: _,
+        billboard,
+        integration,
+        colors,
+        sources,
+        animation,
+    } = a;
+    *billboard == b.billboard
+        && *integration == b.integration
+        && *colors == b.colors
+        && *sources == b.sources
+        && *animation == b.animation
 }
 
 /// `dir/base.ext`, or `dir/base-2.ext`, `dir/base-3.ext`, ... the first that does not exist.
