@@ -1,0 +1,228 @@
+//! The Rendering section: the integrator and its settings, the decay, the resolution, the billboard, the
+//! colors and the blend.
+
+use egui::{DragValue, Ui};
+
+use super::super::action::{Action, Edit};
+use super::super::widgets::{labelled, vec3};
+use super::context::{
+    Context, PANEL_MAX_DIVISIONS, PANEL_MAX_RESOLUTION, PANEL_TOLERANCE, ViewSettings,
+};
+use super::fields::{Edits, color_field, number};
+use crate::animation::{IntegrationSetting, Parameter};
+use crate::integrate::Integrator;
+use crate::scene::Blend;
+
+pub(super) fn render_section(
+    ui: &mut Ui,
+    cx: &Context,
+    view: &mut ViewSettings,
+    out: &mut Edits<'_>,
+) {
+    let scene = cx.shown;
+    let i = &scene.integration;
+    let edit = |out: &mut Edits<'_>, e: Edit| out.push(Action::Edit(e));
+    egui::CollapsingHeader::new("Rendering")
+        .default_open(true)
+        .show(ui, |ui| {
+            egui::Grid::new("energywave.integration")
+                .num_columns(2)
+                .show(ui, |ui| {
+                    ui.label("integrator");
+                    ui.horizontal(|ui| {
+                        for integrator in [Integrator::Adaptive, Integrator::Simpson] {
+                            let hint = match integrator {
+                                Integrator::Adaptive => "Samples where the field needs them, to a tolerance (fast, no banding)",
+                                Integrator::Simpson => "The papers' n evenly spaced samples (bands at a low n)",
+                            };
+                            if ui
+                                .selectable_label(i.integrator == integrator, integrator.name())
+                                .on_hover_text(hint)
+                                .clicked()
+                                && i.integrator != integrator
+                            {
+                                edit(out, Edit::Integrator(integrator));
+                            }
+                        }
+                    });
+                    ui.end_row();
+                    match i.integrator {
+                        Integrator::Adaptive => {
+                            let mut t = i.tolerance;
+                            let r = labelled(
+                                ui,
+                                "tolerance",
+                                DragValue::new(&mut t)
+                                    .range(PANEL_TOLERANCE)
+                                    .speed(1e-5)
+                                    .max_decimals(7),
+                            );
+                            if r.changed() && t != i.tolerance {
+                                edit(out, Edit::Tolerance(t));
+                            }
+                            ui.end_row();
+                        }
+                        Integrator::Simpson => {
+                            let mut n = i.divisions;
+                            labelled(
+                                ui,
+                                "divisions n",
+                                DragValue::new(&mut n)
+                                    .range(2..=PANEL_MAX_DIVISIONS)
+                                    .speed(2),
+                            );
+                            // Simpson's rule needs an even count.
+                            let n = (n + n % 2).clamp(2, PANEL_MAX_DIVISIONS);
+                            if n != i.divisions {
+                                edit(out, Edit::Divisions(n));
+                            }
+                            ui.end_row();
+                            let mut jitter = i.jitter.is_some();
+                            ui.label("");
+                            if ui
+                                .checkbox(&mut jitter, "jitter (noise instead of bands)")
+                                .changed()
+                            {
+                                edit(out, Edit::Jitter(jitter.then_some(i.jitter.unwrap_or(0))));
+                            }
+                            ui.end_row();
+                            if jitter {
+                                labelled(
+                                    ui,
+                                    "average frames",
+                                    DragValue::new(&mut view.average_frames).range(1..=1024),
+                                )
+                                .on_hover_text(
+                                    "While the view is still, average this many jittered frames \
+                                     (the noise falls as 1/\u{221a}frames); 1: none",
+                                );
+                                ui.end_row();
+                            }
+                        }
+                    }
+                    let step = 0.005 * i.decay_length;
+                    let setting = |k| Parameter::Integration(k);
+                    number(
+                        ui,
+                        out,
+                        "decay length",
+                        setting(IntegrationSetting::DecayLength),
+                        i.decay_length,
+                        |x| DragValue::new(x).range(1e-3..=1e6).speed(step),
+                    )
+                    .on_hover_text(
+                        "The depth past the billboard, in scene units, over which \u{3b6} falls from \
+                         \u{3b1}/\u{3b2}\u{b2} to \u{3b1}/(1+\u{3b2})\u{b2}. Fixed in space: the look \
+                         holds as the camera moves",
+                    );
+                    ui.end_row();
+                    number(ui, out, "\u{3b1}", setting(IntegrationSetting::Alpha), i.alpha, |x| {
+                        DragValue::new(x).range(0.001..=1000.0).speed(0.01)
+                    });
+                    ui.end_row();
+                    number(ui, out, "\u{3b2}", setting(IntegrationSetting::Beta), i.beta, |x| {
+                        DragValue::new(x).range(0.001..=1000.0).speed(0.01)
+                    });
+                    ui.end_row();
+                    number(
+                        ui,
+                        out,
+                        "\u{3b5} (clamp)",
+                        setting(IntegrationSetting::Epsilon),
+                        i.epsilon,
+                        |x| {
+                            DragValue::new(x)
+                                .range(1e-6..=10.0)
+                                .speed(0.001)
+                                .max_decimals(6)
+                        },
+                    );
+                    ui.end_row();
+                    let top = cx.max_resolution.clamp(8, PANEL_MAX_RESOLUTION);
+                    let mut w = scene.billboard.resolution;
+                    let r = labelled(
+                        ui,
+                        "resolution W",
+                        DragValue::new(&mut w).range(8..=top).speed(4),
+                    );
+                    if r.changed() && w != scene.billboard.resolution {
+                        edit(out, Edit::Resolution(w));
+                    }
+                    ui.end_row();
+                });
+            billboard_editor(ui, cx, out);
+            color_field(ui, out, "energy Ce", Parameter::EnergyColor, scene.colors.energy);
+            color_field(
+                ui,
+                out,
+                "background Cb",
+                Parameter::BackgroundColor,
+                scene.colors.background,
+            );
+            ui.horizontal(|ui| {
+                ui.label("blend");
+                for (blend, hint) in [
+                    (
+                        Blend::Papers,
+                        "The papers' clamp((1 - B) Cb + B Ce): where B > 1 it subtracts the background",
+                    ),
+                    (
+                        Blend::Over,
+                        "clamp(B Ce + (1 - min(B, 1)) Cb): the same wherever B <= 1, white-hot cores over any \
+                         background, and what the transparent export composites to",
+                    ),
+                ] {
+                    if ui
+                        .selectable_label(scene.colors.blend == blend, blend.name())
+                        .on_hover_text(hint)
+                        .clicked()
+                        && scene.colors.blend != blend
+                    {
+                        out.push(Action::Edit(Edit::Blend(blend)));
+                    }
+                }
+            });
+        });
+}
+
+/// Fixed or automatic placement of the billboard; a fixed one's center and size.
+pub(super) fn billboard_editor(ui: &mut Ui, cx: &Context, out: &mut Edits<'_>) {
+    let scene = cx.shown;
+    let b = &scene.billboard;
+    let mut fixed = b.center.is_some();
+    if ui
+        .checkbox(&mut fixed, "fixed billboard (else placed automatically)")
+        .changed()
+    {
+        let placement = fixed.then(|| {
+            // Fixed where it is now.
+            let placed = crate::geometry::place_billboard(
+                &scene.camera,
+                &scene.sources,
+                None,
+                None,
+                cx.aspect,
+            );
+            (placed.center, placed.size)
+        });
+        out.push(Action::Edit(Edit::Billboard(placement)));
+    }
+    if let (Some(center), Some(size)) = (b.center, b.size) {
+        let mut c = center;
+        // The billboard must not contain the eye.
+        if vec3(ui, "center", &mut c, 0.05).0 && (c - scene.camera.eye).length() > 1e-6 {
+            out.push(Action::Edit(Edit::Billboard(Some((c, size)))));
+        }
+        ui.horizontal(|ui| {
+            let mut l = size;
+            let r = labelled(
+                ui,
+                "size l",
+                DragValue::new(&mut l).range(1e-3..=1e5).speed(0.05),
+            );
+            if r.changed() && l != size {
+                out.push(Action::Edit(Edit::Billboard(Some((center, l)))));
+            }
+        });
+    }
+}

@@ -1,0 +1,263 @@
+//! The Sources section: every source's editors, adding, duplicating and deleting, and selection.
+
+use egui::{DragValue, Slider, Ui};
+
+use super::super::action::{Action, Edit};
+use super::super::widgets::wseries_plot;
+use super::context::Context;
+use super::fields::{Edits, axis, number, position};
+use crate::animation::{Parameter, SourceKind, Value};
+use crate::field::Curve;
+
+pub(super) fn sources_section(ui: &mut Ui, cx: &Context, out: &mut Edits<'_>) {
+    let shown = cx.shown;
+    let target = shown.camera.target;
+    ui.horizontal(|ui| {
+        ui.strong("Sources");
+        for (label, kind) in [
+            ("+ point", SourceKind::Points),
+            ("+ line", SourceKind::Lines),
+            ("+ torus", SourceKind::Tori),
+            ("+ curve", SourceKind::Curves),
+        ] {
+            if ui.button(label).clicked() {
+                out.push(Action::Edit(Edit::AddSource(kind, target)));
+            }
+        }
+    });
+    let s = &shown.sources;
+    list(
+        ui,
+        cx,
+        out,
+        "Point",
+        SourceKind::Points,
+        &s.points,
+        |ui, out, i, p| {
+            position(
+                ui,
+                out,
+                "position",
+                Parameter::Position(SourceKind::Points, i),
+                p.position,
+            );
+            coefficient(ui, out, SourceKind::Points, i, p.coefficient);
+        },
+    );
+    list(
+        ui,
+        cx,
+        out,
+        "Line",
+        SourceKind::Lines,
+        &s.lines,
+        |ui, out, i, l| {
+            position(
+                ui,
+                out,
+                "point",
+                Parameter::Position(SourceKind::Lines, i),
+                l.point,
+            );
+            axis(
+                ui,
+                out,
+                "direction",
+                Parameter::Direction(SourceKind::Lines, i),
+                l.direction,
+            );
+            coefficient(ui, out, SourceKind::Lines, i, l.coefficient);
+        },
+    );
+    list(
+        ui,
+        cx,
+        out,
+        "Torus",
+        SourceKind::Tori,
+        &s.tori,
+        |ui, out, i, t| {
+            position(
+                ui,
+                out,
+                "center",
+                Parameter::Position(SourceKind::Tori, i),
+                t.center,
+            );
+            axis(
+                ui,
+                out,
+                "axis",
+                Parameter::Direction(SourceKind::Tori, i),
+                t.axis,
+            );
+            ui.horizontal(|ui| {
+                number(
+                    ui,
+                    out,
+                    "radius R",
+                    Parameter::MajorRadius(i),
+                    t.major_radius,
+                    |x| DragValue::new(x).range(1e-3..=1e4).speed(0.01),
+                );
+            });
+            coefficient(ui, out, SourceKind::Tori, i, t.coefficient);
+        },
+    );
+    let pulsed = |i: usize| {
+        shown
+            .animation
+            .as_ref()
+            .is_some_and(|a| a.pulses.iter().any(|p| p.curve == i))
+    };
+    list(
+        ui,
+        cx,
+        out,
+        "Curve",
+        SourceKind::Curves,
+        &s.curves,
+        |ui, out, i, c| curve_editor(ui, out, i, c, pulsed(i)),
+    );
+}
+
+pub(super) fn coefficient(ui: &mut Ui, out: &mut Edits<'_>, kind: SourceKind, i: usize, c: f64) {
+    ui.horizontal(|ui| {
+        number(
+            ui,
+            out,
+            "coefficient",
+            Parameter::Coefficient(kind, i),
+            c,
+            |x| {
+                DragValue::new(x)
+                    .speed(0.05)
+                    .range(-1e4..=1e4)
+                    .max_decimals(3)
+            },
+        );
+    });
+}
+
+/// A list of sources of one kind, each with its editor and Duplicate / Delete. A source's name selects it (its
+/// handles ringed in the viewport); the selected source's entry is highlighted, and scrolled to when it was
+/// selected in the viewport.
+pub(super) fn list<T>(
+    ui: &mut Ui,
+    cx: &Context,
+    out: &mut Edits<'_>,
+    label: &str,
+    kind: SourceKind,
+    items: &[T],
+    mut editor: impl FnMut(&mut Ui, &mut Edits<'_>, usize, &T),
+) {
+    for (i, item) in items.iter().enumerate() {
+        let selected = cx.selected == Some((kind, i));
+        let id = ui.make_persistent_id((label, i));
+        let frame = if selected {
+            egui::Frame::NONE
+                .fill(ui.visuals().selection.bg_fill.gamma_multiply(0.25))
+                .stroke(ui.visuals().selection.stroke)
+                .corner_radius(3.0)
+        } else {
+            egui::Frame::NONE
+        };
+        frame.show(ui, |ui| {
+            let state = egui::collapsing_header::CollapsingState::load_with_default_open(
+                ui.ctx(),
+                id,
+                true,
+            );
+            let (_, header, _) = state
+                .show_header(ui, |ui| {
+                    let name = ui
+                        .selectable_label(selected, format!("{label} {}", i + 1))
+                        .on_hover_text("Select: its handles are ringed in the viewport");
+                    if name.clicked() {
+                        out.push(Action::Select((!selected).then_some((kind, i))));
+                    }
+                    name
+                })
+                .body(|ui| {
+                    editor(ui, out, i, item);
+                    ui.horizontal(|ui| {
+                        if ui.small_button("Duplicate").clicked() {
+                            out.push(Action::Edit(Edit::DuplicateSource(kind, i)));
+                        }
+                        if ui.small_button("Delete").clicked() {
+                            out.push(Action::Edit(Edit::DeleteSource(kind, i)));
+                        }
+                    });
+                });
+            if selected && cx.scroll_to_selected {
+                header.inner.scroll_to_me(Some(egui::Align::TOP));
+            }
+        });
+    }
+}
+
+/// Curve `i`: its coefficient, control points, segments and W series (`pulsed`: the W series is the
+/// animation's travelling pulse, shown and not edited here).
+pub(super) fn curve_editor(ui: &mut Ui, out: &mut Edits<'_>, i: usize, c: &Curve, pulsed: bool) {
+    coefficient(ui, out, SourceKind::Curves, i, c.coefficient);
+    let segments = (c.control_points.len() - 1) / 2;
+    ui.label(format!(
+        "{segments} segment(s), {} control points",
+        c.control_points.len()
+    ));
+    for (k, &p) in c.control_points.iter().enumerate() {
+        position(ui, out, &format!("B{k}"), Parameter::ControlPoint(i, k), p);
+    }
+    ui.horizontal(|ui| {
+        if ui
+            .small_button("+ segment")
+            .on_hover_text("Continue the chain smoothly")
+            .clicked()
+        {
+            out.push(Action::Edit(Edit::AddSegment(i)));
+        }
+        if ui
+            .add_enabled(segments > 1, egui::Button::new("- segment").small())
+            .clicked()
+        {
+            out.push(Action::Edit(Edit::RemoveSegment(i)));
+        }
+    });
+    ui.label("Local intensity W");
+    if pulsed {
+        ui.label("Driven by its travelling pulse (Animation section)");
+        wseries_plot(ui, &c.weights);
+        return;
+    }
+    for (k, &w) in c.weights.iter().enumerate() {
+        ui.horizontal(|ui| {
+            let mut x = w;
+            let slider = ui.add(Slider::new(&mut x, 0.0..=2.0).text(format!("w{k}")));
+            if slider.changed() && x != w {
+                out.push(Action::set_number(Parameter::Weight(i, k), x));
+            }
+            out.key_button(ui, Parameter::Weight(i, k), Value::Number(w), slider.rect);
+            if ui
+                .small_button("remove")
+                .on_hover_text(format!("Remove w{k}"))
+                .clicked()
+            {
+                out.push(Action::Edit(Edit::RemoveWeight(i, k)));
+            }
+        });
+    }
+    ui.horizontal(|ui| {
+        if ui.small_button("+ weight").clicked() {
+            out.push(Action::Edit(Edit::AddWeight(i)));
+        }
+        if !c.weights.is_empty()
+            && ui
+                .small_button("uniform")
+                .on_hover_text("All weights 1 (no W series)")
+                .clicked()
+        {
+            out.push(Action::Edit(Edit::UniformWeights(i)));
+        }
+    });
+    wseries_plot(ui, &c.weights);
+}
