@@ -181,23 +181,19 @@ fn key_buttons_key_the_value_shown_and_the_i_key_does_too() {
         .unwrap()
         .set_value_accesskit(5.0);
     h.run();
-    let frames: Vec<f64> = track(&h, coefficient)
-        .unwrap()
-        .keys
-        .iter()
-        .map(|k| k.frame)
-        .collect();
-    assert_eq!(frames, [0.0, 40.0]);
+    let frames = |h: &Harness<'static, ViewerApp>| -> Vec<f64> {
+        track(h, coefficient)
+            .unwrap()
+            .keys
+            .iter()
+            .map(|k| k.frame)
+            .collect()
+    };
+    assert_eq!(frames(&h), [0.0, 40.0]);
     // The button at a key removes it.
     h.get_by_label("key tori[0].coefficient").click();
     h.run();
-    let frames: Vec<f64> = track(&h, coefficient)
-        .unwrap()
-        .keys
-        .iter()
-        .map(|k| k.frame)
-        .collect();
-    assert_eq!(frames, [0.0]);
+    assert_eq!(frames(&h), [0.0]);
     // I over a field keys it, as in Blender.
     let radius = h.get_by_role_and_label(Role::SpinButton, "radius R").rect();
     h.hover_at(radius.center());

@@ -338,6 +338,16 @@ mod tests {
         );
     }
 
+    /// Dates the file's last change at `t` (a change within the same clock tick would go unseen).
+    fn set_mtime(path: &Path, t: SystemTime) {
+        std::fs::File::options()
+            .write(true)
+            .open(path)
+            .unwrap()
+            .set_modified(t)
+            .unwrap();
+    }
+
     #[test]
     fn looking_is_not_editing_and_a_reload_keeps_the_view() {
         let dir = tmp("view");
@@ -358,12 +368,7 @@ mod tests {
         std::thread::sleep(Duration::from_millis(20));
         std::fs::write(&path, edited.to_toml()).unwrap();
         let t = std::time::SystemTime::now() + Duration::from_secs(5);
-        std::fs::File::options()
-            .write(true)
-            .open(&path)
-            .unwrap()
-            .set_modified(t)
-            .unwrap();
+        set_mtime(&path, t);
         assert!(matches!(doc.check_disk(), Some(DiskChange::Reloaded)));
         assert_eq!(doc.scene.sources, edited.sources);
         assert_eq!(doc.scene.camera.eye, eye, "the view the user moved");
@@ -376,12 +381,7 @@ mod tests {
         let mut moved = again.scene.clone();
         moved.camera.eye.z += 2.0;
         std::fs::write(&path, moved.to_toml()).unwrap();
-        std::fs::File::options()
-            .write(true)
-            .open(&path)
-            .unwrap()
-            .set_modified(t + Duration::from_secs(5))
-            .unwrap();
+        set_mtime(&path, t + Duration::from_secs(5));
         assert!(matches!(again.check_disk(), Some(DiskChange::Reloaded)));
         assert_eq!(again.scene.camera, moved.camera);
     }
