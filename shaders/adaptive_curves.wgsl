@@ -842,10 +842,10 @@ fn integrate_adaptive_curves(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let first_curve = point_count() + line_count() + torus_count();
-    var b = 0.0;
+    var b = vec4<f32>(0.0);
     // The range holds curves only (gpu::field_pass::plan_chunks).
     for (var t = chunk.first; t < chunk.first + chunk.count; t++) {
-        b += integrate_curve_term(t - first_curve, texel.start, texel.end);
+        b += glow_of(t, integrate_curve_term(t - first_curve, texel.start, texel.end));
     }
     store(texel.id, b);
 }

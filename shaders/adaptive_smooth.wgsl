@@ -316,7 +316,7 @@ fn integrate_adaptive(@builtin(global_invocation_id) gid: vec3<u32>) {
     if !texel.inside {
         return;
     }
-    var b = 0.0;
+    var b = vec4<f32>(0.0);
     // The range holds points, lines and tori only (gpu::field_pass::plan_chunks); its bounds come from the chunk
     // alone, a storage buffer, so no driver specialises the shader for them.
     for (var t = chunk.first; t < chunk.first + chunk.count; t++) {
@@ -330,7 +330,7 @@ fn integrate_adaptive(@builtin(global_invocation_id) gid: vec3<u32>) {
                 kind = KIND_TORUS;
             }
         }
-        b += integrate_smooth_term(kind, index, texel.start, texel.end);
+        b += glow_of(t, integrate_smooth_term(kind, index, texel.start, texel.end));
     }
     store(texel.id, b);
 }

@@ -1,6 +1,6 @@
 // The running mean of jittered frames while nothing changes (the viewer's accumulation): frame k = 1, 2, ...
-// of the field pass moves each texel's mean by (B - mean) / k. The first frame overwrites whatever the mean
-// texture held. Rust side: gpu::frame_average.
+// of the field pass moves each texel's mean by (B - mean) / k, and each layer of the tint likewise. The first
+// frame overwrites whatever the mean texture held. Rust side: gpu::frame_average.
 
 struct AverageParams {
     weight: f32,   // 1 / k
@@ -10,8 +10,8 @@ struct AverageParams {
 }
 
 @group(0) @binding(0) var<uniform> average: AverageParams;
-@group(0) @binding(1) var frame: texture_2d<f32>;
-@group(0) @binding(2) var mean: texture_storage_2d<r32float, read_write>;
+@group(0) @binding(1) var frame: texture_2d_array<f32>;
+@group(0) @binding(2) var mean: texture_storage_2d_array<r32float, read_write>;
 
 @compute @workgroup_size(8, 8)
 fn average_frames(@builtin(global_invocation_id) id: vec3<u32>) {
@@ -20,11 +20,13 @@ fn average_frames(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let texel = vec2<i32>(id.xy);
-    let b = textureLoad(frame, texel, 0).x;
-    var m = b;
-    if average.weight < 1.0 {
-        let old = textureLoad(mean, texel).x;
-        m = old + (b - old) * average.weight;
+    for (var layer = 0u; layer < textureNumLayers(mean); layer++) {
+        let b = textureLoad(frame, texel, layer, 0).x;
+        var m = b;
+        if average.weight < 1.0 {
+            let old = textureLoad(mean, texel, layer).x;
+            m = old + (b - old) * average.weight;
+        }
+        textureStore(mean, texel, layer, vec4<f32>(m, 0.0, 0.0, 1.0));
     }
-    textureStore(mean, texel, vec4<f32>(m, 0.0, 0.0, 1.0));
 }

@@ -1,5 +1,6 @@
-// The billboard pass: draws the camera-facing billboard as a quad in 3D and blends its brightness B over what
-// lies behind it, color = clamp((1 - B) Cb + B Ce) (METHOD.md section 4). Cb is read from a copy of the
+// The billboard pass: draws the camera-facing billboard as a quad in 3D and blends its brightness B and colored
+// sum G = sum B_i Ce_i (B Ce with one color) over what lies behind it, color = clamp((1 - B) Cb + G) (METHOD.md
+// section 4). Cb is read from a copy of the
 // background at the fragment's pixel, so the blend is exact for any B (fixed-function blending cannot apply
 // the negative weight 1 - B that blows the glow out when B > 1). Rust side: src/gpu/billboard_pass.rs
 // (gpu_data holds the mirror of BillboardParams; keep in sync). CPU twin: src/reference/billboard.rs.
@@ -9,15 +10,16 @@ struct BillboardParams {
     center: vec3<f32>,
     size: f32,
     right: vec3<f32>,
-    resolution: u32,   // W of the brightness texture
+    resolution: u32,   // W of the field texture
     up: vec3<f32>,
-    mode: u32,         // 0: clamp((1 - B) Cb + B Ce); 1: premultiplied B Ce and alpha min(B, 1), unclamped;
-                       // 2: clamp(B Ce + (1 - min(B, 1)) Cb) (gpu::billboard_pass::BlendMode)
-    energy: vec4<f32>, // Ce in rgb
+    mode: u32,         // 0: clamp((1 - B) Cb + G); 1: premultiplied G and alpha min(B, 1), unclamped;
+                       // 2: clamp(G + (1 - min(B, 1)) Cb) (gpu::billboard_pass::BlendMode)
+    energy: vec4<f32>, // Ce in rgb, its intensity applied
 }
 
 @group(0) @binding(0) var<uniform> params: BillboardParams;
-@group(0) @binding(1) var brightness: texture_2d<f32>;
+// The field pass's texture: layer 0 B, layers 1 to 3 the tint sum B_i (Ce_i - Ce), G = B Ce + tint.
+@group(0) @binding(1) var field: texture_2d_array<f32>;
 @group(0) @binding(2) var background: texture_2d<f32>;
 
 struct VertexOut {
@@ -37,36 +39,40 @@ fn vs_main(@builtin(vertex_index) index: u32) -> VertexOut {
 }
 
 // Bilinear filtering by hand (r32float is not filterable everywhere), texel centers at (i + 0.5) / W,
-// clamped at the edges. Twin of reference::billboard::sample_bilinear.
-fn sample_brightness(uv: vec2<f32>) -> f32 {
+// clamped at the edges, of every layer: (B, tint). Twin of reference::billboard::sample_bilinear.
+fn sample_field(uv: vec2<f32>) -> vec4<f32> {
     let w = i32(params.resolution);
     let x = uv * f32(w) - 0.5;
     let x0 = floor(x);
     let f = x - x0;
     let i0 = clamp(vec2<i32>(x0), vec2<i32>(0), vec2<i32>(w - 1));
     let i1 = clamp(vec2<i32>(x0) + 1, vec2<i32>(0), vec2<i32>(w - 1));
-    let b00 = textureLoad(brightness, vec2<i32>(i0.x, i0.y), 0).r;
-    let b10 = textureLoad(brightness, vec2<i32>(i1.x, i0.y), 0).r;
-    let b01 = textureLoad(brightness, vec2<i32>(i0.x, i1.y), 0).r;
-    let b11 = textureLoad(brightness, vec2<i32>(i1.x, i1.y), 0).r;
-    return mix(mix(b00, b10, f.x), mix(b01, b11, f.x), f.y);
+    var out = vec4<f32>(0.0);
+    for (var layer = 0; layer < 4; layer++) {
+        let b00 = textureLoad(field, vec2<i32>(i0.x, i0.y), layer, 0).r;
+        let b10 = textureLoad(field, vec2<i32>(i1.x, i0.y), layer, 0).r;
+        let b01 = textureLoad(field, vec2<i32>(i0.x, i1.y), layer, 0).r;
+        let b11 = textureLoad(field, vec2<i32>(i1.x, i1.y), layer, 0).r;
+        out[layer] = mix(mix(b00, b10, f.x), mix(b01, b11, f.x), f.y);
+    }
+    return out;
 }
 
 @fragment
 fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
-    let b = sample_brightness(in.uv);
-    let ce = params.energy.rgb;
+    let field = sample_field(in.uv);
+    let b = field.x;
+    let glow = b * params.energy.rgb + field.yzw;
     if params.mode == 1u {
-        // Associated (premultiplied) alpha, unclamped: "over" any background Cb gives (1 - B) Cb + B Ce wherever
-        // B <= 1, and over black B Ce everywhere (clamped on display, as the opaque blend). B < 0 is transparent.
-        let bp = max(b, 0.0);
-        return vec4<f32>(bp * ce, min(bp, 1.0));
+        // Associated (premultiplied) alpha, unclamped: "over" any background Cb gives (1 - B) Cb + G wherever
+        // B <= 1, and over black G everywhere (clamped on display, as the opaque blend). B < 0 is transparent.
+        return vec4<f32>(max(glow, vec3<f32>(0.0)), clamp(b, 0.0, 1.0));
     }
     let cb = textureLoad(background, vec2<i32>(in.position.xy), 0);
     if params.mode == 2u {
         // The transparent export composited over the background, for every B.
-        let bp = max(b, 0.0);
-        return vec4<f32>(clamp(bp * ce + (1.0 - min(bp, 1.0)) * cb.rgb, vec3<f32>(0.0), vec3<f32>(1.0)), cb.a);
+        let over = max(glow, vec3<f32>(0.0)) + (1.0 - clamp(b, 0.0, 1.0)) * cb.rgb;
+        return vec4<f32>(clamp(over, vec3<f32>(0.0), vec3<f32>(1.0)), cb.a);
     }
-    return vec4<f32>(clamp((1.0 - b) * cb.rgb + b * ce, vec3<f32>(0.0), vec3<f32>(1.0)), cb.a);
+    return vec4<f32>(clamp((1.0 - b) * cb.rgb + glow, vec3<f32>(0.0), vec3<f32>(1.0)), cb.a);
 }

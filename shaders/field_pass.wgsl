@@ -1,6 +1,6 @@
-// What every field pass shares: for every texel of the billboard's W x W brightness texture, a pass integrates
-// the energy field along the texel's ray S -> E into the texture (METHOD.md section 3): memory is the texture
-// alone, O(W^2). The passes (one WGSL file each: simpson.wgsl, adaptive_smooth.wgsl, adaptive_curves.wgsl, the
+// What every field pass shares: for every texel of the billboard's W x W field texture, a pass integrates the
+// energy field along the texel's ray S -> E into the texture (METHOD.md section 3), B and beside it the tint of
+// the sources' colors: memory is the texture alone, O(W^2). The passes (one WGSL file each: simpson.wgsl, adaptive_smooth.wgsl, adaptive_curves.wgsl, the
 // last two after adaptive.wgsl) are each assembled into a module of their own by src/gpu/shaders.rs: the
 // constants generated from the f64 twin, field_common.wgsl, this file, then the pass. Rust side:
 // src/gpu/field_pass.rs (gpu_data holds the mirror of FieldParams; a test checks the layout). CPU twin:
@@ -103,7 +103,11 @@ fn load_scalars() {
 @group(0) @binding(4) var<storage, read> curves: array<CurveSource>;
 @group(0) @binding(5) var<storage, read> segments: array<CurveSegment>;
 @group(0) @binding(6) var<storage, read> weights: array<f32>;
-@group(0) @binding(7) var brightness: texture_storage_2d<r32float, read_write>;
+// The field texture: layer 0 holds B, layers 1 to 3 the tint sum B_i (Ce_i - Ce) in red, green and blue
+// (gpu::context::FIELD_LAYERS), so that the colored sum is B Ce + tint = sum B_i Ce_i.
+@group(0) @binding(7) var field: texture_storage_2d_array<r32float, read_write>;
+// Each term's Ce_i - Ce in rgb (points, then lines, tori, curves): zero for a source in the scene's color.
+@group(0) @binding(9) var<storage, read> tints: array<vec4<f32>>;
 
 // One dispatch's share of the work: a range of Simpson samples, or of the adaptive integrator's terms (points,
 // then lines, tori, curves). A texel's loops must stay under what some drivers allow one invocation (Mesa's
@@ -123,12 +127,20 @@ fn texel_of(gid: vec3<u32>) -> vec2<u32> {
 }
 
 @group(0) @binding(8) var<storage, read> chunk: Chunk;
-fn store(id: vec2<u32>, value: f32) {
-    var v = value;
-    if chunk.accumulate != 0u {
-        v += textureLoad(brightness, vec2<i32>(id)).x;
+// Writes a texel's (B, tint), or adds it to what the texel holds.
+fn store(id: vec2<u32>, value: vec4<f32>) {
+    for (var layer = 0u; layer < 4u; layer++) {
+        var v = value[layer];
+        if chunk.accumulate != 0u {
+            v += textureLoad(field, vec2<i32>(id), layer).x;
+        }
+        textureStore(field, vec2<i32>(id), layer, vec4<f32>(v, 0.0, 0.0, 1.0));
     }
-    textureStore(brightness, vec2<i32>(id), vec4<f32>(v, 0.0, 0.0, 1.0));
+}
+
+// A term's part of the texel's (B, tint): its B_i, and B_i (Ce_i - Ce) from its tint (index t of tints).
+fn glow_of(t: u32, b: f32) -> vec4<f32> {
+    return vec4<f32>(b, b * tints[t].xyz);
 }
 
 // Sw(t) of a curve's W series (METHOD.md section 2). Twin of wseries::evaluate.

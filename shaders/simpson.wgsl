@@ -104,18 +104,22 @@ fn integrate(@builtin(global_invocation_id) gid: vec3<u32>) {
     } else {
         r.last = min(chunk.first + chunk.count, n + 1u);
     }
-    var sum = 0.0;
+    // B and the tint: each term's sum, and that sum times the term's tint (glow_of).
+    var sum = vec4<f32>(0.0);
     for (var i = 0u; i < point_count(); i++) {
-        sum += point_samples(r, points[i]);
+        sum += glow_of(i, point_samples(r, points[i]));
     }
+    let first_line = point_count();
     for (var i = 0u; i < line_count(); i++) {
-        sum += line_samples(r, lines[i]);
+        sum += glow_of(first_line + i, line_samples(r, lines[i]));
     }
+    let first_torus = first_line + line_count();
     for (var i = 0u; i < torus_count(); i++) {
-        sum += torus_samples(r, tori[i]);
+        sum += glow_of(first_torus + i, torus_samples(r, tori[i]));
     }
+    let first_curve = first_torus + torus_count();
     for (var i = 0u; i < curve_count(); i++) {
-        sum += curve_samples(r, curves[i]);
+        sum += glow_of(first_curve + i, curve_samples(r, curves[i]));
     }
     store(texel.id, sum * scale);
 }

@@ -2,11 +2,12 @@
 // the view moves; paper 000, 5.1: a low-resolution field, smoothly upsampled). Catmull-Rom in each direction
 // over the 4 x 4 nearest source texels, texel centers at (i + 0.5) / size on both textures, edges clamped:
 // C1 (no blocks, no creases at texel boundaries), exact on quadratics away from the edges, and interpolating,
-// so a texel that lands on a source texel's center takes its value. B is not negative; the cubic's overshoot
-// beside a thin bright core is clipped at 0. Rust side: src/gpu/upsample.rs.
+// so a texel that lands on a source texel's center takes its value. Every layer alike (B, then the tint); B
+// is not negative where no coefficient is, and the cubic's overshoot beside a thin bright core is clipped at 0
+// (the tint, of either sign, is not). Rust side: src/gpu/upsample.rs.
 
-@group(0) @binding(0) var low: texture_2d<f32>;
-@group(0) @binding(1) var upsampled: texture_storage_2d<r32float, write>;
+@group(0) @binding(0) var low: texture_2d_array<f32>;
+@group(0) @binding(1) var upsampled: texture_storage_2d_array<r32float, write>;
 
 // The Catmull-Rom weights of the four texels around a point at fraction t past the second of them.
 fn catmull_rom(t: f32) -> vec4<f32> {
@@ -28,15 +29,20 @@ fn upsample(@builtin(global_invocation_id) id: vec3<u32>) {
     let wx = catmull_rom(f.x);
     let wy = catmull_rom(f.y);
     let b = vec2<i32>(base);
-    var sum = 0.0;
-    for (var j = 0; j < 4; j++) {
-        let y = clamp(b.y - 1 + j, 0, n.y - 1);
-        var row = 0.0;
-        for (var i = 0; i < 4; i++) {
-            let column = clamp(b.x - 1 + i, 0, n.x - 1);
-            row += wx[i] * textureLoad(low, vec2<i32>(column, y), 0).x;
+    for (var layer = 0u; layer < textureNumLayers(upsampled); layer++) {
+        var sum = 0.0;
+        for (var j = 0; j < 4; j++) {
+            let y = clamp(b.y - 1 + j, 0, n.y - 1);
+            var row = 0.0;
+            for (var i = 0; i < 4; i++) {
+                let column = clamp(b.x - 1 + i, 0, n.x - 1);
+                row += wx[i] * textureLoad(low, vec2<i32>(column, y), layer, 0).x;
+            }
+            sum += wy[j] * row;
         }
-        sum += wy[j] * row;
+        if layer == 0u {
+            sum = max(sum, 0.0);
+        }
+        textureStore(upsampled, vec2<i32>(id.xy), layer, vec4<f32>(sum, 0.0, 0.0, 1.0));
     }
-    textureStore(upsampled, vec2<i32>(id.xy), vec4<f32>(max(sum, 0.0), 0.0, 0.0, 1.0));
 }

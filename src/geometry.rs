@@ -310,6 +310,7 @@ mod tests {
                 axis: DVec3::new(0.0, 1.0, 1.0).normalize(),
                 major_radius: 1.0,
                 coefficient: 1.0,
+                look: Default::default(),
             }],
             ..Sources::default()
         }

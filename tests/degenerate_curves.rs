@@ -37,6 +37,7 @@ fn curve_scene(control_points: &[[f64; 3]], weights: &[f64], w: u32) -> Scene {
             control_points: control_points.iter().map(|&p| DVec3::from(p)).collect(),
             coefficient: 3.0,
             weights: weights.to_vec(),
+            look: Default::default(),
         }],
         ..Sources::default()
     };
@@ -214,6 +215,7 @@ fn a_line_along_the_view_axis_gives_the_closed_form_with_zeta_at_work() {
             point: eye,
             direction: DVec3::Z,
             coefficient: c,
+            look: Default::default(),
         }],
         ..Sources::default()
     };

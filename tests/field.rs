@@ -148,6 +148,7 @@ fn refined_simpson_reaches_the_closed_form_where_a_fixed_n_does_not() {
         points: vec![Point {
             position: m,
             coefficient: 1.0,
+            look: Default::default(),
         }],
         ..Sources::default()
     };
@@ -202,6 +203,7 @@ fn point_source_integral_matches_the_closed_form() {
         points: vec![Point {
             position: m,
             coefficient: 1.0,
+            look: Default::default(),
         }],
         ..Sources::default()
     };
@@ -233,6 +235,7 @@ fn brightness_applies_zeta_and_the_coefficient() {
         points: vec![Point {
             position: m,
             coefficient: 2.5,
+            look: Default::default(),
         }],
         ..Sources::default()
     };
@@ -260,17 +263,20 @@ fn psi_is_the_sum_of_the_sources_and_is_clamped_by_epsilon() {
     let point = Point {
         position: DVec3::ZERO,
         coefficient: 2.0,
+        look: Default::default(),
     };
     let line = Line {
         point: DVec3::new(0.0, 1.0, 0.0),
         direction: DVec3::X,
         coefficient: -0.5,
+        look: Default::default(),
     };
     let torus = Torus {
         center: DVec3::new(0.0, 0.0, 1.0),
         axis: DVec3::Y,
         major_radius: 1.0,
         coefficient: 3.0,
+        look: Default::default(),
     };
     let curve = Curve {
         control_points: vec![
@@ -280,6 +286,7 @@ fn psi_is_the_sum_of_the_sources_and_is_clamped_by_epsilon() {
         ],
         coefficient: 1.5,
         weights: vec![],
+        look: Default::default(),
     };
     let all = Sources {
         points: vec![point.clone()],
@@ -314,6 +321,7 @@ fn a_chain_is_one_source_with_one_w_series() {
         control_points: cps.clone(),
         coefficient: 1.0,
         weights: vec![0.0, 1.0, 0.0],
+        look: Default::default(),
     };
     // With three weights the W series is the Bernstein blend: Sw(t) = 2 t (1 - t) for W = [0, 1, 0].
     let sw = |t: f64| 2.0 * t * (1.0 - t);
@@ -330,6 +338,7 @@ fn a_chain_is_one_source_with_one_w_series() {
         control_points: cps.to_vec(),
         coefficient: 1.0,
         weights: vec![],
+        look: Default::default(),
     };
     let doubled = separate(&cps[..3]).field(p, eps) + separate(&cps[2..]).field(p, eps);
     assert!(
@@ -368,6 +377,7 @@ fn the_adaptive_integrator_matches_the_closed_form_however_sharp_the_peak() {
             points: vec![Point {
                 position: m,
                 coefficient: 2.5,
+                look: Default::default(),
             }],
             ..Sources::default()
         };

@@ -86,6 +86,7 @@ fn gpu_matches_the_cpu_reference_on_grazing_rays() {
         points: vec![Point {
             position: DVec3::ZERO,
             coefficient: 1.0,
+            look: Default::default(),
         }],
         ..Sources::default()
     };
@@ -115,22 +116,26 @@ fn gpu_matches_the_cpu_reference_on_grazing_rays() {
             Point {
                 position: on_sample,
                 coefficient: 0.5,
+                look: Default::default(),
             },
             Point {
                 position: between,
                 coefficient: 0.5,
+                look: Default::default(),
             },
         ],
         lines: vec![Line {
             point: crossing,
             direction: DVec3::new(1.0, 0.3, -0.2).normalize(),
             coefficient: 0.3,
+            look: Default::default(),
         }],
         tori: vec![Torus {
             center: pierced + DVec3::new(0.0, -0.8, 0.0),
             axis: DVec3::new(0.0, 0.0, 1.0),
             major_radius: 0.8,
             coefficient: 1.0,
+            look: Default::default(),
         }],
         curves: vec![
             // Straight, along the axis of texel (3, 12)'s ray for a stretch.
@@ -138,6 +143,7 @@ fn gpu_matches_the_cpu_reference_on_grazing_rays() {
                 control_points: vec![through - dir, through, through + dir],
                 coefficient: 0.4,
                 weights: vec![],
+                look: Default::default(),
             },
             // Nearly straight, across the ray of texel (20, 5).
             Curve {
@@ -148,6 +154,7 @@ fn gpu_matches_the_cpu_reference_on_grazing_rays() {
                 ],
                 coefficient: 0.4,
                 weights: vec![0.2, 1.0, 0.5, 0.8],
+                look: Default::default(),
             },
         ],
     };
@@ -310,6 +317,7 @@ fn single_point(coefficient: f64, background: [f64; 3], energy: [f64; 3]) -> Sce
         points: vec![Point {
             position: DVec3::ZERO,
             coefficient,
+            look: Default::default(),
         }],
         ..Sources::default()
     };
@@ -541,8 +549,8 @@ fn sizes_beyond_the_device_limits_are_refused() {
 
 #[test]
 fn field_memory_is_w_squared() {
-    // One f32 per texel, independent of n: 1 MiB at W = 512.
-    assert_eq!(field_texture_bytes(512), 1 << 20);
+    // Four f32 a texel (B and the tint's three channels), independent of n: 4 MiB at W = 512.
+    assert_eq!(field_texture_bytes(512), 4 << 20);
     let mut g = gpu();
     let mut scene = single_point(1.0, [0.0; 3], [1.0; 3]);
     scene.billboard.resolution = 48;
@@ -551,8 +559,8 @@ fn field_memory_is_w_squared() {
     g.brightness(&scene, &bb).unwrap();
     let t = g.field().texture().unwrap();
     assert_eq!(
-        (t.width(), t.height(), t.format()),
-        (48, 48, wgpu::TextureFormat::R32Float)
+        (t.width(), t.height(), t.depth_or_array_layers(), t.format()),
+        (48, 48, 4, wgpu::TextureFormat::R32Float)
     );
 }
 

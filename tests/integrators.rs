@@ -98,6 +98,7 @@ fn points_and_lines(eye: DVec3) -> Scene {
     .map(|(position, coefficient)| Point {
         position,
         coefficient,
+        look: Default::default(),
     })
     .to_vec();
     scene.sources.lines = [
@@ -108,6 +109,7 @@ fn points_and_lines(eye: DVec3) -> Scene {
         point,
         direction: direction.normalize(),
         coefficient,
+        look: Default::default(),
     })
     .to_vec();
     scene.camera.eye = eye;
@@ -159,6 +161,7 @@ fn grazing_ray() -> (Sources, Integration, DVec3, DVec3) {
         points: vec![Point {
             position: DVec3::new(0.003, 0.0, -3.3),
             coefficient: 1.0,
+            look: Default::default(),
         }],
         ..Sources::default()
     };

@@ -2,7 +2,7 @@
 //! in bands once it holds still, ending on exactly the texture a still render gives; screenshots at full
 //! quality whatever the screen shows.
 
-use energywave::gpu::{FieldRenderer, GpuContext, HeadlessRenderer, Upsample, texture_2d};
+use energywave::gpu::{FieldRenderer, GpuContext, HeadlessRenderer, Upsample, field_texture};
 use energywave::scene::Scene;
 use energywave::viewer::document::Document;
 use energywave::viewer::navigation;
@@ -14,13 +14,8 @@ use common::shipped_scene;
 /// Runs `upsample` over `values` (n x n, rows from the top) to `w` x `w` and reads the result back.
 fn upsampled(ctx: &GpuContext, values: &[f32], n: u32, w: u32) -> Vec<f32> {
     let (device, queue) = (&ctx.device, &ctx.queue);
-    let source = texture_2d(
-        device,
-        "test.low",
-        [n, n],
-        wgpu::TextureFormat::R32Float,
-        wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-    );
+    // B in the first layer; the tint layers stay zero.
+    let (source, view) = field_texture(device, "test.low", n);
     queue.write_texture(
         source.as_image_copy(),
         bytemuck::cast_slice(values),
@@ -29,9 +24,12 @@ fn upsampled(ctx: &GpuContext, values: &[f32], n: u32, w: u32) -> Vec<f32> {
             bytes_per_row: Some(4 * n),
             rows_per_image: Some(n),
         },
-        source.size(),
+        wgpu::Extent3d {
+            width: n,
+            height: n,
+            depth_or_array_layers: 1,
+        },
     );
-    let view = source.create_view(&Default::default());
     let mut upsample = Upsample::new(device);
     let mut encoder = device.create_command_encoder(&Default::default());
     upsample.encode(device, &mut encoder, &source, &view, w);

@@ -44,6 +44,7 @@ fn curve(points: &[DVec3]) -> Curve {
         control_points: points.to_vec(),
         coefficient: 2.0,
         weights: vec![],
+        look: Default::default(),
     }
 }
 
@@ -94,6 +95,7 @@ fn degenerate_geometry_is_finite_on_cpu_and_gpu() {
                     points: vec![Point {
                         position: origin,
                         coefficient: 3.0,
+                        look: Default::default(),
                     }],
                     ..Default::default()
                 },
@@ -111,6 +113,7 @@ fn degenerate_geometry_is_finite_on_cpu_and_gpu() {
                         axis: DVec3::Z,
                         major_radius: 1.0,
                         coefficient: 3.0,
+                        look: Default::default(),
                     }],
                     ..Default::default()
                 },
@@ -128,6 +131,7 @@ fn degenerate_geometry_is_finite_on_cpu_and_gpu() {
                         axis: DVec3::Y,
                         major_radius: 1.0,
                         coefficient: 3.0,
+                        look: Default::default(),
                     }],
                     ..Default::default()
                 },
@@ -188,6 +192,7 @@ fn degenerate_geometry_is_finite_on_cpu_and_gpu() {
                         point: origin,
                         direction: DVec3::Z,
                         coefficient: 0.5,
+                        look: Default::default(),
                     }],
                     ..Default::default()
                 },
@@ -205,6 +210,7 @@ fn degenerate_geometry_is_finite_on_cpu_and_gpu() {
                         axis: DVec3::Z,
                         major_radius: 2.0,
                         coefficient: 3.0,
+                        look: Default::default(),
                     }],
                     curves: vec![curve(&[a, origin + DVec3::Y, b])],
                     ..Default::default()
@@ -222,6 +228,7 @@ fn degenerate_geometry_is_finite_on_cpu_and_gpu() {
                         points: vec![Point {
                             position: DVec3::new(500.0, 300.0, -200.0),
                             coefficient: 5.0,
+                            look: Default::default(),
                         }],
                         curves: vec![curve(&[
                             DVec3::splat(-800.0),
@@ -303,6 +310,7 @@ fn thousands_of_sources() {
         sources.points.push(Point {
             position: DVec3::new(a.cos() * 3.0, (a * 0.37).sin() * 2.0, a.sin() * 3.0),
             coefficient: 0.01,
+            look: Default::default(),
         });
     }
     for i in 0..200 {
@@ -335,12 +343,14 @@ fn sources() -> impl Strategy<Value = Sources> {
     let point = (vec3(10.0), -10.0..10.0f64).prop_map(|(position, coefficient)| Point {
         position,
         coefficient,
+        look: Default::default(),
     });
     let line =
         (vec3(10.0), unit(), -3.0..3.0f64).prop_map(|(point, direction, coefficient)| Line {
             point,
             direction,
             coefficient,
+            look: Default::default(),
         });
     let torus = (vec3(10.0), unit(), 0.001..5.0f64, -10.0..10.0f64).prop_map(
         |(center, axis, major_radius, coefficient)| Torus {
@@ -348,6 +358,7 @@ fn sources() -> impl Strategy<Value = Sources> {
             axis,
             major_radius,
             coefficient,
+            look: Default::default(),
         },
     );
     let curve = (
@@ -360,6 +371,7 @@ fn sources() -> impl Strategy<Value = Sources> {
             control_points: points[..2 * k + 1].to_vec(),
             coefficient,
             weights,
+            look: Default::default(),
         });
     (
         prop::collection::vec(point, 0..3),

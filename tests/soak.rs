@@ -64,6 +64,7 @@ fn thousands_of_frames_of_random_edits() {
                     rng.range(-3.0, 3.0),
                 ),
                 coefficient: rng.range(-2.0, 4.0),
+                look: Default::default(),
             }),
             1 if !s.sources.points.is_empty() => {
                 let i = rng.below(s.sources.points.len());
@@ -74,6 +75,7 @@ fn thousands_of_frames_of_random_edits() {
                 axis: DVec3::new(rng.range(-1.0, 1.0), 1.0, rng.range(-1.0, 1.0)).normalize(),
                 major_radius: rng.range(0.01, 3.0),
                 coefficient: rng.range(0.0, 5.0),
+                look: Default::default(),
             }),
             3 if s.sources.tori.len() > 1 => {
                 s.sources.tori.pop();
@@ -94,6 +96,7 @@ fn thousands_of_frames_of_random_edits() {
                     control_points: points,
                     coefficient: rng.range(0.0, 6.0),
                     weights,
+                    look: Default::default(),
                 });
             }
             5 if s.sources.curves.len() > 1 => {

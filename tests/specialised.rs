@@ -116,6 +116,7 @@ fn only_the_latest_structures_keep_their_pipelines() {
         scene.sources.points.push(energywave::field::Point {
             position: glam::DVec3::new(k as f64 * 0.1, 0.0, 0.0),
             coefficient: 0.5,
+            look: Default::default(),
         });
         field_of(&ctx, &mut field, &scene);
         structures.push(Structure::of_scene(&scene, &scene.place_billboard(1.0)));

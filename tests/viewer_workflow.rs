@@ -414,6 +414,7 @@ fn clicking_a_handle_selects_its_source_and_shows_its_entry() {
         scene.sources.points.push(energywave::field::Point {
             position: glam::DVec3::new(-2.2 + 0.4 * k as f64, 2.0, 0.0),
             coefficient: 0.5,
+            look: Default::default(),
         });
     }
     let mut h = harness(scene);
@@ -474,6 +475,7 @@ fn a_torus_radius_and_axis_and_a_line_direction_have_handles() {
         point: glam::DVec3::new(0.0, 2.5, 0.0),
         direction: glam::DVec3::X,
         coefficient: 0.3,
+        look: Default::default(),
     });
     let mut h = harness(scene);
     let rect = h.state().viewport_rect();

@@ -95,6 +95,7 @@ pub(super) fn viewer_frames(
     viewer.scene_mut().sources.points.push(crate::field::Point {
         position: glam::DVec3::new(0.5, 1.0, 0.0),
         coefficient: 1.0,
+        look: Default::default(),
     });
     let first = timed(viewer)?;
     let (_, added_frames, added_longest) = settle(viewer)?;

@@ -9,11 +9,25 @@ pub mod wseries;
 
 use glam::DVec3;
 
+/// How a source's glow is colored: its energy color Ce_i and that color's intensity. Not part of psi (the field
+/// and its integrals ignore it): the field pass integrates, beside B = sum B_i, the colored sum sum B_i Ce_i
+/// (METHOD.md section 4), and the blend puts that over the background. `None` takes the scene's
+/// (`colors.energy`, `colors.energy_intensity`).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Look {
+    /// Display values in [0, 1], as an artist picks them.
+    pub color: Option<[f64; 3]>,
+    /// A multiplier of the color, at least 0: above 1 the glow is brighter than a display color can be (HDR),
+    /// clamped on screen and kept unclamped in EXR exports.
+    pub intensity: Option<f64>,
+}
+
 /// A point source (thesis 3.2): `S(P) = 1 / max(eps, |P - M|)`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Point {
     pub position: DVec3,
     pub coefficient: f64,
+    pub look: Look,
 }
 
 /// An infinite line through `point` with unit `direction` (thesis 3.3).
@@ -23,6 +37,7 @@ pub struct Line {
     /// Unit length (the scene loader normalises it).
     pub direction: DVec3,
     pub coefficient: f64,
+    pub look: Look,
 }
 
 /// A torus-shaped source: the circle of radius `major_radius` around `center` in the plane normal to `axis`
@@ -34,6 +49,7 @@ pub struct Torus {
     pub axis: DVec3,
     pub major_radius: f64,
     pub coefficient: f64,
+    pub look: Look,
 }
 
 /// A chain of quadratic Bezier segments (`2k + 1` control points) with its W series (thesis 3.8-3.27).
@@ -43,6 +59,7 @@ pub struct Curve {
     pub coefficient: f64,
     /// The W series; empty means all weights 1.
     pub weights: Vec<f64>,
+    pub look: Look,
 }
 
 /// Every source of a scene, by kind.
@@ -119,6 +136,30 @@ impl Sources {
             + self.lines.iter().map(|s| s.field(p, eps)).sum::<f64>()
             + self.tori.iter().map(|s| s.field(p, eps)).sum::<f64>()
             + self.curves.iter().map(|s| s.field(p, eps)).sum::<f64>()
+    }
+
+    /// Every source's look, in the order of the field pass's terms: points, lines, tori, curves.
+    pub fn looks(&self) -> impl Iterator<Item = &Look> {
+        (self.points.iter().map(|s| &s.look))
+            .chain(self.lines.iter().map(|s| &s.look))
+            .chain(self.tori.iter().map(|s| &s.look))
+            .chain(self.curves.iter().map(|s| &s.look))
+    }
+
+    /// Term `k` of psi(P) alone, in the order of `looks` (points, lines, tori, curves); 0 past the last.
+    pub fn term(&self, k: usize, p: DVec3, eps: f64) -> f64 {
+        let (n_p, n_l, n_t) = (self.points.len(), self.lines.len(), self.tori.len());
+        if k < n_p {
+            self.points[k].field(p, eps)
+        } else if k < n_p + n_l {
+            self.lines[k - n_p].field(p, eps)
+        } else if k < n_p + n_l + n_t {
+            self.tori[k - n_p - n_l].field(p, eps)
+        } else {
+            self.curves
+                .get(k - n_p - n_l - n_t)
+                .map_or(0.0, |c| c.field(p, eps))
+        }
     }
 
     /// Total number of sources.

@@ -43,11 +43,11 @@ pub fn view_projection(camera: &Camera, billboard: &Billboard, aspect: f64) -> D
 /// What the billboard pass writes: the glow blended over the background, or the glow alone for compositing.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BlendMode {
-    /// `clamp((1 - B) Cb + B Ce)` (the papers').
+    /// `clamp((1 - B) Cb + G)` (the papers'), G = sum B_i Ce_i.
     Papers = 0,
-    /// Premultiplied `B Ce` with alpha `min(B, 1)`, unclamped.
+    /// Premultiplied G with alpha `min(B, 1)`, unclamped.
     Transparent = 1,
-    /// `clamp(B Ce + (1 - min(B, 1)) Cb)`.
+    /// `clamp(G + (1 - min(B, 1)) Cb)`.
     Over = 2,
 }
 
@@ -99,12 +99,12 @@ impl BillboardRenderer {
             label: Some("energywave.billboard.shader"),
             source: wgpu::ShaderSource::Wgsl(super::shaders::BILLBOARD_PASS.into()),
         });
-        let texture = |binding| wgpu::BindGroupLayoutEntry {
+        let texture = |binding, view_dimension| wgpu::BindGroupLayoutEntry {
             binding,
             visibility: wgpu::ShaderStages::FRAGMENT,
             ty: wgpu::BindingType::Texture {
                 sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                view_dimension: wgpu::TextureViewDimension::D2,
+                view_dimension,
                 multisampled: false,
             },
             count: None,
@@ -123,8 +123,8 @@ impl BillboardRenderer {
                     },
                     count: None,
                 },
-                texture(1),
-                texture(2),
+                texture(1, wgpu::TextureViewDimension::D2Array),
+                texture(2, wgpu::TextureViewDimension::D2),
             ],
         );
         let pipeline = render_pipeline(

@@ -150,22 +150,22 @@ pub fn compute_pass(
     (pipeline, layout)
 }
 
-/// A bind group layout entry for a compute pass: a float texture read with `textureLoad`.
-pub fn loaded_texture_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+/// A bind group layout entry for a compute pass: a field texture (`field_texture`) read with `textureLoad`.
+pub fn loaded_field_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::COMPUTE,
         ty: wgpu::BindingType::Texture {
             sample_type: wgpu::TextureSampleType::Float { filterable: false },
-            view_dimension: wgpu::TextureViewDimension::D2,
+            view_dimension: wgpu::TextureViewDimension::D2Array,
             multisampled: false,
         },
         count: None,
     }
 }
 
-/// A bind group layout entry for a compute pass: an r32float storage texture.
-pub fn r32_storage_entry(
+/// A bind group layout entry for a compute pass: a field texture (`field_texture`) as storage.
+pub fn field_storage_entry(
     binding: u32,
     access: wgpu::StorageTextureAccess,
 ) -> wgpu::BindGroupLayoutEntry {
@@ -175,10 +175,46 @@ pub fn r32_storage_entry(
         ty: wgpu::BindingType::StorageTexture {
             access,
             format: wgpu::TextureFormat::R32Float,
-            view_dimension: wgpu::TextureViewDimension::D2,
+            view_dimension: wgpu::TextureViewDimension::D2Array,
         },
         count: None,
     }
+}
+
+/// Layers of a field texture: B, then the tint `sum B_i (Ce_i - Ce)` in red, green and blue
+/// (`reference::BrightnessTexture`). r32float layers rather than one rgba32float texture: WebGPU lets a shader
+/// read and write a storage texture of r32float only, and the field pass adds its dispatches into the texture.
+pub const FIELD_LAYERS: u32 = 4;
+
+/// A `w` x `w` field texture of `FIELD_LAYERS` r32float layers, for storage, sampling and copies both ways, and its view
+/// of every layer.
+pub fn field_texture(
+    device: &wgpu::Device,
+    label: &str,
+    w: u32,
+) -> (wgpu::Texture, wgpu::TextureView) {
+    let texture = device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width: w,
+            height: w,
+            depth_or_array_layers: FIELD_LAYERS,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::R32Float,
+        usage: wgpu::TextureUsages::STORAGE_BINDING
+            | wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::COPY_SRC
+            | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    let view = texture.create_view(&wgpu::TextureViewDescriptor {
+        dimension: Some(wgpu::TextureViewDimension::D2Array),
+        ..Default::default()
+    });
+    (texture, view)
 }
 
 /// A uniform buffer for one `T`, written with `Queue::write_buffer`.
@@ -215,10 +251,10 @@ pub fn texture_2d(
     })
 }
 
-/// Bytes of GPU memory a field texture (r32float) takes at resolution `w`: the field pass's and the mean of
-/// its jittered frames.
+/// Bytes of GPU memory a field texture (`FIELD_LAYERS` r32float layers) takes at resolution `w`: the field
+/// pass's and the mean of its jittered frames.
 pub fn field_texture_bytes(w: u32) -> u64 {
-    w as u64 * w as u64 * 4
+    w as u64 * w as u64 * 4 * FIELD_LAYERS as u64
 }
 
 /// Device, queue and the adapter they came from.
@@ -394,12 +430,23 @@ impl GpuContext {
 }
 
 /// Copies a whole 2D texture of `bytes_per_texel` back to the CPU, rows from the top, without padding
-/// (waits for the GPU).
+/// (waits for the GPU); of a field texture, its first layer, B.
 pub fn read_texture(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
     texture: &wgpu::Texture,
     bytes_per_texel: u32,
+) -> Result<Vec<u8>, GpuError> {
+    read_texture_layer(device, queue, texture, bytes_per_texel, 0)
+}
+
+/// `read_texture` of one layer of a texture array.
+pub fn read_texture_layer(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    texture: &wgpu::Texture,
+    bytes_per_texel: u32,
+    layer: u32,
 ) -> Result<Vec<u8>, GpuError> {
     let (width, height) = (texture.width(), texture.height());
     let unpadded = width * bytes_per_texel;
@@ -415,7 +462,16 @@ pub fn read_texture(
         label: Some("energywave.readback.encoder"),
     });
     encoder.copy_texture_to_buffer(
-        texture.as_image_copy(),
+        wgpu::TexelCopyTextureInfo {
+            texture,
+            mip_level: 0,
+            origin: wgpu::Origin3d {
+                x: 0,
+                y: 0,
+                z: layer,
+            },
+            aspect: wgpu::TextureAspect::All,
+        },
         wgpu::TexelCopyBufferInfo {
             buffer: &buffer,
             layout: wgpu::TexelCopyBufferLayout {
@@ -424,7 +480,11 @@ pub fn read_texture(
                 rows_per_image: Some(height),
             },
         },
-        texture.size(),
+        wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: 1,
+        },
     );
     queue.submit([encoder.finish()]);
     let bytes = map_read(device, &buffer)?;

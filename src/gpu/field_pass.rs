@@ -5,7 +5,7 @@
 
 use wgpu::util::DeviceExt;
 
-use super::context::{GpuError, checked, field_texture_bytes, pass_layouts, texture_2d};
+use super::context::{GpuError, checked, field_texture, field_texture_bytes, pass_layouts};
 use super::frame_average::FrameAverage;
 use super::shaders;
 use crate::field::curve::segments;
@@ -140,6 +140,8 @@ struct Packed {
     curves: Vec<CurveSource>,
     segments: Vec<CurveSegment>,
     weights: Vec<f32>,
+    /// Each term's `Ce_i - Ce` (`Scene::tints`) in rgb, points first, then lines, tori and curves.
+    tints: Vec<[f32; 4]>,
     /// The dispatches that together integrate the texture.
     chunks: Vec<Chunk>,
 }
@@ -306,6 +308,9 @@ fn pack(scene: &Scene, billboard: &Billboard) -> Packed {
                 axis: v3(t.axis),
                 coefficient: t.coefficient as f32,
             })
+            .collect(),
+        tints: (scene.tints().iter())
+            .map(|t| [t[0] as f32, t[1] as f32, t[2] as f32, 0.0])
             .collect(),
         ..Packed::default()
     };
@@ -582,7 +587,7 @@ pub struct FieldRenderer {
     /// The chunks, one per `chunk_stride` bytes (bound with a dynamic offset).
     chunks: wgpu::Buffer,
     chunk_stride: u64,
-    buffers: [StorageBuffer; 6],
+    buffers: [StorageBuffer; 7],
     texture: Option<(wgpu::Texture, wgpu::TextureView)>,
     bind_group: Option<wgpu::BindGroup>,
     uploaded: Option<Packed>,
@@ -650,10 +655,11 @@ impl FieldRenderer {
                     ty: wgpu::BindingType::StorageTexture {
                         access: wgpu::StorageTextureAccess::ReadWrite,
                         format: wgpu::TextureFormat::R32Float,
-                        view_dimension: wgpu::TextureViewDimension::D2,
+                        view_dimension: wgpu::TextureViewDimension::D2Array,
                     },
                     count: None,
                 },
+                storage(9),
                 // A read-only storage buffer rather than a uniform one: lavapipe recompiles a shader for the
                 // values of uniforms that bound its loops (to unroll them), and a chunk's range bounds the term
                 // loop, so every new range meant a new compile (seconds each, minutes for some).
@@ -683,6 +689,7 @@ impl FieldRenderer {
             "energywave.field.curves",
             "energywave.field.segments",
             "energywave.field.weights",
+            "energywave.field.tints",
         ]
         .map(|label| StorageBuffer::new(device, label, &[]));
         let chunk_stride = (device.limits().min_storage_buffer_offset_alignment as u64)
@@ -771,13 +778,14 @@ impl FieldRenderer {
         }
         checked(device, || {
             let mut rebind = self.bind_group.is_none();
-            let data: [&[u8]; 6] = [
+            let data: [&[u8]; 7] = [
                 bytemuck::cast_slice(&packed.points),
                 bytemuck::cast_slice(&packed.lines),
                 bytemuck::cast_slice(&packed.tori),
                 bytemuck::cast_slice(&packed.curves),
                 bytemuck::cast_slice(&packed.segments),
                 bytemuck::cast_slice(&packed.weights),
+                bytemuck::cast_slice(&packed.tints),
             ];
             for (buffer, bytes) in self.buffers.iter_mut().zip(data) {
                 rebind |= buffer.write(device, queue, bytes);
@@ -808,17 +816,7 @@ impl FieldRenderer {
             }
             queue.write_buffer(&self.chunks, 0, &bytes);
             if self.texture.as_ref().is_none_or(|(t, _)| t.width() != w) {
-                let texture = texture_2d(
-                    device,
-                    "energywave.field.storage",
-                    [w, w],
-                    wgpu::TextureFormat::R32Float,
-                    wgpu::TextureUsages::STORAGE_BINDING
-                        | wgpu::TextureUsages::TEXTURE_BINDING
-                        | wgpu::TextureUsages::COPY_SRC,
-                );
-                let view = texture.create_view(&wgpu::TextureViewDescriptor::default());
-                self.texture = Some((texture, view));
+                self.texture = Some(field_texture(device, "energywave.field.storage", w));
                 rebind = true;
             }
             if rebind {
@@ -844,9 +842,10 @@ impl FieldRenderer {
             binding: 0,
             resource: self.params.as_entire_binding(),
         }];
+        // Bindings 1 to 6, and the tints at 9.
         for (i, b) in self.buffers.iter().enumerate() {
             entries.push(wgpu::BindGroupEntry {
-                binding: i as u32 + 1,
+                binding: if i < 6 { i as u32 + 1 } else { 9 },
                 resource: b.buffer.as_entire_binding(),
             });
         }
@@ -1238,6 +1237,7 @@ mod tests {
             .map(|i| Point {
                 position: DVec3::new(i as f64, 0.0, 0.0),
                 coefficient: 1.0,
+                look: Default::default(),
             })
             .collect();
         s.sources.lines.clear();
@@ -1246,6 +1246,7 @@ mod tests {
             axis: DVec3::Z,
             major_radius: 1.0,
             coefficient: 1.0,
+            look: Default::default(),
         }];
         s.sources.curves = curves
             .iter()
@@ -1255,6 +1256,7 @@ mod tests {
                     .collect(),
                 coefficient: 1.0,
                 weights: vec![1.0],
+                look: Default::default(),
             })
             .collect();
         s.integration.integrator = integrator;

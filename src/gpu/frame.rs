@@ -159,7 +159,7 @@ impl SceneRenderer {
                 &scene.camera,
                 &billboard,
                 resolution,
-                scene.colors.energy,
+                scene.colors.energy_color(),
                 aspect,
                 BlendMode::of(transparent, scene.colors.blend),
             );

@@ -3,7 +3,7 @@
 //! noise falls as 1/sqrt(k) towards the converged picture (the jittered estimate is unbiased).
 
 use super::context::{
-    compute_pass, loaded_texture_entry, r32_storage_entry, texture_2d, uniform_buffer,
+    compute_pass, field_storage_entry, field_texture, loaded_field_entry, uniform_buffer,
 };
 use super::shaders;
 
@@ -24,7 +24,7 @@ pub mod gpu_data {
 
 use gpu_data::AverageParams;
 
-/// The pipeline, the mean texture (r32float, W x W) and its bind group over one field texture.
+/// The pipeline, the mean texture (a field texture, W x W) and its bind group over one field texture.
 pub struct FrameAverage {
     pipeline: wgpu::ComputePipeline,
     layout: wgpu::BindGroupLayout,
@@ -58,8 +58,8 @@ impl FrameAverage {
                     },
                     count: None,
                 },
-                loaded_texture_entry(1),
-                r32_storage_entry(2, wgpu::StorageTextureAccess::ReadWrite),
+                loaded_field_entry(1),
+                field_storage_entry(2, wgpu::StorageTextureAccess::ReadWrite),
             ],
         );
         let params = uniform_buffer::<AverageParams>(device, "energywave.average.params");
@@ -83,16 +83,7 @@ impl FrameAverage {
     ) {
         // Rebound when the field pass replaced its texture (a new resolution); otherwise only the weight changes.
         if self.mean.as_ref().is_none_or(|b| &b.frame != frame) {
-            let texture = texture_2d(
-                device,
-                "energywave.average.mean",
-                [frame.width(), frame.height()],
-                wgpu::TextureFormat::R32Float,
-                wgpu::TextureUsages::STORAGE_BINDING
-                    | wgpu::TextureUsages::TEXTURE_BINDING
-                    | wgpu::TextureUsages::COPY_SRC,
-            );
-            let view = texture.create_view(&Default::default());
+            let (texture, view) = field_texture(device, "energywave.average.mean", frame.width());
             let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("energywave.average.bind_group"),
                 layout: &self.layout,

@@ -69,6 +69,26 @@ impl HeadlessRenderer {
         Ok(bytemuck::cast_slice(&bytes).to_vec())
     }
 
+    /// The tint `sum B_i (Ce_i - Ce)` for every texel of `billboard` (W x W, rows from the top), after
+    /// `brightness` of the same scene and billboard (which renders it).
+    pub fn tint(&self) -> Result<Vec<[f32; 3]>, GpuError> {
+        let texture = self
+            .renderer
+            .field()
+            .texture()
+            .expect("brightness renders first");
+        let (device, queue) = (&self.ctx.device, &self.ctx.queue);
+        let layers: Vec<Vec<f32>> = (1..4)
+            .map(|layer| {
+                super::context::read_texture_layer(device, queue, texture, 4, layer)
+                    .map(|bytes| bytemuck::cast_slice(&bytes).to_vec())
+            })
+            .collect::<Result<_, _>>()?;
+        Ok((0..layers[0].len())
+            .map(|k| [layers[0][k], layers[1][k], layers[2][k]])
+            .collect())
+    }
+
     /// The scene's camera view, `width` x `height`: the background color, and the billboard blended over it.
     /// With `transparent`, the background is transparent and the billboard carries alpha = min(B, 1).
     pub fn render(

@@ -16,8 +16,8 @@ mod upsample;
 pub use billboard_pass::{BillboardRenderer, billboard_params, view_projection};
 pub use blit_pass::BlitPass;
 pub use context::{
-    GpuContext, GpuError, checked, describe, field_texture_bytes, map_read, read_texture,
-    texture_2d, uniform_buffer,
+    FIELD_LAYERS, GpuContext, GpuError, checked, describe, field_texture, field_texture_bytes,
+    map_read, read_texture, read_texture_layer, texture_2d, uniform_buffer,
 };
 pub use field_pass::{FieldInputs, FieldRenderer, Specialise, Structure};
 pub use frame::{FRAME_FORMAT, FrameTargets, SceneRenderer, f16_to_f32, read_frame};

@@ -2,7 +2,7 @@
 //! integrates a coarse field while the view moves and shows it through the same billboard pass as the full
 //! one, upsampled by Catmull-Rom (no blocks, no creases between texels).
 
-use super::context::{compute_pass, loaded_texture_entry, r32_storage_entry, texture_2d};
+use super::context::{compute_pass, field_storage_entry, field_texture, loaded_field_entry};
 use super::shaders;
 
 /// The pipeline, and the W x W output with its bind group over one source texture.
@@ -27,8 +27,8 @@ impl Upsample {
             shaders::UPSAMPLE_PASS,
             "upsample",
             &[
-                loaded_texture_entry(0),
-                r32_storage_entry(1, wgpu::StorageTextureAccess::WriteOnly),
+                loaded_field_entry(0),
+                field_storage_entry(1, wgpu::StorageTextureAccess::WriteOnly),
             ],
         );
         Self {
@@ -52,16 +52,7 @@ impl Upsample {
             .as_ref()
             .is_none_or(|b| &b.source != source || b.output.width() != resolution);
         if stale {
-            let output = texture_2d(
-                device,
-                "energywave.upsample.output",
-                [resolution, resolution],
-                wgpu::TextureFormat::R32Float,
-                wgpu::TextureUsages::STORAGE_BINDING
-                    | wgpu::TextureUsages::TEXTURE_BINDING
-                    | wgpu::TextureUsages::COPY_SRC,
-            );
-            let view = output.create_view(&Default::default());
+            let (output, view) = field_texture(device, "energywave.upsample.output", resolution);
             let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("energywave.upsample.bind_group"),
                 layout: &self.layout,

@@ -640,6 +640,18 @@ pub fn brightness(sources: &Sources, settings: &Integration, s: DVec3, e: DVec3)
         .sum()
 }
 
+/// The part of B of curve `k` alone, as `brightness` integrates it.
+pub fn term_brightness(
+    sources: &Sources,
+    k: usize,
+    settings: &Integration,
+    s: DVec3,
+    e: DVec3,
+) -> f64 {
+    let share = settings.tolerance / sources.len().max(1) as f64;
+    (sources.curves.get(k)).map_or(0.0, |c| integrate_term(c, s, e, settings, share))
+}
+
 #[cfg(test)]
 mod tests {
     use super::super::adaptive::testing::assert_within_each_tolerance;
@@ -656,6 +668,7 @@ mod tests {
             ],
             coefficient: 1.0,
             weights: vec![],
+            look: Default::default(),
         }
     }
 
@@ -706,6 +719,7 @@ mod tests {
                 ],
                 coefficient: 0.4,
                 weights: vec![],
+                look: Default::default(),
             }],
             ..Default::default()
         };
@@ -739,6 +753,7 @@ mod tests {
                 ],
                 coefficient: 3.0,
                 weights: vec![0.3, 1.0, 0.5, 1.0],
+                look: Default::default(),
             }],
             ..Default::default()
         };

@@ -287,15 +287,29 @@ fn integrate_term(term: Smooth, s: DVec3, e: DVec3, settings: &Integration, tole
 /// share of the tolerance among all the scene's sources (the curves' are `adaptive_curves::brightness`).
 pub fn brightness(sources: &Sources, settings: &Integration, s: DVec3, e: DVec3) -> f64 {
     let share = settings.tolerance / sources.len().max(1) as f64;
-    let terms = sources
-        .points
-        .iter()
-        .map(Smooth::Point)
-        .chain(sources.lines.iter().map(Smooth::Line))
-        .chain(sources.tori.iter().map(Smooth::Torus));
-    terms
+    terms(sources)
         .map(|t| integrate_term(t, s, e, settings, share))
         .sum()
+}
+
+/// The part of B of term `k` alone (points, then lines, then tori), as `brightness` integrates it.
+pub fn term_brightness(
+    sources: &Sources,
+    k: usize,
+    settings: &Integration,
+    s: DVec3,
+    e: DVec3,
+) -> f64 {
+    let share = settings.tolerance / sources.len().max(1) as f64;
+    terms(sources)
+        .nth(k)
+        .map_or(0.0, |t| integrate_term(t, s, e, settings, share))
+}
+
+fn terms(sources: &Sources) -> impl Iterator<Item = Smooth<'_>> {
+    (sources.points.iter().map(Smooth::Point))
+        .chain(sources.lines.iter().map(Smooth::Line))
+        .chain(sources.tori.iter().map(Smooth::Torus))
 }
 
 #[cfg(test)]
@@ -395,6 +409,7 @@ mod tests {
             points: vec![Point {
                 position: DVec3::new(0.0, 0.0, -3.7),
                 coefficient: 1.0,
+                look: Default::default(),
             }],
             ..Default::default()
         };
@@ -416,6 +431,7 @@ mod tests {
                 axis: DVec3::Y,
                 major_radius: 1.0,
                 coefficient: 1.0,
+                look: Default::default(),
             }],
             ..Default::default()
         };
@@ -442,6 +458,7 @@ mod tests {
                 points: vec![Point {
                     position: DVec3::new(h, 0.0, -3.7),
                     coefficient: 1.0,
+                    look: Default::default(),
                 }],
                 ..Default::default()
             };
@@ -461,6 +478,7 @@ mod tests {
                 axis: DVec3::new(0.3, 1.0, 0.2).normalize(),
                 major_radius: 0.9,
                 coefficient: 2.0,
+                look: Default::default(),
             }],
             ..Default::default()
         };

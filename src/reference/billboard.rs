@@ -12,14 +12,25 @@ use crate::scene::{Blend, Scene};
 
 /// `clamp((1 - B) Cb + B Ce, 0, 1)` per channel.
 pub fn blend(b: f64, energy: [f64; 3], background: [f64; 3]) -> [f64; 3] {
-    std::array::from_fn(|c| ((1.0 - b) * background[c] + b * energy[c]).clamp(0.0, 1.0))
+    blend_glow(b, energy.map(|c| b * c), background)
+}
+
+/// `clamp((1 - B) Cb + G, 0, 1)` per channel, G the glow's colored sum `sum B_i Ce_i` (`B Ce` with one color):
+/// the papers' blend with a color per source.
+pub fn blend_glow(b: f64, glow: [f64; 3], background: [f64; 3]) -> [f64; 3] {
+    std::array::from_fn(|c| ((1.0 - b) * background[c] + glow[c]).clamp(0.0, 1.0))
 }
 
 /// `clamp(B Ce + (1 - min(B, 1)) Cb)` per channel, B below 0 taken as 0 (`Blend::Over`): the transparent export
 /// composited over Cb, clamped, for every B.
 pub fn blend_over(b: f64, energy: [f64; 3], background: [f64; 3]) -> [f64; 3] {
-    let b = b.max(0.0);
-    std::array::from_fn(|c| (b * energy[c] + (1.0 - b.min(1.0)) * background[c]).clamp(0.0, 1.0))
+    blend_over_glow(b, energy.map(|c| b * c), background)
+}
+
+/// `clamp(max(G, 0) + (1 - clamp(B, 0, 1)) Cb)` per channel: `blend_over` with the colored sum G.
+pub fn blend_over_glow(b: f64, glow: [f64; 3], background: [f64; 3]) -> [f64; 3] {
+    let alpha = b.clamp(0.0, 1.0);
+    std::array::from_fn(|c| (glow[c].max(0.0) + (1.0 - alpha) * background[c]).clamp(0.0, 1.0))
 }
 
 /// The transparent export of one billboard pixel: associated (premultiplied) color `B Ce`, unclamped, and
@@ -28,14 +39,29 @@ pub fn blend_over(b: f64, energy: [f64; 3], background: [f64; 3]) -> [f64; 3] {
 /// cannot be an alpha: there the glow covers the background (the opaque blend's `(1 - B) Cb` would subtract
 /// it). B < 0 (negative coefficients) is transparent.
 pub fn blend_transparent(b: f64, energy: [f64; 3]) -> [f64; 4] {
-    let b = b.max(0.0);
-    [b * energy[0], b * energy[1], b * energy[2], b.min(1.0)]
+    blend_transparent_glow(b, energy.map(|c| b * c))
+}
+
+/// `blend_transparent` with the colored sum G: `(max(G, 0), clamp(B, 0, 1))`.
+pub fn blend_transparent_glow(b: f64, glow: [f64; 3]) -> [f64; 4] {
+    let [r, g, bl] = glow.map(|c| c.max(0.0));
+    [r, g, bl, b.clamp(0.0, 1.0)]
+}
+
+/// The glow's colored sum `G = B Ce + tint = sum B_i Ce_i`, Ce the scene's energy color with its intensity.
+pub fn glow(b: f64, tint: [f64; 3], energy: [f64; 3]) -> [f64; 3] {
+    std::array::from_fn(|c| b * energy[c] + tint[c])
 }
 
 /// Samples a `w` x `w` row-major texture (rows from the top) bilinearly at texture coordinates `(u, v)` in
 /// [0, 1], texel centers at `(i + 0.5) / w`, clamping at the edges: what a GPU linear sampler with
 /// clamp-to-edge does.
 pub fn sample_bilinear(texture: &[f64], w: u32, u: f64, v: f64) -> f64 {
+    sample_bilinear_by(w, u, v, |k| texture[k])
+}
+
+/// `sample_bilinear` of the texture whose texel `k` (row-major) is `texel(k)`.
+pub fn sample_bilinear_by(w: u32, u: f64, v: f64, texel: impl Fn(usize) -> f64) -> f64 {
     let w_i = w as i64;
     let x = u * w as f64 - 0.5;
     let y = v * w as f64 - 0.5;
@@ -46,7 +72,7 @@ pub fn sample_bilinear(texture: &[f64], w: u32, u: f64, v: f64) -> f64 {
     let at = |i: i64, j: i64| -> f64 {
         let i = i.clamp(0, w_i - 1);
         let j = j.clamp(0, w_i - 1);
-        texture[(j * w_i + i) as usize]
+        texel((j * w_i + i) as usize)
     };
     let (x0, y0) = (x0 as i64, y0 as i64);
     let top = at(x0, y0) * (1.0 - fx) + at(x0 + 1, y0) * fx;
@@ -55,9 +81,9 @@ pub fn sample_bilinear(texture: &[f64], w: u32, u: f64, v: f64) -> f64 {
 }
 
 /// The frame the camera sees, RGBA, rows from the top: the background color everywhere, and over the
-/// billboard the blend of B (sampled bilinearly, as the GPU's pass does) `clamp((1 - B) Cb + B Ce)`, alpha 1.
-/// With `transparent`, the background is transparent and the billboard carries associated (premultiplied) color
-/// `B Ce` with alpha = min(B, 1) (`blend_transparent`).
+/// billboard the blend of B and the colored sum G = sum B_i Ce_i (both sampled bilinearly, as the GPU's pass
+/// does) by the scene's blend, alpha 1. With `transparent`, the background is transparent and the billboard
+/// carries associated (premultiplied) color G with alpha = min(B, 1) (`blend_transparent_glow`).
 pub fn compose_frame(
     scene: &Scene,
     billboard: &Billboard,
@@ -83,13 +109,17 @@ pub fn compose_frame(
                     .pixel_ray(x as f64 + 0.5, y as f64 + 0.5, width, height);
                 if let Some((u, v)) = billboard.hit(scene.camera.eye, dir) {
                     let b = sample_bilinear(&texture.values, texture.resolution, u, v);
+                    let tint: [f64; 3] = std::array::from_fn(|c| {
+                        sample_bilinear_by(texture.resolution, u, v, |k| texture.tint[k][c])
+                    });
+                    let g = glow(b, tint, scene.colors.energy_color());
                     *out = if transparent {
-                        blend_transparent(b, scene.colors.energy)
+                        blend_transparent_glow(b, g)
                     } else {
-                        let (ce, cb) = (scene.colors.energy, scene.colors.background);
+                        let cb = scene.colors.background;
                         let [r, g, b] = match scene.colors.blend {
-                            Blend::Papers => blend(b, ce, cb),
-                            Blend::Over => blend_over(b, ce, cb),
+                            Blend::Papers => blend_glow(b, g, cb),
+                            Blend::Over => blend_over_glow(b, g, cb),
                         };
                         [r, g, b, 1.0]
                     };

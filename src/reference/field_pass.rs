@@ -28,39 +28,100 @@ pub fn adaptive(sources: &Sources, settings: &Integration, s: DVec3, e: DVec3) -
         + adaptive_curves::brightness(sources, settings, s, e)
 }
 
-/// The billboard's brightness texture: `resolution` x `resolution` values of B, row-major, rows from the top.
+/// The part of B of term `k` alone (points, lines, tori, curves, as `Sources::term` counts), by the scene's
+/// integrator as `brightness` integrates it.
+pub fn term_brightness(
+    sources: &Sources,
+    k: usize,
+    settings: &Integration,
+    s: DVec3,
+    e: DVec3,
+    xi: f64,
+) -> f64 {
+    let smooth = sources.points.len() + sources.lines.len() + sources.tori.len();
+    match settings.integrator {
+        Integrator::Simpson => simpson::term_brightness(sources, k, settings, s, e, xi),
+        Integrator::Adaptive if k < smooth => {
+            adaptive_smooth::term_brightness(sources, k, settings, s, e)
+        }
+        Integrator::Adaptive => {
+            adaptive_curves::term_brightness(sources, k - smooth, settings, s, e)
+        }
+    }
+}
+
+/// The tint of the segment from `s` to `e`: `sum B_i (Ce_i - Ce)` over the terms, `tints` their `Ce_i - Ce`
+/// (`Scene::tints`); what the field pass integrates beside B, so that the colored sum `sum B_i Ce_i` is
+/// `B Ce + tint`. Terms in the scene's color add nothing and are not integrated.
+pub fn tint_of(
+    sources: &Sources,
+    tints: &[[f64; 3]],
+    settings: &Integration,
+    s: DVec3,
+    e: DVec3,
+    xi: f64,
+) -> [f64; 3] {
+    let mut sum = [0.0; 3];
+    for (k, t) in tints.iter().enumerate() {
+        if t.iter().any(|&x| x != 0.0) {
+            let b = term_brightness(sources, k, settings, s, e, xi);
+            (0..3).for_each(|c| sum[c] += b * t[c]);
+        }
+    }
+    sum
+}
+
+/// The billboard's field texture: `resolution` x `resolution` texels, row-major, rows from the top, each B and
+/// the tint `sum B_i (Ce_i - Ce)` (zero where every source has the scene's color).
 #[derive(Clone, Debug, PartialEq)]
 pub struct BrightnessTexture {
     pub resolution: u32,
     pub values: Vec<f64>,
+    pub tint: Vec<[f64; 3]>,
 }
 
-/// Integrates B for every texel of `billboard` (METHOD.md section 3).
+/// Integrates B and the tint for every texel of `billboard` (METHOD.md section 3).
 pub fn render_brightness(scene: &Scene, billboard: &Billboard) -> BrightnessTexture {
     let w = scene.billboard.resolution;
     let reach = scene.ray_reach(billboard);
-    let mut values = vec![0.0; (w as usize) * (w as usize)];
+    let tints = scene.tints();
+    let n = (w as usize) * (w as usize);
+    let mut values = vec![0.0; n];
+    let mut tint = vec![[0.0; 3]; n];
     values
         .par_chunks_mut(w as usize)
+        .zip(tint.par_chunks_mut(w as usize))
         .enumerate()
-        .for_each(|(j, row)| {
-            for (i, out) in row.iter_mut().enumerate() {
-                *out = texel_brightness_on(scene, billboard, reach, i as u32, j as u32);
+        .for_each(|(j, (row, tint_row))| {
+            for (i, (out, tint_out)) in row.iter_mut().zip(tint_row).enumerate() {
+                let ray = texel_ray(scene, billboard, reach, i as u32, j as u32);
+                *out = brightness(&scene.sources, &ray.settings, ray.s, ray.e, ray.xi);
+                *tint_out = tint_of(&scene.sources, &tints, &ray.settings, ray.s, ray.e, ray.xi);
             }
         });
     BrightnessTexture {
         resolution: w,
         values,
+        tint,
     }
 }
 
 /// B of a single texel, for tests that probe one ray.
 pub fn texel_brightness(scene: &Scene, billboard: &Billboard, i: u32, j: u32) -> f64 {
-    texel_brightness_on(scene, billboard, scene.ray_reach(billboard), i, j)
+    let ray = texel_ray(scene, billboard, scene.ray_reach(billboard), i, j);
+    brightness(&scene.sources, &ray.settings, ray.s, ray.e, ray.xi)
 }
 
-/// B of texel `(i, j)` with the frame's `reach` already known.
-fn texel_brightness_on(scene: &Scene, billboard: &Billboard, reach: Reach, i: u32, j: u32) -> f64 {
+/// A texel's ray and what its integral needs.
+struct TexelRay {
+    s: DVec3,
+    e: DVec3,
+    xi: f64,
+    settings: Integration,
+}
+
+/// The ray of texel `(i, j)` with the frame's `reach` already known.
+fn texel_ray(scene: &Scene, billboard: &Billboard, reach: Reach, i: u32, j: u32) -> TexelRay {
     let w = scene.billboard.resolution;
     let s: DVec3 = billboard.texel_center(i, j, w);
     let e = ray_end(s, scene.camera.eye, reach.nu);
@@ -69,5 +130,5 @@ fn texel_brightness_on(scene: &Scene, billboard: &Billboard, reach: Reach, i: u3
         .jitter
         .map_or(0.5, |seed| jitter_offset(seed, i, j, w));
     let settings = scene.integration.on_ray(reach.stretch);
-    brightness(&scene.sources, &settings, s, e, xi)
+    TexelRay { s, e, xi, settings }
 }

@@ -20,6 +20,24 @@ pub fn brightness(sources: &Sources, settings: &Integration, s: DVec3, e: DVec3,
     }
 }
 
+/// The part of B of term `k` of psi alone (`Sources::term`), by the same rule as `brightness`.
+pub fn term_brightness(
+    sources: &Sources,
+    k: usize,
+    settings: &Integration,
+    s: DVec3,
+    e: DVec3,
+    xi: f64,
+) -> f64 {
+    let f = |t: f64| {
+        sources.term(k, s + (e - s) * t, settings.epsilon) * zeta(t, settings.alpha, settings.beta)
+    };
+    match settings.jitter {
+        None => simpson(f, settings.divisions),
+        Some(_) => shifted_rectangle(f, settings.divisions, xi),
+    }
+}
+
 /// Simpson's rule over [0, 1] with `n` (even) divisions, samples `k = 0..=n` (3.33, corrected to end at
 /// s = 1): `(1 / 3n) (f_0 + 4 f_1 + 2 f_2 + ... + 4 f_{n-1} + f_n)`.
 pub fn simpson(f: impl Fn(f64) -> f64, n: u32) -> f64 {

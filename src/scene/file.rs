@@ -77,6 +77,8 @@ pub(crate) struct IntegrationFile {
 #[serde(deny_unknown_fields)]
 pub(crate) struct ColorsFile {
     pub energy: Option<[f64; 3]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub energy_intensity: Option<f64>,
     pub background: Option<[f64; 3]>,
     pub blend: Option<String>,
 }
@@ -86,6 +88,10 @@ pub(crate) struct ColorsFile {
 pub(crate) struct PointFile {
     pub position: [f64; 3],
     pub coefficient: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub color: Option<[f64; 3]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub intensity: Option<f64>,
 }
 
 #[derive(Debug, Deserialize, Serialize)]
@@ -94,6 +100,10 @@ pub(crate) struct LineFile {
     pub point: [f64; 3],
     pub direction: [f64; 3],
     pub coefficient: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub color: Option<[f64; 3]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub intensity: Option<f64>,
 }
 
 #[derive(Debug, Deserialize, Serialize)]
@@ -105,6 +115,10 @@ pub(crate) struct TorusFile {
     pub axis: [f64; 3],
     pub major_radius: f64,
     pub coefficient: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub color: Option<[f64; 3]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub intensity: Option<f64>,
 }
 
 fn default_axis() -> [f64; 3] {
@@ -120,6 +134,10 @@ pub(crate) struct CurveFile {
     pub weights: Option<Vec<f64>>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub pulse: Option<PulseFile>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub color: Option<[f64; 3]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub intensity: Option<f64>,
 }
 
 /// `[animation]`: the timeline and the keyed parameters.

@@ -19,7 +19,7 @@ pub use error::{Problem, SceneError};
 use file::{FieldPath, Locator, SceneFile};
 
 use crate::animation::Animation;
-use crate::field::{Curve, Line, Point, Sources, Torus};
+use crate::field::{Curve, Line, Look, Point, Sources, Torus};
 use crate::geometry::{self, Billboard, Camera};
 use crate::integrate::{Integration, Integrator};
 
@@ -36,6 +36,9 @@ pub const MAX_COORDINATE: f64 = 1e15;
 /// The papers' nu (`E = V + nu (S - V)`), from which a file without a decay length derives one.
 pub const PAPERS_NU: f64 = 2.0;
 
+/// The largest intensity multiplier of a color (`colors.energy_intensity`, a source's `intensity`).
+pub const MAX_INTENSITY: f64 = 1000.0;
+
 /// Where the billboard goes; `None` fields are placed automatically (`geometry::place_billboard`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct BillboardSettings {
@@ -50,8 +53,23 @@ pub struct BillboardSettings {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Colors {
     pub energy: [f64; 3],
+    /// The energy color's intensity multiplier, at least 0 (HDR above 1): `Ce = energy_intensity energy`.
+    pub energy_intensity: f64,
     pub background: [f64; 3],
     pub blend: Blend,
+}
+
+impl Colors {
+    /// The scene's energy color Ce as the blend uses it: the color times its intensity.
+    pub fn energy_color(&self) -> [f64; 3] {
+        self.energy.map(|c| c * self.energy_intensity)
+    }
+
+    /// A source's energy color Ce_i: its own color and intensity, each the scene's where it has none.
+    pub fn color_of(&self, look: &Look) -> [f64; 3] {
+        let intensity = look.intensity.unwrap_or(self.energy_intensity);
+        look.color.unwrap_or(self.energy).map(|c| c * intensity)
+    }
 }
 
 /// How the glow's brightness B puts Ce over Cb.
@@ -113,6 +131,7 @@ impl Default for Colors {
     fn default() -> Self {
         Self {
             energy: [0.35, 0.65, 1.0],
+            energy_intensity: 1.0,
             background: [0.0, 0.0, 0.0],
             blend: Blend::Papers,
         }
@@ -230,6 +249,8 @@ impl Scene {
             }),
             colors: Some(file::ColorsFile {
                 energy: Some(self.colors.energy),
+                energy_intensity: (self.colors.energy_intensity != 1.0)
+                    .then_some(self.colors.energy_intensity),
                 background: Some(self.colors.background),
                 blend: Some(self.colors.blend.name().to_owned()),
             }),
@@ -237,6 +258,8 @@ impl Scene {
                 .map(|s| file::PointFile {
                     position: v(s.position),
                     coefficient: s.coefficient,
+                    color: s.look.color,
+                    intensity: s.look.intensity,
                 })
                 .collect(),
             lines: (self.sources.lines.iter())
@@ -244,6 +267,8 @@ impl Scene {
                     point: v(s.point),
                     direction: v(s.direction),
                     coefficient: s.coefficient,
+                    color: s.look.color,
+                    intensity: s.look.intensity,
                 })
                 .collect(),
             tori: (self.sources.tori.iter())
@@ -252,6 +277,8 @@ impl Scene {
                     axis: v(s.axis),
                     major_radius: s.major_radius,
                     coefficient: s.coefficient,
+                    color: s.look.color,
+                    intensity: s.look.intensity,
                 })
                 .collect(),
             curves: (self.sources.curves.iter())
@@ -260,12 +287,33 @@ impl Scene {
                     coefficient: s.coefficient,
                     weights: (!s.weights.is_empty()).then(|| s.weights.clone()),
                     pulse: None,
+                    color: s.look.color,
+                    intensity: s.look.intensity,
                 })
                 .collect(),
             animation: None,
         };
         animation_file::write(self, &mut file);
         toml::to_string_pretty(&file).expect("a scene always serialises to TOML")
+    }
+
+    /// Each source's color less the scene's, `Ce_i - Ce`, in the order of the field pass's terms (points, lines,
+    /// tori, curves): what the field pass integrates beside B, `sum B_i (Ce_i - Ce)`, so that the colored sum is
+    /// `B Ce + sum B_i (Ce_i - Ce) = sum B_i Ce_i`. Zero for every source in the scene's color, where the blend is
+    /// the papers' own to the bit.
+    pub fn tints(&self) -> Vec<[f64; 3]> {
+        let base = self.colors.energy_color();
+        (self.sources.looks())
+            .map(|look| {
+                let c = self.colors.color_of(look);
+                std::array::from_fn(|k| c[k] - base[k])
+            })
+            .collect()
+    }
+
+    /// True when some source's color differs from the scene's (`tints` is not all zero).
+    pub fn tinted(&self) -> bool {
+        self.tints().iter().any(|t| t.iter().any(|&x| x != 0.0))
     }
 
     /// The billboard for a frame of `aspect` (width / height): the scene's own, or placed automatically.
@@ -364,6 +412,25 @@ impl Checker<'_, '_> {
             self.fail(path, format!("{x} is out of range: {what}"));
         }
         x
+    }
+
+    /// A color's intensity multiplier: finite, in 0..=MAX_INTENSITY.
+    fn intensity(&mut self, path: &FieldPath, x: f64) -> f64 {
+        if self.finite(path, x) && !(0.0..=MAX_INTENSITY).contains(&x) {
+            self.fail(
+                path,
+                format!("{x} is out of range: an intensity multiplies its color and is in 0..={MAX_INTENSITY} (1 leaves the color as it is, above 1 is HDR)"),
+            );
+        }
+        x
+    }
+
+    /// A source's own color and intensity (`color`, `intensity` at `path`), each optional.
+    fn look(&mut self, path: &FieldPath, color: Option<[f64; 3]>, intensity: Option<f64>) -> Look {
+        Look {
+            color: color.map(|a| self.color(&path.key("color"), a)),
+            intensity: intensity.map(|x| self.intensity(&path.key("intensity"), x)),
+        }
     }
 
     fn color(&mut self, path: &FieldPath, a: [f64; 3]) -> [f64; 3] {
@@ -613,6 +680,11 @@ fn check_colors(c: &mut Checker<'_, '_>, file: &SceneFile) -> Colors {
         .map_or(default_colors.energy, |a| {
             c.color(&col_path.key("energy"), a)
         });
+    let energy_intensity = col
+        .and_then(|x| x.energy_intensity)
+        .map_or(default_colors.energy_intensity, |x| {
+            c.intensity(&col_path.key("energy_intensity"), x)
+        });
     let background = col
         .and_then(|x| x.background)
         .map_or(default_colors.background, |a| {
@@ -632,6 +704,7 @@ fn check_colors(c: &mut Checker<'_, '_>, file: &SceneFile) -> Colors {
     };
     Colors {
         energy,
+        energy_intensity,
         background,
         blend,
     }
@@ -648,6 +721,7 @@ fn check_sources(c: &mut Checker<'_, '_>, file: &SceneFile) -> Sources {
         sources.points.push(Point {
             position,
             coefficient: p.coefficient,
+            look: c.look(&path, p.color, p.intensity),
         });
     }
     for (i, l) in file.lines.iter().enumerate() {
@@ -659,6 +733,7 @@ fn check_sources(c: &mut Checker<'_, '_>, file: &SceneFile) -> Sources {
             point,
             direction,
             coefficient: l.coefficient,
+            look: c.look(&path, l.color, l.intensity),
         });
     }
     for (i, t) in file.tori.iter().enumerate() {
@@ -678,6 +753,7 @@ fn check_sources(c: &mut Checker<'_, '_>, file: &SceneFile) -> Sources {
             axis,
             major_radius: t.major_radius,
             coefficient: t.coefficient,
+            look: c.look(&path, t.color, t.intensity),
         });
     }
     for (i, curve) in file.curves.iter().enumerate() {
@@ -718,6 +794,7 @@ fn check_sources(c: &mut Checker<'_, '_>, file: &SceneFile) -> Sources {
             control_points,
             coefficient: curve.coefficient,
             weights,
+            look: c.look(&path, curve.color, curve.intensity),
         });
     }
     sources

@@ -157,17 +157,20 @@ impl Edit {
                 SourceKind::Points => s.points.push(Point {
                     position: at,
                     coefficient: 2.0,
+                    look: Default::default(),
                 }),
                 SourceKind::Lines => s.lines.push(Line {
                     point: at,
                     direction: DVec3::X,
                     coefficient: 0.5,
+                    look: Default::default(),
                 }),
                 SourceKind::Tori => s.tori.push(Torus {
                     center: at,
                     axis: DVec3::Y,
                     major_radius: 1.0,
                     coefficient: 3.0,
+                    look: Default::default(),
                 }),
                 SourceKind::Curves => s.curves.push(Curve {
                     control_points: vec![
@@ -177,6 +180,7 @@ impl Edit {
                     ],
                     coefficient: 4.0,
                     weights: vec![],
+                    look: Default::default(),
                 }),
             },
             Edit::DuplicateSource(kind, i) => {

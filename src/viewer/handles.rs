@@ -437,6 +437,7 @@ mod tests {
             scene.sources.points.push(crate::field::Point {
                 position: center + f.forward * d,
                 coefficient: 1.0,
+                look: Default::default(),
             });
         }
         let at = to_screen(&scene.camera, rect, center).unwrap();

@@ -156,6 +156,7 @@ mod tests {
                 axis: DVec3::Z,
                 major_radius: 3.0,
                 coefficient: 1.0,
+                look: Default::default(),
             }],
             ..Sources::default()
         };

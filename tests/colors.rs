@@ -1,0 +1,334 @@
+//! A color per source and HDR intensities: the colored sum `sum B_i Ce_i` the field pass integrates beside B,
+//! against each source rendered alone and summed (the independent oracle: B is linear in the sources); the GPU
+//! against the CPU twin; scenes in the scene's one color exactly as before; intensities above 1 unclamped in
+//! the transparent export; the scene file's keys, errors and round trip.
+
+use std::path::Path;
+use std::sync::{Mutex, MutexGuard, OnceLock};
+
+use energywave::gpu::HeadlessRenderer;
+use energywave::integrate::Integrator;
+use energywave::reference;
+use energywave::scene::{Blend, Scene, SceneError};
+
+mod common;
+use common::shipped_scene;
+
+fn gpu() -> MutexGuard<'static, HeadlessRenderer> {
+    static GPU: OnceLock<Mutex<HeadlessRenderer>> = OnceLock::new();
+    GPU.get_or_init(|| Mutex::new(HeadlessRenderer::new().expect("a GPU adapter (lavapipe in CI)")))
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+}
+
+/// The shipped red rings around a blue beam, at `w` texels a side, by `integrator`.
+fn rings(w: u32, integrator: Integrator) -> Scene {
+    let mut scene = shipped_scene("rings_and_beam.toml");
+    scene.billboard.resolution = w;
+    scene.integration.integrator = integrator;
+    scene.integration.divisions = 400;
+    scene
+}
+
+/// `scene` with every source but term `k` (points, lines, tori, curves) at coefficient 0: the same rays
+/// (their reach depends on where the sources are, not on how bright) and the same share of the tolerance.
+fn alone(scene: &Scene, k: usize) -> Scene {
+    let mut s = scene.clone();
+    let mut i = 0;
+    let mut keep = |c: &mut f64| {
+        if i != k {
+            *c = 0.0;
+        }
+        i += 1;
+    };
+    let src = &mut s.sources;
+    src.points.iter_mut().for_each(|x| keep(&mut x.coefficient));
+    src.lines.iter_mut().for_each(|x| keep(&mut x.coefficient));
+    src.tori.iter_mut().for_each(|x| keep(&mut x.coefficient));
+    src.curves.iter_mut().for_each(|x| keep(&mut x.coefficient));
+    s
+}
+
+#[test]
+fn the_colored_sum_is_each_source_rendered_alone_and_summed() {
+    for integrator in [Integrator::Simpson, Integrator::Adaptive] {
+        let scene = rings(20, integrator);
+        let bb = scene.place_billboard(1.0);
+        let whole = reference::render_brightness(&scene, &bb);
+        let looks: Vec<_> = scene.sources.looks().copied().collect();
+        assert_eq!(looks.len(), 3);
+        let ce = scene.colors.energy_color();
+        let mut b_sum = vec![0.0; whole.values.len()];
+        let mut g_sum = vec![[0.0; 3]; whole.values.len()];
+        for (k, look) in looks.iter().enumerate() {
+            let one = reference::render_brightness(&alone(&scene, k), &bb);
+            // Alone, a source's tint is its own B_k (Ce_k - Ce).
+            let color = scene.colors.color_of(look);
+            for (t, (&b, tint)) in one.values.iter().zip(&one.tint).enumerate() {
+                b_sum[t] += b;
+                for c in 0..3 {
+                    g_sum[t][c] += b * color[c];
+                    assert!((tint[c] - b * (color[c] - ce[c])).abs() <= 1e-12 * b.abs().max(1.0));
+                }
+            }
+        }
+        // B and the colored sum G = B Ce + tint against the sum of the sources alone. Simpson is linear in the
+        // integrand: the same to rounding. The adaptive integrator picks its nodes term by term, each within
+        // its share of the tolerance, which alone keeps.
+        let tolerance = match integrator {
+            Integrator::Simpson => 1e-12,
+            Integrator::Adaptive => scene.integration.tolerance * 1e-6,
+        };
+        let mut lit = 0;
+        for t in 0..whole.values.len() {
+            let b = whole.values[t];
+            assert!(
+                (b - b_sum[t]).abs() <= tolerance * b.max(1.0),
+                "{integrator:?} texel {t}"
+            );
+            for c in 0..3 {
+                let g = b * ce[c] + whole.tint[t][c];
+                assert!(
+                    (g - g_sum[t][c]).abs() <= tolerance * b.max(1.0) * 2.0,
+                    "{integrator:?} texel {t} channel {c}: {g} against {}",
+                    g_sum[t][c]
+                );
+            }
+            lit += whole.tint[t].iter().any(|&x| x.abs() > 0.05) as usize;
+        }
+        assert!(lit > 40, "the rings tint the texture: {lit} texels");
+    }
+}
+
+#[test]
+fn sources_in_the_scene_color_render_as_the_scene_did_to_the_bit() {
+    let mut scene = shipped_scene("mixed.toml");
+    scene.billboard.resolution = 24;
+    let bb = scene.place_billboard(1.0);
+    let plain = reference::render_brightness(&scene, &bb);
+    assert!(plain.tint.iter().all(|t| *t == [0.0; 3]));
+    let frame = reference::compose_frame(&scene, &bb, &plain, 40, 40, false);
+    // Every source given the scene's color and intensity explicitly: nothing changes.
+    let mut explicit = scene.clone();
+    let (energy, intensity) = (scene.colors.energy, scene.colors.energy_intensity);
+    for look in looks_mut(&mut explicit) {
+        look.color = Some(energy);
+        look.intensity = Some(intensity);
+    }
+    assert!(!explicit.tinted());
+    let texture = reference::render_brightness(&explicit, &bb);
+    assert_eq!(texture, plain);
+    assert_eq!(
+        reference::compose_frame(&explicit, &bb, &texture, 40, 40, false),
+        frame
+    );
+    let mut g = gpu();
+    let explicit_frame = g.render(&explicit, 40, 40, false).unwrap().pixels;
+    assert_eq!(
+        explicit_frame,
+        g.render(&scene, 40, 40, false).unwrap().pixels
+    );
+    drop(g);
+    // Every source in one other color is the scene in that color.
+    let orange = [1.0, 0.5, 0.1];
+    let mut recolored = scene.clone();
+    for look in looks_mut(&mut recolored) {
+        look.color = Some(orange);
+    }
+    let mut orange_scene = scene.clone();
+    orange_scene.colors.energy = orange;
+    let a = reference::compose_frame(
+        &recolored,
+        &bb,
+        &reference::render_brightness(&recolored, &bb),
+        40,
+        40,
+        false,
+    );
+    let b = reference::compose_frame(&orange_scene, &bb, &plain, 40, 40, false);
+    for (p, q) in a.iter().zip(&b) {
+        assert!((0..4).all(|c| (p[c] - q[c]).abs() < 1e-12), "{p:?} {q:?}");
+    }
+}
+
+fn looks_mut(scene: &mut Scene) -> Vec<&mut energywave::field::Look> {
+    let s = &mut scene.sources;
+    (s.points.iter_mut().map(|x| &mut x.look))
+        .chain(s.lines.iter_mut().map(|x| &mut x.look))
+        .chain(s.tori.iter_mut().map(|x| &mut x.look))
+        .chain(s.curves.iter_mut().map(|x| &mut x.look))
+        .collect()
+}
+
+#[test]
+fn the_gpu_tint_matches_the_cpu_twin() {
+    for integrator in [Integrator::Simpson, Integrator::Adaptive] {
+        let scene = rings(40, integrator);
+        let bb = scene.place_billboard(1.0);
+        let cpu = reference::render_brightness(&scene, &bb);
+        let mut g = gpu();
+        let b = g.brightness(&scene, &bb).unwrap();
+        let tint = g.tint().unwrap();
+        let largest = scene
+            .tints()
+            .iter()
+            .flatten()
+            .fold(0.0f64, |m, &x| m.max(x.abs()));
+        let mut worst: f64 = 0.0;
+        for t in 0..b.len() {
+            let scale = cpu.values[t].abs().max(0.01);
+            let rel = (b[t] as f64 - cpu.values[t]).abs() / scale;
+            assert!(
+                rel <= 1.5e-4,
+                "{integrator:?} texel {t}: B {} against {}",
+                b[t],
+                cpu.values[t]
+            );
+            for c in 0..3 {
+                let rel = (tint[t][c] as f64 - cpu.tint[t][c]).abs() / (scale * largest);
+                assert!(
+                    rel <= 1.5e-4,
+                    "{integrator:?} texel {t} channel {c}: tint {} against {}",
+                    tint[t][c],
+                    cpu.tint[t][c]
+                );
+                worst = worst.max(rel);
+            }
+        }
+        eprintln!("{integrator:?}: worst tint error {worst:.2e} of B times the largest tint");
+    }
+}
+
+#[test]
+fn colored_frames_match_the_cpu_in_every_blend_and_the_transparent_export() {
+    let (w, h) = (72, 56);
+    for blend in [Blend::Papers, Blend::Over] {
+        let mut scene = rings(48, Integrator::Adaptive);
+        scene.colors.blend = blend;
+        let bb = scene.place_billboard(w as f64 / h as f64);
+        let texture = reference::render_brightness(&scene, &bb);
+        for transparent in [false, true] {
+            let cpu = reference::compose_frame(&scene, &bb, &texture, w, h, transparent);
+            let frame = gpu().render(&scene, w, h, transparent).unwrap();
+            let mut red = 0;
+            for (p, q) in frame.pixels.iter().zip(&cpu) {
+                for c in 0..4 {
+                    let scale = q[c].abs().max(1.0);
+                    assert!(
+                        (p[c] as f64 - q[c]).abs() <= 2.0 / 255.0 * scale,
+                        "{blend:?} transparent {transparent}: {p:?} against the CPU's {q:?}"
+                    );
+                }
+                red += (q[0] > 0.4 && q[0] > 2.0 * q[2]) as usize;
+            }
+            // Both colors show: red rings and a blue beam.
+            let blue = cpu.iter().filter(|q| q[2] > 0.3 && q[2] > q[0]).count();
+            assert!(red > 30 && blue > 10, "red {red}, blue {blue}");
+        }
+    }
+}
+
+#[test]
+fn intensities_above_one_stay_unclamped_in_the_transparent_export() {
+    let mut scene = shipped_scene("mixed.toml");
+    scene.billboard.resolution = 32;
+    let bb = scene.place_billboard(1.0);
+    let texture = reference::render_brightness(&scene, &bb);
+    let base = reference::compose_frame(&scene, &bb, &texture, 32, 32, true);
+    // The point four times as intense as its color; the scene twice.
+    scene.sources.points[0].look.intensity = Some(4.0);
+    scene.colors.energy_intensity = 2.0;
+    let hot = reference::render_brightness(&scene, &bb);
+    // B does not change: intensity is color, not energy.
+    assert_eq!(hot.values, texture.values);
+    let frame = reference::compose_frame(&scene, &bb, &hot, 32, 32, true);
+    let brightest = frame.iter().map(|p| p[2]).fold(0.0, f64::max);
+    assert!(brightest > 2.0, "HDR values survive unclamped: {brightest}");
+    // Where the point contributes nothing the glow is twice the base; everywhere it is at least that.
+    for (p, q) in frame.iter().zip(&base) {
+        for c in 0..3 {
+            assert!(p[c] >= 2.0 * q[c] - 1e-9);
+        }
+        assert_eq!(p[3], q[3]);
+    }
+    let gpu_frame = gpu().render(&scene, 32, 32, true).unwrap();
+    for (p, q) in gpu_frame.pixels.iter().zip(&frame) {
+        for c in 0..3 {
+            assert!(
+                (p[c] as f64 - q[c]).abs() <= 4e-3 * q[c].max(1.0),
+                "{p:?} {q:?}"
+            );
+        }
+    }
+    // The opaque frame shows the clamp.
+    let opaque = gpu().render(&scene, 32, 32, false).unwrap();
+    assert!(opaque.pixels.iter().all(|p| p.iter().all(|&c| c <= 1.0)));
+    // One texel of the tint by hand: the point's B_0 times (4 Ce_0 - 2 Ce), Ce_0 = Ce.
+    let t = 16 * 32 + 16;
+    let b0 = reference::render_brightness(&alone(&scene, 0), &bb).values[t];
+    let ce = scene.colors.energy;
+    for c in 0..3 {
+        assert!((hot.tint[t][c] - b0 * (4.0 - 2.0) * ce[c]).abs() < 1e-9);
+    }
+}
+
+fn invalid(text: &str) -> String {
+    match Scene::parse(text, Path::new("bad.toml")) {
+        Err(e @ SceneError::Invalid { .. }) => e.to_string(),
+        other => panic!("{text:?} was not refused: {other:?}"),
+    }
+}
+
+#[test]
+fn colors_and_intensities_in_scene_files() {
+    let msg = invalid(
+        "[[points]]\nposition = [0.0, 0.0, 0.0]\ncoefficient = 1.0\ncolor = [1.2, 0.0, 0.0]\n",
+    );
+    assert!(
+        msg.contains("bad.toml:4:") && msg.contains("points[0].color"),
+        "{msg}"
+    );
+    assert!(msg.contains("0..1"), "{msg}");
+    let msg = invalid(
+        "[[tori]]\nmajor_radius = 1.0\ncoefficient = 1.0\n\n[[tori]]\nmajor_radius = 1.0\ncoefficient = 1.0\nintensity = -1.0\n",
+    );
+    assert!(
+        msg.contains("bad.toml:8:") && msg.contains("tori[1].intensity"),
+        "{msg}"
+    );
+    let msg = invalid(
+        "[colors]\nenergy_intensity = 1e9\n\n[[points]]\nposition = [0.0, 0.0, 0.0]\ncoefficient = 1.0\n",
+    );
+    assert!(
+        msg.contains("colors.energy_intensity") && msg.contains("0..=1000"),
+        "{msg}"
+    );
+    let msg = invalid(
+        "[[curves]]\ncontrol_points = [[0.0, 0.0, 0.0], [1.0, 1.0, 0.0], [2.0, 0.0, 0.0]]\ncoefficient = 1.0\ncolour = [1.0, 0.0, 0.0]\n",
+    );
+    assert!(msg.contains("colour"), "{msg}");
+
+    // Written back and read again: the same scene, each source's own color and intensity kept, and the keys
+    // of sources without their own left out.
+    let scene = shipped_scene("rings_and_beam.toml");
+    let text = scene.to_toml();
+    assert_eq!(Scene::parse(&text, Path::new("saved.toml")).unwrap(), scene);
+    assert_eq!(text.matches("color = ").count(), 2, "{text}");
+    assert_eq!(text.matches("intensity = ").count(), 1, "{text}");
+    // One edit, one line changed in the file's own text.
+    let path = common::scenes_dir().join("rings_and_beam.toml");
+    let original = std::fs::read_to_string(&path).unwrap();
+    let mut edited = scene.clone();
+    edited.sources.tori[1].look.color = Some([0.2, 1.0, 0.4]);
+    let saved = energywave::scene::format::update_text(&original, &scene, &edited);
+    let changed: Vec<_> = original
+        .lines()
+        .zip(saved.lines())
+        .filter(|(a, b)| a != b)
+        .collect();
+    assert_eq!(
+        changed,
+        [("color = [1.0, 0.55, 0.1]", "color = [0.2, 1.0, 0.4]")]
+    );
+    assert_eq!(original.lines().count(), saved.lines().count());
+}
