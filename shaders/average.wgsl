@@ -19,14 +19,13 @@ fn average_frames(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x >= size.x || id.y >= size.y {
         return;
     }
+    // One layer a z (B, then the tint where the scene has one: gpu::frame_average dispatches that many).
     let texel = vec2<i32>(id.xy);
-    for (var layer = 0u; layer < textureNumLayers(mean); layer++) {
-        let b = textureLoad(frame, texel, layer, 0).x;
-        var m = b;
-        if average.weight < 1.0 {
-            let old = textureLoad(mean, texel, layer).x;
-            m = old + (b - old) * average.weight;
-        }
-        textureStore(mean, texel, layer, vec4<f32>(m, 0.0, 0.0, 1.0));
+    let b = textureLoad(frame, texel, id.z, 0).x;
+    var m = b;
+    if average.weight < 1.0 {
+        let old = textureLoad(mean, texel, id.z).x;
+        m = old + (b - old) * average.weight;
     }
+    textureStore(mean, texel, id.z, vec4<f32>(m, 0.0, 0.0, 1.0));
 }

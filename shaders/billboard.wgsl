@@ -15,6 +15,7 @@ struct BillboardParams {
     mode: u32,         // 0: clamp((1 - B) Cb + G); 1: premultiplied G and alpha min(B, 1), unclamped;
                        // 2: clamp(G + (1 - min(B, 1)) Cb) (gpu::billboard_pass::BlendMode)
     energy: vec4<f32>, // Ce in rgb, its intensity applied
+    layers: u32,       // the field texture's layers to read: 1 (B; the tint is zero) or 4 (B and the tint)
 }
 
 @group(0) @binding(0) var<uniform> params: BillboardParams;
@@ -39,21 +40,36 @@ fn vs_main(@builtin(vertex_index) index: u32) -> VertexOut {
 }
 
 // Bilinear filtering by hand (r32float is not filterable everywhere), texel centers at (i + 0.5) / W,
-// clamped at the edges, of every layer: (B, tint). Twin of reference::billboard::sample_bilinear.
-fn sample_field(uv: vec2<f32>) -> vec4<f32> {
+// clamped at the edges, of every layer: (B, tint), the tint only where the scene has one. Twin of
+// reference::billboard::sample_bilinear.
+struct Bilinear {
+    i0: vec2<i32>,
+    i1: vec2<i32>,
+    f: vec2<f32>,
+}
+
+fn bilinear_at(uv: vec2<f32>) -> Bilinear {
     let w = i32(params.resolution);
     let x = uv * f32(w) - 0.5;
     let x0 = floor(x);
-    let f = x - x0;
     let i0 = clamp(vec2<i32>(x0), vec2<i32>(0), vec2<i32>(w - 1));
     let i1 = clamp(vec2<i32>(x0) + 1, vec2<i32>(0), vec2<i32>(w - 1));
-    var out = vec4<f32>(0.0);
-    for (var layer = 0; layer < 4; layer++) {
-        let b00 = textureLoad(field, vec2<i32>(i0.x, i0.y), layer, 0).r;
-        let b10 = textureLoad(field, vec2<i32>(i1.x, i0.y), layer, 0).r;
-        let b01 = textureLoad(field, vec2<i32>(i0.x, i1.y), layer, 0).r;
-        let b11 = textureLoad(field, vec2<i32>(i1.x, i1.y), layer, 0).r;
-        out[layer] = mix(mix(b00, b10, f.x), mix(b01, b11, f.x), f.y);
+    return Bilinear(i0, i1, x - x0);
+}
+
+fn sample_layer(s: Bilinear, layer: i32) -> f32 {
+    let b00 = textureLoad(field, vec2<i32>(s.i0.x, s.i0.y), layer, 0).r;
+    let b10 = textureLoad(field, vec2<i32>(s.i1.x, s.i0.y), layer, 0).r;
+    let b01 = textureLoad(field, vec2<i32>(s.i0.x, s.i1.y), layer, 0).r;
+    let b11 = textureLoad(field, vec2<i32>(s.i1.x, s.i1.y), layer, 0).r;
+    return mix(mix(b00, b10, s.f.x), mix(b01, b11, s.f.x), s.f.y);
+}
+
+fn sample_field(uv: vec2<f32>) -> vec4<f32> {
+    let s = bilinear_at(uv);
+    var out = vec4<f32>(sample_layer(s, 0), 0.0, 0.0, 0.0);
+    if params.layers > 1u {
+        out = vec4<f32>(out.x, sample_layer(s, 1), sample_layer(s, 2), sample_layer(s, 3));
     }
     return out;
 }

@@ -27,6 +27,7 @@ struct FieldParams {
     jitter: u32,        // simpson: 1 for the randomly shifted rectangle rule
     seed: u32,
     gauss_order: u32,   // adaptive: n of the Gauss-Kronrod pair (n and 2n + 1 nodes; adaptive::kronrod_order)
+    layers: u32,        // the texture's layers written: 1 (B alone, every source in the scene's color) or 4
 }
 
 @group(0) @binding(0) var<storage, read> params: FieldParams;
@@ -127,15 +128,23 @@ fn texel_of(gid: vec3<u32>) -> vec2<u32> {
 }
 
 @group(0) @binding(8) var<storage, read> chunk: Chunk;
-// Writes a texel's (B, tint), or adds it to what the texel holds.
+// Writes a texel's (B, tint), or adds it to what the texel holds: B alone where the tint is zero (no reader
+// looks at the tint layers then).
 fn store(id: vec2<u32>, value: vec4<f32>) {
-    for (var layer = 0u; layer < 4u; layer++) {
-        var v = value[layer];
-        if chunk.accumulate != 0u {
-            v += textureLoad(field, vec2<i32>(id), layer).x;
-        }
-        textureStore(field, vec2<i32>(id), layer, vec4<f32>(v, 0.0, 0.0, 1.0));
+    store_layer(id, 0u, value.x);
+    if params.layers > 1u {
+        store_layer(id, 1u, value.y);
+        store_layer(id, 2u, value.z);
+        store_layer(id, 3u, value.w);
     }
+}
+
+fn store_layer(id: vec2<u32>, layer: u32, value: f32) {
+    var v = value;
+    if chunk.accumulate != 0u {
+        v += textureLoad(field, vec2<i32>(id), layer).x;
+    }
+    textureStore(field, vec2<i32>(id), layer, vec4<f32>(v, 0.0, 0.0, 1.0));
 }
 
 // A term's part of the texel's (B, tint): its B_i, and B_i (Ce_i - Ce) from its tint (index t of tints).

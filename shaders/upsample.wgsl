@@ -29,7 +29,9 @@ fn upsample(@builtin(global_invocation_id) id: vec3<u32>) {
     let wx = catmull_rom(f.x);
     let wy = catmull_rom(f.y);
     let b = vec2<i32>(base);
-    for (var layer = 0u; layer < textureNumLayers(upsampled); layer++) {
+    // One layer a z (B, then the tint where the scene has one: gpu::upsample dispatches that many).
+    let layer = id.z;
+    {
         var sum = 0.0;
         for (var j = 0; j < 4; j++) {
             let y = clamp(b.y - 1 + j, 0, n.y - 1);

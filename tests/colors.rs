@@ -184,13 +184,11 @@ fn the_gpu_tint_matches_the_cpu_twin() {
                 b[t],
                 cpu.values[t]
             );
-            for c in 0..3 {
-                let rel = (tint[t][c] as f64 - cpu.tint[t][c]).abs() / (scale * largest);
+            for (c, (&g, &want)) in tint[t].iter().zip(&cpu.tint[t]).enumerate() {
+                let rel = (g as f64 - want).abs() / (scale * largest);
                 assert!(
                     rel <= 1.5e-4,
-                    "{integrator:?} texel {t} channel {c}: tint {} against {}",
-                    tint[t][c],
-                    cpu.tint[t][c]
+                    "{integrator:?} texel {t} channel {c}: tint {g} against {want}"
                 );
                 worst = worst.max(rel);
             }
@@ -267,8 +265,8 @@ fn intensities_above_one_stay_unclamped_in_the_transparent_export() {
     let t = 16 * 32 + 16;
     let b0 = reference::render_brightness(&alone(&scene, 0), &bb).values[t];
     let ce = scene.colors.energy;
-    for c in 0..3 {
-        assert!((hot.tint[t][c] - b0 * (4.0 - 2.0) * ce[c]).abs() < 1e-9);
+    for (tint, ce) in hot.tint[t].iter().zip(ce) {
+        assert!((tint - b0 * (4.0 - 2.0) * ce).abs() < 1e-9);
     }
 }
 

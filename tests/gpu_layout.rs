@@ -142,7 +142,8 @@ fn rust_mirrors_match_the_wgsl_layouts() {
         "FieldParams",
         size_of::<FieldParams>(),
         fields!(FieldParams: center, size, right, resolution, up, divisions, eye, nu, alpha, beta, epsilon,
-            point_count, line_count, torus_count, curve_count, integrator, term_tolerance, jitter, seed, gauss_order),
+            point_count, line_count, torus_count, curve_count, integrator, term_tolerance, jitter, seed, gauss_order,
+            layers),
     );
     check_struct(
         &field,
@@ -192,7 +193,7 @@ fn rust_mirrors_match_the_wgsl_layouts() {
         &billboard,
         "BillboardParams",
         size_of::<BillboardParams>(),
-        fields!(BillboardParams: view_proj, center, size, right, resolution, up, mode, energy),
+        fields!(BillboardParams: view_proj, center, size, right, resolution, up, mode, energy, layers),
     );
     let average = parse_and_validate("average", shaders::AVERAGE_PASS);
     check_struct(

@@ -549,8 +549,10 @@ fn sizes_beyond_the_device_limits_are_refused() {
 
 #[test]
 fn field_memory_is_w_squared() {
-    // Four f32 a texel (B and the tint's three channels), independent of n: 4 MiB at W = 512.
-    assert_eq!(field_texture_bytes(512), 4 << 20);
+    // One f32 a texel (B), independent of n: 1 MiB at W = 512; four with a color per source (B and the tint's
+    // three channels).
+    assert_eq!(field_texture_bytes(512, 1), 1 << 20);
+    assert_eq!(field_texture_bytes(512, 4), 4 << 20);
     let mut g = gpu();
     let mut scene = single_point(1.0, [0.0; 3], [1.0; 3]);
     scene.billboard.resolution = 48;
@@ -560,8 +562,13 @@ fn field_memory_is_w_squared() {
     let t = g.field().texture().unwrap();
     assert_eq!(
         (t.width(), t.height(), t.depth_or_array_layers(), t.format()),
-        (48, 48, 4, wgpu::TextureFormat::R32Float)
+        (48, 48, 1, wgpu::TextureFormat::R32Float)
     );
+    // A source in a color of its own: the texture takes the tint's layers.
+    scene.sources.points[0].look.color = Some([1.0, 0.0, 0.0]);
+    g.brightness(&scene, &bb).unwrap();
+    let t = g.field().texture().unwrap();
+    assert_eq!((t.width(), t.depth_or_array_layers()), (48, 4));
 }
 
 #[test]

@@ -15,7 +15,7 @@ use common::shipped_scene;
 fn upsampled(ctx: &GpuContext, values: &[f32], n: u32, w: u32) -> Vec<f32> {
     let (device, queue) = (&ctx.device, &ctx.queue);
     // B in the first layer; the tint layers stay zero.
-    let (source, view) = field_texture(device, "test.low", n);
+    let (source, view) = field_texture(device, "test.low", n, 1);
     queue.write_texture(
         source.as_image_copy(),
         bytemuck::cast_slice(values),
@@ -32,7 +32,7 @@ fn upsampled(ctx: &GpuContext, values: &[f32], n: u32, w: u32) -> Vec<f32> {
     );
     let mut upsample = Upsample::new(device);
     let mut encoder = device.create_command_encoder(&Default::default());
-    upsample.encode(device, &mut encoder, &source, &view, w);
+    upsample.encode(device, &mut encoder, &source, &view, w, 1);
     ctx.checked(|| queue.submit([encoder.finish()])).unwrap();
     let (output, _) = upsample.output().unwrap();
     bytemuck::cast_slice(&ctx.read_texture(output, 4).unwrap()).to_vec()

@@ -712,3 +712,47 @@ fn the_viewer_exports_a_video_and_a_padded_sheet() {
     // 8 frames of 64 x 48 in 3 columns and 3 rows, 2 between: 196 x 148, up to 256 x 256.
     assert_eq!((sheet.width(), sheet.height()), (256, 256));
 }
+
+#[test]
+fn a_source_gets_its_own_color_in_the_panel_keyed_and_undone() {
+    use common::viewer::{mean_abs_difference, viewport_pixels};
+    use energywave::animation::{Parameter, SourceKind};
+    let mut scene = light_scene();
+    let red = [1.0, 0.2, 0.1];
+    scene.sources.tori[0].look.color = Some(red);
+    let energy = scene.colors.energy;
+    let mut h = harness(scene);
+    let reddish = viewport_pixels(&mut h);
+    let redness =
+        |p: &[[u8; 4]]| p.iter().map(|q| q[0] as f64 - q[2] as f64).sum::<f64>() / p.len() as f64;
+    // The torus (the first source in the panel) in its own red: the view is redder than blue in the mean.
+    assert!(redness(&reddish) > 0.0, "{}", redness(&reddish));
+    // Back to the scene's color: the glow all light blue.
+    h.get_all_by_label("own color").next().unwrap().click();
+    h.run();
+    assert_eq!(h.state().scene().sources.tori[0].look, Default::default());
+    let blue = viewport_pixels(&mut h);
+    assert!(redness(&blue) < redness(&reddish) - 5.0);
+    assert!(mean_abs_difference(&reddish, &blue) > 0.02);
+    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+    h.run();
+    assert_eq!(h.state().scene().sources.tori[0].look.color, Some(red));
+    // Its color keyed, then its own color dropped: the keys go with it.
+    h.get_by_label("key tori[0].color").scroll_to_me();
+    h.run();
+    h.get_by_label("key tori[0].color").click();
+    h.run();
+    let keyed = h.state().scene().animation.as_ref().is_some_and(|a| {
+        (a.tracks.iter()).any(|t| t.parameter == Parameter::SourceColor(SourceKind::Tori, 0))
+    });
+    assert!(keyed, "the torus's color is keyed");
+    h.get_all_by_label("own color").next().unwrap().click();
+    h.run();
+    let scene = h.state().scene();
+    assert_eq!(scene.sources.tori[0].look, Default::default());
+    assert!(scene.animation.as_ref().is_none_or(|a| a.tracks.is_empty()));
+    // A color of its own again starts from the scene's.
+    h.get_all_by_label("own color").next().unwrap().click();
+    h.run();
+    assert_eq!(h.state().scene().sources.tori[0].look.color, Some(energy));
+}

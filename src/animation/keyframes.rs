@@ -106,6 +106,12 @@ pub enum Parameter {
     EnergyColor,
     /// `colors.background`
     BackgroundColor,
+    /// `colors.energy_intensity`
+    EnergyIntensity,
+    /// `points[i].color`, ... (any kind): the source's own energy color
+    SourceColor(SourceKind, usize),
+    /// `points[i].intensity`, ... (any kind): the source's own intensity
+    Intensity(SourceKind, usize),
     /// `points[i].position`, `lines[i].point`, `tori[i].center`
     Position(SourceKind, usize),
     /// `lines[i].direction`, `tori[i].axis` (normalised after interpolation)
@@ -143,9 +149,10 @@ impl IntegrationSetting {
 }
 
 /// The parameter paths a track may name, for messages.
-pub const PARAMETER_FORMS: &str = "colors.energy, colors.background, points[i].position, points[i].coefficient, \
-lines[i].point, lines[i].direction, lines[i].coefficient, tori[i].center, tori[i].axis, tori[i].major_radius, \
-tori[i].coefficient, curves[i].control_points[j], curves[i].coefficient, curves[i].weights[j], \
+pub const PARAMETER_FORMS: &str = "colors.energy, colors.energy_intensity, colors.background, points[i].position, \
+points[i].coefficient, lines[i].point, lines[i].direction, lines[i].coefficient, tori[i].center, tori[i].axis, \
+tori[i].major_radius, tori[i].coefficient, curves[i].control_points[j], curves[i].coefficient, curves[i].weights[j], \
+points[i].color and points[i].intensity (any kind of source), \
 integration.decay_length, integration.alpha, integration.beta, integration.epsilon";
 
 /// Splits `name[3]` into `("name", Some(3))`, `name` into `("name", None)`.
@@ -179,6 +186,7 @@ impl Parameter {
         let p = match parts.as_slice() {
             [("colors", None), ("energy", None)] => Parameter::EnergyColor,
             [("colors", None), ("background", None)] => Parameter::BackgroundColor,
+            [("colors", None), ("energy_intensity", None)] => Parameter::EnergyIntensity,
             [("integration", None), (name, None)] => Parameter::Integration(
                 [
                     IntegrationSetting::DecayLength,
@@ -198,6 +206,8 @@ impl Parameter {
                     Parameter::Direction(kind(k).ok_or_else(err)?, *i)
                 }
                 (kind, "coefficient", None) => Parameter::Coefficient(kind, *i),
+                (kind, "color", None) => Parameter::SourceColor(kind, *i),
+                (kind, "intensity", None) => Parameter::Intensity(kind, *i),
                 (Tori, "major_radius", None) => Parameter::MajorRadius(*i),
                 (Curves, "control_points", Some(j)) => Parameter::ControlPoint(*i, *j),
                 (Curves, "weights", Some(j)) => Parameter::Weight(*i, *j),
@@ -214,6 +224,7 @@ impl Parameter {
             self,
             Parameter::EnergyColor
                 | Parameter::BackgroundColor
+                | Parameter::SourceColor(..)
                 | Parameter::Position(..)
                 | Parameter::Direction(..)
                 | Parameter::ControlPoint(..)
@@ -223,10 +234,15 @@ impl Parameter {
     /// The source this parameter belongs to, if any.
     pub fn source(&self) -> Option<(SourceKind, usize)> {
         match *self {
-            Parameter::EnergyColor | Parameter::BackgroundColor | Parameter::Integration(_) => None,
+            Parameter::EnergyColor
+            | Parameter::BackgroundColor
+            | Parameter::EnergyIntensity
+            | Parameter::Integration(_) => None,
             Parameter::Position(k, i)
             | Parameter::Direction(k, i)
-            | Parameter::Coefficient(k, i) => Some((k, i)),
+            | Parameter::Coefficient(k, i)
+            | Parameter::SourceColor(k, i)
+            | Parameter::Intensity(k, i) => Some((k, i)),
             Parameter::MajorRadius(i) => Some((SourceKind::Tori, i)),
             Parameter::ControlPoint(i, _) | Parameter::Weight(i, _) => {
                 Some((SourceKind::Curves, i))
@@ -240,6 +256,8 @@ impl Parameter {
             Parameter::Position(k, _) => Parameter::Position(k, index),
             Parameter::Direction(k, _) => Parameter::Direction(k, index),
             Parameter::Coefficient(k, _) => Parameter::Coefficient(k, index),
+            Parameter::SourceColor(k, _) => Parameter::SourceColor(k, index),
+            Parameter::Intensity(k, _) => Parameter::Intensity(k, index),
             Parameter::MajorRadius(_) => Parameter::MajorRadius(index),
             Parameter::ControlPoint(_, j) => Parameter::ControlPoint(index, j),
             Parameter::Weight(_, j) => Parameter::Weight(index, j),
@@ -253,6 +271,9 @@ impl fmt::Display for Parameter {
         match self {
             Parameter::EnergyColor => write!(f, "colors.energy"),
             Parameter::BackgroundColor => write!(f, "colors.background"),
+            Parameter::EnergyIntensity => write!(f, "colors.energy_intensity"),
+            Parameter::SourceColor(k, i) => write!(f, "{}[{i}].color", k.key()),
+            Parameter::Intensity(k, i) => write!(f, "{}[{i}].intensity", k.key()),
             Parameter::Position(k, i) => {
                 let field = match k {
                     SourceKind::Lines => "point",

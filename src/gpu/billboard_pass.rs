@@ -23,8 +23,10 @@ pub mod gpu_data {
         pub up: [f32; 3],             // 96
         pub mode: u32,                // 108: BlendMode
         pub energy: [f32; 4],         // 112
+        pub layers: u32, // 128: the field texture's layers to read, 1 (B) or 4 (and the tint)
+        pub pad: [u32; 3], // 132
     }
-    const _: () = assert!(size_of::<BillboardParams>() == 128);
+    const _: () = assert!(size_of::<BillboardParams>() == 144);
 }
 
 use gpu_data::BillboardParams;
@@ -68,6 +70,7 @@ pub fn billboard_params(
     billboard: &Billboard,
     resolution: u32,
     energy: [f64; 3],
+    layers: u32,
     aspect: f64,
     mode: BlendMode,
 ) -> BillboardParams {
@@ -82,6 +85,8 @@ pub fn billboard_params(
         up: billboard.up.as_vec3().to_array(),
         mode: mode as u32,
         energy: [energy[0] as f32, energy[1] as f32, energy[2] as f32, 1.0],
+        layers,
+        pad: [0; 3],
     }
 }
 

@@ -184,21 +184,24 @@ pub fn field_storage_entry(
 /// Layers of a field texture: B, then the tint `sum B_i (Ce_i - Ce)` in red, green and blue
 /// (`reference::BrightnessTexture`). r32float layers rather than one rgba32float texture: WebGPU lets a shader
 /// read and write a storage texture of r32float only, and the field pass adds its dispatches into the texture.
+/// A scene whose sources all have its color has no tint: its field textures hold B alone, one layer
+/// (`field_pass::layers_of`), as much memory and work as before there were colors.
 pub const FIELD_LAYERS: u32 = 4;
 
-/// A `w` x `w` field texture of `FIELD_LAYERS` r32float layers, for storage, sampling and copies both ways, and its view
-/// of every layer.
+/// A `w` x `w` field texture of `layers` r32float layers (1, B alone, or `FIELD_LAYERS`), for storage,
+/// sampling and copies both ways, and its view of every layer (a texture array, whatever the count).
 pub fn field_texture(
     device: &wgpu::Device,
     label: &str,
     w: u32,
+    layers: u32,
 ) -> (wgpu::Texture, wgpu::TextureView) {
     let texture = device.create_texture(&wgpu::TextureDescriptor {
         label: Some(label),
         size: wgpu::Extent3d {
             width: w,
             height: w,
-            depth_or_array_layers: FIELD_LAYERS,
+            depth_or_array_layers: layers,
         },
         mip_level_count: 1,
         sample_count: 1,
@@ -251,10 +254,10 @@ pub fn texture_2d(
     })
 }
 
-/// Bytes of GPU memory a field texture (`FIELD_LAYERS` r32float layers) takes at resolution `w`: the field
-/// pass's and the mean of its jittered frames.
-pub fn field_texture_bytes(w: u32) -> u64 {
-    w as u64 * w as u64 * 4 * FIELD_LAYERS as u64
+/// Bytes of GPU memory a field texture of `layers` r32float layers takes at resolution `w`: the field pass's
+/// and the mean of its jittered frames.
+pub fn field_texture_bytes(w: u32, layers: u32) -> u64 {
+    w as u64 * w as u64 * 4 * layers as u64
 }
 
 /// Device, queue and the adapter they came from.

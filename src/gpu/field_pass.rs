@@ -5,7 +5,9 @@
 
 use wgpu::util::DeviceExt;
 
-use super::context::{GpuError, checked, field_texture, field_texture_bytes, pass_layouts};
+use super::context::{
+    FIELD_LAYERS, GpuError, checked, field_texture, field_texture_bytes, pass_layouts,
+};
 use super::frame_average::FrameAverage;
 use super::shaders;
 use crate::field::curve::segments;
@@ -42,8 +44,12 @@ pub mod gpu_data {
         pub jitter: u32,         // 100
         pub seed: u32,           // 104
         pub gauss_order: u32, // 108: adaptive: n of the Gauss-Kronrod pair (integrate::adaptive::kronrod_order)
+        pub layers: u32, // 112: the field texture's layers written: 1 (B) or FIELD_LAYERS (and the tint)
+        pub pad0: u32,   // 116
+        pub pad1: u32,   // 120
+        pub pad2: u32,   // 124
     }
-    const _: () = assert!(size_of::<FieldParams>() == 112);
+    const _: () = assert!(size_of::<FieldParams>() == 128);
 
     /// `Chunk` in `shaders/field_pass.wgsl`: one dispatch's range of samples or terms.
     #[repr(C)]
@@ -253,12 +259,20 @@ fn plan_chunks(p: &Packed) -> Vec<Chunk> {
     chunks
 }
 
+/// The layers of the field texture that `scene` needs: B alone where every source has the scene's color (the
+/// tint is zero: the passes neither write nor read it), else B and the tint.
+pub fn layers_of(scene: &Scene) -> u32 {
+    if scene.tinted() { FIELD_LAYERS } else { 1 }
+}
+
 fn v3(v: glam::DVec3) -> [f32; 3] {
     v.as_vec3().to_array()
 }
 
 fn pack(scene: &Scene, billboard: &Billboard) -> Packed {
     let s = &scene.sources;
+    let tints = scene.tints();
+    let tinted = tints.iter().flatten().any(|&x| x != 0.0);
     let reach = scene.ray_reach(billboard);
     let i = &scene.integration.on_ray(reach.stretch);
     let mut packed = Packed {
@@ -286,6 +300,8 @@ fn pack(scene: &Scene, billboard: &Billboard) -> Packed {
             jitter: i.jitter.is_some() as u32,
             seed: i.jitter.unwrap_or(0),
             gauss_order: crate::integrate::adaptive::kronrod_order(i.tolerance),
+            layers: if tinted { FIELD_LAYERS } else { 1 },
+            ..FieldParams::default()
         },
         points: (s.points.iter())
             .map(|p| PointSource {
@@ -309,7 +325,7 @@ fn pack(scene: &Scene, billboard: &Billboard) -> Packed {
                 coefficient: t.coefficient as f32,
             })
             .collect(),
-        tints: (scene.tints().iter())
+        tints: (tints.iter())
             .map(|t| [t[0] as f32, t[1] as f32, t[2] as f32, 0.0])
             .collect(),
         ..Packed::default()
@@ -746,8 +762,14 @@ impl FieldRenderer {
         let mut params = packed.params;
         params.seed = params.seed.wrapping_add(self.averaged);
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
-        self.average
-            .prepare(device, queue, texture, view, self.averaged + 1);
+        self.average.prepare(
+            device,
+            queue,
+            texture,
+            view,
+            self.averaged + 1,
+            params.layers,
+        );
     }
 
     /// Uploads what the texture depends on. Returns true when it changed (the next `encode` re-renders).
@@ -815,8 +837,10 @@ impl FieldRenderer {
                 }
             }
             queue.write_buffer(&self.chunks, 0, &bytes);
-            if self.texture.as_ref().is_none_or(|(t, _)| t.width() != w) {
-                self.texture = Some(field_texture(device, "energywave.field.storage", w));
+            let layers = packed.params.layers;
+            let stale = |t: &wgpu::Texture| t.width() != w || t.depth_or_array_layers() != layers;
+            if self.texture.as_ref().is_none_or(|(t, _)| stale(t)) {
+                self.texture = Some(field_texture(device, "energywave.field.storage", w, layers));
                 rebind = true;
             }
             if rebind {
@@ -1070,10 +1094,9 @@ impl FieldRenderer {
 
     /// GPU memory the field pass holds now: the texture, the uniform and the storage buffers, in bytes.
     pub fn gpu_bytes(&self) -> u64 {
-        let texture = self
-            .texture
-            .as_ref()
-            .map_or(0, |(t, _)| field_texture_bytes(t.width()));
+        let texture = self.texture.as_ref().map_or(0, |(t, _)| {
+            field_texture_bytes(t.width(), t.depth_or_array_layers())
+        });
         texture
             + self.params.size()
             + self.buffers.iter().map(|b| b.buffer.size()).sum::<u64>()
@@ -1090,7 +1113,13 @@ impl FieldRenderer {
         }
     }
 
-    /// The brightness texture (after the first `prepare`).
+    /// The layers of the field texture the last `prepare` wrote (`layers_of` its scene): 1, B alone, or
+    /// `FIELD_LAYERS`, B and the tint.
+    pub fn layers(&self) -> u32 {
+        self.uploaded.as_ref().map_or(1, |p| p.params.layers)
+    }
+
+    /// The field texture (after the first `prepare`).
     pub fn texture(&self) -> Option<&wgpu::Texture> {
         self.shown().map(|(t, _)| t)
     }

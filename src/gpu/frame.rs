@@ -160,6 +160,7 @@ impl SceneRenderer {
                 &billboard,
                 resolution,
                 scene.colors.energy_color(),
+                crate::gpu::field_pass::layers_of(scene),
                 aspect,
                 BlendMode::of(transparent, scene.colors.blend),
             );

@@ -31,6 +31,8 @@ pub struct FrameAverage {
     params: wgpu::Buffer,
     /// The field texture bound, the mean texture, its view and the bind group over both.
     mean: Option<Bound>,
+    /// The layers averaged (`field_pass::layers_of`).
+    layers: u32,
 }
 
 struct Bound {
@@ -68,6 +70,7 @@ impl FrameAverage {
             layout,
             params,
             mean: None,
+            layers: 1,
         }
     }
 
@@ -80,10 +83,16 @@ impl FrameAverage {
         frame: &wgpu::Texture,
         frame_view: &wgpu::TextureView,
         k: u32,
+        layers: u32,
     ) {
         // Rebound when the field pass replaced its texture (a new resolution); otherwise only the weight changes.
         if self.mean.as_ref().is_none_or(|b| &b.frame != frame) {
-            let (texture, view) = field_texture(device, "energywave.average.mean", frame.width());
+            let (texture, view) = field_texture(
+                device,
+                "energywave.average.mean",
+                frame.width(),
+                frame.depth_or_array_layers(),
+            );
             let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("energywave.average.bind_group"),
                 layout: &self.layout,
@@ -114,6 +123,7 @@ impl FrameAverage {
             ..AverageParams::default()
         };
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+        self.layers = layers;
     }
 
     /// Records the dispatch that folds the field texture into the mean (after the field pass's dispatches).
@@ -121,7 +131,9 @@ impl FrameAverage {
         if let Some(b) = &self.mean {
             pass.set_pipeline(&self.pipeline);
             pass.set_bind_group(0, &b.bind_group, &[]);
-            pass.dispatch_workgroups(b.mean.width().div_ceil(8), b.mean.height().div_ceil(8), 1);
+            // One layer a z: the tint's only where the scene has one.
+            let (w, h) = (b.mean.width(), b.mean.height());
+            pass.dispatch_workgroups(w.div_ceil(8), h.div_ceil(8), self.layers);
         }
     }
 
@@ -132,8 +144,9 @@ impl FrameAverage {
 
     /// GPU memory held: the mean texture and the uniform, in bytes.
     pub fn gpu_bytes(&self) -> u64 {
-        let texture =
-            (self.mean.as_ref()).map_or(0, |b| super::context::field_texture_bytes(b.mean.width()));
+        let texture = (self.mean.as_ref()).map_or(0, |b| {
+            super::context::field_texture_bytes(b.mean.width(), b.mean.depth_or_array_layers())
+        });
         texture + self.params.size()
     }
 }

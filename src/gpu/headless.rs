@@ -69,14 +69,15 @@ impl HeadlessRenderer {
         Ok(bytemuck::cast_slice(&bytes).to_vec())
     }
 
-    /// The tint `sum B_i (Ce_i - Ce)` for every texel of `billboard` (W x W, rows from the top), after
-    /// `brightness` of the same scene and billboard (which renders it).
+    /// The tint `sum B_i (Ce_i - Ce)` for every texel (W x W, rows from the top) of the last `brightness`'s
+    /// scene and billboard: zero where every source has the scene's color (the pass writes B alone then).
     pub fn tint(&self) -> Result<Vec<[f32; 3]>, GpuError> {
-        let texture = self
-            .renderer
-            .field()
-            .texture()
-            .expect("brightness renders first");
+        let field = self.renderer.field();
+        let texture = field.texture().expect("brightness renders first");
+        if field.layers() == 1 {
+            let w = texture.width() as usize;
+            return Ok(vec![[0.0; 3]; w * w]);
+        }
         let (device, queue) = (&self.ctx.device, &self.ctx.queue);
         let layers: Vec<Vec<f32>> = (1..4)
             .map(|layer| {

@@ -38,7 +38,8 @@ impl Upsample {
         }
     }
 
-    /// Records the upsampling of `source` (its view `source_view`) into the W x W output, `w` = `resolution`.
+    /// Records the upsampling of `source` (its view `source_view`) into the W x W output, `w` = `resolution`:
+    /// its first `layers` layers (`field_pass::layers_of`).
     pub fn encode(
         &mut self,
         device: &wgpu::Device,
@@ -46,13 +47,16 @@ impl Upsample {
         source: &wgpu::Texture,
         source_view: &wgpu::TextureView,
         resolution: u32,
+        layers: u32,
     ) {
-        let stale = self
-            .bound
-            .as_ref()
-            .is_none_or(|b| &b.source != source || b.output.width() != resolution);
+        let stale = self.bound.as_ref().is_none_or(|b| {
+            &b.source != source
+                || b.output.width() != resolution
+                || b.output.depth_or_array_layers() != layers
+        });
         if stale {
-            let (output, view) = field_texture(device, "energywave.upsample.output", resolution);
+            let (output, view) =
+                field_texture(device, "energywave.upsample.output", resolution, layers);
             let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("energywave.upsample.bind_group"),
                 layout: &self.layout,
@@ -81,7 +85,8 @@ impl Upsample {
         });
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, &b.bind_group, &[]);
-        pass.dispatch_workgroups(resolution.div_ceil(8), resolution.div_ceil(8), 1);
+        // One layer a z: B, and the tint only where the scene has one.
+        pass.dispatch_workgroups(resolution.div_ceil(8), resolution.div_ceil(8), layers);
     }
 
     /// The upsampled texture and its view (after the first `encode`).
@@ -91,8 +96,8 @@ impl Upsample {
 
     /// GPU memory held: the output texture, in bytes.
     pub fn gpu_bytes(&self) -> u64 {
-        self.bound
-            .as_ref()
-            .map_or(0, |b| super::context::field_texture_bytes(b.output.width()))
+        self.bound.as_ref().map_or(0, |b| {
+            super::context::field_texture_bytes(b.output.width(), b.output.depth_or_array_layers())
+        })
     }
 }

@@ -244,8 +244,14 @@ pub(super) fn validate(
 /// What the still scene requires of a value holds for a key too.
 fn check_value(c: &mut Checker<'_, '_>, path: &FieldPath, parameter: &Parameter, value: Value) {
     match (parameter, value) {
-        (Parameter::EnergyColor | Parameter::BackgroundColor, Value::Vector(v)) => {
+        (
+            Parameter::EnergyColor | Parameter::BackgroundColor | Parameter::SourceColor(..),
+            Value::Vector(v),
+        ) => {
             c.color(path, v);
+        }
+        (Parameter::EnergyIntensity | Parameter::Intensity(..), Value::Number(x)) => {
+            c.intensity(path, x);
         }
         (Parameter::Direction(..), Value::Vector(v))
             if glam::DVec3::from_array(v).length() <= 1e-12 =>

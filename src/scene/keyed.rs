@@ -5,7 +5,8 @@
 use glam::DVec3;
 
 use crate::animation::{Animation, IntegrationSetting, Parameter, SourceKind, Value};
-use crate::scene::Scene;
+use crate::field::Look;
+use crate::scene::{MAX_INTENSITY, Scene};
 
 impl Parameter {
     /// The parameter's current value in `scene`; `None` when the path names nothing there (a source or a
@@ -16,6 +17,14 @@ impl Parameter {
         Some(match *self {
             Parameter::EnergyColor => Value::Vector(scene.colors.energy),
             Parameter::BackgroundColor => Value::Vector(scene.colors.background),
+            Parameter::EnergyIntensity => Value::Number(scene.colors.energy_intensity),
+            // A source without a color of its own shows the scene's: keying it gives it one.
+            Parameter::SourceColor(kind, i) => {
+                Value::Vector(scene.look(kind, i)?.color.unwrap_or(scene.colors.energy))
+            }
+            Parameter::Intensity(kind, i) => Value::Number(
+                (scene.look(kind, i)?.intensity).unwrap_or(scene.colors.energy_intensity),
+            ),
             Parameter::Position(SourceKind::Points, i) => v(s.points.get(i)?.position),
             Parameter::Position(SourceKind::Lines, i) => v(s.lines.get(i)?.point),
             Parameter::Position(SourceKind::Tori, i) => v(s.tori.get(i)?.center),
@@ -49,7 +58,8 @@ impl Parameter {
 
     /// Writes `value` into `scene`; does nothing when the path names nothing there or the value is of the
     /// wrong kind. Directions are normalised (a zero vector leaves the direction as it was), colors clamped
-    /// to 0..1, radii and weights kept positive, as the scene loader would require.
+    /// to 0..1 and intensities to 0..=MAX_INTENSITY, radii and weights kept positive, as the scene loader would
+    /// require.
     pub fn set(&self, scene: &mut Scene, value: Value) {
         let s = &mut scene.sources;
         match (self, value) {
@@ -58,6 +68,19 @@ impl Parameter {
             }
             (Parameter::BackgroundColor, Value::Vector(c)) => {
                 scene.colors.background = c.map(|x| x.clamp(0.0, 1.0))
+            }
+            (Parameter::EnergyIntensity, Value::Number(x)) => {
+                scene.colors.energy_intensity = x.clamp(0.0, MAX_INTENSITY)
+            }
+            (Parameter::SourceColor(kind, i), Value::Vector(c)) => {
+                if let Some(look) = scene.look_mut(*kind, *i) {
+                    look.color = Some(c.map(|x| x.clamp(0.0, 1.0)));
+                }
+            }
+            (Parameter::Intensity(kind, i), Value::Number(x)) => {
+                if let Some(look) = scene.look_mut(*kind, *i) {
+                    look.intensity = Some(x.clamp(0.0, MAX_INTENSITY));
+                }
             }
             (Parameter::Position(kind, i), Value::Vector(p)) => {
                 let p = DVec3::from_array(p);
@@ -127,6 +150,30 @@ impl Parameter {
                 }
             }
             _ => {}
+        }
+    }
+}
+
+impl Scene {
+    /// The look of source `i` of `kind`.
+    pub fn look(&self, kind: SourceKind, i: usize) -> Option<&Look> {
+        let s = &self.sources;
+        match kind {
+            SourceKind::Points => s.points.get(i).map(|x| &x.look),
+            SourceKind::Lines => s.lines.get(i).map(|x| &x.look),
+            SourceKind::Tori => s.tori.get(i).map(|x| &x.look),
+            SourceKind::Curves => s.curves.get(i).map(|x| &x.look),
+        }
+    }
+
+    /// The look of source `i` of `kind`, to change.
+    pub fn look_mut(&mut self, kind: SourceKind, i: usize) -> Option<&mut Look> {
+        let s = &mut self.sources;
+        match kind {
+            SourceKind::Points => s.points.get_mut(i).map(|x| &mut x.look),
+            SourceKind::Lines => s.lines.get_mut(i).map(|x| &mut x.look),
+            SourceKind::Tori => s.tori.get_mut(i).map(|x| &mut x.look),
+            SourceKind::Curves => s.curves.get_mut(i).map(|x| &mut x.look),
         }
     }
 }

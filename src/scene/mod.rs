@@ -313,7 +313,8 @@ impl Scene {
 
     /// True when some source's color differs from the scene's (`tints` is not all zero).
     pub fn tinted(&self) -> bool {
-        self.tints().iter().any(|t| t.iter().any(|&x| x != 0.0))
+        let base = self.colors.energy_color();
+        (self.sources.looks()).any(|look| self.colors.color_of(look) != base)
     }
 
     /// The billboard for a frame of `aspect` (width / height): the scene's own, or placed automatically.

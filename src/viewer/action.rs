@@ -92,6 +92,8 @@ pub enum Edit {
     UniformWeights(usize),
     /// How the glow goes over the background.
     Blend(Blend),
+    /// A source's own color and intensity dropped, with their keys: it takes the scene's again.
+    InheritLook(SourceKind, usize),
     /// A key of a parameter at the current frame, to a value: its track's, or a new track's (a still scene gets
     /// an animation).
     Key(Parameter, Value),
@@ -149,6 +151,16 @@ impl Edit {
             Edit::Jitter(seed) => scene.integration.jitter = seed,
             Edit::Resolution(w) => scene.billboard.resolution = w,
             Edit::Blend(b) => scene.colors.blend = b,
+            Edit::InheritLook(kind, i) => {
+                if let Some(look) = scene.look_mut(kind, i) {
+                    *look = Default::default();
+                }
+                if let Some(a) = &mut scene.animation {
+                    a.tracks.retain(|t| {
+                        !matches!(t.parameter, Parameter::SourceColor(k, j) | Parameter::Intensity(k, j) if (k, j) == (kind, i))
+                    });
+                }
+            }
             Edit::Billboard(fixed) => {
                 scene.billboard.center = fixed.map(|(c, _)| c);
                 scene.billboard.size = fixed.map(|(_, l)| l);

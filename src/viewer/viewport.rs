@@ -232,8 +232,9 @@ impl ViewportGpu {
                     self.preview.encode(encoder);
                     let (texture, view) = (self.preview.texture(), self.preview.view());
                     let (texture, view) = (texture.expect("prepared"), view.expect("prepared"));
+                    let layers = self.preview.layers();
                     self.upsample
-                        .encode(device, encoder, texture, view, upsampled);
+                        .encode(device, encoder, texture, view, upsampled, layers);
                 })?;
                 work = Work::Preview {
                     texels: resolution as u64 * resolution as u64,

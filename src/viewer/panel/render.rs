@@ -11,7 +11,7 @@ use super::context::{
 use super::fields::{Edits, color_field, number};
 use crate::animation::{IntegrationSetting, Parameter};
 use crate::integrate::Integrator;
-use crate::scene::Blend;
+use crate::scene::{Blend, MAX_INTENSITY};
 
 pub(super) fn render_section(
     ui: &mut Ui,
@@ -152,6 +152,22 @@ pub(super) fn render_section(
                 });
             billboard_editor(ui, cx, out);
             color_field(ui, out, "energy Ce", Parameter::EnergyColor, scene.colors.energy);
+            ui.horizontal(|ui| {
+                number(
+                    ui,
+                    out,
+                    "intensity",
+                    Parameter::EnergyIntensity,
+                    scene.colors.energy_intensity,
+                    |x| {
+                        DragValue::new(x)
+                            .speed(0.02)
+                            .range(0.0..=MAX_INTENSITY)
+                            .max_decimals(3)
+                    },
+                )
+                .on_hover_text("Multiplies Ce: above 1 the glow is brighter than a display color (HDR, kept in EXR exports; the viewer shows the clamp)");
+            });
             color_field(
                 ui,
                 out,

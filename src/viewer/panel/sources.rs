@@ -5,9 +5,11 @@ use egui::{DragValue, Slider, Ui};
 use super::super::action::{Action, Edit};
 use super::super::widgets::wseries_plot;
 use super::context::Context;
-use super::fields::{Edits, axis, number, position};
+use super::fields::{Edits, axis, color_field, number, position};
 use crate::animation::{Parameter, SourceKind, Value};
-use crate::field::Curve;
+use crate::field::{Curve, Look};
+use crate::scene::{Colors, MAX_INTENSITY};
+use glam::DVec3;
 
 pub(super) fn sources_section(ui: &mut Ui, cx: &Context, out: &mut Edits<'_>) {
     let shown = cx.shown;
@@ -42,6 +44,7 @@ pub(super) fn sources_section(ui: &mut Ui, cx: &Context, out: &mut Edits<'_>) {
                 p.position,
             );
             coefficient(ui, out, SourceKind::Points, i, p.coefficient);
+            look_editor(ui, out, &shown.colors, SourceKind::Points, i, &p.look);
         },
     );
     list(
@@ -67,6 +70,7 @@ pub(super) fn sources_section(ui: &mut Ui, cx: &Context, out: &mut Edits<'_>) {
                 l.direction,
             );
             coefficient(ui, out, SourceKind::Lines, i, l.coefficient);
+            look_editor(ui, out, &shown.colors, SourceKind::Lines, i, &l.look);
         },
     );
     list(
@@ -102,6 +106,7 @@ pub(super) fn sources_section(ui: &mut Ui, cx: &Context, out: &mut Edits<'_>) {
                 );
             });
             coefficient(ui, out, SourceKind::Tori, i, t.coefficient);
+            look_editor(ui, out, &shown.colors, SourceKind::Tori, i, &t.look);
         },
     );
     let pulsed = |i: usize| {
@@ -117,7 +122,10 @@ pub(super) fn sources_section(ui: &mut Ui, cx: &Context, out: &mut Edits<'_>) {
         "Curve",
         SourceKind::Curves,
         &s.curves,
-        |ui, out, i, c| curve_editor(ui, out, i, c, pulsed(i)),
+        |ui, out, i, c| {
+            curve_editor(ui, out, i, c, pulsed(i));
+            look_editor(ui, out, &shown.colors, SourceKind::Curves, i, &c.look);
+        },
     );
 }
 
@@ -137,6 +145,73 @@ pub(super) fn coefficient(ui: &mut Ui, out: &mut Edits<'_>, kind: SourceKind, i:
             },
         );
     });
+}
+
+/// A source's color: the scene's, or its own color and intensity (each keyable).
+pub(super) fn look_editor(
+    ui: &mut Ui,
+    out: &mut Edits<'_>,
+    colors: &Colors,
+    kind: SourceKind,
+    i: usize,
+    look: &Look,
+) {
+    let own = look.color.is_some() || look.intensity.is_some();
+    let mut checked = own;
+    let swatch = colors.color_of(look);
+    ui.horizontal(|ui| {
+        let toggle = ui
+            .checkbox(&mut checked, "own color")
+            .on_hover_text("A color and intensity of its own, instead of the scene's energy Ce");
+        if !own {
+            color_swatch(ui, swatch);
+        }
+        if toggle.changed() {
+            out.push(if checked {
+                Action::set_vector(
+                    Parameter::SourceColor(kind, i),
+                    DVec3::from_array(look.color.unwrap_or(colors.energy)),
+                )
+            } else {
+                Action::Edit(Edit::InheritLook(kind, i))
+            });
+        }
+    });
+    if !own {
+        return;
+    }
+    color_field(
+        ui,
+        out,
+        "color",
+        Parameter::SourceColor(kind, i),
+        look.color.unwrap_or(colors.energy),
+    );
+    ui.horizontal(|ui| {
+        number(
+            ui,
+            out,
+            "intensity",
+            Parameter::Intensity(kind, i),
+            look.intensity.unwrap_or(colors.energy_intensity),
+            |x| {
+                DragValue::new(x)
+                    .speed(0.02)
+                    .range(0.0..=MAX_INTENSITY)
+                    .max_decimals(3)
+            },
+        )
+        .on_hover_text("Multiplies the color: above 1 the glow is brighter than a display color (HDR, kept in EXR)");
+    });
+}
+
+/// A small square of a color (an intensity above 1 shown clamped).
+fn color_swatch(ui: &mut Ui, c: [f64; 3]) {
+    let side = ui.spacing().interact_size.y * 0.8;
+    let (rect, _) = ui.allocate_exact_size(egui::vec2(side, side), egui::Sense::hover());
+    let [r, g, b] = c.map(|x| (x.clamp(0.0, 1.0) * 255.0).round() as u8);
+    ui.painter()
+        .rect_filled(rect, 2.0, egui::Color32::from_rgb(r, g, b));
 }
 
 /// A list of sources of one kind, each with its editor and Duplicate / Delete. A source's name selects it (its
