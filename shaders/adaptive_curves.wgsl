@@ -642,19 +642,29 @@ fn track_nearest(c: CurveSource, ray: Ray, t: f32, track: ptr<function, Track>) 
 // The Kronrod and Gauss values on [a, b] in u of a curve's term: f = w / max(eps, d) zeta(t) (before the
 // coefficient) at each node, t clamped to the piece. The nodes go in order along the ray, so that each carries
 // the nearest point on from the last (track_nearest). Twin of kronrod.
-fn curve_kronrod(ray: Ray, p: Peak, a: f32, b: f32, panel: vec2<f32>, singular: vec2<bool>, track: ptr<function, Track>) -> vec2<f32> {
+// The Kronrod and Gauss values (kg) and, of the term times the curve's color series (zero without one), the
+// Kronrod value (colored): its nodes are B's, and B's pair decides the refinement.
+struct CurveRule {
+    kg: vec2<f32>,
+    colored: vec3<f32>,
+}
+
+fn curve_kronrod(ray: Ray, p: Peak, a: f32, b: f32, panel: vec2<f32>, singular: vec2<bool>, track: ptr<function, Track>) -> CurveRule {
     let c = curves[ray.index];
     let mid = 0.5 * (a + b);
     let r = 0.5 * (b - a);
     var sum = vec2<f32>(0.0);
+    var colored = vec3<f32>(0.0);
     for (var i = 0u; i <= 2u * gauss_order(); i++) {
         let node = kronrod_node(i);
         let toward = toward_singular(mid + r * node.x, panel, singular);
         let m = map_node(p, toward.x);
         let n = track_nearest(c, ray, m.x, track);
-        sum += node.yz * (toward.y * m.y * wseries(c, n.x) * falloff(n.y, EPSILON) * zeta_at(m.x));
+        let f = toward.y * m.y * wseries(c, n.x) * falloff(n.y, EPSILON) * zeta_at(m.x);
+        sum += node.yz * f;
+        colored += node.y * f * color_series(c, n.x);
     }
-    return r * sum;
+    return CurveRule(r * sum, r * colored);
 }
 
 // Twin of toward_singular: u at v on the panel [a, b] with the nodes drawn toward its singular ends, and du/dv.
@@ -672,16 +682,17 @@ fn toward_singular(v: f32, panel: vec2<f32>, singular: vec2<bool>) -> vec2<f32> 
 }
 
 // A curve's term on the panel [a, b] in u, refined where the pair disagrees. Twin of integrate_panel.
-fn curve_panel(ray: Ray, p: Peak, a: f32, b: f32, singular: vec2<bool>, allowance: f32, refinements: ptr<function, u32>, track: ptr<function, Track>) -> f32 {
+fn curve_panel(ray: Ray, p: Peak, a: f32, b: f32, singular: vec2<bool>, allowance: f32, refinements: ptr<function, u32>, track: ptr<function, Track>) -> vec4<f32> {
     let end = 1u << MAX_DEPTH;
     var at = 0u;
     var level = 0u;
-    var sum = 0.0;
+    var sum = vec4<f32>(0.0);
     while at < end {
         let x = part_bounds(a, b, at, level);
-        let kg = curve_kronrod(ray, p, x.x, x.y, vec2<f32>(a, b), singular, track);
+        let rule = curve_kronrod(ray, p, x.x, x.y, vec2<f32>(a, b), singular, track);
+        let kg = rule.kg;
         if settled(kg, allowance, x.y - x.x) || level == MAX_DEPTH || *refinements == 0u {
-            sum += kg.x;
+            sum += vec4<f32>(kg.x, rule.colored);
             let next = next_part(at, level);
             at = next.x;
             level = next.y;
@@ -707,11 +718,12 @@ fn nearest_segment_index(c: CurveSource, ray: Ray, p: Peak, u: f32) -> u32 {
     return select(segment, NO_SEGMENT, at_joint);
 }
 
-// A curve's term of B over its pieces, each cut at its kinks. Twin of integrate_term.
-fn integrate_curve_term(index: u32, s_point: vec3<f32>, e_point: vec3<f32>) -> f32 {
+// A curve's term of B over its pieces, each cut at its kinks, and that term times its color series (zero
+// without one). Twin of integrate_term and, for the series, of integrate_weighted.
+fn integrate_curve_term(index: u32, s_point: vec3<f32>, e_point: vec3<f32>) -> vec4<f32> {
     let coefficient = curves[index].coefficient;
     if coefficient == 0.0 {
-        return 0.0;
+        return vec4<f32>(0.0);
     }
     let ray = Ray(s_point, e_point - s_point, 3u, index, vec3<f32>(0.0), vec3<f32>(0.0), 0.0);
     let c = curves[index];
@@ -725,7 +737,7 @@ fn integrate_curve_term(index: u32, s_point: vec3<f32>, e_point: vec3<f32>) -> f
     let features = curve_features(ray);
     let allowance = params.term_tolerance / (abs(coefficient) * max(pieces_length(features.found), 1e-30));
     var refinements = select(COARSE_REFINEMENTS, MAX_REFINEMENTS, gauss_order() > COARSE_ORDER);
-    var sum = 0.0;
+    var sum = vec4<f32>(0.0);
     for (var k = 0u; k < features.found.count; k++) {
         let p = features.found.peaks[k];
         let u0 = stable_asinh((p.lo - p.center) / p.width);
@@ -845,7 +857,8 @@ fn integrate_adaptive_curves(@builtin(global_invocation_id) gid: vec3<u32>) {
     var b = vec4<f32>(0.0);
     // The range holds curves only (gpu::field_pass::plan_chunks).
     for (var t = chunk.first; t < chunk.first + chunk.count; t++) {
-        b += glow_of(t, integrate_curve_term(t - first_curve, texel.start, texel.end));
+        let term = integrate_curve_term(t - first_curve, texel.start, texel.end);
+        b += glow_of(t, term.x) + vec4<f32>(0.0, term.yzw);
     }
     store(texel.id, b);
 }

@@ -15,8 +15,12 @@ struct BillboardParams {
     mode: u32,         // 0: clamp((1 - B) Cb + G); 1: premultiplied G and alpha min(B, 1), unclamped;
                        // 2: clamp(G + (1 - min(B, 1)) Cb) (gpu::billboard_pass::BlendMode)
     energy: vec4<f32>, // Ce in rgb, its intensity applied
-    layers: u32,       // the field texture's layers to read: 1 (B; the tint is zero) or 4 (B and the tint)
 }
+
+// Whether the field texture holds the tint (layers 1 to 3) beside B: false where every source has the scene's
+// color. A constant, so that the tint's loads are compiled out where there is none (gpu::billboard_pass keeps
+// a pipeline of each).
+override TINTED: bool = true;
 
 @group(0) @binding(0) var<uniform> params: BillboardParams;
 // The field pass's texture: layer 0 B, layers 1 to 3 the tint sum B_i (Ce_i - Ce), G = B Ce + tint.
@@ -68,7 +72,7 @@ fn sample_layer(s: Bilinear, layer: i32) -> f32 {
 fn sample_field(uv: vec2<f32>) -> vec4<f32> {
     let s = bilinear_at(uv);
     var out = vec4<f32>(sample_layer(s, 0), 0.0, 0.0, 0.0);
-    if params.layers > 1u {
+    if TINTED {
         out = vec4<f32>(out.x, sample_layer(s, 1), sample_layer(s, 2), sample_layer(s, 3));
     }
     return out;

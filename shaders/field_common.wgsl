@@ -22,17 +22,17 @@ struct TorusSource {
     coefficient: f32,
 }
 
-// A chain of quadratic Bezier segments: its segments and W series are ranges of the segment and weight
-// buffers.
+// A chain of quadratic Bezier segments: its segments, W series and color series are ranges of the segment,
+// weight and color buffers.
 struct CurveSource {
     first_segment: u32,
     segment_count: u32,
     first_weight: u32,
     weight_count: u32, // 0: all weights 1
     coefficient: f32,
+    first_color: u32,
+    color_count: u32,  // 0: no color series (the curve's one color is its tint)
     pad0: f32,
-    pad1: f32,
-    pad2: f32,
 }
 
 // One segment in power form, C(t) = c2 t^2 + c1 t + c0 (computed from the control points in f64).

@@ -107,8 +107,11 @@ fn load_scalars() {
 // The field texture: layer 0 holds B, layers 1 to 3 the tint sum B_i (Ce_i - Ce) in red, green and blue
 // (gpu::context::FIELD_LAYERS), so that the colored sum is B Ce + tint = sum B_i Ce_i.
 @group(0) @binding(7) var field: texture_storage_2d_array<r32float, read_write>;
-// Each term's Ce_i - Ce in rgb (points, then lines, tori, curves): zero for a source in the scene's color.
+// Each term's Ce_i - Ce in rgb (points, then lines, tori, curves): zero for a source in the scene's color;
+// -Ce for a curve with a color series, whose pass adds the integral of its term times the series.
 @group(0) @binding(9) var<storage, read> tints: array<vec4<f32>>;
+// The curves' color series (CurveSource::first_color, color_count), their intensity applied.
+@group(0) @binding(10) var<storage, read> colors: array<vec4<f32>>;
 
 // One dispatch's share of the work: a range of Simpson samples, or of the adaptive integrator's terms (points,
 // then lines, tori, curves). A texel's loops must stay under what some drivers allow one invocation (Mesa's
@@ -169,6 +172,26 @@ fn wseries(c: CurveSource, t_in: f32) -> f32 {
     let b = wseries_basis(n, t);
     let first = w + wseries_span(n, t) - 2u;
     return b.x * weights[first] + b.y * weights[first + 1u] + b.z * weights[first + 2u];
+}
+
+// A curve's color series at t (twin of Colors::color_along): the quadratic B-spline of its colors, as wseries
+// of its weights; zero without a series.
+fn color_series(c: CurveSource, t_in: f32) -> vec3<f32> {
+    let t = clamp(t_in, 0.0, 1.0);
+    let n = c.color_count;
+    let k = c.first_color;
+    if n == 0u {
+        return vec3<f32>(0.0);
+    }
+    if n == 1u {
+        return colors[k].xyz;
+    }
+    if n == 2u {
+        return mix(colors[k].xyz, colors[k + 1u].xyz, t);
+    }
+    let b = wseries_basis(n, t);
+    let first = k + wseries_span(n, t) - 2u;
+    return b.x * colors[first].xyz + b.y * colors[first + 1u].xyz + b.z * colors[first + 2u].xyz;
 }
 
 // The nearest point of a curve chain: (t* = (j + t) / k over all segments, distance).

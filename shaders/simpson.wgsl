@@ -3,10 +3,11 @@
 // CPU twin: src/reference/simpson.rs.
 
 
-// A curve chain's term: b Sw(t*) / max(eps, L).
-fn curve_field(c: CurveSource, p: vec3<f32>, eps: f32) -> f32 {
+// A curve chain's term at p, b Sw(t*) / max(eps, L), and that times its color series at t* (zero without one).
+fn curve_field(c: CurveSource, p: vec3<f32>, eps: f32) -> vec4<f32> {
     let best = curve_nearest(c, p);
-    return c.coefficient * wseries(c, best.x) * falloff(best.y, eps);
+    let f = c.coefficient * wseries(c, best.x) * falloff(best.y, eps);
+    return vec4<f32>(f, f * color_series(c, best.x));
 }
 
 // The PCG hash (Jarzynski and Olano 2020). Twin of reference::simpson::pcg_hash.
@@ -75,8 +76,9 @@ fn torus_samples(r: Samples, src: TorusSource) -> f32 {
     return src.coefficient * sum;
 }
 
-fn curve_samples(r: Samples, c: CurveSource) -> f32 {
-    var sum = 0.0;
+// B's part and the color series' (zero without one).
+fn curve_samples(r: Samples, c: CurveSource) -> vec4<f32> {
+    var sum = vec4<f32>(0.0);
     for (var k = r.first; k < r.last; k++) {
         let x = sample_at(r, k);
         sum += x.w * curve_field(c, x.xyz, EPSILON);
@@ -119,7 +121,8 @@ fn integrate(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let first_curve = first_torus + torus_count();
     for (var i = 0u; i < curve_count(); i++) {
-        sum += glow_of(first_curve + i, curve_samples(r, curves[i]));
+        let g = curve_samples(r, curves[i]);
+        sum += glow_of(first_curve + i, g.x) + vec4<f32>(0.0, g.yzw);
     }
     store(texel.id, sum * scale);
 }

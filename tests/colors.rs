@@ -62,13 +62,19 @@ fn the_colored_sum_is_each_source_rendered_alone_and_summed() {
         let mut g_sum = vec![[0.0; 3]; whole.values.len()];
         for (k, look) in looks.iter().enumerate() {
             let one = reference::render_brightness(&alone(&scene, k), &bb);
-            // Alone, a source's tint is its own B_k (Ce_k - Ce).
+            // Alone, a source in one color has the tint B_k (Ce_k - Ce); the beam's color varies along it
+            // (its series is checked against a direct evaluation below).
+            let series = scene.series_curve(k).is_some();
             let color = scene.colors.color_of(look);
             for (t, (&b, tint)) in one.values.iter().zip(&one.tint).enumerate() {
                 b_sum[t] += b;
                 for c in 0..3 {
-                    g_sum[t][c] += b * color[c];
-                    assert!((tint[c] - b * (color[c] - ce[c])).abs() <= 1e-12 * b.abs().max(1.0));
+                    g_sum[t][c] += b * ce[c] + tint[c];
+                    if !series {
+                        assert!(
+                            (tint[c] - b * (color[c] - ce[c])).abs() <= 1e-12 * b.abs().max(1.0)
+                        );
+                    }
                 }
             }
         }
@@ -270,6 +276,132 @@ fn intensities_above_one_stay_unclamped_in_the_transparent_export() {
     }
 }
 
+/// The quadratic B-spline of `values` on the clamped uniform knot vector at `t`, by the Cox-de Boor recursion
+/// (independent of `wseries`' triangular scheme).
+fn cox_de_boor(values: &[f64], t: f64) -> f64 {
+    let n = values.len();
+    match n {
+        1 => return values[0],
+        2 => return values[0] + (values[1] - values[0]) * t,
+        _ => {}
+    }
+    let segments = (n - 2) as f64;
+    let knot = |i: usize| ((i as f64 - 2.0) / segments).clamp(0.0, 1.0);
+    fn basis(i: usize, p: usize, t: f64, knot: &dyn Fn(usize) -> f64) -> f64 {
+        if p == 0 {
+            let (a, b) = (knot(i), knot(i + 1));
+            // The last non-empty span holds t = 1.
+            return if (a <= t && t < b) || (t >= 1.0 && b >= 1.0 && a < 1.0) {
+                1.0
+            } else {
+                0.0
+            };
+        }
+        let mut v = 0.0;
+        let d1 = knot(i + p) - knot(i);
+        if d1 > 0.0 {
+            v += (t - knot(i)) / d1 * basis(i, p - 1, t, knot);
+        }
+        let d2 = knot(i + p + 1) - knot(i + 1);
+        if d2 > 0.0 {
+            v += (knot(i + p + 1) - t) / d2 * basis(i + 1, p - 1, t, knot);
+        }
+        v
+    }
+    (0..n).map(|i| values[i] * basis(i, 2, t, &knot)).sum()
+}
+
+#[test]
+fn a_curve_s_color_series_is_its_b_spline_along_the_nearest_point() {
+    use energywave::field::{curve, falloff, wseries};
+    use energywave::geometry::ray_end;
+    use energywave::integrate::zeta;
+    use energywave::reference::simpson::simpson_refined;
+    // The series itself, against Cox-de Boor, at many t and for every length.
+    for series in [
+        vec![[0.2, 0.4, 0.9]],
+        vec![[1.0, 1.0, 1.0], [0.1, 0.3, 1.0]],
+        vec![[1.0, 1.0, 1.0], [0.6, 0.8, 1.0], [0.2, 0.45, 1.0]],
+        vec![
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [1.0, 1.0, 0.0],
+            [0.5, 0.5, 0.5],
+        ],
+    ] {
+        for k in 0..=50 {
+            let t = k as f64 / 50.0;
+            let got = wseries::evaluate_colors(&series, t);
+            for (c, g) in got.iter().enumerate() {
+                let channel: Vec<f64> = series.iter().map(|x| x[c]).collect();
+                assert!(
+                    (g - cox_de_boor(&channel, t)).abs() < 1e-12,
+                    "{series:?} at {t}"
+                );
+            }
+        }
+    }
+    // The beam alone, with an intensity: its tint on a few texel rays against the integral, converged, of its
+    // term times (I Cs(t*) - Ce), Cs by Cox-de Boor at the nearest point's t*.
+    for integrator in [Integrator::Simpson, Integrator::Adaptive] {
+        let mut scene = rings(16, integrator);
+        let beam = 2;
+        assert!(scene.series_curve(beam).is_some());
+        scene.sources.curves[0].look.intensity = Some(1.7);
+        let scene = alone(&scene, beam);
+        let bb = scene.place_billboard(1.0);
+        let texture = reference::render_brightness(&scene, &bb);
+        let (ce, curve) = (scene.colors.energy_color(), &scene.sources.curves[0]);
+        let reach = scene.ray_reach(&bb);
+        let settings = scene.integration.on_ray(reach.stretch);
+        for (i, j) in [(8, 8), (3, 8), (12, 7), (8, 2), (15, 15)] {
+            let s = bb.texel_center(i, j, 16);
+            let e = ray_end(s, scene.camera.eye, reach.nu);
+            for c in 0..3 {
+                let channel: Vec<f64> = curve.color_series.iter().map(|x| x[c]).collect();
+                let f = |t: f64| {
+                    let n = curve::nearest_on_chain(&curve.control_points, s + (e - s) * t);
+                    curve.coefficient
+                        * (1.7 * cox_de_boor(&channel, n.t) - ce[c])
+                        * falloff(n.distance, settings.epsilon)
+                        * zeta(t, settings.alpha, settings.beta)
+                };
+                let (want, _) = simpson_refined(f, 2000, 1e-11, 30);
+                let got = texture.tint[(j * 16 + i) as usize][c];
+                let allowed = match integrator {
+                    Integrator::Simpson => 1e-3 * want.abs().max(0.01),
+                    Integrator::Adaptive => 2.0 * scene.integration.tolerance,
+                };
+                assert!(
+                    (got - want).abs() <= allowed,
+                    "{integrator:?} texel ({i}, {j}) channel {c}: {got} against {want}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn a_series_of_one_color_is_that_color() {
+    let mut scene = rings(16, Integrator::Adaptive);
+    let bb = scene.place_billboard(1.0);
+    scene.sources.curves[0].color_series = vec![[0.9, 0.2, 0.6]];
+    let series = reference::render_brightness(&scene, &bb);
+    scene.sources.curves[0].color_series.clear();
+    scene.sources.curves[0].look.color = Some([0.9, 0.2, 0.6]);
+    let one = reference::render_brightness(&scene, &bb);
+    assert_eq!(series.values, one.values);
+    for (a, b) in series.tint.iter().zip(&one.tint) {
+        for c in 0..3 {
+            assert!(
+                (a[c] - b[c]).abs() <= 1e-6 * b[c].abs().max(1.0),
+                "{a:?} {b:?}"
+            );
+        }
+    }
+}
+
 fn invalid(text: &str) -> String {
     match Scene::parse(text, Path::new("bad.toml")) {
         Err(e @ SceneError::Invalid { .. }) => e.to_string(),
@@ -305,6 +437,25 @@ fn colors_and_intensities_in_scene_files() {
         "[[curves]]\ncontrol_points = [[0.0, 0.0, 0.0], [1.0, 1.0, 0.0], [2.0, 0.0, 0.0]]\ncoefficient = 1.0\ncolour = [1.0, 0.0, 0.0]\n",
     );
     assert!(msg.contains("colour"), "{msg}");
+    let curve = "[[curves]]\ncontrol_points = [[0.0, 0.0, 0.0], [1.0, 1.0, 0.0], [2.0, 0.0, 0.0]]\ncoefficient = 1.0\n";
+    let msg = invalid(&format!("{curve}color_series = []\n"));
+    assert!(
+        msg.contains("bad.toml:4:")
+            && msg.contains("curves[0].color_series")
+            && msg.contains("empty"),
+        "{msg}"
+    );
+    let msg = invalid(&format!(
+        "{curve}color_series = [[1.0, 1.0, 1.0], [0.0, -0.5, 1.0]]\n"
+    ));
+    assert!(
+        msg.contains("curves[0].color_series[1]") && msg.contains("0..1"),
+        "{msg}"
+    );
+    let msg = invalid(&format!(
+        "{curve}color = [1.0, 0.0, 0.0]\ncolor_series = [[1.0, 1.0, 1.0]]\n"
+    ));
+    assert!(msg.contains("not both"), "{msg}");
 
     // Written back and read again: the same scene, each source's own color and intensity kept, and the keys
     // of sources without their own left out.
@@ -312,6 +463,7 @@ fn colors_and_intensities_in_scene_files() {
     let text = scene.to_toml();
     assert_eq!(Scene::parse(&text, Path::new("saved.toml")).unwrap(), scene);
     assert_eq!(text.matches("color = ").count(), 2, "{text}");
+    assert_eq!(text.matches("color_series = ").count(), 1, "{text}");
     assert_eq!(text.matches("intensity = ").count(), 1, "{text}");
     // One edit, one line changed in the file's own text.
     let path = common::scenes_dir().join("rings_and_beam.toml");

@@ -38,6 +38,7 @@ fn curve_scene(control_points: &[[f64; 3]], weights: &[f64], w: u32) -> Scene {
             coefficient: 3.0,
             weights: weights.to_vec(),
             look: Default::default(),
+            color_series: Vec::new(),
         }],
         ..Sources::default()
     };

@@ -287,6 +287,7 @@ fn psi_is_the_sum_of_the_sources_and_is_clamped_by_epsilon() {
         coefficient: 1.5,
         weights: vec![],
         look: Default::default(),
+        color_series: Vec::new(),
     };
     let all = Sources {
         points: vec![point.clone()],
@@ -322,6 +323,7 @@ fn a_chain_is_one_source_with_one_w_series() {
         coefficient: 1.0,
         weights: vec![0.0, 1.0, 0.0],
         look: Default::default(),
+        color_series: Vec::new(),
     };
     // With three weights the W series is the Bernstein blend: Sw(t) = 2 t (1 - t) for W = [0, 1, 0].
     let sw = |t: f64| 2.0 * t * (1.0 - t);
@@ -339,6 +341,7 @@ fn a_chain_is_one_source_with_one_w_series() {
         coefficient: 1.0,
         weights: vec![],
         look: Default::default(),
+        color_series: Vec::new(),
     };
     let doubled = separate(&cps[..3]).field(p, eps) + separate(&cps[2..]).field(p, eps);
     assert!(

@@ -173,7 +173,7 @@ fn rust_mirrors_match_the_wgsl_layouts() {
         &field,
         "CurveSource",
         size_of::<CurveSource>(),
-        fields!(CurveSource: first_segment, segment_count, first_weight, weight_count, coefficient, pad0, pad1, pad2),
+        fields!(CurveSource: first_segment, segment_count, first_weight, weight_count, coefficient, first_color, color_count, pad0),
     );
     check_struct(
         &field,
@@ -193,7 +193,7 @@ fn rust_mirrors_match_the_wgsl_layouts() {
         &billboard,
         "BillboardParams",
         size_of::<BillboardParams>(),
-        fields!(BillboardParams: view_proj, center, size, right, resolution, up, mode, energy, layers),
+        fields!(BillboardParams: view_proj, center, size, right, resolution, up, mode, energy),
     );
     let average = parse_and_validate("average", shaders::AVERAGE_PASS);
     check_struct(

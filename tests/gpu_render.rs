@@ -144,6 +144,7 @@ fn gpu_matches_the_cpu_reference_on_grazing_rays() {
                 coefficient: 0.4,
                 weights: vec![],
                 look: Default::default(),
+                color_series: Vec::new(),
             },
             // Nearly straight, across the ray of texel (20, 5).
             Curve {
@@ -155,6 +156,7 @@ fn gpu_matches_the_cpu_reference_on_grazing_rays() {
                 coefficient: 0.4,
                 weights: vec![0.2, 1.0, 0.5, 0.8],
                 look: Default::default(),
+                color_series: Vec::new(),
             },
         ],
     };

@@ -45,6 +45,7 @@ fn curve(points: &[DVec3]) -> Curve {
         coefficient: 2.0,
         weights: vec![],
         look: Default::default(),
+        color_series: Vec::new(),
     }
 }
 
@@ -372,6 +373,7 @@ fn sources() -> impl Strategy<Value = Sources> {
             coefficient,
             weights,
             look: Default::default(),
+            color_series: Vec::new(),
         });
     (
         prop::collection::vec(point, 0..3),

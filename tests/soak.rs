@@ -97,6 +97,7 @@ fn thousands_of_frames_of_random_edits() {
                     coefficient: rng.range(0.0, 6.0),
                     weights,
                     look: Default::default(),
+                    color_series: Vec::new(),
                 });
             }
             5 if s.sources.curves.len() > 1 => {

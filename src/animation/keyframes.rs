@@ -112,6 +112,8 @@ pub enum Parameter {
     SourceColor(SourceKind, usize),
     /// `points[i].intensity`, ... (any kind): the source's own intensity
     Intensity(SourceKind, usize),
+    /// `curves[i].color_series[j]`
+    SeriesColor(usize, usize),
     /// `points[i].position`, `lines[i].point`, `tori[i].center`
     Position(SourceKind, usize),
     /// `lines[i].direction`, `tori[i].axis` (normalised after interpolation)
@@ -152,7 +154,7 @@ impl IntegrationSetting {
 pub const PARAMETER_FORMS: &str = "colors.energy, colors.energy_intensity, colors.background, points[i].position, \
 points[i].coefficient, lines[i].point, lines[i].direction, lines[i].coefficient, tori[i].center, tori[i].axis, \
 tori[i].major_radius, tori[i].coefficient, curves[i].control_points[j], curves[i].coefficient, curves[i].weights[j], \
-points[i].color and points[i].intensity (any kind of source), \
+points[i].color and points[i].intensity (any kind of source), curves[i].color_series[j], \
 integration.decay_length, integration.alpha, integration.beta, integration.epsilon";
 
 /// Splits `name[3]` into `("name", Some(3))`, `name` into `("name", None)`.
@@ -211,6 +213,7 @@ impl Parameter {
                 (Tori, "major_radius", None) => Parameter::MajorRadius(*i),
                 (Curves, "control_points", Some(j)) => Parameter::ControlPoint(*i, *j),
                 (Curves, "weights", Some(j)) => Parameter::Weight(*i, *j),
+                (Curves, "color_series", Some(j)) => Parameter::SeriesColor(*i, *j),
                 _ => return Err(err()),
             },
             _ => return Err(err()),
@@ -225,6 +228,7 @@ impl Parameter {
             Parameter::EnergyColor
                 | Parameter::BackgroundColor
                 | Parameter::SourceColor(..)
+                | Parameter::SeriesColor(..)
                 | Parameter::Position(..)
                 | Parameter::Direction(..)
                 | Parameter::ControlPoint(..)
@@ -244,9 +248,9 @@ impl Parameter {
             | Parameter::SourceColor(k, i)
             | Parameter::Intensity(k, i) => Some((k, i)),
             Parameter::MajorRadius(i) => Some((SourceKind::Tori, i)),
-            Parameter::ControlPoint(i, _) | Parameter::Weight(i, _) => {
-                Some((SourceKind::Curves, i))
-            }
+            Parameter::ControlPoint(i, _)
+            | Parameter::Weight(i, _)
+            | Parameter::SeriesColor(i, _) => Some((SourceKind::Curves, i)),
         }
     }
 
@@ -261,6 +265,7 @@ impl Parameter {
             Parameter::MajorRadius(_) => Parameter::MajorRadius(index),
             Parameter::ControlPoint(_, j) => Parameter::ControlPoint(index, j),
             Parameter::Weight(_, j) => Parameter::Weight(index, j),
+            Parameter::SeriesColor(_, j) => Parameter::SeriesColor(index, j),
             other => other,
         }
     }
@@ -294,6 +299,7 @@ impl fmt::Display for Parameter {
             Parameter::MajorRadius(i) => write!(f, "tori[{i}].major_radius"),
             Parameter::ControlPoint(i, j) => write!(f, "curves[{i}].control_points[{j}]"),
             Parameter::Weight(i, j) => write!(f, "curves[{i}].weights[{j}]"),
+            Parameter::SeriesColor(i, j) => write!(f, "curves[{i}].color_series[{j}]"),
             Parameter::Integration(k) => write!(f, "integration.{}", k.key()),
         }
     }

@@ -60,6 +60,10 @@ pub struct Curve {
     /// The W series; empty means all weights 1.
     pub weights: Vec<f64>,
     pub look: Look,
+    /// The color series: the glow's color along the chain, a quadratic B-spline of colors over the chain
+    /// parameter t* of the nearest point, like the W series (display values in [0, 1], times the look's
+    /// intensity); empty means the look's one color.
+    pub color_series: Vec<[f64; 3]>,
 }
 
 /// Every source of a scene, by kind.

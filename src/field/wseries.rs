@@ -9,15 +9,26 @@
 
 /// Evaluates `Sw(t)` for `t` in `[0, 1]` (values outside are clamped).
 pub fn evaluate(weights: &[f64], t: f64) -> f64 {
+    evaluate_by(weights.len(), t, |i| weights[i])
+}
+
+/// The color series at `t`: the same quadratic B-spline as the W series, of colors (each channel alike); a
+/// series of one color is that color. `colors` must not be empty.
+pub fn evaluate_colors(colors: &[[f64; 3]], t: f64) -> [f64; 3] {
+    std::array::from_fn(|c| evaluate_by(colors.len(), t, |i| colors[i][c]))
+}
+
+/// The series of `n` values `value(0..n)` at `t`: 1 without values.
+fn evaluate_by(n: usize, t: f64, value: impl Fn(usize) -> f64) -> f64 {
     let t = if t.is_nan() { 0.0 } else { t.clamp(0.0, 1.0) };
-    match weights.len() {
+    match n {
         0 => 1.0,
-        1 => weights[0],
-        2 => weights[0] + (weights[1] - weights[0]) * t,
+        1 => value(0),
+        2 => value(0) + (value(1) - value(0)) * t,
         n => {
             let [b0, b1, b2] = basis(n, t);
             let span = span_index(n, t);
-            b0 * weights[span - 2] + b1 * weights[span - 1] + b2 * weights[span]
+            b0 * value(span - 2) + b1 * value(span - 1) + b2 * value(span)
         }
     }
 }

@@ -23,10 +23,8 @@ pub mod gpu_data {
         pub up: [f32; 3],             // 96
         pub mode: u32,                // 108: BlendMode
         pub energy: [f32; 4],         // 112
-        pub layers: u32, // 128: the field texture's layers to read, 1 (B) or 4 (and the tint)
-        pub pad: [u32; 3], // 132
     }
-    const _: () = assert!(size_of::<BillboardParams>() == 144);
+    const _: () = assert!(size_of::<BillboardParams>() == 128);
 }
 
 use gpu_data::BillboardParams;
@@ -70,7 +68,6 @@ pub fn billboard_params(
     billboard: &Billboard,
     resolution: u32,
     energy: [f64; 3],
-    layers: u32,
     aspect: f64,
     mode: BlendMode,
 ) -> BillboardParams {
@@ -85,14 +82,13 @@ pub fn billboard_params(
         up: billboard.up.as_vec3().to_array(),
         mode: mode as u32,
         energy: [energy[0] as f32, energy[1] as f32, energy[2] as f32, 1.0],
-        layers,
-        pad: [0; 3],
     }
 }
 
 /// The pipeline of the billboard pass for one target format.
 pub struct BillboardRenderer {
-    pipeline: wgpu::RenderPipeline,
+    /// B alone, and B with the tint (`field_pass::layers_of`).
+    pipelines: [wgpu::RenderPipeline; 2],
     layout: wgpu::BindGroupLayout,
     params: wgpu::Buffer,
 }
@@ -132,32 +128,39 @@ impl BillboardRenderer {
                 texture(2, wgpu::TextureViewDimension::D2),
             ],
         );
-        let pipeline = render_pipeline(
-            device,
-            RenderPipelineSpec {
-                name: "billboard",
-                module: &module,
-                layout: &pipeline_layout,
-                vertex_buffers: &[],
-                topology: wgpu::PrimitiveTopology::TriangleStrip,
-                fragment_entry: "fs_main",
-                target: wgpu::ColorTargetState {
-                    format,
-                    blend: None,
-                    write_mask: wgpu::ColorWrites::ALL,
+        // Two pipelines, B alone and B with the tint (the shader's TINTED): a branch on a uniform around the
+        // tint's loads cost lavapipe 14 % of the billboard even where it is never taken (measured, a 4096^2
+        // frame).
+        let pipelines = [0.0, 1.0].map(|tinted| {
+            render_pipeline(
+                device,
+                RenderPipelineSpec {
+                    name: "billboard",
+                    module: &module,
+                    layout: &pipeline_layout,
+                    vertex_buffers: &[],
+                    topology: wgpu::PrimitiveTopology::TriangleStrip,
+                    fragment_entry: "fs_main",
+                    constants: &[("TINTED", tinted)],
+                    target: wgpu::ColorTargetState {
+                        format,
+                        blend: None,
+                        write_mask: wgpu::ColorWrites::ALL,
+                    },
                 },
-            },
-        );
+            )
+        });
         let params = uniform_buffer::<BillboardParams>(device, "energywave.billboard.params");
         Self {
-            pipeline,
+            pipelines,
             layout,
             params,
         }
     }
 
     /// Records the billboard into `target` (loaded, not cleared), reading `background` (a copy of what lies
-    /// behind, same size as the target) and `brightness` (the field pass's texture). The parameters are
+    /// behind, same size as the target) and `brightness` (the field pass's texture, of `layers` layers: B, or B
+    /// and the tint). The parameters are
     /// written through the queue, so one draw per submission.
     #[allow(clippy::too_many_arguments)]
     pub fn draw(
@@ -168,6 +171,7 @@ impl BillboardRenderer {
         target: &wgpu::TextureView,
         background: &wgpu::TextureView,
         brightness: &wgpu::TextureView,
+        layers: u32,
         params: &BillboardParams,
     ) {
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(params));
@@ -205,7 +209,7 @@ impl BillboardRenderer {
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_pipeline(&self.pipeline);
+        pass.set_pipeline(&self.pipelines[(layers > 1) as usize]);
         pass.set_bind_group(0, &bind_group, &[]);
         pass.draw(0..4, 0..1);
     }

@@ -54,6 +54,7 @@ impl BlitPass {
                 } else {
                     "fs_display"
                 },
+                constants: &[],
                 target: wgpu::ColorTargetState {
                     format: target_format,
                     blend: None,

@@ -93,6 +93,8 @@ pub struct RenderPipelineSpec<'a> {
     pub vertex_buffers: &'a [Option<wgpu::VertexBufferLayout<'a>>],
     pub topology: wgpu::PrimitiveTopology,
     pub fragment_entry: &'a str,
+    /// Values of the fragment stage's pipeline-overridable constants.
+    pub constants: &'a [(&'a str, f64)],
     pub target: wgpu::ColorTargetState,
 }
 
@@ -117,7 +119,10 @@ pub fn render_pipeline(device: &wgpu::Device, spec: RenderPipelineSpec) -> wgpu:
         fragment: Some(wgpu::FragmentState {
             module: spec.module,
             entry_point: Some(spec.fragment_entry),
-            compilation_options: Default::default(),
+            compilation_options: wgpu::PipelineCompilationOptions {
+                constants: spec.constants,
+                ..Default::default()
+            },
             targets: &[Some(spec.target)],
         }),
         multiview_mask: None,

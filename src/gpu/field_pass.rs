@@ -103,9 +103,9 @@ pub mod gpu_data {
         pub first_weight: u32,  // 8
         pub weight_count: u32,  // 12
         pub coefficient: f32,   // 16
-        pub pad0: f32,          // 20
-        pub pad1: f32,          // 24
-        pub pad2: f32,          // 28
+        pub first_color: u32,   // 20
+        pub color_count: u32,   // 24: 0, no color series
+        pub pad0: f32,          // 28
     }
     const _: () = assert!(size_of::<CurveSource>() == 32);
 
@@ -148,6 +148,8 @@ struct Packed {
     weights: Vec<f32>,
     /// Each term's `Ce_i - Ce` (`Scene::tints`) in rgb, points first, then lines, tori and curves.
     tints: Vec<[f32; 4]>,
+    /// The curves' color series, their intensity applied, in rgb (`CurveSource::first_color`).
+    colors: Vec<[f32; 4]>,
     /// The dispatches that together integrate the texture.
     chunks: Vec<Chunk>,
 }
@@ -343,11 +345,20 @@ fn pack(scene: &Scene, billboard: &Billboard) -> Packed {
                 ..CurveSegment::default()
             }));
         packed.weights.extend(c.weights.iter().map(|&w| w as f32));
+        let first_color = packed.colors.len() as u32;
+        let intensity = c.look.intensity.unwrap_or(scene.colors.energy_intensity);
+        packed.colors.extend(
+            (c.color_series.iter())
+                .map(|x| x.map(|v| (v * intensity) as f32))
+                .map(|[r, g, b]| [r, g, b, 0.0]),
+        );
         packed.curves.push(CurveSource {
             first_segment,
             segment_count: packed.segments.len() as u32 - first_segment,
             first_weight,
             weight_count: c.weights.len() as u32,
+            first_color,
+            color_count: c.color_series.len() as u32,
             coefficient: c.coefficient as f32,
             ..CurveSource::default()
         });
@@ -603,7 +614,7 @@ pub struct FieldRenderer {
     /// The chunks, one per `chunk_stride` bytes (bound with a dynamic offset).
     chunks: wgpu::Buffer,
     chunk_stride: u64,
-    buffers: [StorageBuffer; 7],
+    buffers: [StorageBuffer; 8],
     texture: Option<(wgpu::Texture, wgpu::TextureView)>,
     bind_group: Option<wgpu::BindGroup>,
     uploaded: Option<Packed>,
@@ -676,6 +687,7 @@ impl FieldRenderer {
                     count: None,
                 },
                 storage(9),
+                storage(10),
                 // A read-only storage buffer rather than a uniform one: lavapipe recompiles a shader for the
                 // values of uniforms that bound its loops (to unroll them), and a chunk's range bounds the term
                 // loop, so every new range meant a new compile (seconds each, minutes for some).
@@ -706,6 +718,7 @@ impl FieldRenderer {
             "energywave.field.segments",
             "energywave.field.weights",
             "energywave.field.tints",
+            "energywave.field.colors",
         ]
         .map(|label| StorageBuffer::new(device, label, &[]));
         let chunk_stride = (device.limits().min_storage_buffer_offset_alignment as u64)
@@ -800,7 +813,7 @@ impl FieldRenderer {
         }
         checked(device, || {
             let mut rebind = self.bind_group.is_none();
-            let data: [&[u8]; 7] = [
+            let data: [&[u8]; 8] = [
                 bytemuck::cast_slice(&packed.points),
                 bytemuck::cast_slice(&packed.lines),
                 bytemuck::cast_slice(&packed.tori),
@@ -808,6 +821,7 @@ impl FieldRenderer {
                 bytemuck::cast_slice(&packed.segments),
                 bytemuck::cast_slice(&packed.weights),
                 bytemuck::cast_slice(&packed.tints),
+                bytemuck::cast_slice(&packed.colors),
             ];
             for (buffer, bytes) in self.buffers.iter_mut().zip(data) {
                 rebind |= buffer.write(device, queue, bytes);
@@ -866,10 +880,10 @@ impl FieldRenderer {
             binding: 0,
             resource: self.params.as_entire_binding(),
         }];
-        // Bindings 1 to 6, and the tints at 9.
+        // Bindings 1 to 6, then the tints at 9 and the color series at 10.
         for (i, b) in self.buffers.iter().enumerate() {
             entries.push(wgpu::BindGroupEntry {
-                binding: if i < 6 { i as u32 + 1 } else { 9 },
+                binding: if i < 6 { i as u32 + 1 } else { i as u32 + 3 },
                 resource: b.buffer.as_entire_binding(),
             });
         }
@@ -1286,6 +1300,7 @@ mod tests {
                 coefficient: 1.0,
                 weights: vec![1.0],
                 look: Default::default(),
+                color_series: Vec::new(),
             })
             .collect();
         s.integration.integrator = integrator;

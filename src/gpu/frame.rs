@@ -160,7 +160,6 @@ impl SceneRenderer {
                 &billboard,
                 resolution,
                 scene.colors.energy_color(),
-                crate::gpu::field_pass::layers_of(scene),
                 aspect,
                 BlendMode::of(transparent, scene.colors.blend),
             );
@@ -171,6 +170,7 @@ impl SceneRenderer {
                 &targets.color_view,
                 &targets.background_view,
                 brightness,
+                crate::gpu::field_pass::layers_of(scene),
                 &params,
             );
         })

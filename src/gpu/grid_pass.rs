@@ -84,6 +84,7 @@ impl GridPass {
                 })],
                 topology: wgpu::PrimitiveTopology::LineList,
                 fragment_entry: "fs_main",
+                constants: &[],
                 target: wgpu::ColorTargetState {
                     format: FRAME_FORMAT,
                     // Lines over the background; alpha stays 1 (the billboard copies it).

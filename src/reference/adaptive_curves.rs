@@ -580,6 +580,22 @@ fn split_at_switch(
 
 /// One chain's integral along `s -> e` within `tolerance` on B, on the pieces of its features, cut at its kinks.
 fn integrate_term(c: &Curve, s: DVec3, e: DVec3, settings: &Integration, tolerance: f64) -> f64 {
+    integrate_weighted(c, s, e, settings, tolerance, &|t| {
+        wseries::evaluate(&c.weights, t)
+    })
+}
+
+/// A chain's term with `weight(t*)` in the place of its W series `Sw(t*)`: `b weight(t*) / max(eps, d)`
+/// integrated along `s -> e` within `tolerance`, on the same features and cuts (they depend on where the nearest
+/// point jumps, not on the weight).
+fn integrate_weighted(
+    c: &Curve,
+    s: DVec3,
+    e: DVec3,
+    settings: &Integration,
+    tolerance: f64,
+    weight: &dyn Fn(f64) -> f64,
+) -> f64 {
     if c.coefficient == 0.0 {
         return 0.0;
     }
@@ -607,9 +623,7 @@ fn integrate_term(c: &Curve, s: DVec3, e: DVec3, settings: &Integration, toleran
         } else {
             curve::nearest_on_chain(cp, p)
         };
-        wseries::evaluate(&c.weights, n.t)
-            * falloff(n.distance, settings.epsilon)
-            * zeta(t, settings.alpha, settings.beta)
+        weight(n.t) * falloff(n.distance, settings.epsilon) * zeta(t, settings.alpha, settings.beta)
     };
     integrate_pieces(
         &found,
@@ -638,6 +652,22 @@ pub fn brightness(sources: &Sources, settings: &Integration, s: DVec3, e: DVec3)
         .iter()
         .map(|c| integrate_term(c, s, e, settings, share))
         .sum()
+}
+
+/// Curve `k`'s term with `weight(t*)` in the place of its W series (`integrate_weighted`), within its share
+/// of the tolerance times `scale` (the weight's largest size against the W series').
+pub fn term_weighted(
+    sources: &Sources,
+    k: usize,
+    settings: &Integration,
+    (s, e): (DVec3, DVec3),
+    weight: &dyn Fn(f64) -> f64,
+    scale: f64,
+) -> f64 {
+    let share = settings.tolerance / sources.len().max(1) as f64 * scale;
+    (sources.curves.get(k)).map_or(0.0, |c| {
+        integrate_weighted(c, s, e, settings, share, weight)
+    })
 }
 
 /// The part of B of curve `k` alone, as `brightness` integrates it.
@@ -669,6 +699,7 @@ mod tests {
             coefficient: 1.0,
             weights: vec![],
             look: Default::default(),
+            color_series: Vec::new(),
         }
     }
 
@@ -720,6 +751,7 @@ mod tests {
                 coefficient: 0.4,
                 weights: vec![],
                 look: Default::default(),
+                color_series: Vec::new(),
             }],
             ..Default::default()
         };
@@ -754,6 +786,7 @@ mod tests {
                 coefficient: 3.0,
                 weights: vec![0.3, 1.0, 0.5, 1.0],
                 look: Default::default(),
+                color_series: Vec::new(),
             }],
             ..Default::default()
         };

@@ -7,7 +7,7 @@ use rayon::prelude::*;
 
 use super::simpson::jitter_offset;
 use super::{adaptive_curves, adaptive_smooth, simpson};
-use crate::field::Sources;
+use crate::field::{Sources, wseries};
 use crate::geometry::{Billboard, Reach, ray_end};
 use crate::integrate::{Integration, Integrator};
 use crate::scene::Scene;
@@ -52,20 +52,47 @@ pub fn term_brightness(
 
 /// The tint of the segment from `s` to `e`: `sum B_i (Ce_i - Ce)` over the terms, `tints` their `Ce_i - Ce`
 /// (`Scene::tints`); what the field pass integrates beside B, so that the colored sum `sum B_i Ce_i` is
-/// `B Ce + tint`. Terms in the scene's color add nothing and are not integrated.
+/// `B Ce + tint`. Terms in the scene's color add nothing and are not integrated. A curve with a color series
+/// adds, beside its B_i times `-Ce`, its term with the series in the place of the constant color, channel by
+/// channel, each within the term's share of the tolerance times the channel's largest value.
 pub fn tint_of(
-    sources: &Sources,
+    scene: &Scene,
     tints: &[[f64; 3]],
     settings: &Integration,
-    s: DVec3,
-    e: DVec3,
+    (s, e): (DVec3, DVec3),
     xi: f64,
 ) -> [f64; 3] {
+    let sources = &scene.sources;
     let mut sum = [0.0; 3];
     for (k, t) in tints.iter().enumerate() {
         if t.iter().any(|&x| x != 0.0) {
             let b = term_brightness(sources, k, settings, s, e, xi);
             (0..3).for_each(|c| sum[c] += b * t[c]);
+        }
+        let Some(curve) = scene.series_curve(k) else {
+            continue;
+        };
+        let index = k - (sources.points.len() + sources.lines.len() + sources.tori.len());
+        for (c, out) in sum.iter_mut().enumerate() {
+            let color = |t: f64| scene.colors.color_along(curve, t)[c];
+            let largest = (curve.color_series.iter()).fold(0.0f64, |m, x| m.max(x[c]));
+            let scale = largest
+                * curve
+                    .look
+                    .intensity
+                    .unwrap_or(scene.colors.energy_intensity);
+            if scale == 0.0 {
+                continue;
+            }
+            let weight = |t: f64| wseries::evaluate(&curve.weights, t) * color(t);
+            *out += match settings.integrator {
+                Integrator::Simpson => {
+                    simpson::curve_weighted(curve, settings, (s, e), xi, &weight)
+                }
+                Integrator::Adaptive => {
+                    adaptive_curves::term_weighted(sources, index, settings, (s, e), &weight, scale)
+                }
+            };
         }
     }
     sum
@@ -96,7 +123,7 @@ pub fn render_brightness(scene: &Scene, billboard: &Billboard) -> BrightnessText
             for (i, (out, tint_out)) in row.iter_mut().zip(tint_row).enumerate() {
                 let ray = texel_ray(scene, billboard, reach, i as u32, j as u32);
                 *out = brightness(&scene.sources, &ray.settings, ray.s, ray.e, ray.xi);
-                *tint_out = tint_of(&scene.sources, &tints, &ray.settings, ray.s, ray.e, ray.xi);
+                *tint_out = tint_of(scene, &tints, &ray.settings, (ray.s, ray.e), ray.xi);
             }
         });
     BrightnessTexture {

@@ -5,7 +5,7 @@
 
 use glam::DVec3;
 
-use crate::field::Sources;
+use crate::field::{Curve, Sources, curve, falloff};
 use crate::integrate::{Integration, zeta};
 
 /// The brightness B of the segment from `s` to `e` by the papers' rule with the settings' `divisions`:
@@ -31,6 +31,27 @@ pub fn term_brightness(
 ) -> f64 {
     let f = |t: f64| {
         sources.term(k, s + (e - s) * t, settings.epsilon) * zeta(t, settings.alpha, settings.beta)
+    };
+    match settings.jitter {
+        None => simpson(f, settings.divisions),
+        Some(_) => shifted_rectangle(f, settings.divisions, xi),
+    }
+}
+
+/// Curve `c`'s term with `weight(t*)` in the place of its W series, by the same rule as `brightness`.
+pub fn curve_weighted(
+    c: &Curve,
+    settings: &Integration,
+    (s, e): (DVec3, DVec3),
+    xi: f64,
+    weight: &dyn Fn(f64) -> f64,
+) -> f64 {
+    let f = |t: f64| {
+        let n = curve::nearest_on_chain(&c.control_points, s + (e - s) * t);
+        c.coefficient
+            * weight(n.t)
+            * falloff(n.distance, settings.epsilon)
+            * zeta(t, settings.alpha, settings.beta)
     };
     match settings.jitter {
         None => simpson(f, settings.divisions),

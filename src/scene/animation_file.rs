@@ -245,7 +245,10 @@ pub(super) fn validate(
 fn check_value(c: &mut Checker<'_, '_>, path: &FieldPath, parameter: &Parameter, value: Value) {
     match (parameter, value) {
         (
-            Parameter::EnergyColor | Parameter::BackgroundColor | Parameter::SourceColor(..),
+            Parameter::EnergyColor
+            | Parameter::BackgroundColor
+            | Parameter::SourceColor(..)
+            | Parameter::SeriesColor(..),
             Value::Vector(v),
         ) => {
             c.color(path, v);

@@ -138,6 +138,8 @@ pub(crate) struct CurveFile {
     pub color: Option<[f64; 3]>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub intensity: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub color_series: Option<Vec<[f64; 3]>>,
 }
 
 /// `[animation]`: the timeline and the keyed parameters.

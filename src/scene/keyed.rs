@@ -47,6 +47,7 @@ impl Parameter {
             Parameter::MajorRadius(i) => Value::Number(s.tori.get(i)?.major_radius),
             Parameter::ControlPoint(i, j) => v(*s.curves.get(i)?.control_points.get(j)?),
             Parameter::Weight(i, j) => Value::Number(*s.curves.get(i)?.weights.get(j)?),
+            Parameter::SeriesColor(i, j) => Value::Vector(*s.curves.get(i)?.color_series.get(j)?),
             Parameter::Integration(k) => Value::Number(match k {
                 IntegrationSetting::DecayLength => scene.integration.decay_length,
                 IntegrationSetting::Alpha => scene.integration.alpha,
@@ -143,6 +144,12 @@ impl Parameter {
                 // Every keyable setting is positive. Interpolating between valid keys stays valid; this only
                 // guards against rounding.
                 *slot = x.max(1e-9);
+            }
+            (Parameter::SeriesColor(i, j), Value::Vector(c)) => {
+                if let Some(slot) = (s.curves.get_mut(*i)).and_then(|x| x.color_series.get_mut(*j))
+                {
+                    *slot = c.map(|x| x.clamp(0.0, 1.0));
+                }
             }
             (Parameter::Weight(i, j), Value::Number(x)) => {
                 if let Some(slot) = s.curves.get_mut(*i).and_then(|c| c.weights.get_mut(*j)) {

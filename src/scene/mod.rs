@@ -70,6 +70,16 @@ impl Colors {
         let intensity = look.intensity.unwrap_or(self.energy_intensity);
         look.color.unwrap_or(self.energy).map(|c| c * intensity)
     }
+
+    /// A curve's energy color at chain parameter `t`: its color series there times its intensity, or its one
+    /// color (`color_of`) without a series.
+    pub fn color_along(&self, curve: &Curve, t: f64) -> [f64; 3] {
+        if curve.color_series.is_empty() {
+            return self.color_of(&curve.look);
+        }
+        let intensity = curve.look.intensity.unwrap_or(self.energy_intensity);
+        crate::field::wseries::evaluate_colors(&curve.color_series, t).map(|c| c * intensity)
+    }
 }
 
 /// How the glow's brightness B puts Ce over Cb.
@@ -289,6 +299,7 @@ impl Scene {
                     pulse: None,
                     color: s.look.color,
                     intensity: s.look.intensity,
+                    color_series: (!s.color_series.is_empty()).then(|| s.color_series.clone()),
                 })
                 .collect(),
             animation: None,
@@ -300,21 +311,40 @@ impl Scene {
     /// Each source's color less the scene's, `Ce_i - Ce`, in the order of the field pass's terms (points, lines,
     /// tori, curves): what the field pass integrates beside B, `sum B_i (Ce_i - Ce)`, so that the colored sum is
     /// `B Ce + sum B_i (Ce_i - Ce) = sum B_i Ce_i`. Zero for every source in the scene's color, where the blend is
-    /// the papers' own to the bit.
+    /// the papers' own to the bit. A curve with a color series has `-Ce`: its color varies along it, and the
+    /// field pass adds the integral of B_i's integrand times the series (`Colors::color_along`) itself.
     pub fn tints(&self) -> Vec<[f64; 3]> {
         let base = self.colors.energy_color();
-        (self.sources.looks())
-            .map(|look| {
-                let c = self.colors.color_of(look);
-                std::array::from_fn(|k| c[k] - base[k])
+        let series = |k: usize| self.series_curve(k).is_some();
+        (self.sources.looks().enumerate())
+            .map(|(k, look)| {
+                let c = if series(k) {
+                    [0.0; 3]
+                } else {
+                    self.colors.color_of(look)
+                };
+                std::array::from_fn(|j| c[j] - base[j])
             })
             .collect()
     }
 
-    /// True when some source's color differs from the scene's (`tints` is not all zero).
+    /// Term `k` (points, lines, tori, curves) when it is a curve with a color series.
+    pub fn series_curve(&self, k: usize) -> Option<&Curve> {
+        let s = &self.sources;
+        let first = s.points.len() + s.lines.len() + s.tori.len();
+        let c = s.curves.get(k.checked_sub(first)?)?;
+        (!c.color_series.is_empty()).then_some(c)
+    }
+
+    /// True when some source's color differs from the scene's (`tints` is not all zero), or varies along it.
     pub fn tinted(&self) -> bool {
         let base = self.colors.energy_color();
         (self.sources.looks()).any(|look| self.colors.color_of(look) != base)
+            || self
+                .sources
+                .curves
+                .iter()
+                .any(|c| !c.color_series.is_empty())
     }
 
     /// The billboard for a frame of `aspect` (width / height): the scene's own, or placed automatically.
@@ -791,11 +821,33 @@ fn check_sources(c: &mut Checker<'_, '_>, file: &SceneFile) -> Sources {
                 w.clone()
             }
         };
+        let color_series = match &curve.color_series {
+            None => Vec::new(),
+            Some(series) if series.is_empty() => {
+                c.fail(
+                    &path.key("color_series"),
+                    "the color series is empty: give at least one color, or remove the key for the curve's one color",
+                );
+                Vec::new()
+            }
+            Some(series) => {
+                if curve.color.is_some() {
+                    c.fail(
+                        &path.key("color_series"),
+                        "give color or color_series, not both: the series is the curve's color along it",
+                    );
+                }
+                (series.iter().enumerate())
+                    .map(|(j, &a)| c.color(&path.key("color_series").index(j), a))
+                    .collect()
+            }
+        };
         sources.curves.push(Curve {
             control_points,
             coefficient: curve.coefficient,
             weights,
             look: c.look(&path, curve.color, curve.intensity),
+            color_series,
         });
     }
     sources

@@ -94,6 +94,11 @@ pub enum Edit {
     Blend(Blend),
     /// A source's own color and intensity dropped, with their keys: it takes the scene's again.
     InheritLook(SourceKind, usize),
+    /// A color appended to curve `i`'s color series (its last, or the curve's one color for a new series,
+    /// which then starts with two: the same look until one is changed).
+    AddSeriesColor(usize),
+    /// Color `j` removed from curve `i`'s color series (the last removed, the curve has one color again).
+    RemoveSeriesColor(usize, usize),
     /// A key of a parameter at the current frame, to a value: its track's, or a new track's (a still scene gets
     /// an animation).
     Key(Parameter, Value),
@@ -151,13 +156,41 @@ impl Edit {
             Edit::Jitter(seed) => scene.integration.jitter = seed,
             Edit::Resolution(w) => scene.billboard.resolution = w,
             Edit::Blend(b) => scene.colors.blend = b,
+            Edit::AddSeriesColor(i) => {
+                let colors = scene.colors.clone();
+                if let Some(c) = scene.sources.curves.get_mut(i) {
+                    let one = c.look.color.unwrap_or(colors.energy);
+                    if c.color_series.is_empty() {
+                        c.color_series.push(one);
+                        c.look.color = None;
+                    }
+                    let last = *c.color_series.last().expect("not empty");
+                    c.color_series.push(last);
+                }
+            }
+            Edit::RemoveSeriesColor(i, j) => {
+                if let Some(c) = scene.sources.curves.get_mut(i)
+                    && j < c.color_series.len()
+                {
+                    c.color_series.remove(j);
+                    if c.color_series.len() == 1 {
+                        c.look.color = c.color_series.pop();
+                    }
+                }
+            }
             Edit::InheritLook(kind, i) => {
                 if let Some(look) = scene.look_mut(kind, i) {
                     *look = Default::default();
                 }
+                if kind == SourceKind::Curves
+                    && let Some(c) = scene.sources.curves.get_mut(i)
+                {
+                    c.color_series.clear();
+                }
                 if let Some(a) = &mut scene.animation {
                     a.tracks.retain(|t| {
                         !matches!(t.parameter, Parameter::SourceColor(k, j) | Parameter::Intensity(k, j) if (k, j) == (kind, i))
+                            && !matches!(t.parameter, Parameter::SeriesColor(j, _) if kind == SourceKind::Curves && j == i)
                     });
                 }
             }
@@ -193,6 +226,7 @@ impl Edit {
                     coefficient: 4.0,
                     weights: vec![],
                     look: Default::default(),
+                    color_series: Vec::new(),
                 }),
             },
             Edit::DuplicateSource(kind, i) => {

@@ -44,7 +44,14 @@ pub(super) fn sources_section(ui: &mut Ui, cx: &Context, out: &mut Edits<'_>) {
                 p.position,
             );
             coefficient(ui, out, SourceKind::Points, i, p.coefficient);
-            look_editor(ui, out, &shown.colors, SourceKind::Points, i, &p.look);
+            look_editor(
+                ui,
+                out,
+                &shown.colors,
+                (SourceKind::Points, i),
+                &p.look,
+                false,
+            );
         },
     );
     list(
@@ -70,7 +77,14 @@ pub(super) fn sources_section(ui: &mut Ui, cx: &Context, out: &mut Edits<'_>) {
                 l.direction,
             );
             coefficient(ui, out, SourceKind::Lines, i, l.coefficient);
-            look_editor(ui, out, &shown.colors, SourceKind::Lines, i, &l.look);
+            look_editor(
+                ui,
+                out,
+                &shown.colors,
+                (SourceKind::Lines, i),
+                &l.look,
+                false,
+            );
         },
     );
     list(
@@ -106,7 +120,14 @@ pub(super) fn sources_section(ui: &mut Ui, cx: &Context, out: &mut Edits<'_>) {
                 );
             });
             coefficient(ui, out, SourceKind::Tori, i, t.coefficient);
-            look_editor(ui, out, &shown.colors, SourceKind::Tori, i, &t.look);
+            look_editor(
+                ui,
+                out,
+                &shown.colors,
+                (SourceKind::Tori, i),
+                &t.look,
+                false,
+            );
         },
     );
     let pulsed = |i: usize| {
@@ -124,7 +145,16 @@ pub(super) fn sources_section(ui: &mut Ui, cx: &Context, out: &mut Edits<'_>) {
         &s.curves,
         |ui, out, i, c| {
             curve_editor(ui, out, i, c, pulsed(i));
-            look_editor(ui, out, &shown.colors, SourceKind::Curves, i, &c.look);
+            let series = !c.color_series.is_empty();
+            look_editor(
+                ui,
+                out,
+                &shown.colors,
+                (SourceKind::Curves, i),
+                &c.look,
+                series,
+            );
+            color_series_editor(ui, out, &shown.colors, i, c);
         },
     );
 }
@@ -147,16 +177,17 @@ pub(super) fn coefficient(ui: &mut Ui, out: &mut Edits<'_>, kind: SourceKind, i:
     });
 }
 
-/// A source's color: the scene's, or its own color and intensity (each keyable).
+/// A source's color: the scene's, or its own color and intensity (each keyable); a curve's color series
+/// (`series`) stands for its one color.
 pub(super) fn look_editor(
     ui: &mut Ui,
     out: &mut Edits<'_>,
     colors: &Colors,
-    kind: SourceKind,
-    i: usize,
+    (kind, i): (SourceKind, usize),
     look: &Look,
+    series: bool,
 ) {
-    let own = look.color.is_some() || look.intensity.is_some();
+    let own = look.color.is_some() || look.intensity.is_some() || series;
     let mut checked = own;
     let swatch = colors.color_of(look);
     ui.horizontal(|ui| {
@@ -180,13 +211,15 @@ pub(super) fn look_editor(
     if !own {
         return;
     }
-    color_field(
-        ui,
-        out,
-        "color",
-        Parameter::SourceColor(kind, i),
-        look.color.unwrap_or(colors.energy),
-    );
+    if !series {
+        color_field(
+            ui,
+            out,
+            "color",
+            Parameter::SourceColor(kind, i),
+            look.color.unwrap_or(colors.energy),
+        );
+    }
     ui.horizontal(|ui| {
         number(
             ui,
@@ -203,6 +236,65 @@ pub(super) fn look_editor(
         )
         .on_hover_text("Multiplies the color: above 1 the glow is brighter than a display color (HDR, kept in EXR)");
     });
+}
+
+/// Curve `i`'s color series: a color editor (keyable) per control color with its removal, one more, and the
+/// gradient it makes along the chain.
+fn color_series_editor(ui: &mut Ui, out: &mut Edits<'_>, colors: &Colors, i: usize, c: &Curve) {
+    if c.color_series.is_empty() {
+        if ui
+            .small_button("+ color series")
+            .on_hover_text("A color along the chain, from its first end to its last (a white core to a colored tip)")
+            .clicked()
+        {
+            out.push(Action::Edit(Edit::AddSeriesColor(i)));
+        }
+        return;
+    }
+    ui.label("Color along the curve");
+    for (j, &color) in c.color_series.iter().enumerate() {
+        ui.horizontal(|ui| {
+            color_field(
+                ui,
+                out,
+                &format!("c{j}"),
+                Parameter::SeriesColor(i, j),
+                color,
+            );
+            if ui
+                .small_button("remove")
+                .on_hover_text(format!("Remove c{j}"))
+                .clicked()
+            {
+                out.push(Action::Edit(Edit::RemoveSeriesColor(i, j)));
+            }
+        });
+    }
+    if ui.small_button("+ color").clicked() {
+        out.push(Action::Edit(Edit::AddSeriesColor(i)));
+    }
+    gradient_strip(ui, |t| colors.color_along(c, t));
+}
+
+/// The colors `color(t)` for t from 0 to 1 as a strip (intensities above 1 shown clamped).
+fn gradient_strip(ui: &mut Ui, color: impl Fn(f64) -> [f64; 3]) {
+    let (rect, _) = ui.allocate_exact_size(
+        egui::vec2(ui.available_width().min(300.0), 14.0),
+        egui::Sense::hover(),
+    );
+    let steps = 64;
+    let painter = ui.painter_at(rect);
+    for k in 0..steps {
+        let t = (k as f64 + 0.5) / steps as f64;
+        let [r, g, b] = color(t).map(|x| (x.clamp(0.0, 1.0) * 255.0).round() as u8);
+        let x0 = rect.left() + rect.width() * k as f32 / steps as f32;
+        let x1 = rect.left() + rect.width() * (k + 1) as f32 / steps as f32;
+        painter.rect_filled(
+            egui::Rect::from_x_y_ranges(x0..=x1, rect.y_range()),
+            0.0,
+            egui::Color32::from_rgb(r, g, b),
+        );
+    }
 }
 
 /// A small square of a color (an intensity above 1 shown clamped).
