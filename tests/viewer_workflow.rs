@@ -756,3 +756,57 @@ fn a_source_gets_its_own_color_in_the_panel_keyed_and_undone() {
     h.run();
     assert_eq!(h.state().scene().sources.tori[0].look.color, Some(energy));
 }
+
+#[test]
+fn a_curve_gets_a_color_series_in_the_panel_and_loses_it_again() {
+    use energywave::animation::Parameter;
+    let scene = light_scene();
+    let energy = scene.colors.energy;
+    let mut h = harness(scene);
+    h.get_by_label("+ color series").scroll_to_me();
+    h.run();
+    h.get_by_label("+ color series").click();
+    h.run();
+    // Two colors, both the curve's one color: the same look until one changes.
+    assert_eq!(
+        h.state().scene().sources.curves[0].color_series,
+        [energy, energy]
+    );
+    assert!(h.state().scene().tinted());
+    h.get_by_label("+ color").scroll_to_me();
+    h.run();
+    h.get_by_label("+ color").click();
+    h.run();
+    assert_eq!(h.state().scene().sources.curves[0].color_series.len(), 3);
+    // A control color keyed, then removed with it.
+    h.get_by_label("key curves[0].color_series[2]")
+        .scroll_to_me();
+    h.run();
+    h.get_by_label("key curves[0].color_series[2]").click();
+    h.run();
+    let keyed =
+        |h: &Harness<'static, ViewerApp>| {
+            h.state().scene().animation.as_ref().is_some_and(|a| {
+                (a.tracks.iter()).any(|t| t.parameter == Parameter::SeriesColor(0, 2))
+            })
+        };
+    assert!(keyed(&h));
+    h.get_by_label("remove c2").scroll_to_me();
+    h.run();
+    h.get_by_label("remove c2").click();
+    h.run();
+    assert_eq!(h.state().scene().sources.curves[0].color_series.len(), 2);
+    assert!(!keyed(&h), "a key of a removed color goes with it");
+    // Down to one color: the curve has that one color again, and no series.
+    h.get_by_label("remove c1").scroll_to_me();
+    h.run();
+    h.get_by_label("remove c1").click();
+    h.run();
+    let curve = &h.state().scene().sources.curves[0];
+    assert!(curve.color_series.is_empty());
+    assert_eq!(curve.look.color, Some(energy));
+    // Undo brings the series back.
+    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+    h.run();
+    assert_eq!(h.state().scene().sources.curves[0].color_series.len(), 2);
+}

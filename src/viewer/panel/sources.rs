@@ -262,8 +262,8 @@ fn color_series_editor(ui: &mut Ui, out: &mut Edits<'_>, colors: &Colors, i: usi
                 color,
             );
             if ui
-                .small_button("remove")
-                .on_hover_text(format!("Remove c{j}"))
+                .small_button(format!("remove c{j}"))
+                .on_hover_text(format!("Remove c{j} from the color series"))
                 .clicked()
             {
                 out.push(Action::Edit(Edit::RemoveSeriesColor(i, j)));
