@@ -810,3 +810,26 @@ fn a_curve_gets_a_color_series_in_the_panel_and_loses_it_again() {
     h.run();
     assert_eq!(h.state().scene().sources.curves[0].color_series.len(), 2);
 }
+
+#[test]
+fn glare_is_turned_on_in_the_panel_and_is_an_undo_step() {
+    use common::viewer::{mean_abs_difference, viewport_pixels};
+    let mut h = harness(light_scene());
+    let plain = viewport_pixels(&mut h);
+    h.get_by_label("glare (fog glow)").scroll_to_me();
+    h.run();
+    h.get_by_label("glare (fog glow)").click();
+    h.run();
+    assert_eq!(
+        h.state().scene().glare,
+        Some(energywave::scene::Glare::default())
+    );
+    let glared = viewport_pixels(&mut h);
+    assert!(
+        mean_abs_difference(&plain, &glared) > 0.001,
+        "the glow glares"
+    );
+    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+    h.run();
+    assert_eq!(h.state().scene().glare, None);
+}

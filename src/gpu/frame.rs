@@ -5,6 +5,7 @@
 use super::billboard_pass::{BillboardRenderer, BlendMode, billboard_params, view_projection};
 use super::context::{GpuError, checked, read_texture, texture_2d};
 use super::field_pass::FieldRenderer;
+use super::glare_pass::GlarePass;
 use crate::scene::Scene;
 
 /// Format of composed frames: half floats (renderable on every backend, unlike Rgba32Float on GL), 11 bits of
@@ -51,6 +52,7 @@ impl FrameTargets {
 pub struct SceneRenderer {
     field: FieldRenderer,
     billboard: BillboardRenderer,
+    glare: GlarePass,
 }
 
 impl SceneRenderer {
@@ -58,6 +60,7 @@ impl SceneRenderer {
         Self {
             field: FieldRenderer::new(device),
             billboard: BillboardRenderer::new(device, FRAME_FORMAT),
+            glare: GlarePass::new(device),
         }
     }
 
@@ -120,7 +123,15 @@ impl SceneRenderer {
         let [w, h] = targets.size;
         let aspect = w as f64 / h as f64;
         let billboard = scene.place_billboard(aspect);
+        let layers = crate::gpu::field_pass::layers_of(scene);
         checked(device, || {
+            // The glare, where the scene has one, adds to the field before the blend.
+            let brightness = match &scene.glare {
+                Some(glare) => self.glare.encode(
+                    device, queue, encoder, brightness, resolution, layers, glare,
+                ),
+                None => brightness,
+            };
             let view_proj = view_projection(&scene.camera, &billboard, aspect)
                 .as_mat4()
                 .to_cols_array_2d();
@@ -170,7 +181,7 @@ impl SceneRenderer {
                 &targets.color_view,
                 &targets.background_view,
                 brightness,
-                crate::gpu::field_pass::layers_of(scene),
+                layers,
                 &params,
             );
         })

@@ -8,6 +8,7 @@ mod context;
 mod field_pass;
 mod frame;
 mod frame_average;
+pub mod glare_pass;
 pub mod grid_pass;
 mod headless;
 pub mod shaders;

@@ -43,6 +43,8 @@ pub fn field_module_source(k: usize) -> String {
 
 /// The billboard pass.
 pub const BILLBOARD_PASS: &str = include_str!("../../shaders/billboard.wgsl");
+/// The glare pass (`gpu::glare_pass`).
+pub const GLARE_PASS: &str = include_str!("../../shaders/glare.wgsl");
 
 /// The smooth upsampling of the viewer's low-resolution preview field.
 pub const UPSAMPLE_PASS: &str = include_str!("../../shaders/upsample.wgsl");

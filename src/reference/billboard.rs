@@ -98,6 +98,8 @@ pub fn compose_frame(
     } else {
         [r, g, b, 1.0]
     };
+    let glared = scene.glare.map(|g| super::glare::apply(texture, &g));
+    let texture = glared.as_ref().unwrap_or(texture);
     let mut pixels = vec![clear; width as usize * height as usize];
     pixels
         .par_chunks_mut(width.max(1) as usize)

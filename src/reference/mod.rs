@@ -12,6 +12,7 @@
 //! | `adaptive.wgsl`         | [`adaptive`]: the adaptive integrator's shared parts (Gauss-Kronrod, pieces, cuts) |
 //! | `adaptive_smooth.wgsl`  | [`adaptive_smooth`]: points, lines (in closed form where it holds) and tori  |
 //! | `adaptive_curves.wgsl`  | [`adaptive_curves`]: curve chains, their scan, jumps and kinks               |
+//! | `glare.wgsl`            | [`glare`]: the fog glow, the excess over a threshold blurred and added back  |
 //! | `billboard.wgsl`        | [`billboard`]: the blend and the composed frame                              |
 //!
 //! The other shaders only display or resample a field already integrated (`average.wgsl`, the viewer's running
@@ -27,6 +28,7 @@ pub mod adaptive_smooth;
 pub mod billboard;
 pub mod converged;
 pub mod field_pass;
+pub mod glare;
 pub mod simpson;
 
 pub use billboard::compose_frame;

@@ -21,6 +21,8 @@ pub(crate) struct SceneFile {
     pub integration: Option<IntegrationFile>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub colors: Option<ColorsFile>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub glare: Option<GlareFile>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub points: Vec<PointFile>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
@@ -81,6 +83,20 @@ pub(crate) struct ColorsFile {
     pub energy_intensity: Option<f64>,
     pub background: Option<[f64; 3]>,
     pub blend: Option<String>,
+}
+
+/// `[glare]`: the fog glow (`scene::Glare`).
+#[derive(Debug, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct GlareFile {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kind: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub threshold: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub size: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub strength: Option<f64>,
 }
 
 #[derive(Debug, Deserialize, Serialize)]

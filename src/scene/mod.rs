@@ -104,6 +104,50 @@ impl Blend {
     }
 }
 
+/// Glare, an optional post pass (`[glare]`, off without it): a fog glow, the parts of the glow brighter than
+/// `threshold` blurred by a Gaussian and added back `strength` times, in the billboard's plane. It adds to B and
+/// to the colored sum alike, each texel's excess in its own color, so every blend and the transparent export
+/// take it as more glow.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Glare {
+    /// B above which the glow glares, at least 0 (1: only what blows out).
+    pub threshold: f64,
+    /// The Gaussian's standard deviation as a fraction of the billboard's side, in (0, MAX_GLARE_SIZE].
+    pub size: f64,
+    /// How much of the blurred excess is added, at least 0.
+    pub strength: f64,
+}
+
+impl Default for Glare {
+    fn default() -> Self {
+        Self {
+            threshold: 1.0,
+            size: 0.03,
+            strength: 0.6,
+        }
+    }
+}
+
+/// The largest glare size: a tenth of the billboard's side.
+pub const MAX_GLARE_SIZE: f64 = 0.1;
+
+/// The most texels the glare's blur reaches to either side (3 standard deviations, at most).
+pub const MAX_GLARE_RADIUS: u32 = 128;
+
+impl Glare {
+    /// The blur's weights for offsets `-r..=r` (r = ceil(3 sigma), at most `MAX_GLARE_RADIUS`), sigma = size W
+    /// texels on a billboard of W, normalised to sum to 1: the one kernel of the GPU pass and its twin.
+    pub fn kernel(&self, w: u32) -> Vec<f64> {
+        let sigma = (self.size * w as f64).max(1e-6);
+        let r = ((3.0 * sigma).ceil() as u32).min(MAX_GLARE_RADIUS) as i64;
+        let raw: Vec<f64> = (-r..=r)
+            .map(|k| (-(k * k) as f64 / (2.0 * sigma * sigma)).exp())
+            .collect();
+        let total: f64 = raw.iter().sum();
+        raw.into_iter().map(|x| x / total).collect()
+    }
+}
+
 /// A whole scene.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Scene {
@@ -111,6 +155,8 @@ pub struct Scene {
     pub billboard: BillboardSettings,
     pub integration: Integration,
     pub colors: Colors,
+    /// The fog glow over the glow, or none (the papers' look).
+    pub glare: Option<Glare>,
     pub sources: Sources,
     /// Time: `None` for a still scene (see `crate::animation`).
     pub animation: Option<Animation>,
@@ -263,6 +309,12 @@ impl Scene {
                     .then_some(self.colors.energy_intensity),
                 background: Some(self.colors.background),
                 blend: Some(self.colors.blend.name().to_owned()),
+            }),
+            glare: self.glare.map(|g| file::GlareFile {
+                kind: Some("fog".to_owned()),
+                threshold: Some(g.threshold),
+                size: Some(g.size),
+                strength: Some(g.strength),
             }),
             points: (self.sources.points.iter())
                 .map(|s| file::PointFile {
@@ -502,9 +554,59 @@ fn validate(file: &SceneFile, locator: &Locator<'_>, problems: &mut Vec<Problem>
             ..integration
         },
         colors,
+        glare: check_glare(&mut c, file),
         sources,
         animation: None,
     }
+}
+
+/// `[glare]`: the fog glow's threshold, size and strength.
+fn check_glare(c: &mut Checker<'_, '_>, file: &SceneFile) -> Option<Glare> {
+    let g = file.glare.as_ref()?;
+    let path = FieldPath::default().key("glare");
+    let d = Glare::default();
+    if let Some(kind) = g.kind.as_deref()
+        && kind != "fog"
+    {
+        c.fail(
+            &path.key("kind"),
+            format!(
+                "{kind:?} is not a kind of glare: \"fog\" (a Gaussian fog glow) is the one there is"
+            ),
+        );
+    }
+    let threshold = g.threshold.map_or(d.threshold, |x| {
+        if c.finite(&path.key("threshold"), x) && x < 0.0 {
+            c.fail(
+                &path.key("threshold"),
+                format!("{x}: the threshold is a brightness B, at least 0"),
+            );
+        }
+        x
+    });
+    let size = g.size.map_or(d.size, |x| {
+        if c.finite(&path.key("size"), x) && !(x > 0.0 && x <= MAX_GLARE_SIZE) {
+            c.fail(
+                &path.key("size"),
+                format!("{x} is out of range: the size is the blur's standard deviation as a fraction of the billboard's side, in (0, {MAX_GLARE_SIZE}]"),
+            );
+        }
+        x
+    });
+    let strength = g.strength.map_or(d.strength, |x| {
+        if c.finite(&path.key("strength"), x) && !(0.0..=MAX_INTENSITY).contains(&x) {
+            c.fail(
+                &path.key("strength"),
+                format!("{x} is out of range: the strength is in 0..={MAX_INTENSITY}"),
+            );
+        }
+        x
+    });
+    Some(Glare {
+        threshold,
+        size,
+        strength,
+    })
 }
 
 /// `[camera]`: eye, target, up and the field of view, and how they relate.

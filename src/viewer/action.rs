@@ -11,7 +11,7 @@ use crate::export::Target;
 use crate::field::{Curve, Line, Point, Torus};
 use crate::geometry::Camera;
 use crate::integrate::Integrator;
-use crate::scene::{Blend, Scene};
+use crate::scene::{Blend, Glare, Scene};
 
 /// One request from the UI.
 #[derive(Clone, Debug, PartialEq)]
@@ -92,6 +92,8 @@ pub enum Edit {
     UniformWeights(usize),
     /// How the glow goes over the background.
     Blend(Blend),
+    /// Glare on (with its settings) or off.
+    Glare(Option<Glare>),
     /// A source's own color and intensity dropped, with their keys: it takes the scene's again.
     InheritLook(SourceKind, usize),
     /// A color appended to curve `i`'s color series (its last, or the curve's one color for a new series,
@@ -156,6 +158,7 @@ impl Edit {
             Edit::Jitter(seed) => scene.integration.jitter = seed,
             Edit::Resolution(w) => scene.billboard.resolution = w,
             Edit::Blend(b) => scene.colors.blend = b,
+            Edit::Glare(g) => scene.glare = g,
             Edit::AddSeriesColor(i) => {
                 let colors = scene.colors.clone();
                 if let Some(c) = scene.sources.curves.get_mut(i) {

@@ -252,12 +252,14 @@ fn same_effect(a: &Scene, b: &Scene) -> bool {
         billboard,
         integration,
         colors,
+        glare,
         sources,
         animation,
     } = a;
     *billboard == b.billboard
         && *integration == b.integration
         && *colors == b.colors
+        && *glare == b.glare
         && *sources == b.sources
         && *animation == b.animation
 }

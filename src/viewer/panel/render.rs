@@ -11,7 +11,7 @@ use super::context::{
 use super::fields::{Edits, color_field, number};
 use crate::animation::{IntegrationSetting, Parameter};
 use crate::integrate::Integrator;
-use crate::scene::{Blend, MAX_INTENSITY};
+use crate::scene::{Blend, Glare, MAX_GLARE_SIZE, MAX_INTENSITY};
 
 pub(super) fn render_section(
     ui: &mut Ui,
@@ -198,7 +198,53 @@ pub(super) fn render_section(
                     }
                 }
             });
+            glare_editor(ui, scene.glare, out);
         });
+}
+
+/// Glare on or off, and its threshold, size and strength.
+fn glare_editor(ui: &mut Ui, glare: Option<Glare>, out: &mut Edits<'_>) {
+    let mut on = glare.is_some();
+    if ui
+        .checkbox(&mut on, "glare (fog glow)")
+        .on_hover_text("The glow brighter than the threshold blurred and added back, in the billboard's plane; off is the papers' look")
+        .changed()
+    {
+        out.push(Action::Edit(Edit::Glare(on.then(Glare::default))));
+    }
+    let Some(g) = glare else { return };
+    let mut next = g;
+    ui.horizontal(|ui| {
+        labelled(
+            ui,
+            "threshold",
+            DragValue::new(&mut next.threshold)
+                .range(0.0..=100.0)
+                .speed(0.02)
+                .max_decimals(3),
+        )
+        .on_hover_text("B above which the glow glares (1: only what blows out)");
+        labelled(
+            ui,
+            "size",
+            DragValue::new(&mut next.size)
+                .range(0.001..=MAX_GLARE_SIZE)
+                .speed(0.001)
+                .max_decimals(3),
+        )
+        .on_hover_text("The blur's width, a fraction of the billboard's side");
+        labelled(
+            ui,
+            "strength",
+            DragValue::new(&mut next.strength)
+                .range(0.0..=MAX_INTENSITY)
+                .speed(0.02)
+                .max_decimals(3),
+        );
+    });
+    if next != g {
+        out.push(Action::Edit(Edit::Glare(Some(next))));
+    }
 }
 
 /// Fixed or automatic placement of the billboard; a fixed one's center and size.

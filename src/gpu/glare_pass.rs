@@ -1,0 +1,169 @@
+//! The glare pass (`shaders/glare.wgsl`): a fog glow added to a field texture before the billboard blends it,
+//! the excess over a threshold blurred by a separable Gaussian whose weights come from the f64 twin
+//! (`scene::Glare::kernel`).
+
+use super::context::{compute_pass, field_storage_entry, field_texture, loaded_field_entry};
+use super::shaders;
+use crate::scene::{Glare, MAX_GLARE_RADIUS};
+
+/// Rust mirror of `GlareParams` in `shaders/glare.wgsl`.
+pub mod gpu_data {
+    use bytemuck::{Pod, Zeroable};
+
+    #[repr(C)]
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+    pub struct GlareParams {
+        pub threshold: f32, // 0
+        pub strength: f32,  // 4
+        pub radius: u32,    // 8
+        pub pad0: u32,      // 12
+    }
+    const _: () = assert!(size_of::<GlareParams>() == 16);
+}
+
+use gpu_data::GlareParams;
+
+/// The two passes (rows, then columns), their parameters and the textures they write: the rows' blur, and the
+/// field with the glare added.
+pub struct GlarePass {
+    rows: wgpu::ComputePipeline,
+    rows_layout: wgpu::BindGroupLayout,
+    columns: wgpu::ComputePipeline,
+    columns_layout: wgpu::BindGroupLayout,
+    params: wgpu::Buffer,
+    weights: wgpu::Buffer,
+    /// The rows' blur and the output, with their views, for one size and layer count.
+    targets: Option<[(wgpu::Texture, wgpu::TextureView); 2]>,
+}
+
+fn storage_buffer_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only: true },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+impl GlarePass {
+    pub fn new(device: &wgpu::Device) -> Self {
+        let write = wgpu::StorageTextureAccess::WriteOnly;
+        let (rows, rows_layout) = compute_pass(
+            device,
+            "glare",
+            shaders::GLARE_PASS,
+            "glare_rows",
+            &[
+                storage_buffer_entry(0),
+                storage_buffer_entry(1),
+                loaded_field_entry(2),
+                field_storage_entry(4, write),
+            ],
+        );
+        let (columns, columns_layout) = compute_pass(
+            device,
+            "glare",
+            shaders::GLARE_PASS,
+            "glare_columns",
+            &[
+                storage_buffer_entry(0),
+                storage_buffer_entry(1),
+                loaded_field_entry(2),
+                loaded_field_entry(3),
+                field_storage_entry(4, write),
+            ],
+        );
+        let buffer = |label, size| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        };
+        Self {
+            rows,
+            rows_layout,
+            columns,
+            columns_layout,
+            params: buffer("energywave.glare.params", size_of::<GlareParams>() as u64),
+            weights: buffer(
+                "energywave.glare.weights",
+                (2 * MAX_GLARE_RADIUS as u64 + 1) * 4,
+            ),
+            targets: None,
+        }
+    }
+
+    /// Records the glare over `field` (its view; `resolution` texels a side, `layers` layers) and returns the
+    /// view of the field with the glare added.
+    #[allow(clippy::too_many_arguments)]
+    pub fn encode(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+        field: &wgpu::TextureView,
+        resolution: u32,
+        layers: u32,
+        glare: &Glare,
+    ) -> &wgpu::TextureView {
+        let stale = self.targets.as_ref().is_none_or(|[(t, _), _]| {
+            t.width() != resolution || t.depth_or_array_layers() != layers
+        });
+        if stale {
+            self.targets = Some([
+                field_texture(device, "energywave.glare.rows", resolution, layers),
+                field_texture(device, "energywave.glare.output", resolution, layers),
+            ]);
+        }
+        let weights: Vec<f32> = glare.kernel(resolution).iter().map(|&w| w as f32).collect();
+        let params = GlareParams {
+            threshold: glare.threshold as f32,
+            strength: glare.strength as f32,
+            radius: (weights.len() / 2) as u32,
+            pad0: 0,
+        };
+        queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+        queue.write_buffer(&self.weights, 0, bytemuck::cast_slice(&weights));
+        let [(_, rows_view), (_, output_view)] = self.targets.as_ref().expect("made above");
+        let entry = |binding, resource| wgpu::BindGroupEntry { binding, resource };
+        let tex = wgpu::BindingResource::TextureView;
+        let rows_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("energywave.glare.rows.bind_group"),
+            layout: &self.rows_layout,
+            entries: &[
+                entry(0, self.params.as_entire_binding()),
+                entry(1, self.weights.as_entire_binding()),
+                entry(2, tex(field)),
+                entry(4, tex(rows_view)),
+            ],
+        });
+        let columns_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("energywave.glare.columns.bind_group"),
+            layout: &self.columns_layout,
+            entries: &[
+                entry(0, self.params.as_entire_binding()),
+                entry(1, self.weights.as_entire_binding()),
+                entry(2, tex(field)),
+                entry(3, tex(rows_view)),
+                entry(4, tex(output_view)),
+            ],
+        });
+        let groups = resolution.div_ceil(8);
+        for (pipeline, group) in [(&self.rows, &rows_group), (&self.columns, &columns_group)] {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("energywave.glare.pass"),
+                timestamp_writes: None,
+            });
+            pass.set_pipeline(pipeline);
+            pass.set_bind_group(0, group, &[]);
+            pass.dispatch_workgroups(groups, groups, layers);
+        }
+        output_view
+    }
+}
