@@ -158,6 +158,8 @@ fn key_buttons_key_the_value_shown_and_the_i_key_does_too() {
     let mut h = harness(light_scene());
     assert!(!h.state().scene().is_animated());
     // A still scene: keying a value gives it a timeline, with the key at frame 0.
+    h.get_by_label("key tori[0].coefficient").scroll_to_me();
+    h.run();
     h.get_by_label("key tori[0].coefficient").click();
     h.run();
     let track = |h: &Harness<'static, ViewerApp>, p: Parameter| {
@@ -191,6 +193,8 @@ fn key_buttons_key_the_value_shown_and_the_i_key_does_too() {
     };
     assert_eq!(frames(&h), [0.0, 40.0]);
     // The button at a key removes it.
+    h.get_by_label("key tori[0].coefficient").scroll_to_me();
+    h.run();
     h.get_by_label("key tori[0].coefficient").click();
     h.run();
     assert_eq!(frames(&h), [0.0]);
@@ -228,6 +232,8 @@ fn the_panel_keeps_its_width_whatever_it_shows() {
     let left = h.state().viewport_rect().left();
     // Simpson with jitter shows the most rows; an animation adds key buttons everywhere.
     h.get_by_label("jitter (noise instead of bands)").click();
+    h.run();
+    h.get_by_label("key tori[0].coefficient").scroll_to_me();
     h.run();
     h.get_by_label("key tori[0].coefficient").click();
     h.run();
@@ -728,6 +734,11 @@ fn a_source_gets_its_own_color_in_the_panel_keyed_and_undone() {
     // The torus (the first source in the panel) in its own red: the view is redder than blue in the mean.
     assert!(redness(&reddish) > 0.0, "{}", redness(&reddish));
     // Back to the scene's color: the glow all light blue.
+    h.get_all_by_label("own color")
+        .next()
+        .unwrap()
+        .scroll_to_me();
+    h.run();
     h.get_all_by_label("own color").next().unwrap().click();
     h.run();
     assert_eq!(h.state().scene().sources.tori[0].look, Default::default());
@@ -746,12 +757,22 @@ fn a_source_gets_its_own_color_in_the_panel_keyed_and_undone() {
         (a.tracks.iter()).any(|t| t.parameter == Parameter::SourceColor(SourceKind::Tori, 0))
     });
     assert!(keyed, "the torus's color is keyed");
+    h.get_all_by_label("own color")
+        .next()
+        .unwrap()
+        .scroll_to_me();
+    h.run();
     h.get_all_by_label("own color").next().unwrap().click();
     h.run();
     let scene = h.state().scene();
     assert_eq!(scene.sources.tori[0].look, Default::default());
     assert!(scene.animation.as_ref().is_none_or(|a| a.tracks.is_empty()));
     // A color of its own again starts from the scene's.
+    h.get_all_by_label("own color")
+        .next()
+        .unwrap()
+        .scroll_to_me();
+    h.run();
     h.get_all_by_label("own color").next().unwrap().click();
     h.run();
     assert_eq!(h.state().scene().sources.tori[0].look.color, Some(energy));

@@ -100,13 +100,14 @@ impl SceneRenderer {
             scene,
             targets,
             transparent,
-            (&brightness, scene.billboard.resolution),
+            (&brightness, scene.billboard.resolution, true),
             behind,
         )
     }
 
-    /// Records the rest of a frame over a brightness texture already integrated (`brightness`: its view and
-    /// its side, W or another): the background with whatever `behind` draws over it, then the billboard
+    /// Records the rest of a frame over a brightness texture already integrated (`brightness`: its view, its
+    /// side, W or another, and whether its texels changed since the last frame, for the glare to reuse its
+    /// last where they did not): the background with whatever `behind` draws over it, then the billboard
     /// blended over a copy of that.
     #[allow(clippy::too_many_arguments)]
     pub fn compose(
@@ -117,7 +118,7 @@ impl SceneRenderer {
         scene: &Scene,
         targets: &FrameTargets,
         transparent: bool,
-        (brightness, resolution): (&wgpu::TextureView, u32),
+        (brightness, resolution, fresh): (&wgpu::TextureView, u32, bool),
         behind: impl FnOnce(&mut wgpu::RenderPass<'_>, [[f32; 4]; 4]),
     ) -> Result<(), GpuError> {
         let [w, h] = targets.size;
@@ -127,9 +128,11 @@ impl SceneRenderer {
         checked(device, || {
             // The glare, where the scene has one, adds to the field before the blend.
             let brightness = match &scene.glare {
-                Some(glare) => self.glare.encode(
-                    device, queue, encoder, brightness, resolution, layers, glare,
-                ),
+                Some(glare) => {
+                    let size = (resolution, layers);
+                    self.glare
+                        .encode(device, queue, encoder, brightness, size, glare, fresh)
+                }
                 None => brightness,
             };
             let view_proj = view_projection(&scene.camera, &billboard, aspect)

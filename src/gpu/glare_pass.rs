@@ -34,6 +34,8 @@ pub struct GlarePass {
     weights: wgpu::Buffer,
     /// The rows' blur and the output, with their views, for one size and layer count.
     targets: Option<[(wgpu::Texture, wgpu::TextureView); 2]>,
+    /// What the output holds the glare of: the field's view, the glare, its side and layers.
+    last: Option<(wgpu::TextureView, Glare, u32, u32)>,
 }
 
 fn storage_buffer_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
@@ -96,11 +98,14 @@ impl GlarePass {
                 (2 * MAX_GLARE_RADIUS as u64 + 1) * 4,
             ),
             targets: None,
+            last: None,
         }
     }
 
     /// Records the glare over `field` (its view; `resolution` texels a side, `layers` layers) and returns the
-    /// view of the field with the glare added.
+    /// view of the field with the glare added. Unless `fresh` (the field's texels changed since the last call),
+    /// the glare of the same field and settings is the one already there, and nothing is recorded: a viewer
+    /// at rest spends nothing on it.
     #[allow(clippy::too_many_arguments)]
     pub fn encode(
         &mut self,
@@ -108,10 +113,15 @@ impl GlarePass {
         queue: &wgpu::Queue,
         encoder: &mut wgpu::CommandEncoder,
         field: &wgpu::TextureView,
-        resolution: u32,
-        layers: u32,
+        (resolution, layers): (u32, u32),
         glare: &Glare,
+        fresh: bool,
     ) -> &wgpu::TextureView {
+        let key = (field.clone(), *glare, resolution, layers);
+        if !fresh && self.last.as_ref() == Some(&key) {
+            return &self.targets.as_ref().expect("rendered before")[1].1;
+        }
+        self.last = Some(key);
         let stale = self.targets.as_ref().is_none_or(|[(t, _), _]| {
             t.width() != resolution || t.depth_or_array_layers() != layers
         });

@@ -169,6 +169,7 @@ pub fn all_modules() -> Vec<(&'static str, String)> {
             field_module_source(2),
         ),
         ("billboard.wgsl", BILLBOARD_PASS.to_string()),
+        ("glare.wgsl", GLARE_PASS.to_string()),
         ("average.wgsl", AVERAGE_PASS.to_string()),
         ("upsample.wgsl", UPSAMPLE_PASS.to_string()),
         ("grid.wgsl", GRID_PASS.to_string()),

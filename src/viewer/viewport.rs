@@ -154,7 +154,7 @@ impl ViewportGpu {
                 &view.scene,
                 targets,
                 false,
-                (&brightness.0, brightness.1),
+                (&brightness.0, brightness.1, brightness.2),
                 // The grid lies behind the glow, which blends over it, with the renderer's own projection.
                 |pass, view_proj| grid.draw(queue, pass, view_proj),
             )
@@ -182,7 +182,7 @@ impl ViewportGpu {
         view: &ViewportView,
         targets: &FrameTargets,
         progressive: bool,
-    ) -> Result<(wgpu::TextureView, u32), GpuError> {
+    ) -> Result<(wgpu::TextureView, u32, bool), GpuError> {
         let scene = &view.scene;
         let [width, height] = targets.size;
         let billboard = scene.place_billboard(width as f64 / height as f64);
@@ -264,13 +264,15 @@ impl ViewportGpu {
         if preview.is_none() && !main.pending() {
             main.compile_in_background();
         }
+        // Whether the texels shown changed: work this frame, or another texture shown.
+        let fresh = !matches!(work, Work::Nothing) || preview != self.showing_preview;
         self.showing_preview = preview;
         let shown = match preview {
             Some(_) => self.upsample.output().map(|(t, v)| (v, t.width())),
             None => self.scene_renderer.field().view().map(|v| (v, w)),
         };
         let (view, side) = shown.expect("a field was integrated above");
-        Ok((view.clone(), side))
+        Ok((view.clone(), side, fresh))
     }
 
     /// Copies the last recorded frame into egui's render pass (whose viewport egui has set to the callback's
