@@ -155,6 +155,20 @@ pub fn compute_pass(
     (pipeline, layout)
 }
 
+/// A bind group layout entry for a compute pass: a read-only storage buffer.
+pub fn storage_buffer_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only: true },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
 /// A bind group layout entry for a compute pass: a field texture (`field_texture`) read with `textureLoad`.
 pub fn loaded_field_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {

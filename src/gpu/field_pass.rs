@@ -7,6 +7,7 @@ use wgpu::util::DeviceExt;
 
 use super::context::{
     FIELD_LAYERS, GpuError, checked, field_texture, field_texture_bytes, pass_layouts,
+    storage_buffer_entry,
 };
 use super::frame_average::FrameAverage;
 use super::shaders;
@@ -643,16 +644,7 @@ impl FieldRenderer {
                 source: wgpu::ShaderSource::Wgsl(shaders::field_module_source(k).into()),
             })
         });
-        let storage = |binding| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only: true },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        };
+        let storage = storage_buffer_entry;
         let (layout, pipeline_layout) = pass_layouts(
             device,
             "field",

@@ -2,7 +2,9 @@
 //! the excess over a threshold blurred by a separable Gaussian whose weights come from the f64 twin
 //! (`scene::Glare::kernel`).
 
-use super::context::{compute_pass, field_storage_entry, field_texture, loaded_field_entry};
+use super::context::{
+    compute_pass, field_storage_entry, field_texture, loaded_field_entry, storage_buffer_entry,
+};
 use super::shaders;
 use crate::scene::{Glare, MAX_GLARE_RADIUS};
 
@@ -36,19 +38,6 @@ pub struct GlarePass {
     targets: Option<[(wgpu::Texture, wgpu::TextureView); 2]>,
     /// What the output holds the glare of: the field's view, the glare, its side and layers.
     last: Option<(wgpu::TextureView, Glare, u32, u32)>,
-}
-
-fn storage_buffer_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only: true },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }
 }
 
 impl GlarePass {

@@ -11,13 +11,7 @@ use crate::integrate::{Integration, zeta};
 /// The brightness B of the segment from `s` to `e` by the papers' rule with the settings' `divisions`:
 /// Simpson's, or the shifted rectangle rule with offset `xi` where the settings jitter.
 pub fn brightness(sources: &Sources, settings: &Integration, s: DVec3, e: DVec3, xi: f64) -> f64 {
-    let f = |t: f64| {
-        sources.psi(s + (e - s) * t, settings.epsilon) * zeta(t, settings.alpha, settings.beta)
-    };
-    match settings.jitter {
-        None => simpson(f, settings.divisions),
-        Some(_) => shifted_rectangle(f, settings.divisions, xi),
-    }
+    along_ray(settings, (s, e), xi, |p| sources.psi(p, settings.epsilon))
 }
 
 /// The part of B of term `k` of psi alone (`Sources::term`), by the same rule as `brightness`.
@@ -29,13 +23,9 @@ pub fn term_brightness(
     e: DVec3,
     xi: f64,
 ) -> f64 {
-    let f = |t: f64| {
-        sources.term(k, s + (e - s) * t, settings.epsilon) * zeta(t, settings.alpha, settings.beta)
-    };
-    match settings.jitter {
-        None => simpson(f, settings.divisions),
-        Some(_) => shifted_rectangle(f, settings.divisions, xi),
-    }
+    along_ray(settings, (s, e), xi, |p| {
+        sources.term(k, p, settings.epsilon)
+    })
 }
 
 /// Curve `c`'s term with `weight(t*)` in the place of its W series, by the same rule as `brightness`.
@@ -46,13 +36,21 @@ pub fn curve_weighted(
     xi: f64,
     weight: &dyn Fn(f64) -> f64,
 ) -> f64 {
-    let f = |t: f64| {
-        let n = curve::nearest_on_chain(&c.control_points, s + (e - s) * t);
-        c.coefficient
-            * weight(n.t)
-            * falloff(n.distance, settings.epsilon)
-            * zeta(t, settings.alpha, settings.beta)
-    };
+    along_ray(settings, (s, e), xi, |p| {
+        let n = curve::nearest_on_chain(&c.control_points, p);
+        c.coefficient * weight(n.t) * falloff(n.distance, settings.epsilon)
+    })
+}
+
+/// The integral over [0, 1] of `field((1 - t) S + t E) zeta(t)` by the settings' rule: Simpson's, or the
+/// shifted rectangle rule with offset `xi` where they jitter.
+fn along_ray(
+    settings: &Integration,
+    (s, e): (DVec3, DVec3),
+    xi: f64,
+    field: impl Fn(DVec3) -> f64,
+) -> f64 {
+    let f = |t: f64| field(s + (e - s) * t) * zeta(t, settings.alpha, settings.beta);
     match settings.jitter {
         None => simpson(f, settings.divisions),
         Some(_) => shifted_rectangle(f, settings.divisions, xi),
