@@ -482,3 +482,92 @@ fn colors_and_intensities_in_scene_files() {
     );
     assert_eq!(original.lines().count(), saved.lines().count());
 }
+
+#[test]
+fn color_series_on_degenerate_chains_meet_the_converged_integral_on_the_cpu_and_the_gpu() {
+    use energywave::field::{Curve, Sources, curve, falloff};
+    use energywave::geometry::ray_end;
+    use energywave::integrate::zeta;
+    use energywave::reference::simpson::simpson_refined;
+    use glam::DVec3;
+    let (a, c) = ([-2.0, -1.0, 0.0], [2.0, 1.0, 0.5]);
+    let chains: Vec<(&str, Vec<[f64; 3]>)> = vec![
+        ("first two points coincide", vec![a, a, c]),
+        ("last two points coincide", vec![a, c, c]),
+        (
+            "a segment starting at rest at a joint",
+            vec![[-3.0, -1.0, 0.0], [-1.0, 1.0, 0.0], [0.0; 3], [0.0; 3], c],
+        ),
+        (
+            "a segment of zero length inside the chain",
+            vec![
+                [-3.0, -1.0, 0.0],
+                [-1.0, 1.0, 0.0],
+                [0.0; 3],
+                [0.0; 3],
+                [0.0; 3],
+                [1.0, -1.0, 0.0],
+                c,
+            ],
+        ),
+    ];
+    let series = vec![[1.0, 1.0, 1.0], [0.9, 0.3, 0.1], [0.2, 0.45, 1.0]];
+    let mut g = gpu();
+    for (name, points) in chains {
+        let mut scene = Scene::default_scene();
+        scene.billboard.resolution = 16;
+        scene.animation = None;
+        scene.sources = Sources {
+            curves: vec![Curve {
+                control_points: points.iter().map(|&p| DVec3::from(p)).collect(),
+                coefficient: 3.0,
+                weights: vec![0.2, 1.0, 0.4, 0.9, 0.3],
+                look: Default::default(),
+                color_series: series.clone(),
+            }],
+            ..Sources::default()
+        };
+        let bb = scene.place_billboard(1.0);
+        let cpu = reference::render_brightness(&scene, &bb);
+        g.brightness(&scene, &bb).unwrap();
+        let gpu_tint = g.tint().unwrap();
+        // Each within the tolerance of the converged value (|Cs - Ce| <= 1 here), so within twice of each other:
+        // the adaptive integrator's promise, which on these chains is not a relative one.
+        let tolerance = scene.integration.tolerance;
+        for (t, (gt, ct)) in gpu_tint.iter().zip(&cpu.tint).enumerate() {
+            for (ch, (&g, &c)) in gt.iter().zip(ct).enumerate() {
+                let g = g as f64;
+                assert!(
+                    (g - c).abs() <= 2.0 * tolerance,
+                    "{name}: texel {t} channel {ch}: GPU {g} CPU {c}"
+                );
+            }
+        }
+        let (ce, curve) = (scene.colors.energy_color(), &scene.sources.curves[0]);
+        let reach = scene.ray_reach(&bb);
+        let settings = scene.integration.on_ray(reach.stretch);
+        for (i, j) in [(8, 8), (4, 9), (11, 6), (2, 13)] {
+            let s = bb.texel_center(i, j, 16);
+            let e = ray_end(s, scene.camera.eye, reach.nu);
+            for ch in 0..3 {
+                let channel: Vec<f64> = series.iter().map(|x| x[ch]).collect();
+                let f = |t: f64| {
+                    let n = curve::nearest_on_chain(&curve.control_points, s + (e - s) * t);
+                    curve.coefficient
+                        * cox_de_boor(&curve.weights, n.t)
+                        * (cox_de_boor(&channel, n.t) - ce[ch])
+                        * falloff(n.distance, settings.epsilon)
+                        * zeta(t, settings.alpha, settings.beta)
+                };
+                let (want, _) = simpson_refined(f, 2000, 1e-11, 30);
+                let k = (j * 16 + i) as usize;
+                for (twin, got) in [("CPU", cpu.tint[k][ch]), ("GPU", gpu_tint[k][ch] as f64)] {
+                    assert!(
+                        (got - want).abs() <= 2.0 * tolerance,
+                        "{name}: {twin} texel ({i}, {j}) channel {ch}: {got} against {want}"
+                    );
+                }
+            }
+        }
+    }
+}
