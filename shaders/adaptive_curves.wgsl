@@ -237,6 +237,220 @@ fn search_jumps(ray: Ray, a: ChainSample, b: ChainSample, kinks: ptr<function, K
     return vec4<f32>(a1.t, a1.param, b1.t, b1.param);
 }
 
+// The continuous W form's brightest point seen from the ray's point at t. Twin of BrightSample.
+struct BrightSample {
+    t: f32,
+    param: f32,
+    rate: f32,
+    value: f32,
+    slope: f32,
+}
+
+fn bright_sample(ray: Ray, t: f32) -> BrightSample {
+    let p = ray.start + ray.dir * t;
+    let b = curve_search(curves[ray.index], p);
+    let m = bright_motion(b, p, ray.dir);
+    return BrightSample(t, b.t, m.x, b.value, m.y);
+}
+
+// How far the brightest point's parameter lands at b from where its rates would have taken it from a. Twin of
+// bright_miss.
+fn bright_miss(a: BrightSample, b: BrightSample) -> f32 {
+    let m = abs(b.param - a.param - 0.5 * (a.rate + b.rate) * (b.t - a.t));
+    return select(F32_MAX, m, m < F32_MAX);
+}
+
+// Where the two branches' values, each moving on with its slope, meet between a and b (else the middle).
+fn bright_estimate(a: BrightSample, b: BrightSample) -> f32 {
+    let t = (b.value - a.value + a.slope * a.t - b.slope * b.t) / (a.slope - b.slope);
+    return select(0.5 * (a.t + b.t), t, t > a.t && t < b.t);
+}
+
+// The continuous W form's kinks along the ray (twin of bright_kinks): a scan of BRIGHT_SCAN intervals; where the
+// brightest point jumps in one, the jump is bracketed (each round probes either side of the estimate, or of the
+// middle where the same side moved twice in a row, and gives each probe to the end whose branch it continues; twin
+// of find_bright_kink), then the rest of the interval before and after the bracket is searched once more; between
+// jumps, the cuts where the point passes a piece's end (bright_cuts). One loop, one call of the search: each pass
+// takes the next scan sample or the next probe, so that drivers, which inline every call, compile the search once.
+fn bright_kinks(ray: Ray, kinks: ptr<function, Kinks>) {
+    let bracket = select(FINE_KINK_BRACKET, KINK_BRACKET, gauss_order() <= COARSE_ORDER);
+    var i = 0u;
+    var before: BrightSample;
+    var after: BrightSample;
+    // stage 0: scanning; 1: the interval's first jump; 2 and 3: the rest of the interval before and after it.
+    var stage = 0u;
+    var a: BrightSample;
+    var b: BrightSample;
+    var a1: BrightSample;
+    var b1: BrightSample;
+    var round = 0u;
+    var side = 2u;
+    var guess = 0.0;
+    var tau = 0.0;
+    var moved_a = false;
+    var moved_b = false;
+    var last_moved = 0i;
+    var stale = false;
+    var t = 0.0;
+    loop {
+        if stage == 0u {
+            if i > BRIGHT_SCAN {
+                break;
+            }
+            t = f32(i) / f32(BRIGHT_SCAN);
+        }
+        let m = bright_sample(ray, t);
+        if stage == 0u {
+            i++;
+            if i == 1u {
+                before = m;
+                continue;
+            }
+            after = m;
+            // Once the kinks are full, further searches would be dropped: none is made.
+            if bright_miss(before, after) <= PARAM_JUMP || (*kinks).count >= MAX_KINKS {
+                bright_cuts(ray, before, after, kinks);
+                before = after;
+                continue;
+            }
+            stage = 1u;
+            a = before;
+            b = after;
+            round = 0u;
+            side = 2u;
+            last_moved = 0i;
+            stale = false;
+        } else {
+            let pa = a.param + a.rate * (m.t - a.t);
+            let pb = b.param + b.rate * (m.t - b.t);
+            if abs(m.param - pa) <= abs(m.param - pb) {
+                a = m;
+                moved_a = true;
+            } else {
+                b = m;
+                moved_b = true;
+            }
+            side++;
+        }
+        // On to the next probe: the round's other side, the next round, or the search's end and what follows it.
+        loop {
+            if side < 2u {
+                t = guess + select(-tau, tau, side == 1u);
+                if t > a.t && t < b.t {
+                    break;
+                }
+                side++;
+                continue;
+            }
+            if side == 2u && round > 0u {
+                // The round ends.
+                var moved = 0i;
+                if moved_a && !moved_b {
+                    moved = -1i;
+                } else if moved_b && !moved_a {
+                    moved = 1i;
+                }
+                stale = moved != 0i && moved == last_moved;
+                last_moved = moved;
+            }
+            if b.t - a.t > bracket && round < KINK_ROUNDS {
+                // A round begins.
+                guess = 0.5 * (a.t + b.t);
+                if !stale {
+                    guess = bright_estimate(a, b);
+                }
+                tau = KINK_PROBE * (b.t - a.t);
+                moved_a = false;
+                moved_b = false;
+                round++;
+                side = 0u;
+                continue;
+            }
+            // The search ends: its kink, then the rest of the interval, then the cuts and the scan.
+            push_kink(kinks, bright_estimate(a, b), false);
+            if stage == 1u {
+                a1 = a;
+                b1 = b;
+            }
+            var next = 0u;
+            let room = (*kinks).count < MAX_KINKS;
+            if stage == 1u && bright_miss(before, a1) > PARAM_JUMP && room {
+                next = 2u;
+                a = before;
+                b = a1;
+            } else if stage <= 2u && bright_miss(b1, after) > PARAM_JUMP && room {
+                next = 3u;
+                a = b1;
+                b = after;
+            }
+            if next != 0u {
+                stage = next;
+                round = 0u;
+                side = 2u;
+                last_moved = 0i;
+                stale = false;
+                continue;
+            }
+            bright_cuts(ray, before, a1, kinks);
+            bright_cuts(ray, b1, after, kinks);
+            before = after;
+            stage = 0u;
+            break;
+        }
+    }
+}
+
+// The cuts where the brightest point passes the end of a piece (a joint or a knot of W) between samples x and y with
+// no jump between them, or comes to rest at (or leaves) an end of the chain: its parameter's cubic Hermite
+// interpolant between them crossing the piece's end, by bisection; a rest at an end where the moving sample's rate
+// takes it there. Twin of bright_cuts.
+fn bright_cuts(ray: Ray, x: BrightSample, y: BrightSample, kinks: ptr<function, Kinks>) {
+    if y.t <= x.t || x.param == y.param {
+        return;
+    }
+    let c = curves[ray.index];
+    let h = y.t - x.t;
+    for (var k = 0u; k <= c.piece_count; k++) {
+        let end = k == 0u || k == c.piece_count;
+        var at = select(0.0, 1.0, k == c.piece_count);
+        if !end {
+            at = pieces[c.first_piece + k].t0;
+        }
+        var t = 0.0;
+        if end {
+            if (x.param == at) == (y.param == at) {
+                continue;
+            }
+            var m = x;
+            if x.param == at {
+                m = y;
+            }
+            t = m.t + (at - m.param) / m.rate;
+        } else {
+            if (x.param - at) * (y.param - at) >= 0.0 {
+                continue;
+            }
+            var lo = x.t;
+            var hi = y.t;
+            for (var r = 0u; r < CUT_BISECTIONS; r++) {
+                let mid = 0.5 * (lo + hi);
+                let u = (mid - x.t) / h;
+                let u2 = u * u;
+                let u3 = u2 * u;
+                let value = (2.0 * u3 - 3.0 * u2 + 1.0) * x.param + (u3 - 2.0 * u2 + u) * h * x.rate
+                    + (-2.0 * u3 + 3.0 * u2) * y.param + (u3 - u2) * h * y.rate;
+                if (value - at) * (x.param - at) > 0.0 {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            t = 0.5 * (lo + hi);
+        }
+        push_kink(kinks, select(0.5 * (x.t + y.t), clamp(t, x.t, y.t), abs(t) < 1e30), false);
+    }
+}
+
 // Twin of curve::Segment::start_tangent and end_tangent: the direction in which a segment leaves its start or
 // arrives at its end, the second derivative's where the speed vanishes there.
 fn start_tangent(s: CurveSegment) -> vec3<f32> {
@@ -378,6 +592,8 @@ fn curve_features(ray: Ray) -> CurveFeatures {
     let end_moving0 = chain_sample(ray, end_t.x, true);
     let end_moving1 = chain_sample(ray, end_t.y, true);
     let step = 1.0 / f32(SCAN);
+    // The kinks of the nearest point, or in the continuous W form those of the brightest point (bright_kinks).
+    let nearest_kinks = !(SEARCH != 0u && c.piece_count > 0u);
     var minima: Minima;
     minima.count = 0u;
     var kinks: Kinks;
@@ -456,7 +672,10 @@ fn curve_features(ray: Ray) -> CurveFeatures {
                     }
                 }
             }
-            let bracket = search_jumps(ray, left, right, &kinks);
+            var bracket = vec4<f32>(-1.0);
+            if nearest_kinks {
+                bracket = search_jumps(ray, left, right, &kinks);
+            }
             if bracket.x >= 0.0 {
                 // Up to the jump, and inside its bracket (the nearest point may have passed a joint as well).
                 for (var q = 0u; q < 2u; q++) {
@@ -471,12 +690,17 @@ fn curve_features(ray: Ray) -> CurveFeatures {
             left = next_left;
         }
         // The stretch since the last jump.
-        joint_cuts(ray, calm, vec2<f32>(after.t, after.param), &kinks);
-        knot_cuts(ray, calm, vec2<f32>(after.t, after.param), &kinks);
+        if nearest_kinks {
+            joint_cuts(ray, calm, vec2<f32>(after.t, after.param), &kinks);
+            knot_cuts(ray, calm, vec2<f32>(after.t, after.param), &kinks);
+        }
         g_before_before = before.d2;
         before = after;
     }
     offer(&minima, before, g_before_before, F32_MAX);
+    if !nearest_kinks {
+        bright_kinks(ray, &kinks);
+    }
     var found: Peaks;
     found.count = 0u;
     for (var slot = 0u; slot < minima.count; slot++) {
@@ -659,7 +883,14 @@ fn curve_kronrod(ray: Ray, p: Peak, a: f32, b: f32, panel: vec2<f32>, singular: 
         let node = kronrod_node(i);
         let toward = toward_singular(mid + r * node.x, panel, singular);
         let m = map_node(p, toward.x);
-        let n = track_nearest(c, ray, m.x, track);
+        // The continuous W form searches the whole chain at every node (twin of integrate_weighted).
+        var n: vec2<f32>;
+        if SEARCH != 0u && c.piece_count > 0u {
+            let b = curve_search(c, ray.start + ray.dir * m.x);
+            n = vec2<f32>(b.t, b.distance);
+        } else {
+            n = track_nearest(c, ray, m.x, track);
+        }
         let f = toward.y * m.y * wseries(c, n.x) * falloff(n.y, EPSILON) * zeta_at(m.x);
         sum += node.yz * f;
         colored += node.y * f * color_series(c, n.x);

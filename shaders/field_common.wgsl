@@ -32,6 +32,28 @@ struct CurveSource {
     coefficient: f32,
     first_color: u32,
     color_count: u32,  // 0: no color series (the curve's one color is its tint)
+    first_piece: u32,
+    piece_count: u32,  // 0: the term reads the nearest point (the papers' form, or a uniform W series)
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
+}
+
+// A stretch of a chain between its joints and W's knots, for the continuous W form (twin of field::brightest::Piece):
+// the curve C(x) = c2 x^2 + c1 x + c0 and S(x) = s2 x^2 + s1 x + s0 in its own x in [0, 1], the chain parameters at
+// its ends, a ball holding it and S's largest value on it.
+struct CurvePiece {
+    c2: vec3<f32>,
+    s2: f32,
+    c1: vec3<f32>,
+    s1: f32,
+    c0: vec3<f32>,
+    s0: f32,
+    center: vec3<f32>,
+    radius: f32,
+    t0: f32,
+    t1: f32,
+    weight_max: f32,
     pad0: f32,
 }
 

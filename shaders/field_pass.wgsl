@@ -28,6 +28,7 @@ struct FieldParams {
     seed: u32,
     gauss_order: u32,   // adaptive: n of the Gauss-Kronrod pair (n and 2n + 1 nodes; adaptive::kronrod_order)
     layers: u32,        // the texture's layers written: 1 (B alone, every source in the scene's color) or 4
+    search: u32,        // 1 where some curve's term reads its brightest point (read on the CPU: the SEARCH constant)
 }
 
 @group(0) @binding(0) var<storage, read> params: FieldParams;
@@ -43,6 +44,9 @@ override TORUS_COUNT: u32 = 4294967295u;
 override CURVE_COUNT: u32 = 4294967295u;
 override GAUSS_ORDER: u32 = 4294967295u;
 override JITTER: u32 = 4294967295u;
+// Whether some curve's term reads its brightest point (the continuous W form, gpu::field_pass::Structure): 0
+// drops that search from the pipeline, so that scenes without it compile none of it.
+override SEARCH: u32 = 0u;
 fn point_count() -> u32 {
     if POINT_COUNT == GENERIC {
         return params.point_count;
@@ -112,6 +116,8 @@ fn load_scalars() {
 @group(0) @binding(9) var<storage, read> tints: array<vec4<f32>>;
 // The curves' color series (CurveSource::first_color, color_count), their intensity applied.
 @group(0) @binding(10) var<storage, read> colors: array<vec4<f32>>;
+// The pieces of the curves whose term reads their brightest point (CurveSource::first_piece, piece_count).
+@group(0) @binding(11) var<storage, read> pieces: array<CurvePiece>;
 
 // One dispatch's share of the work: a range of Simpson samples, or of the adaptive integrator's terms (points,
 // then lines, tori, curves). A texel's loops must stay under what some drivers allow one invocation (Mesa's
@@ -204,6 +210,278 @@ fn curve_nearest(c: CurveSource, p: vec3<f32>) -> vec2<f32> {
         }
     }
     return best;
+}
+
+// The point of a chain its term reads at p, (t, distance): the brightest point in the continuous W form
+// (piece_count > 0), else the nearest. The term is b Sw(t) / max(eps, distance) at it.
+fn curve_point(c: CurveSource, p: vec3<f32>) -> vec2<f32> {
+    if SEARCH != 0u && c.piece_count > 0u {
+        return curve_brightest(c, p);
+    }
+    return curve_nearest(c, p);
+}
+
+// The continuous W form (twin of field::brightest): the chain parameter t of the largest Sw(t) / max(eps, |p - C(t)|)
+// and its distance from p.
+fn curve_brightest(c: CurveSource, p: vec3<f32>) -> vec2<f32> {
+    let b = curve_search(c, p);
+    return vec2<f32>(b.t, b.distance);
+}
+
+// The brightest point of a chain (twin of brightest::Brightest): the term's value there without its coefficient, its
+// chain parameter and distance, and where it lies (the index of its piece in pieces, and x on it).
+struct Bright {
+    value: f32,
+    t: f32,
+    distance: f32,
+    x: f32,
+    piece: u32,
+}
+
+// Twin of brightest::search: each piece offers its ends; one that could still beat the best (its largest weight over
+// its ball's distance) offers the maxima of S / sqrt(D) inside it, and where it comes within eps of p, the ends of
+// that stretch and S's vertex.
+fn curve_search(c: CurveSource, p: vec3<f32>) -> Bright {
+    var best = Bright(-1.0, 0.0, F32_MAX, 0.0, c.first_piece);
+    for (var i = 0u; i < c.piece_count; i++) {
+        let k = c.first_piece + i;
+        let q = pieces[k];
+        best = offer_point(best, q, k, 0.0, p);
+        best = offer_point(best, q, k, 1.0, p);
+        let reach = length(p - q.center) - q.radius;
+        if q.weight_max / max(EPSILON, reach) <= best.value {
+            continue;
+        }
+        // The maxima inside; within eps of p also the ends of the flat top's stretches and S's vertex on one (one
+        // call site of the walk: drivers inline every call).
+        for (var mode = 0u; mode < select(1u, 2u, reach < EPSILON); mode++) {
+            best = piece_roots(best, q, k, p, mode);
+        }
+    }
+    return best;
+}
+
+// Twin of Brightest::motion: how the brightest point and the term move as p moves along dir, (the rate of its chain
+// parameter, the slope of the value): the rate 0 where it rests at a piece's end or on the flat top.
+fn bright_motion(b: Bright, p: vec3<f32>, dir: vec3<f32>) -> vec2<f32> {
+    let q = pieces[b.piece];
+    let x = b.x;
+    let off = piece_at(q, x) - p;
+    let d = length(off);
+    if d <= EPSILON {
+        return vec2<f32>(0.0);
+    }
+    let s = piece_weight(q, x);
+    let slope = s * dot(off, dir) / (d * d * d);
+    if x <= 0.0 || x >= 1.0 {
+        return vec2<f32>(0.0, slope);
+    }
+    let ds = 2.0 * q.s2 * x + q.s1;
+    let d1 = 2.0 * q.c2 * x + q.c1;
+    let dd = 2.0 * dot(d1, off);
+    let ddd = 2.0 * (dot(d1, d1) + dot(2.0 * q.c2, off));
+    let dh_dx = 4.0 * q.s2 * dot(off, off) + ds * dd - s * ddd;
+    let dh_dp = -4.0 * ds * off + 2.0 * s * d1;
+    let rate = -dot(dh_dp, dir) / dh_dx * (q.t1 - q.t0);
+    return vec2<f32>(select(0.0, rate, abs(rate) < 1e30), slope);
+}
+
+fn piece_at(q: CurvePiece, x: f32) -> vec3<f32> {
+    return (q.c2 * x + q.c1) * x + q.c0;
+}
+
+fn piece_weight(q: CurvePiece, x: f32) -> f32 {
+    return (q.s2 * x + q.s1) * x + q.s0;
+}
+
+// The better of best and point x of piece k (q).
+fn offer_point(best: Bright, q: CurvePiece, k: u32, x: f32, p: vec3<f32>) -> Bright {
+    let d = length(piece_at(q, x) - p);
+    let value = piece_weight(q, x) / max(EPSILON, d);
+    if value > best.value {
+        return Bright(value, mix(q.t0, q.t1, x), d, x, k);
+    }
+    return best;
+}
+
+// A quartic a0 + a1 x + ... + a4 x^4: (a0, a1, a2, a3) and a4.
+struct Quartic {
+    low: vec4<f32>,
+    a4: f32,
+}
+
+// h = 2 S' D - S D' on a piece, D = |C(x) - p|^2: S / sqrt(D) rises where h > 0. Twin of stationary_quartic.
+fn stationary_quartic(q: CurvePiece, p: vec3<f32>) -> Quartic {
+    let e = q.c0 - p;
+    let d0 = dot(e, e);
+    let d1 = 2.0 * dot(q.c1, e);
+    let d2 = dot(q.c1, q.c1) + 2.0 * dot(q.c2, e);
+    let d3 = 2.0 * dot(q.c1, q.c2);
+    let d4 = dot(q.c2, q.c2);
+    return Quartic(
+        vec4<f32>(
+            2.0 * q.s1 * d0 - q.s0 * d1,
+            4.0 * q.s2 * d0 + q.s1 * d1 - 2.0 * q.s0 * d2,
+            3.0 * q.s2 * d1 - 3.0 * q.s0 * d3,
+            2.0 * q.s2 * d2 - q.s1 * d3 - 4.0 * q.s0 * d4,
+        ),
+        q.s2 * d3 - 2.0 * q.s1 * d4,
+    );
+}
+
+// The quartic and its derivative at x.
+fn quartic_at(a: Quartic, x: f32) -> vec2<f32> {
+    let f = (((a.a4 * x + a.low.w) * x + a.low.z) * x + a.low.y) * x + a.low.x;
+    let df = ((4.0 * a.a4 * x + 3.0 * a.low.w) * x + 2.0 * a.low.z) * x + a.low.y;
+    return vec2<f32>(f, df);
+}
+
+// The Bernstein coefficients of the quartic on [u, v] (twin of bernstein_on): Taylor shift to u, scaling by v - u,
+// then power to Bernstein form.
+fn bernstein_on(a: Quartic, u: f32, v: f32) -> Quartic {
+    var q0 = a.low.x;
+    var q1 = a.low.y;
+    var q2 = a.low.z;
+    var q3 = a.low.w;
+    var q4 = a.a4;
+    // Synthetic division by (x - u), four rounds, unrolled (an array indexed by loop variables would live in memory).
+    q3 += u * q4; q2 += u * q3; q1 += u * q2; q0 += u * q1;
+    q3 += u * q4; q2 += u * q3; q1 += u * q2;
+    q3 += u * q4; q2 += u * q3;
+    q3 += u * q4;
+    let w = v - u;
+    q1 *= w;
+    q2 *= w * w;
+    q3 *= w * w * w;
+    q4 *= w * w * w * w;
+    return Quartic(
+        vec4<f32>(
+            q0,
+            q0 + 0.25 * q1,
+            q0 + 0.5 * q1 + q2 / 6.0,
+            q0 + 0.75 * q1 + 0.5 * q2 + 0.25 * q3,
+        ),
+        q0 + q1 + q2 + q3 + q4,
+    );
+}
+
+// The sign changes along Bernstein coefficients b, zeros skipped. Twin of sign_changes.
+fn sign_changes(b: Quartic) -> u32 {
+    var changes = 0u;
+    var last = b.low.x;
+    let c = vec4<f32>(b.low.yzw, b.a4);
+    // Each coefficient in turn, unrolled (see bernstein_on).
+    changes += select(0u, 1u, c.x != 0.0 && last != 0.0 && (c.x > 0.0) != (last > 0.0));
+    last = select(last, c.x, c.x != 0.0);
+    changes += select(0u, 1u, c.y != 0.0 && last != 0.0 && (c.y > 0.0) != (last > 0.0));
+    last = select(last, c.y, c.y != 0.0);
+    changes += select(0u, 1u, c.z != 0.0 && last != 0.0 && (c.z > 0.0) != (last > 0.0));
+    last = select(last, c.z, c.z != 0.0);
+    changes += select(0u, 1u, c.w != 0.0 && last != 0.0 && (c.w > 0.0) != (last > 0.0));
+    return changes;
+}
+
+// The distance quartic D - eps^2 on a piece, D = |C(x) - p|^2: negative on the stretches closer than eps.
+fn flat_quartic(q: CurvePiece, p: vec3<f32>) -> Quartic {
+    let e = q.c0 - p;
+    return Quartic(
+        vec4<f32>(dot(e, e) - EPSILON * EPSILON, 2.0 * dot(q.c1, e), dot(q.c1, q.c1) + 2.0 * dot(q.c2, e), 2.0 * dot(q.c1, q.c2)),
+        dot(q.c2, q.c2),
+    );
+}
+
+// The points a piece offers inside it (twin of piece_roots): mode 0, the maxima of S / sqrt(D), where h falls through
+// zero; mode 1, the ends of its stretches closer than eps (where D - eps^2 changes sign) and S's vertex if it lies
+// on one, where the term's flat top S / eps is largest. The roots are isolated on dyadic parts of [0, 1] by their
+// Bernstein coefficients' signs, visited in order without a stack (as next_part walks panels).
+fn piece_roots(best_in: Bright, q: CurvePiece, k: u32, p: vec3<f32>, mode: u32) -> Bright {
+    var best = best_in;
+    var a = stationary_quartic(q, p);
+    if mode == 1u {
+        a = flat_quartic(q, p);
+    }
+    let levels = select(ROOT_LEVELS, FLAT_LEVELS, mode == 1u);
+    let most = select(ROOT_VISITS, FLAT_VISITS, mode == 1u);
+    let end = 1u << levels;
+    var at = 0u;
+    var level = 0u;
+    var visits = 0u;
+    while at < end {
+        let size = end >> level;
+        let u = f32(at) / f32(end);
+        let v = f32(at + size) / f32(end);
+        let b = bernstein_on(a, u, v);
+        let changes = sign_changes(b);
+        visits++;
+        if changes >= 2u && level < levels && visits < most {
+            level++;
+            continue;
+        }
+        // A root where the ends' signs differ (of h: a maximum only where it falls); where the walk gave up
+        // halving a part, its middle stands in for its maxima.
+        var x = -1.0;
+        if (b.low.x > 0.0 && b.a4 < 0.0) || (mode == 1u && b.low.x < 0.0 && b.a4 > 0.0) {
+            x = bracketed_root(a, q, p, mode, u, v);
+        } else if changes >= 2u && mode == 0u {
+            x = 0.5 * (u + v);
+        }
+        if x >= 0.0 {
+            best = offer_point(best, q, k, x, p);
+        }
+        at += size;
+        while level > 0u && (at & ((end >> (level - 1u)) - 1u)) == 0u {
+            level--;
+        }
+    }
+    if mode == 1u && q.s2 < 0.0 {
+        let vertex = -q.s1 / (2.0 * q.s2);
+        if vertex > 0.0 && vertex < 1.0 && length(piece_at(q, vertex) - p) < EPSILON {
+            best = offer_point(best, q, k, vertex, p);
+        }
+    }
+    return best;
+}
+
+// The root in [u, v] of h (mode 0) or of D - eps^2 (mode 1, evaluated from the point itself, not the quartic's
+// coefficients, which cancel where D is small), whose signs differ at u and v: Newton's method from the secant's root,
+// kept in the bracket. Twin of bracketed_root.
+fn bracketed_root(a: Quartic, q: CurvePiece, p: vec3<f32>, mode: u32, u: f32, v: f32) -> f32 {
+    let fu = root_function(a, q, p, mode, u).x;
+    let fv = root_function(a, q, p, mode, v).x;
+    // lo keeps the sign of u, hi that of v.
+    var lo = u;
+    var hi = v;
+    var x = clamp(u + (v - u) * fu / (fu - fv), u, v);
+    for (var i = 0u; i < ROOT_NEWTON; i++) {
+        let f = root_function(a, q, p, mode, x);
+        if f.x == 0.0 {
+            break;
+        }
+        if (f.x > 0.0) == (fu > 0.0) {
+            lo = x;
+        } else {
+            hi = x;
+        }
+        var next = x - f.x / f.y;
+        if !(next > min(lo, hi) && next < max(lo, hi)) {
+            next = 0.5 * (lo + hi);
+        }
+        let settled = abs(next - x) <= 1e-7 * max(abs(x), 1e-3);
+        x = next;
+        if settled {
+            break;
+        }
+    }
+    return x;
+}
+
+// The function bracketed_root solves and its derivative at x.
+fn root_function(a: Quartic, q: CurvePiece, p: vec3<f32>, mode: u32, x: f32) -> vec2<f32> {
+    if mode == 1u {
+        let off = piece_at(q, x) - p;
+        return vec2<f32>(dot(off, off) - EPSILON * EPSILON, 2.0 * dot(off, 2.0 * q.c2 * x + q.c1));
+    }
+    return quartic_at(a, x);
 }
 
 // What every entry point does first: copy the scalars (load_scalars) and find its texel and the texel's ray.

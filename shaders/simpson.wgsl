@@ -3,9 +3,10 @@
 // CPU twin: src/reference/simpson.rs.
 
 
-// A curve chain's term at p, b Sw(t*) / max(eps, L), and that times its color series at t* (zero without one).
+// A curve chain's term at p, b Sw(t) / max(eps, |p - C(t)|) at the point it reads (curve_point: the nearest point t*,
+// or the brightest), and that times its color series at t (zero without one).
 fn curve_field(c: CurveSource, p: vec3<f32>, eps: f32) -> vec4<f32> {
-    let best = curve_nearest(c, p);
+    let best = curve_point(c, p);
     let f = c.coefficient * wseries(c, best.x) * falloff(best.y, eps);
     return vec4<f32>(f, f * color_series(c, best.x));
 }

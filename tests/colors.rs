@@ -524,6 +524,7 @@ fn color_series_on_degenerate_chains_meet_the_converged_integral_on_the_cpu_and_
                 weights: vec![0.2, 1.0, 0.4, 0.9, 0.3],
                 look: Default::default(),
                 color_series: series.clone(),
+                w_form: energywave::field::WForm::Nearest,
             }],
             ..Sources::default()
         };

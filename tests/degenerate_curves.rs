@@ -39,6 +39,7 @@ fn curve_scene(control_points: &[[f64; 3]], weights: &[f64], w: u32) -> Scene {
             weights: weights.to_vec(),
             look: Default::default(),
             color_series: Vec::new(),
+            w_form: energywave::field::WForm::Nearest,
         }],
         ..Sources::default()
     };

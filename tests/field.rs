@@ -288,6 +288,7 @@ fn psi_is_the_sum_of_the_sources_and_is_clamped_by_epsilon() {
         weights: vec![],
         look: Default::default(),
         color_series: Vec::new(),
+        w_form: energywave::field::WForm::Nearest,
     };
     let all = Sources {
         points: vec![point.clone()],
@@ -324,6 +325,7 @@ fn a_chain_is_one_source_with_one_w_series() {
         weights: vec![0.0, 1.0, 0.0],
         look: Default::default(),
         color_series: Vec::new(),
+        w_form: energywave::field::WForm::Nearest,
     };
     // With three weights the W series is the Bernstein blend: Sw(t) = 2 t (1 - t) for W = [0, 1, 0].
     let sw = |t: f64| 2.0 * t * (1.0 - t);
@@ -342,6 +344,7 @@ fn a_chain_is_one_source_with_one_w_series() {
         weights: vec![],
         look: Default::default(),
         color_series: Vec::new(),
+        w_form: energywave::field::WForm::Nearest,
     };
     let doubled = separate(&cps[..3]).field(p, eps) + separate(&cps[2..]).field(p, eps);
     assert!(

@@ -143,7 +143,7 @@ fn rust_mirrors_match_the_wgsl_layouts() {
         size_of::<FieldParams>(),
         fields!(FieldParams: center, size, right, resolution, up, divisions, eye, nu, alpha, beta, epsilon,
             point_count, line_count, torus_count, curve_count, integrator, term_tolerance, jitter, seed, gauss_order,
-            layers),
+            layers, search),
     );
     check_struct(
         &field,
@@ -173,7 +173,14 @@ fn rust_mirrors_match_the_wgsl_layouts() {
         &field,
         "CurveSource",
         size_of::<CurveSource>(),
-        fields!(CurveSource: first_segment, segment_count, first_weight, weight_count, coefficient, first_color, color_count, pad0),
+        fields!(CurveSource: first_segment, segment_count, first_weight, weight_count, coefficient, first_color, color_count,
+            first_piece, piece_count, pad0, pad1, pad2),
+    );
+    check_struct(
+        &field,
+        "CurvePiece",
+        size_of::<CurvePiece>(),
+        fields!(CurvePiece: c2, s2, c1, s1, c0, s0, center, radius, t0, t1, weight_max, pad0),
     );
     check_struct(
         &field,

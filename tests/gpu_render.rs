@@ -145,6 +145,7 @@ fn gpu_matches_the_cpu_reference_on_grazing_rays() {
                 weights: vec![],
                 look: Default::default(),
                 color_series: Vec::new(),
+                w_form: energywave::field::WForm::Nearest,
             },
             // Nearly straight, across the ray of texel (20, 5).
             Curve {
@@ -157,6 +158,7 @@ fn gpu_matches_the_cpu_reference_on_grazing_rays() {
                 weights: vec![0.2, 1.0, 0.5, 0.8],
                 look: Default::default(),
                 color_series: Vec::new(),
+                w_form: energywave::field::WForm::Nearest,
             },
         ],
     };

@@ -46,6 +46,7 @@ fn curve(points: &[DVec3]) -> Curve {
         weights: vec![],
         look: Default::default(),
         color_series: Vec::new(),
+        w_form: energywave::field::WForm::Nearest,
     }
 }
 
@@ -367,13 +368,19 @@ fn sources() -> impl Strategy<Value = Sources> {
         prop::collection::vec(vec3(10.0), 7),
         -10.0..10.0f64,
         prop::collection::vec(0.0..2.0f64, 0..8),
+        any::<bool>(),
     )
-        .prop_map(|(k, points, coefficient, weights)| Curve {
+        .prop_map(|(k, points, coefficient, weights, nearest)| Curve {
             control_points: points[..2 * k + 1].to_vec(),
             coefficient,
             weights,
             look: Default::default(),
             color_series: Vec::new(),
+            w_form: if nearest {
+                energywave::field::WForm::Nearest
+            } else {
+                energywave::field::WForm::Continuous
+            },
         });
     (
         prop::collection::vec(point, 0..3),

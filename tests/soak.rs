@@ -98,6 +98,7 @@ fn thousands_of_frames_of_random_edits() {
                     weights,
                     look: Default::default(),
                     color_series: Vec::new(),
+                    w_form: energywave::field::WForm::default(),
                 });
             }
             5 if s.sources.curves.len() > 1 => {

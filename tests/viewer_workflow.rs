@@ -854,3 +854,35 @@ fn glare_is_turned_on_in_the_panel_and_is_an_undo_step() {
     h.run();
     assert_eq!(h.state().scene().glare, None);
 }
+
+#[test]
+fn the_w_form_is_switched_in_the_panel_and_is_an_undo_step() {
+    use common::viewer::{mean_abs_difference, viewport_pixels};
+    use energywave::field::WForm;
+    let mut h = harness(light_scene());
+    assert_eq!(
+        h.state().scene().sources.curves[0].w_form,
+        WForm::Continuous
+    );
+    let continuous = viewport_pixels(&mut h);
+    h.get_by_label("continuous (no seam)").scroll_to_me();
+    h.run();
+    h.get_by_label("continuous (no seam)").click();
+    h.run();
+    assert_eq!(h.state().scene().sources.curves[0].w_form, WForm::Nearest);
+    let nearest = viewport_pixels(&mut h);
+    assert!(
+        mean_abs_difference(&continuous, &nearest) > 0.001,
+        "the papers' form shows another glow"
+    );
+    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+    h.run();
+    assert_eq!(
+        h.state().scene().sources.curves[0].w_form,
+        WForm::Continuous
+    );
+    // A curve without a W series offers no choice: both forms are one term there.
+    h.state_mut().scene_mut().sources.curves[0].weights.clear();
+    h.run();
+    assert!(h.query_by_label("continuous (no seam)").is_none());
+}

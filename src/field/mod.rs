@@ -3,9 +3,12 @@
 //! This is the f64 reference the GPU passes are checked against; `shaders/field_common.wgsl` and the field
 //! passes mirror it in f32, function for function.
 
+pub mod brightest;
 pub mod cubic;
 pub mod curve;
 pub mod wseries;
+
+pub use brightest::WForm;
 
 use glam::DVec3;
 
@@ -64,6 +67,9 @@ pub struct Curve {
     /// parameter t* of the nearest point, like the W series (display values in [0, 1], times the look's
     /// intensity); empty means the look's one color.
     pub color_series: Vec<[f64; 3]>,
+    /// How the W series weighs the term: at the chain's brightest point seen from P (continuous, the default)
+    /// or at the nearest point (the papers').
+    pub w_form: WForm,
 }
 
 /// Every source of a scene, by kind.
@@ -124,16 +130,91 @@ impl Torus {
 }
 
 impl Curve {
-    /// This source's term of psi: `b Sw(t*) / max(eps, L(P))`, t* the chain parameter of the nearest point.
+    /// Whether the term reads its chain at the brightest point (`brightest`): the continuous form of a W series
+    /// that varies. Elsewhere both forms read the nearest point (with a uniform W they are the same term).
+    pub fn searches(&self) -> bool {
+        self.w_form == WForm::Continuous && !brightest::uniform(&self.weights)
+    }
+
+    /// What `point_seen` needs: the chain's pieces where the term searches for its brightest point, else none.
+    pub fn pieces(&self) -> Vec<brightest::Piece> {
+        if self.searches() {
+            brightest::pieces(&self.control_points, &self.weights)
+        } else {
+            Vec::new()
+        }
+    }
+
+    /// The point of the chain the term reads at `p`, with `pieces` from `pieces`: the brightest point in the
+    /// continuous form, else the nearest. The term is `b Sw(t) falloff(distance)` at it.
+    pub fn point_seen(&self, pieces: &[brightest::Piece], p: DVec3, eps: f64) -> curve::Nearest {
+        if pieces.is_empty() {
+            curve::nearest_on_chain(&self.control_points, p)
+        } else {
+            brightest::brightest(pieces, p, eps)
+        }
+    }
+
+    /// This source's term of psi: `b Sw(t) / max(eps, |P - C(t)|)` at the point `point_seen` reads (t* the nearest
+    /// point in the papers' form, `b Sw(t*) / max(eps, L(P))`).
     pub fn field(&self, p: DVec3, eps: f64) -> f64 {
-        let nearest = curve::nearest_on_chain(&self.control_points, p);
-        self.coefficient
-            * wseries::evaluate(&self.weights, nearest.t)
-            * falloff(nearest.distance, eps)
+        self.term_at(self.point_seen(&self.pieces(), p, eps), eps)
+    }
+
+    /// The term at the point `seen` it reads.
+    pub fn term_at(&self, seen: curve::Nearest, eps: f64) -> f64 {
+        self.coefficient * wseries::evaluate(&self.weights, seen.t) * falloff(seen.distance, eps)
+    }
+}
+
+/// A scene's sources with what their terms need worked out once (the curves' pieces): for evaluating psi at
+/// many points.
+pub struct Field<'a> {
+    pub sources: &'a Sources,
+    pieces: Vec<Vec<brightest::Piece>>,
+}
+
+impl Field<'_> {
+    /// psi(P), the sum of every source's term (thesis 3.28).
+    pub fn psi(&self, p: DVec3, eps: f64) -> f64 {
+        let s = self.sources;
+        s.points.iter().map(|x| x.field(p, eps)).sum::<f64>()
+            + s.lines.iter().map(|x| x.field(p, eps)).sum::<f64>()
+            + s.tori.iter().map(|x| x.field(p, eps)).sum::<f64>()
+            + (0..s.curves.len())
+                .map(|i| self.curve(i, p, eps))
+                .sum::<f64>()
+    }
+
+    /// Curve `i`'s term at `p`.
+    pub fn curve(&self, i: usize, p: DVec3, eps: f64) -> f64 {
+        let c = &self.sources.curves[i];
+        c.term_at(c.point_seen(&self.pieces[i], p, eps), eps)
+    }
+
+    /// Term `k` of psi(P) alone, in the order of `Sources::looks`; 0 past the last.
+    pub fn term(&self, k: usize, p: DVec3, eps: f64) -> f64 {
+        let s = self.sources;
+        let smooth = s.points.len() + s.lines.len() + s.tori.len();
+        if k < smooth {
+            s.term(k, p, eps)
+        } else if k - smooth < s.curves.len() {
+            self.curve(k - smooth, p, eps)
+        } else {
+            0.0
+        }
     }
 }
 
 impl Sources {
+    /// The sources prepared for evaluating psi at many points.
+    pub fn field(&self) -> Field<'_> {
+        Field {
+            sources: self,
+            pieces: self.curves.iter().map(Curve::pieces).collect(),
+        }
+    }
+
     /// psi(P), the sum of every source's term (thesis 3.28).
     pub fn psi(&self, p: DVec3, eps: f64) -> f64 {
         self.points.iter().map(|s| s.field(p, eps)).sum::<f64>()

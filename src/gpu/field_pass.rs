@@ -46,7 +46,7 @@ pub mod gpu_data {
         pub seed: u32,           // 104
         pub gauss_order: u32, // 108: adaptive: n of the Gauss-Kronrod pair (integrate::adaptive::kronrod_order)
         pub layers: u32, // 112: the field texture's layers written: 1 (B) or FIELD_LAYERS (and the tint)
-        pub pad0: u32,   // 116
+        pub search: u32, // 116: 1 where some curve's term reads its brightest point (the SEARCH constant)
         pub pad1: u32,   // 120
         pub pad2: u32,   // 124
     }
@@ -106,9 +106,32 @@ pub mod gpu_data {
         pub coefficient: f32,   // 16
         pub first_color: u32,   // 20
         pub color_count: u32,   // 24: 0, no color series
-        pub pad0: f32,          // 28
+        pub first_piece: u32,   // 28
+        pub piece_count: u32,   // 32: 0, the term reads the nearest point
+        pub pad0: u32,          // 36
+        pub pad1: u32,          // 40
+        pub pad2: u32,          // 44
     }
-    const _: () = assert!(size_of::<CurveSource>() == 32);
+    const _: () = assert!(size_of::<CurveSource>() == 48);
+
+    /// `CurvePiece` in `shaders/field_common.wgsl` (twin of `field::brightest::Piece`).
+    #[repr(C)]
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+    pub struct CurvePiece {
+        pub c2: [f32; 3],     // 0
+        pub s2: f32,          // 12
+        pub c1: [f32; 3],     // 16
+        pub s1: f32,          // 28
+        pub c0: [f32; 3],     // 32
+        pub s0: f32,          // 44
+        pub center: [f32; 3], // 48
+        pub radius: f32,      // 60
+        pub t0: f32,          // 64
+        pub t1: f32,          // 68
+        pub weight_max: f32,  // 72
+        pub pad0: f32,        // 76
+    }
+    const _: () = assert!(size_of::<CurvePiece>() == 80);
 
     /// `CurveSegment` in `shaders/field_common.wgsl`.
     #[repr(C)]
@@ -151,6 +174,8 @@ struct Packed {
     tints: Vec<[f32; 4]>,
     /// The curves' color series, their intensity applied, in rgb (`CurveSource::first_color`).
     colors: Vec<[f32; 4]>,
+    /// The pieces of the curves whose term reads their brightest point (`CurveSource::first_piece`).
+    pieces: Vec<CurvePiece>,
     /// The dispatches that together integrate the texture.
     chunks: Vec<Chunk>,
 }
@@ -175,9 +200,14 @@ const fn rule_iterations(order: u32) -> u64 {
 /// approaches, a sample for each knot cut, and the rules on every cut (at most `MAX_PEAKS` pieces, two closest
 /// approaches and two ends, each cut at its flat top's ends, and the kinks).
 const fn curve_evaluations(order: u32) -> u64 {
-    use crate::integrate::adaptive::{KINK_ROUNDS, MAX_KINKS, MAX_PEAKS, PEAK_NEWTON, SCAN};
+    use crate::integrate::adaptive::{
+        BRIGHT_SCAN, CUT_BISECTIONS, KINK_ROUNDS, MAX_KINKS, MAX_PEAKS, PEAK_NEWTON, SCAN,
+    };
     let cuts = 3 * MAX_PEAKS as u64 + MAX_KINKS as u64;
     (SCAN as u64 + 1)
+        // The continuous W form's scan, and the bisections that place its cuts (loop iterations, counted alike).
+        + (BRIGHT_SCAN as u64 + 1)
+        + MAX_KINKS as u64 * CUT_BISECTIONS as u64
         + 2
         + 2 * KINK_ROUNDS as u64 * MAX_KINKS as u64
         + 2 * PEAK_NEWTON as u64
@@ -190,9 +220,16 @@ const fn smooth_iterations(order: u32) -> u64 {
     20 + rules(3 * 3) * rule_iterations(order)
 }
 
-/// Loop iterations of one evaluation of a source's distance (a curve loops over its segments and roots).
-fn curve_iterations(segments: u32) -> u64 {
-    1 + 12 * segments as u64
+/// Loop iterations of one evaluation of a source's distance (a curve loops over its segments and roots), or of its
+/// brightest point (`pieces` > 0: over its pieces, each with its two walks, the parts they visit and the Newton steps
+/// on the two maxima and the four ends of the flat top a quartic has at most).
+fn curve_iterations(segments: u32, pieces: u32) -> u64 {
+    use crate::field::brightest::{FLAT_VISITS, ROOT_NEWTON, ROOT_VISITS};
+    if pieces > 0 {
+        1 + pieces as u64 * (2 + (ROOT_VISITS + FLAT_VISITS) as u64 + 6 * ROOT_NEWTON as u64)
+    } else {
+        1 + 12 * segments as u64
+    }
 }
 
 /// Newton steps a Gauss node of a curve's piece takes from the last node's nearest point before it falls back, if
@@ -203,7 +240,7 @@ const TRACK_NEWTON: u64 = shaders::TRACK_NEWTON as u64;
 /// its distance: each evaluation may take Newton's steps from the last node (`track_nearest` in the shader), then
 /// solve the piece's segment alone, then the whole chain (`nearest_on_chain_from`), in an outer loop of its own.
 fn adaptive_curve_iterations(order: u32, iterations: u64) -> u64 {
-    curve_evaluations(order) * (TRACK_NEWTON + iterations + curve_iterations(1) + 1)
+    curve_evaluations(order) * (TRACK_NEWTON + iterations + curve_iterations(1, 0) + 1)
 }
 
 /// The pipelines: simpson's, the adaptive integrator's for points, lines and tori, and for curves.
@@ -224,7 +261,7 @@ fn plan_chunks(p: &Packed) -> Vec<Chunk> {
     let curves: Vec<u64> = p
         .curves
         .iter()
-        .map(|c| curve_iterations(c.segment_count))
+        .map(|c| curve_iterations(c.segment_count, c.piece_count))
         .collect();
     if p.params.integrator == 0 {
         // Simpson: ranges of samples, each sample costing a walk over every source.
@@ -353,6 +390,22 @@ fn pack(scene: &Scene, billboard: &Billboard) -> Packed {
                 .map(|x| x.map(|v| (v * intensity) as f32))
                 .map(|[r, g, b]| [r, g, b, 0.0]),
         );
+        let first_piece = packed.pieces.len() as u32;
+        packed.pieces.extend(c.pieces().iter().map(|q| CurvePiece {
+            c2: v3(q.segment.c2),
+            s2: q.weight[0] as f32,
+            c1: v3(q.segment.c1),
+            s1: q.weight[1] as f32,
+            c0: v3(q.segment.c0),
+            s0: q.weight[2] as f32,
+            center: v3(q.center),
+            // Rounded outward, so that the ball still holds the piece's f32 points.
+            radius: (q.radius * (1.0 + 1e-5) + 1e-6 * q.center.length()) as f32,
+            t0: q.t0 as f32,
+            t1: q.t1 as f32,
+            weight_max: (q.weight_max * (1.0 + 1e-6)) as f32,
+            pad0: 0.0,
+        }));
         packed.curves.push(CurveSource {
             first_segment,
             segment_count: packed.segments.len() as u32 - first_segment,
@@ -360,10 +413,13 @@ fn pack(scene: &Scene, billboard: &Billboard) -> Packed {
             weight_count: c.weights.len() as u32,
             first_color,
             color_count: c.color_series.len() as u32,
+            first_piece,
+            piece_count: packed.pieces.len() as u32 - first_piece,
             coefficient: c.coefficient as f32,
             ..CurveSource::default()
         });
     }
+    packed.params.search = packed.curves.iter().any(|c| c.piece_count > 0) as u32;
     packed.chunks = plan_chunks(&packed);
     packed
 }
@@ -386,9 +442,9 @@ struct StorageBuffer {
 
 impl StorageBuffer {
     fn new(device: &wgpu::Device, label: &'static str, bytes: &[u8]) -> Self {
-        // An empty list still binds one zeroed element of the largest struct (CurveSegment, 48 bytes).
+        // An empty list still binds one zeroed element of the largest struct (CurvePiece, 80 bytes).
         let contents: Vec<u8> = if bytes.is_empty() {
-            vec![0; 64]
+            vec![0; 80]
         } else {
             bytes.to_vec()
         };
@@ -429,6 +485,8 @@ pub struct Structure {
     pub curves: u32,
     pub gauss_order: u32,
     pub jitter: u32,
+    /// Whether some curve's term reads its brightest point (`FieldParams::search`).
+    pub search: u32,
 }
 
 impl Structure {
@@ -442,6 +500,7 @@ impl Structure {
             curves: params.curve_count,
             gauss_order: if simpson { 0 } else { params.gauss_order },
             jitter: if simpson { params.jitter } else { 0 },
+            search: params.search,
         }
     }
 
@@ -455,7 +514,7 @@ impl Structure {
         Self::of(&pack(scene, billboard).params)
     }
 
-    fn constants(&self) -> [(&'static str, f64); 6] {
+    fn constants(&self) -> [(&'static str, f64); 7] {
         [
             ("POINT_COUNT", self.points as f64),
             ("LINE_COUNT", self.lines as f64),
@@ -463,6 +522,7 @@ impl Structure {
             ("CURVE_COUNT", self.curves as f64),
             ("GAUSS_ORDER", self.gauss_order as f64),
             ("JITTER", self.jitter as f64),
+            ("SEARCH", self.search as f64),
         ]
     }
 }
@@ -498,10 +558,10 @@ fn build_pipeline(
     entry: &str,
     constants: &[(&str, f64)],
 ) -> wgpu::ComputePipeline {
-    let specialised = if constants.is_empty() {
-        ""
-    } else {
-        ".specialised"
+    let specialised = match constants {
+        [] => "",
+        [("SEARCH", _)] => ".search",
+        _ => ".specialised",
     };
     device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
         label: Some(&format!("energywave.field.{entry}{specialised}")),
@@ -516,14 +576,23 @@ fn build_pipeline(
     })
 }
 
-/// The generic pipelines of every entry point.
+/// The generic pipelines of every entry point: without the search for the brightest point of a curve (`search`
+/// false: scenes without the continuous W form compile none of it), or with it.
 fn build_pipelines(
     device: &wgpu::Device,
     modules: &Modules,
     layout: &wgpu::PipelineLayout,
+    search: bool,
 ) -> Pipelines {
+    let constants: &[(&str, f64)] = if search { &[("SEARCH", 1.0)] } else { &[] };
     std::array::from_fn(|k| {
-        build_pipeline(device, &modules[k], layout, shaders::FIELD_PASSES[k].0, &[])
+        build_pipeline(
+            device,
+            &modules[k],
+            layout,
+            shaders::FIELD_PASSES[k].0,
+            constants,
+        )
     })
 }
 
@@ -603,8 +672,9 @@ impl SpecialisedPipelines {
 
 /// The field pass: its pipelines (one per integrator) and the GPU copies of one scene's data.
 pub struct FieldRenderer {
-    /// The generic pipelines of the three passes (`shaders::FIELD_PASSES`), indexed by `Chunk::pipeline`.
-    pipelines: Pipelines,
+    /// The generic pipelines of the three passes (`shaders::FIELD_PASSES`), indexed by `Chunk::pipeline`: without
+    /// the search for a curve's brightest point, and with it, each built when a scene first needs it.
+    generic: [Option<Pipelines>; 2],
     modules: Modules,
     pipeline_layout: wgpu::PipelineLayout,
     specialise: Specialise,
@@ -615,7 +685,7 @@ pub struct FieldRenderer {
     /// The chunks, one per `chunk_stride` bytes (bound with a dynamic offset).
     chunks: wgpu::Buffer,
     chunk_stride: u64,
-    buffers: [StorageBuffer; 8],
+    buffers: [StorageBuffer; 9],
     texture: Option<(wgpu::Texture, wgpu::TextureView)>,
     bind_group: Option<wgpu::BindGroup>,
     uploaded: Option<Packed>,
@@ -636,7 +706,7 @@ pub struct FieldRenderer {
 }
 
 impl FieldRenderer {
-    /// Builds the pipelines.
+    /// Builds the passes' modules and layouts; their pipelines are built when a scene first needs them.
     pub fn new(device: &wgpu::Device) -> Self {
         let modules: Modules = std::array::from_fn(|k| {
             device.create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -680,6 +750,7 @@ impl FieldRenderer {
                 },
                 storage(9),
                 storage(10),
+                storage(11),
                 // A read-only storage buffer rather than a uniform one: lavapipe recompiles a shader for the
                 // values of uniforms that bound its loops (to unroll them), and a chunk's range bounds the term
                 // loop, so every new range meant a new compile (seconds each, minutes for some).
@@ -695,7 +766,6 @@ impl FieldRenderer {
                 },
             ],
         );
-        let pipelines = build_pipelines(device, &modules, &pipeline_layout);
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("energywave.field.params"),
             size: size_of::<FieldParams>() as u64,
@@ -711,12 +781,13 @@ impl FieldRenderer {
             "energywave.field.weights",
             "energywave.field.tints",
             "energywave.field.colors",
+            "energywave.field.pieces",
         ]
         .map(|label| StorageBuffer::new(device, label, &[]));
         let chunk_stride = (device.limits().min_storage_buffer_offset_alignment as u64)
             .max(size_of::<Chunk>() as u64);
         Self {
-            pipelines,
+            generic: [None, None],
             modules,
             pipeline_layout,
             specialise: Specialise::default(),
@@ -805,7 +876,7 @@ impl FieldRenderer {
         }
         checked(device, || {
             let mut rebind = self.bind_group.is_none();
-            let data: [&[u8]; 8] = [
+            let data: [&[u8]; 9] = [
                 bytemuck::cast_slice(&packed.points),
                 bytemuck::cast_slice(&packed.lines),
                 bytemuck::cast_slice(&packed.tori),
@@ -814,6 +885,7 @@ impl FieldRenderer {
                 bytemuck::cast_slice(&packed.weights),
                 bytemuck::cast_slice(&packed.tints),
                 bytemuck::cast_slice(&packed.colors),
+                bytemuck::cast_slice(&packed.pieces),
             ];
             for (buffer, bytes) in self.buffers.iter_mut().zip(data) {
                 rebind |= buffer.write(device, queue, bytes);
@@ -872,7 +944,7 @@ impl FieldRenderer {
             binding: 0,
             resource: self.params.as_entire_binding(),
         }];
-        // Bindings 1 to 6, then the tints at 9 and the color series at 10.
+        // Bindings 1 to 6, then the tints at 9, the color series at 10 and the pieces at 11.
         for (i, b) in self.buffers.iter().enumerate() {
             entries.push(wgpu::BindGroupEntry {
                 binding: if i < 6 { i as u32 + 1 } else { i as u32 + 3 },
@@ -939,10 +1011,20 @@ impl FieldRenderer {
             &self.pipeline_layout,
             Structure::of(&packed.params),
         );
+        // The generic pipelines where the specialised ones are not ready, built the first time they are needed.
+        let search = packed.params.search != 0;
+        let ready = |k: u32| (specialised.as_ref()).is_some_and(|set| set[k as usize].is_some());
+        if !packed.chunks.iter().all(|c| ready(c.pipeline)) {
+            let (device, modules, layout) = (&self.device, &self.modules, &self.pipeline_layout);
+            self.generic[search as usize]
+                .get_or_insert_with(|| build_pipelines(device, modules, layout, search));
+        }
+        let generic = &self.generic[search as usize];
         let pipeline = |k: usize| {
             (specialised.as_ref())
                 .and_then(|set| set[k].as_ref())
-                .unwrap_or(&self.pipelines[k])
+                .or_else(|| generic.as_ref().map(|g| &g[k]))
+                .expect("the generic pipelines are built where the specialised are not ready")
         };
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("energywave.field.pass"),
@@ -1293,6 +1375,7 @@ mod tests {
                 weights: vec![1.0],
                 look: Default::default(),
                 color_series: Vec::new(),
+                w_form: crate::field::WForm::Nearest,
             })
             .collect();
         s.integration.integrator = integrator;
@@ -1329,7 +1412,9 @@ mod tests {
             if c.pipeline == ADAPTIVE_CURVES && c.count > 1 {
                 let cost: u64 = (c.first..last)
                     .map(|t| p.curves[(t - 3) as usize].segment_count)
-                    .map(|k| adaptive_curve_iterations(p.params.gauss_order, curve_iterations(k)))
+                    .map(|k| {
+                        adaptive_curve_iterations(p.params.gauss_order, curve_iterations(k, 0))
+                    })
                     .sum();
                 assert!(cost <= ITERATION_BUDGET, "{c:?} costs {cost}");
             }

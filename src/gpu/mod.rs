@@ -30,7 +30,8 @@ pub use upsample::Upsample;
 pub mod layout {
     pub use super::billboard_pass::gpu_data::BillboardParams;
     pub use super::field_pass::gpu_data::{
-        Chunk, CurveSegment, CurveSource, FieldParams, LineSource, PointSource, TorusSource,
+        Chunk, CurvePiece, CurveSegment, CurveSource, FieldParams, LineSource, PointSource,
+        TorusSource,
     };
     pub use super::frame_average::gpu_data::AverageParams;
 }

@@ -77,10 +77,13 @@ fn f32_literal(v: f64) -> String {
 /// (`crate::field::curve`), the Newton steps the iteration budget counts on (`TRACK_NEWTON`), and the
 /// Gauss-Kronrod table with the function that finds a pair in it.
 pub fn shared_constants() -> String {
+    use crate::field::brightest as b;
     use crate::integrate::adaptive as a;
     use std::fmt::Write;
-    let integers: [(&str, u64); 14] = [
+    let integers: [(&str, u64); 21] = [
         ("SCAN", a::SCAN as u64),
+        ("BRIGHT_SCAN", a::BRIGHT_SCAN as u64),
+        ("CUT_BISECTIONS", a::CUT_BISECTIONS as u64),
         ("KINK_ROUNDS", a::KINK_ROUNDS as u64),
         ("MAX_KINKS", a::MAX_KINKS as u64),
         ("MAX_GAUSS_PANELS", a::MAX_GAUSS_PANELS as u64),
@@ -93,6 +96,11 @@ pub fn shared_constants() -> String {
         ("SWITCH_ROUNDS", a::SWITCH_ROUNDS as u64),
         ("RING_NEWTON", a::RING_NEWTON as u64),
         ("TRACK_NEWTON", TRACK_NEWTON as u64),
+        ("ROOT_LEVELS", b::ROOT_LEVELS as u64),
+        ("ROOT_VISITS", b::ROOT_VISITS as u64),
+        ("ROOT_NEWTON", b::ROOT_NEWTON as u64),
+        ("FLAT_LEVELS", b::FLAT_LEVELS as u64),
+        ("FLAT_VISITS", b::FLAT_VISITS as u64),
         ("KRONROD_ROWS", a::KRONROD.len() as u64),
     ];
     let reals: [(&str, f64); 16] = [

@@ -224,6 +224,15 @@ pub const SINGULAR_MERGE: f64 = 1e-3;
 /// Intervals of the scan along a curve's ray, which finds its closest approaches and kinks.
 pub const SCAN: u32 = 6;
 
+/// Intervals of the scan along the ray of a curve in the continuous W form, which finds where its brightest point
+/// jumps between parts of the chain (each sample a whole search: finer than `SCAN`, since two jumps within one
+/// interval cancel out and go unseen).
+pub const BRIGHT_SCAN: u32 = 24;
+
+/// Bisections that place a cut where the brightest point passes the end of a piece (in its interpolated motion
+/// between two samples of the scan): 2^-24 of a scan interval.
+pub const CUT_BISECTIONS: u32 = 24;
+
 /// A chain's nearest point jumps between two samples where it lands farther than this many times the distance
 /// from where a smooth motion would have taken it.
 pub const JUMP: f64 = 0.1;

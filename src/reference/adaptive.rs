@@ -413,8 +413,9 @@ pub(super) mod testing {
     /// The converged integral by Simpson with many samples.
     pub fn reference(sources: &Sources, s: DVec3, e: DVec3, n: u32) -> f64 {
         let st = settings();
+        let field = sources.field();
         simpson(
-            |t| sources.psi(s + (e - s) * t, st.epsilon) * zeta(t, st.alpha, st.beta),
+            |t| field.psi(s + (e - s) * t, st.epsilon) * zeta(t, st.alpha, st.beta),
             n,
         )
     }

@@ -8,20 +8,33 @@ use std::cell::Cell;
 use glam::DVec3;
 
 use super::adaptive::{Features, Kinks, Peak, integrate_pieces, peak, share_ray};
-use crate::field::{Curve, Sources, curve, falloff, wseries};
+use crate::field::{Curve, Sources, brightest, curve, falloff, wseries};
 use crate::integrate::adaptive::{
-    END_SNAP, JUMP, KINK_PROBE, KINK_ROUNDS, MAX_PEAKS, PARAM_JUMP, PEAK_NEWTON, PEAK_SETTLED,
-    SCAN, SWITCH_INSET, SWITCH_ROUNDS, kink_bracket, kronrod_order,
+    BRIGHT_SCAN, CUT_BISECTIONS, END_SNAP, JUMP, KINK_PROBE, KINK_ROUNDS, MAX_KINKS, MAX_PEAKS,
+    PARAM_JUMP, PEAK_NEWTON, PEAK_SETTLED, SCAN, SWITCH_INSET, SWITCH_ROUNDS, kink_bracket,
+    kronrod_order,
 };
 use crate::integrate::{Integration, zeta};
 
 /// The features of a chain along `s -> e` (at most `MAX_PEAKS`), sorted along the ray, each owning its piece,
-/// and its kinks.
-fn features(c: &Curve, s: DVec3, e: DVec3, scan: u32, eps: f64, bracket: f64) -> Features {
+/// and its kinks: those of its nearest point, or in the continuous W form (`pieces` not empty) those of its
+/// brightest point (`bright_kinks`).
+fn features(
+    c: &Curve,
+    pieces: &[brightest::Piece],
+    s: DVec3,
+    e: DVec3,
+    (scan, eps, bracket): (u32, f64, f64),
+) -> Features {
     let dir = e - s;
     let mut out = [peak(0.0, 0.0, 0.0, eps); MAX_PEAKS];
     let mut kinks = Kinks::default();
-    let (found, count) = chain_features(c, s, dir, (scan, eps, bracket), &mut kinks);
+    let nearest_kinks = pieces.is_empty();
+    let (found, count) = chain_features(c, s, dir, (scan, eps, bracket, nearest_kinks), &mut kinks);
+    if !nearest_kinks {
+        let sample = |t: f64| BrightSample::at(pieces, s, dir, t, eps);
+        bright_kinks(&sample, pieces, bracket, &mut kinks);
+    }
     out[..count].copy_from_slice(&found[..count]);
     share_ray(&mut out[..count]);
     Features {
@@ -46,7 +59,7 @@ fn chain_features(
     c: &Curve,
     s: DVec3,
     dir: DVec3,
-    (scan, eps, bracket): (u32, f64, f64),
+    (scan, eps, bracket, nearest_kinks): (u32, f64, f64, bool),
     kinks: &mut Kinks,
 ) -> ([Peak; MAX_PEAKS], usize) {
     let sample = |t: f64| ChainSample::at(c, s, dir, t, false);
@@ -116,6 +129,10 @@ fn chain_features(
                     }
                 }
             }
+            if !nearest_kinks {
+                left = y;
+                continue;
+            }
             if let Some((a1, b1)) = search_jumps(&sample, (s, dir), left, x, (eps, bracket), kinks)
             {
                 joint_cuts(cp, (s, dir), [&calm, &a1, &b1], kinks);
@@ -124,14 +141,17 @@ fn chain_features(
             }
             left = y;
         }
-        if let Some((a1, b1)) = search_jumps(&sample, (s, dir), left, after, (eps, bracket), kinks)
-        {
-            joint_cuts(cp, (s, dir), [&calm, &a1, &b1], kinks);
-            knot_cuts(&sample, c.weights.len(), &calm, &a1, kinks);
-            calm = b1;
+        if nearest_kinks {
+            if let Some((a1, b1)) =
+                search_jumps(&sample, (s, dir), left, after, (eps, bracket), kinks)
+            {
+                joint_cuts(cp, (s, dir), [&calm, &a1, &b1], kinks);
+                knot_cuts(&sample, c.weights.len(), &calm, &a1, kinks);
+                calm = b1;
+            }
+            joint_cuts(cp, (s, dir), [&calm, &after, &after], kinks);
+            knot_cuts(&sample, c.weights.len(), &calm, &after, kinks);
         }
-        joint_cuts(cp, (s, dir), [&calm, &after, &after], kinks);
-        knot_cuts(&sample, c.weights.len(), &calm, &after, kinks);
         g_before_before = before.d2;
         before = after;
     }
@@ -265,6 +285,187 @@ fn search_jumps(
         }
     }
     Some((a1, b1))
+}
+
+/// The continuous W form's kinks along the ray: where the chain's brightest point jumps from one part of the chain
+/// to another, the term (the largest of the parts' values) is continuous but turns a corner, which a
+/// Gauss-Kronrod pair across it misjudges. A scan of `BRIGHT_SCAN` intervals finds the jumps: the brightest point's
+/// parameter lands far from where its rate would take it (`bright_miss`); each is bracketed by
+/// `find_bright_kink`, and the rest of its interval on either side searched once more.
+///
+/// Between jumps the term is smooth but for where the brightest point crosses a joint or a knot of W (the ends of
+/// the pieces: the chain's curvature or S's steps there, and the term's second derivative with them) or comes to
+/// rest at an end of the chain: those are cut too (`bright_cuts`).
+fn bright_kinks(
+    sample: &impl Fn(f64) -> BrightSample,
+    pieces: &[brightest::Piece],
+    bracket: f64,
+    kinks: &mut Kinks,
+) {
+    // The shader runs this as one loop with one call of its search, in the same order of samples.
+    let k = BRIGHT_SCAN;
+    let mut before = sample(0.0);
+    for i in 1..=k {
+        let after = sample(i as f64 / k as f64);
+        let mut calm = before;
+        // Once the kinks are full, further searches would be dropped: none is made.
+        let room = |kinks: &Kinks| kinks.count < MAX_KINKS;
+        if bright_miss(&before, &after) > PARAM_JUMP && room(kinks) {
+            let (kink, a1, b1) = find_bright_kink(sample, before, after, bracket);
+            kinks.push(kink);
+            for (x, y) in [(before, a1), (b1, after)] {
+                if bright_miss(&x, &y) > PARAM_JUMP && room(kinks) {
+                    kinks.push(find_bright_kink(sample, x, y, bracket).0);
+                }
+            }
+            bright_cuts(pieces, &calm, &a1, kinks);
+            calm = b1;
+        }
+        bright_cuts(pieces, &calm, &after, kinks);
+        before = after;
+    }
+}
+
+/// The cuts where the brightest point passes the end of a piece (a joint or a knot of W) between samples `x` and
+/// `y` with no jump between them, or comes to rest at (or leaves) an end of the chain. Its parameter between the
+/// samples is their cubic Hermite interpolant (values and rates), whose crossing of a piece's end is found by
+/// bisection; a rest at an end starts or stops where the moving sample's rate takes it there. No sample is taken
+/// (the shader's search has one call site in this scan, see bright_kinks there).
+fn bright_cuts(pieces: &[brightest::Piece], x: &BrightSample, y: &BrightSample, kinks: &mut Kinks) {
+    if y.t <= x.t || x.param == y.param {
+        return;
+    }
+    let h = y.t - x.t;
+    let hermite = |t: f64| {
+        let u = (t - x.t) / h;
+        let (u2, u3) = (u * u, u * u * u);
+        (2.0 * u3 - 3.0 * u2 + 1.0) * x.param
+            + (u3 - 2.0 * u2 + u) * h * x.rate
+            + (-2.0 * u3 + 3.0 * u2) * y.param
+            + (u3 - u2) * h * y.rate
+    };
+    for k in 0..=pieces.len() {
+        let end = k == 0 || k == pieces.len();
+        let at = match k {
+            0 => 0.0,
+            k if k == pieces.len() => 1.0,
+            k => pieces[k].t0,
+        };
+        let t = if end {
+            if (x.param == at) == (y.param == at) {
+                continue;
+            }
+            // The moving sample's rate takes it to the end.
+            let m = if x.param == at { y } else { x };
+            m.t + (at - m.param) / m.rate
+        } else {
+            if (x.param - at) * (y.param - at) >= 0.0 {
+                continue;
+            }
+            let (mut lo, mut hi) = (x.t, y.t);
+            for _ in 0..CUT_BISECTIONS {
+                let mid = 0.5 * (lo + hi);
+                if (hermite(mid) - at) * (x.param - at) > 0.0 {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            0.5 * (lo + hi)
+        };
+        kinks.push(if t.is_finite() {
+            t.clamp(x.t, y.t)
+        } else {
+            0.5 * (x.t + y.t)
+        });
+    }
+}
+
+/// A chain's brightest point seen from the ray's point at t (the continuous W form): its chain parameter and that
+/// parameter's rate along the ray, the term's value there (without its coefficient) and the value's slope.
+#[derive(Clone, Copy, Debug)]
+struct BrightSample {
+    t: f64,
+    param: f64,
+    rate: f64,
+    value: f64,
+    slope: f64,
+}
+
+impl BrightSample {
+    fn at(pieces: &[brightest::Piece], s: DVec3, dir: DVec3, t: f64, eps: f64) -> Self {
+        let p = s + dir * t;
+        let b = brightest::search(pieces, p, eps);
+        let (rate, slope) = b.motion(pieces, p, dir, eps);
+        BrightSample {
+            t,
+            param: b.at.t,
+            rate,
+            value: b.value,
+            slope,
+        }
+    }
+
+    /// Where its parameter would be at t had it moved on at its rate.
+    fn predict(&self, t: f64) -> f64 {
+        self.param + self.rate * (t - self.t)
+    }
+}
+
+/// How far the brightest point's parameter lands at `b` from where its rates would have taken it from `a`.
+fn bright_miss(a: &BrightSample, b: &BrightSample) -> f64 {
+    let m = (b.param - a.param - 0.5 * (a.rate + b.rate) * (b.t - a.t)).abs();
+    if m.is_finite() { m } else { f64::INFINITY }
+}
+
+/// Where the brightest point jumps between `a` and `b`: each round probes either side of the estimate (where the
+/// two branches' values, each moving on with its slope, meet), or of the middle where the same side has moved
+/// twice in a row, and gives each probe to the end whose branch it continues. Returns the estimate in the final
+/// bracket and the bracket. Twin of the shader's bright_kink.
+fn find_bright_kink(
+    sample: &impl Fn(f64) -> BrightSample,
+    mut a: BrightSample,
+    mut b: BrightSample,
+    bracket: f64,
+) -> (f64, BrightSample, BrightSample) {
+    let estimate = |a: &BrightSample, b: &BrightSample| {
+        let t = (b.value - a.value + a.slope * a.t - b.slope * b.t) / (a.slope - b.slope);
+        if t.is_finite() && t > a.t && t < b.t {
+            t
+        } else {
+            0.5 * (a.t + b.t)
+        }
+    };
+    let (mut last_moved, mut stale) = (0i32, false);
+    for _ in 0..KINK_ROUNDS {
+        if b.t - a.t <= bracket {
+            break;
+        }
+        let guess = if stale {
+            0.5 * (a.t + b.t)
+        } else {
+            estimate(&a, &b)
+        };
+        let tau = KINK_PROBE * (b.t - a.t);
+        let (mut moved_a, mut moved_b) = (false, false);
+        for probe in [guess - tau, guess + tau] {
+            if probe <= a.t || probe >= b.t {
+                continue;
+            }
+            let m = sample(probe);
+            if (m.param - a.predict(probe)).abs() <= (m.param - b.predict(probe)).abs() {
+                a = m;
+                moved_a = true;
+            } else {
+                b = m;
+                moved_b = true;
+            }
+        }
+        let moved = moved_b as i32 - moved_a as i32;
+        stale = moved != 0 && moved == last_moved;
+        last_moved = moved;
+    }
+    (estimate(&a, &b), a, b)
 }
 
 /// A curve chain's nearest point to the ray's point at t: the squared distance, the point and its velocity along
@@ -600,7 +801,14 @@ fn integrate_weighted(
         return 0.0;
     }
     let order = kronrod_order(settings.tolerance);
-    let found = features(c, s, e, SCAN, settings.epsilon, kink_bracket(order));
+    let pieces = c.pieces();
+    let found = features(
+        c,
+        &pieces,
+        s,
+        e,
+        (SCAN, settings.epsilon, kink_bracket(order)),
+    );
     let dir = e - s;
     let cp = &c.control_points;
     // A chain's nearest point stays on one segment between cuts, or passes a joint continuously: each cut
@@ -613,9 +821,13 @@ fn integrate_weighted(
     // So is every part of a chain with a segment at rest at an end (`curve::is_degenerate`): the shader's
     // tracking loses the nearest point there.
     let degenerate = curve::is_degenerate(cp);
+    // In the continuous form every node searches the whole chain for its brightest point (the term is continuous,
+    // with kinks where that point jumps, cut at by `bright_kinks`).
     let f = |t: f64| {
         let p = s + dir * t;
-        let n = if tracking.get() {
+        let n = if !pieces.is_empty() {
+            brightest::brightest(&pieces, p, settings.epsilon)
+        } else if tracking.get() {
             let mut on = segment.get();
             let n = curve::nearest_on_chain_from(cp, p, &mut on);
             segment.set(on);
@@ -700,6 +912,7 @@ mod tests {
             weights: vec![],
             look: Default::default(),
             color_series: Vec::new(),
+            w_form: crate::field::WForm::Nearest,
         }
     }
 
@@ -713,7 +926,7 @@ mod tests {
         let c = arch();
         let (y, z) = (0.3, 0.2);
         let (s, e) = (DVec3::new(-3.0, y, z), DVec3::new(3.0, y, z));
-        let found = features(&c, s, e, SCAN, 0.01, KINK_BRACKET);
+        let found = features(&c, &[], s, e, (SCAN, 0.01, KINK_BRACKET));
         let kinks = &found.kinks.at[..found.kinks.count];
         let near = |t: f64, within: f64| kinks.iter().any(|&k| (k - t).abs() < within);
         assert!(near(0.5, 1e-5), "the medial crossing: {kinks:?}");
@@ -726,7 +939,7 @@ mod tests {
         }
         // Far above the arch the nearest point moves smoothly: no kink but the ends'.
         let (s, e) = (DVec3::new(-3.0, 3.0, z), DVec3::new(3.0, 3.0, z));
-        let found = features(&c, s, e, SCAN, 0.01, KINK_BRACKET);
+        let found = features(&c, &[], s, e, (SCAN, 0.01, KINK_BRACKET));
         assert!(
             found.kinks.count <= 2,
             "{:?}",
@@ -752,6 +965,7 @@ mod tests {
                 weights: vec![],
                 look: Default::default(),
                 color_series: Vec::new(),
+                w_form: crate::field::WForm::Nearest,
             }],
             ..Default::default()
         };
@@ -787,6 +1001,7 @@ mod tests {
                 weights: vec![0.3, 1.0, 0.5, 1.0],
                 look: Default::default(),
                 color_series: Vec::new(),
+                w_form: crate::field::WForm::Nearest,
             }],
             ..Default::default()
         };

@@ -31,6 +31,7 @@ pub fn converged_reference(scene: &Scene, stride: u32) -> (Vec<f64>, ReferenceSt
         .step_by(stride as usize)
         .flat_map(|j| (0..w).step_by(stride as usize).map(move |i| (i, j)))
         .collect();
+    let field = s.sources.field();
     let out: Vec<(f64, u64)> = texels
         .par_iter()
         .map(|&(i, j)| {
@@ -43,8 +44,7 @@ pub fn converged_reference(scene: &Scene, stride: u32) -> (Vec<f64>, ReferenceSt
             let span = reach.stretch;
             let f = |t: f64| {
                 let sigma = t * span;
-                s.sources
-                    .psi(p + per_depth * (sigma * i.decay_length), i.epsilon)
+                field.psi(p + per_depth * (sigma * i.decay_length), i.epsilon)
                     * zeta(sigma, i.alpha, i.beta)
                     * span
             };

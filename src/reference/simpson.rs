@@ -5,13 +5,14 @@
 
 use glam::DVec3;
 
-use crate::field::{Curve, Sources, curve, falloff};
+use crate::field::{Curve, Sources, falloff};
 use crate::integrate::{Integration, zeta};
 
 /// The brightness B of the segment from `s` to `e` by the papers' rule with the settings' `divisions`:
 /// Simpson's, or the shifted rectangle rule with offset `xi` where the settings jitter.
 pub fn brightness(sources: &Sources, settings: &Integration, s: DVec3, e: DVec3, xi: f64) -> f64 {
-    along_ray(settings, (s, e), xi, |p| sources.psi(p, settings.epsilon))
+    let field = sources.field();
+    along_ray(settings, (s, e), xi, |p| field.psi(p, settings.epsilon))
 }
 
 /// The part of B of term `k` of psi alone (`Sources::term`), by the same rule as `brightness`.
@@ -23,12 +24,12 @@ pub fn term_brightness(
     e: DVec3,
     xi: f64,
 ) -> f64 {
-    along_ray(settings, (s, e), xi, |p| {
-        sources.term(k, p, settings.epsilon)
-    })
+    let field = sources.field();
+    along_ray(settings, (s, e), xi, |p| field.term(k, p, settings.epsilon))
 }
 
-/// Curve `c`'s term with `weight(t*)` in the place of its W series, by the same rule as `brightness`.
+/// Curve `c`'s term with `weight(t)` in the place of its W series at the point it reads (`Curve::point_seen`: the
+/// nearest point, or the brightest in the continuous form), by the same rule as `brightness`.
 pub fn curve_weighted(
     c: &Curve,
     settings: &Integration,
@@ -36,8 +37,9 @@ pub fn curve_weighted(
     xi: f64,
     weight: &dyn Fn(f64) -> f64,
 ) -> f64 {
+    let pieces = c.pieces();
     along_ray(settings, (s, e), xi, |p| {
-        let n = curve::nearest_on_chain(&c.control_points, p);
+        let n = c.point_seen(&pieces, p, settings.epsilon);
         c.coefficient * weight(n.t) * falloff(n.distance, settings.epsilon)
     })
 }

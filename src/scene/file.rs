@@ -156,6 +156,8 @@ pub(crate) struct CurveFile {
     pub intensity: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub color_series: Option<Vec<[f64; 3]>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub w_form: Option<String>,
 }
 
 /// `[animation]`: the timeline and the keyed parameters.

@@ -19,7 +19,7 @@ pub use error::{Problem, SceneError};
 use file::{FieldPath, Locator, SceneFile};
 
 use crate::animation::Animation;
-use crate::field::{Curve, Line, Look, Point, Sources, Torus};
+use crate::field::{Curve, Line, Look, Point, Sources, Torus, WForm};
 use crate::geometry::{self, Billboard, Camera};
 use crate::integrate::{Integration, Integrator};
 
@@ -352,6 +352,7 @@ impl Scene {
                     color: s.look.color,
                     intensity: s.look.intensity,
                     color_series: (!s.color_series.is_empty()).then(|| s.color_series.clone()),
+                    w_form: (s.w_form != WForm::default()).then(|| s.w_form.name().to_owned()),
                 })
                 .collect(),
             animation: None,
@@ -944,12 +945,23 @@ fn check_sources(c: &mut Checker<'_, '_>, file: &SceneFile) -> Sources {
                     .collect()
             }
         };
+        let w_form = match curve.w_form.as_deref() {
+            None => WForm::default(),
+            Some(name) => WForm::ALL.into_iter().find(|f| f.name() == name).unwrap_or_else(|| {
+                c.fail(
+                    &path.key("w_form"),
+                    format!("{name:?} is not a form of the W series: use \"continuous\" (the chain's brightest point seen from P, max Sw(t) / max(eps, |P - C(t)|): no seam, the default) or \"nearest\" (the papers' Sw(t*) at the nearest point t*)"),
+                );
+                WForm::default()
+            }),
+        };
         sources.curves.push(Curve {
             control_points,
             coefficient: curve.coefficient,
             weights,
             look: c.look(&path, curve.color, curve.intensity),
             color_series,
+            w_form,
         });
     }
     sources

@@ -8,7 +8,7 @@ use glam::DVec3;
 
 use crate::animation::{Animation, Key, Parameter, SourceKind, Track, Value};
 use crate::export::Target;
-use crate::field::{Curve, Line, Point, Torus};
+use crate::field::{Curve, Line, Point, Torus, WForm};
 use crate::geometry::Camera;
 use crate::integrate::Integrator;
 use crate::scene::{Blend, Glare, Scene};
@@ -90,6 +90,8 @@ pub enum Edit {
     RemoveWeight(usize, usize),
     /// A curve's W series removed (uniform intensity).
     UniformWeights(usize),
+    /// How curve `i`'s W series weighs its term: at its brightest point (continuous) or its nearest (the papers').
+    WForm(usize, WForm),
     /// How the glow goes over the background.
     Blend(Blend),
     /// Glare on (with its settings) or off.
@@ -230,6 +232,7 @@ impl Edit {
                     weights: vec![],
                     look: Default::default(),
                     color_series: Vec::new(),
+                    w_form: WForm::default(),
                 }),
             },
             Edit::DuplicateSource(kind, i) => {
@@ -293,6 +296,11 @@ impl Edit {
             Edit::UniformWeights(c) => {
                 if let Some(c) = s.curves.get_mut(c) {
                     c.weights.clear();
+                }
+            }
+            Edit::WForm(c, form) => {
+                if let Some(c) = s.curves.get_mut(c) {
+                    c.w_form = form;
                 }
             }
             Edit::Key(parameter, value) => {

@@ -7,7 +7,7 @@ use super::super::widgets::wseries_plot;
 use super::context::Context;
 use super::fields::{Edits, axis, color_field, number, position};
 use crate::animation::{Parameter, SourceKind, Value};
-use crate::field::{Curve, Look};
+use crate::field::{Curve, Look, WForm, brightest};
 use crate::scene::{Colors, MAX_INTENSITY};
 use glam::DVec3;
 
@@ -427,4 +427,27 @@ pub(super) fn curve_editor(ui: &mut Ui, out: &mut Edits<'_>, i: usize, c: &Curve
         }
     });
     wseries_plot(ui, &c.weights);
+    w_form_editor(ui, out, i, c);
+}
+
+/// How a curve's W series weighs its term, offered where the series varies (elsewhere both forms are one term).
+fn w_form_editor(ui: &mut Ui, out: &mut Edits<'_>, i: usize, c: &Curve) {
+    if brightest::uniform(&c.weights) {
+        return;
+    }
+    let mut continuous = c.w_form == WForm::Continuous;
+    let toggle = ui
+        .checkbox(&mut continuous, "continuous (no seam)")
+        .on_hover_text(
+            "W at the chain's brightest point seen from each place, max Sw(t) / d: no edge where the nearest point \
+             jumps between parts of the chain. Off: the papers' W at the nearest point",
+        );
+    if toggle.changed() {
+        let form = if continuous {
+            WForm::Continuous
+        } else {
+            WForm::Nearest
+        };
+        out.push(Action::Edit(Edit::WForm(i, form)));
+    }
 }
