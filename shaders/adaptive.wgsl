@@ -144,6 +144,38 @@ fn map_node(p: Peak, u: f32) -> vec2<f32> {
     return vec2<f32>(clamp(p.center + p.width * 0.5 * (e - 1.0 / e), p.lo, p.hi), p.width * 0.5 * (e + 1.0 / e));
 }
 
+// How much a term's Gauss and Kronrod values may differ per unit of u (twin of Allowance): its tolerance on B shared
+// along its u; for the rms decay, B = sqrt(J / stretch) of the integral J of its square, which may err by
+// tolerance sqrt(stretch J), J read as the running sum of the parts accepted so far and the part at hand, and at
+// least by tolerance^2 stretch. scale: the factor the integrand was taken without (|b|, or b^2 for rms).
+struct Allowance {
+    tolerance: f32,
+    length: f32,
+    scale: f32,
+}
+
+fn allowance_at(a: Allowance, running: f32) -> f32 {
+    var per_b = a.tolerance;
+    if params.decay == 1u {
+        let stretch = params.stretch;
+        per_b = max(a.tolerance * sqrt(stretch * a.scale * max(running, 0.0)), a.tolerance * a.tolerance * stretch);
+    }
+    return per_b / (a.scale * max(a.length, 1e-30));
+}
+
+// The weighed energy v of a term at a node, squared for the rms decay (Integration::power).
+fn decayed(v: f32) -> f32 {
+    return select(v, v * v, params.decay == 1u);
+}
+
+// A term's part of B from the integral of its weighed energy to the decay's power (twin of Integration::finish).
+fn finish(integral: f32) -> f32 {
+    if params.decay == 1u {
+        return sqrt(max(integral, 0.0) / params.stretch);
+    }
+    return integral;
+}
+
 // Whether a part's Kronrod and Gauss values kg are close enough for its share of the allowance (per unit of u),
 // or close to f32's rounding of the value, below which f32 cannot tell. Twin of integrate_panel's test.
 fn settled(kg: vec2<f32>, allowance: f32, width: f32) -> bool {

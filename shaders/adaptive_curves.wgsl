@@ -891,7 +891,13 @@ fn curve_kronrod(ray: Ray, p: Peak, a: f32, b: f32, panel: vec2<f32>, singular: 
         } else {
             n = track_nearest(c, ray, m.x, track);
         }
-        let f = toward.y * m.y * wseries(c, n.x) * falloff(n.y, EPSILON) * zeta_at(m.x);
+        let w = wseries(c, n.x);
+        var f = toward.y * m.y * w * falloff(n.y, EPSILON) * zeta_at(m.x);
+        if params.decay == 1u {
+            // The rms decay's square of the weighed energy (the map's derivatives stay to the first power).
+            let v = w * falloff(n.y, EPSILON) * zeta_at(m.x);
+            f = toward.y * m.y * v * v;
+        }
         sum += node.yz * f;
         colored += node.y * f * color_series(c, n.x);
     }
@@ -913,7 +919,7 @@ fn toward_singular(v: f32, panel: vec2<f32>, singular: vec2<bool>) -> vec2<f32> 
 }
 
 // A curve's term on the panel [a, b] in u, refined where the pair disagrees. Twin of integrate_panel.
-fn curve_panel(ray: Ray, p: Peak, a: f32, b: f32, singular: vec2<bool>, allowance: f32, refinements: ptr<function, u32>, track: ptr<function, Track>) -> vec4<f32> {
+fn curve_panel(ray: Ray, p: Peak, a: f32, b: f32, singular: vec2<bool>, allowance: Allowance, refinements: ptr<function, u32>, track: ptr<function, Track>, running: ptr<function, f32>) -> vec4<f32> {
     let end = 1u << MAX_DEPTH;
     var at = 0u;
     var level = 0u;
@@ -922,8 +928,10 @@ fn curve_panel(ray: Ray, p: Peak, a: f32, b: f32, singular: vec2<bool>, allowanc
         let x = part_bounds(a, b, at, level);
         let rule = curve_kronrod(ray, p, x.x, x.y, vec2<f32>(a, b), singular, track);
         let kg = rule.kg;
-        if settled(kg, allowance, x.y - x.x) || level == MAX_DEPTH || *refinements == 0u {
+        let per_unit = allowance_at(allowance, *running + max(kg.x, 0.0));
+        if settled(kg, per_unit, x.y - x.x) || level == MAX_DEPTH || *refinements == 0u {
             sum += vec4<f32>(kg.x, rule.colored);
+            *running += kg.x;
             let next = next_part(at, level);
             at = next.x;
             level = next.y;
@@ -966,8 +974,9 @@ fn integrate_curve_term(index: u32, s_point: vec3<f32>, e_point: vec3<f32>) -> v
         degenerate = degenerate || starts_at_rest(s) || ends_at_rest(s);
     }
     let features = curve_features(ray);
-    let allowance = params.term_tolerance / (abs(coefficient) * max(pieces_length(features.found), 1e-30));
+    let allowance = Allowance(params.term_tolerance, pieces_length(features.found), abs(decayed(coefficient)));
     var refinements = select(COARSE_REFINEMENTS, MAX_REFINEMENTS, gauss_order() > COARSE_ORDER);
+    var running = 0.0;
     var sum = vec4<f32>(0.0);
     for (var k = 0u; k < features.found.count; k++) {
         let p = features.found.peaks[k];
@@ -1070,10 +1079,15 @@ fn integrate_curve_term(index: u32, s_point: vec3<f32>, e_point: vec3<f32>) -> v
                 for (var i = 0u; i < panels; i++) {
                     let pa = pa0 + width * f32(i);
                     let singular = vec2<bool>(singular_a && first && i == 0u, singular_b && last && i + 1u == panels);
-                    sum += curve_panel(ray, p, pa, pa + width, singular, allowance, &refinements, &track);
+                    sum += curve_panel(ray, p, pa, pa + width, singular, allowance, &refinements, &track, &running);
                 }
             }
         }
+    }
+    if params.decay == 1u {
+        // B_i, and the color series' mean weighed by the term's square (twin of tint_of).
+        let b = finish(coefficient * coefficient * sum.x);
+        return vec4<f32>(b, select(vec3<f32>(0.0), b * sum.yzw / sum.x, sum.x > 0.0));
     }
     return coefficient * sum;
 }

@@ -222,7 +222,7 @@ fn smooth_features(ray: Ray) -> Peaks {
 fn smooth_f(ray: Ray, p: Peak, t_in: f32) -> f32 {
     let t = clamp(t_in, p.lo, p.hi);
     let d = smooth_distance(ray, ray.start + ray.dir * t);
-    return falloff(d, EPSILON) * zeta_at(t);
+    return decayed(falloff(d, EPSILON) * zeta_at(t));
 }
 
 // The Kronrod and Gauss values on [a, b] in u of a point's, a line's or a torus's term. Twin of kronrod.
@@ -240,7 +240,7 @@ fn smooth_kronrod(ray: Ray, p: Peak, a: f32, b: f32) -> vec2<f32> {
 
 // A point's, a line's or a torus's term on the panel [a, b] in u, refined where the pair disagrees. Twin of
 // integrate_panel.
-fn smooth_panel(ray: Ray, p: Peak, a: f32, b: f32, allowance: f32, refinements: ptr<function, u32>) -> f32 {
+fn smooth_panel(ray: Ray, p: Peak, a: f32, b: f32, allowance: Allowance, refinements: ptr<function, u32>, running: ptr<function, f32>) -> f32 {
     let end = 1u << MAX_DEPTH;
     var at = 0u;
     var level = 0u;
@@ -248,8 +248,10 @@ fn smooth_panel(ray: Ray, p: Peak, a: f32, b: f32, allowance: f32, refinements: 
     while at < end {
         let x = part_bounds(a, b, at, level);
         let kg = smooth_kronrod(ray, p, x.x, x.y);
-        if settled(kg, allowance, x.y - x.x) || level == MAX_DEPTH || *refinements == 0u {
+        let per_unit = allowance_at(allowance, *running + max(kg.x, 0.0));
+        if settled(kg, per_unit, x.y - x.x) || level == MAX_DEPTH || *refinements == 0u {
             sum += kg.x;
+            *running += kg.x;
             let next = next_part(at, level);
             at = next.x;
             level = next.y;
@@ -268,8 +270,8 @@ fn integrate_smooth_term(kind: u32, index: u32, s_point: vec3<f32>, e_point: vec
         return 0.0;
     }
     let ray = smooth_ray(kind, index, s_point, e_point);
-    // A point's and a line's term in closed form, where it is well conditioned: no samples at all.
-    if kind != KIND_TORUS {
+    // A point's and a line's term in closed form (the distance decay's), where it is well conditioned: no samples.
+    if kind != KIND_TORUS && params.decay == 0u {
         let r = approach(ray);
         let closed = falloff_integral(r.x, r.y, r.z);
         if closed.y > 0.0 {
@@ -277,8 +279,10 @@ fn integrate_smooth_term(kind: u32, index: u32, s_point: vec3<f32>, e_point: vec
         }
     }
     let found = smooth_features(ray);
-    let allowance = params.term_tolerance / (abs(coefficient) * max(pieces_length(found), 1e-30));
+    let scale = abs(decayed(coefficient));
+    let allowance = Allowance(params.term_tolerance, pieces_length(found), scale);
     var refinements = select(COARSE_REFINEMENTS, MAX_REFINEMENTS, gauss_order() > COARSE_ORDER);
+    var running = 0.0;
     var sum = 0.0;
     for (var k = 0u; k < found.count; k++) {
         let p = found.peaks[k];
@@ -303,11 +307,11 @@ fn integrate_smooth_term(kind: u32, index: u32, s_point: vec3<f32>, e_point: vec
             let width = (b - a) / f32(panels);
             for (var i = 0u; i < panels; i++) {
                 let pa = a + width * f32(i);
-                sum += smooth_panel(ray, p, pa, pa + width, allowance, &refinements);
+                sum += smooth_panel(ray, p, pa, pa + width, allowance, &refinements, &running);
             }
         }
     }
-    return coefficient * sum;
+    return finish(decayed(coefficient) * sum);
 }
 
 @compute @workgroup_size(8, 8)

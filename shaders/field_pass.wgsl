@@ -29,6 +29,8 @@ struct FieldParams {
     gauss_order: u32,   // adaptive: n of the Gauss-Kronrod pair (n and 2n + 1 nodes; adaptive::kronrod_order)
     layers: u32,        // the texture's layers written: 1 (B alone, every source in the scene's color) or 4
     search: u32,        // 1 where some curve's term reads its brightest point (read on the CPU: the SEARCH constant)
+    decay: u32,         // 0: distance (the papers'), 1: rms (integrate::Decay)
+    stretch: f32,       // the rays' span in decay lengths: the rms decay's unit
 }
 
 @group(0) @binding(0) var<storage, read> params: FieldParams;
@@ -129,6 +131,8 @@ struct Chunk {
     accumulate: u32,  // 0: the first dispatch writes, else adds to what the texel holds
     pipeline: u32,    // the entry point that runs it (read on the CPU only)
     row_offset: u32,  // the first texel row of the dispatch: a band of rows (the viewer refines in bands)
+    term: u32,        // simpson with the rms decay: the one term whose samples first .. first + count it sums
+    stage: u32,       // and what it does with its sums: bit 0, add the scratch's; bit 1, finish the term (else keep)
 }
 
 // The texel an invocation integrates: its dispatch covers a band of rows from chunk.row_offset.
@@ -238,16 +242,32 @@ struct Bright {
     piece: u32,
 }
 
-// Twin of brightest::search: each piece offers its ends; one that could still beat the best (its largest weight over
-// its ball's distance) offers the maxima of S / sqrt(D) inside it, and where it comes within eps of p, the ends of
-// that stretch and S's vertex.
+// Twin of brightest::search: the pieces' ends first (each piece's start, and the chain's end), then the insides of
+// the pieces that could still beat the best (their largest weight over their ball's distance), the most promising
+// first, so that near the chain one search settles the best and the rest fall to their bounds: the maxima of
+// S / sqrt(D) inside, and where a piece comes within eps of p, the ends of that stretch and S's vertex.
 fn curve_search(c: CurveSource, p: vec3<f32>) -> Bright {
     var best = Bright(-1.0, 0.0, F32_MAX, 0.0, c.first_piece);
-    for (var i = 0u; i < c.piece_count; i++) {
+    var first = 0u;
+    var top = -1.0;
+    for (var i = 0u; i <= c.piece_count; i++) {
+        let k = c.first_piece + min(i, c.piece_count - 1u);
+        let q = pieces[k];
+        best = offer_point(best, q, k, select(0.0, 1.0, i == c.piece_count), p);
+        let bound = q.weight_max / max(EPSILON, length(p - q.center) - q.radius);
+        if i < c.piece_count && bound > top {
+            top = bound;
+            first = i;
+        }
+    }
+    for (var j = 0u; j < c.piece_count; j++) {
+        // The most promising piece, then the others in order.
+        var i = first;
+        if j > 0u {
+            i = select(j, j - 1u, j <= first);
+        }
         let k = c.first_piece + i;
         let q = pieces[k];
-        best = offer_point(best, q, k, 0.0, p);
-        best = offer_point(best, q, k, 1.0, p);
         let reach = length(p - q.center) - q.radius;
         if q.weight_max / max(EPSILON, reach) <= best.value {
             continue;

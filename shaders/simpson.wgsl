@@ -36,16 +36,24 @@ struct Samples {
     n: u32,
     shift: f32,
     simpson: bool,
+    squared: bool,  // the rms decay: each sample's weighed energy squared (Integration::power)
 }
 
-// Sample k's position on the ray and its weight times zeta(s), zeta(s) = alpha / (s + beta)^2.
+// Sample k's position on the ray and its weight times zeta(s), zeta(s) = alpha / (s + beta)^2 (squared for the rms
+// decay).
 fn sample_at(r: Samples, k: u32) -> vec4<f32> {
     let s = (f32(k) + r.shift) / f32(r.n);
     var weight = 1.0;
     if r.simpson && k != 0u && k != r.n {
         weight = select(2.0, 4.0, (k & 1u) == 1u);
     }
-    return vec4<f32>(mix(r.s_point, r.e_point, s), weight * zeta_at(s));
+    let zeta = zeta_at(s);
+    return vec4<f32>(mix(r.s_point, r.e_point, s), weight * select(zeta, zeta * zeta, r.squared));
+}
+
+// v, squared for the rms decay.
+fn raised(r: Samples, v: f32) -> f32 {
+    return select(v, v * v, r.squared);
 }
 
 // Each kind's part of the sum over the samples, source by source (thesis 3.28 summed in the other order): a
@@ -54,37 +62,91 @@ fn point_samples(r: Samples, src: PointSource) -> f32 {
     var sum = 0.0;
     for (var k = r.first; k < r.last; k++) {
         let x = sample_at(r, k);
-        sum += x.w * falloff(length(x.xyz - src.position), EPSILON);
+        sum += x.w * raised(r, falloff(length(x.xyz - src.position), EPSILON));
     }
-    return src.coefficient * sum;
+    return raised(r, src.coefficient) * sum;
 }
 
 fn line_samples(r: Samples, src: LineSource) -> f32 {
     var sum = 0.0;
     for (var k = r.first; k < r.last; k++) {
         let x = sample_at(r, k);
-        sum += x.w * falloff(line_distance(x.xyz, src.point, src.direction), EPSILON);
+        sum += x.w * raised(r, falloff(line_distance(x.xyz, src.point, src.direction), EPSILON));
     }
-    return src.coefficient * sum;
+    return raised(r, src.coefficient) * sum;
 }
 
 fn torus_samples(r: Samples, src: TorusSource) -> f32 {
     var sum = 0.0;
     for (var k = r.first; k < r.last; k++) {
         let x = sample_at(r, k);
-        sum += x.w * falloff(torus_distance(x.xyz, src.center, src.axis, src.major_radius), EPSILON);
+        sum += x.w * raised(r, falloff(torus_distance(x.xyz, src.center, src.axis, src.major_radius), EPSILON));
     }
-    return src.coefficient * sum;
+    return raised(r, src.coefficient) * sum;
 }
 
-// B's part and the color series' (zero without one).
+// B's part and the color series' (zero without one); for the rms decay their squares' (the series weighed by the
+// term's square).
 fn curve_samples(r: Samples, c: CurveSource) -> vec4<f32> {
     var sum = vec4<f32>(0.0);
     for (var k = r.first; k < r.last; k++) {
         let x = sample_at(r, k);
-        sum += x.w * curve_field(c, x.xyz, EPSILON);
+        let g = curve_field(c, x.xyz, EPSILON);
+        sum += x.w * select(g, g.x * g, r.squared);
     }
     return sum;
+}
+
+// Term t's sums (points, lines, tori, curves): B's part, and its color series' (curves).
+fn term_samples(r: Samples, t: u32) -> vec4<f32> {
+    let first_line = point_count();
+    let first_torus = first_line + line_count();
+    let first_curve = first_torus + torus_count();
+    if t < first_line {
+        return vec4<f32>(point_samples(r, points[t]), 0.0, 0.0, 0.0);
+    }
+    if t < first_torus {
+        return vec4<f32>(line_samples(r, lines[t - first_line]), 0.0, 0.0, 0.0);
+    }
+    if t < first_curve {
+        return vec4<f32>(torus_samples(r, tori[t - first_torus]), 0.0, 0.0, 0.0);
+    }
+    return curve_samples(r, curves[t - first_curve]);
+}
+
+// The scratch texture: a term's sums between the dispatches of simpson with the rms decay (gpu::field_pass's
+// scratch; one texel where no term takes more than one dispatch).
+@group(0) @binding(12) var scratch: texture_storage_2d_array<r32float, read_write>;
+
+// Simpson's rule (or the shifted rectangle rule) with the rms decay, one term a dispatch or several: its sums of
+// squares over the dispatch's samples, added to those kept from its earlier dispatches, then kept again, or
+// finished into the field: B_t = sqrt(sum scale / stretch), and its color series' mean weighed alike.
+fn integrate_rms(texel: Texel, r_in: Samples, scale: f32) {
+    var r = r_in;
+    r.squared = true;
+    var sums = term_samples(r, chunk.term);
+    let at = vec2<i32>(texel.id);
+    if (chunk.stage & 1u) != 0u {
+        sums += vec4<f32>(
+            textureLoad(scratch, at, 0).x,
+            textureLoad(scratch, at, 1).x,
+            textureLoad(scratch, at, 2).x,
+            textureLoad(scratch, at, 3).x,
+        );
+    }
+    if (chunk.stage & 2u) == 0u {
+        textureStore(scratch, at, 0, vec4<f32>(sums.x, 0.0, 0.0, 1.0));
+        textureStore(scratch, at, 1, vec4<f32>(sums.y, 0.0, 0.0, 1.0));
+        textureStore(scratch, at, 2, vec4<f32>(sums.z, 0.0, 0.0, 1.0));
+        textureStore(scratch, at, 3, vec4<f32>(sums.w, 0.0, 0.0, 1.0));
+        return;
+    }
+    let b = sqrt(max(sums.x * scale, 0.0) / params.stretch);
+    var glow = glow_of(chunk.term, b);
+    if sums.x > 0.0 {
+        glow += vec4<f32>(0.0, b * sums.yzw / sums.x);
+    }
+    store(texel.id, glow);
 }
 
 // The papers' integrator: Simpson's rule over k = 0..=n (3.33, corrected to end at s = 1), or with jitter the
@@ -98,7 +160,7 @@ fn integrate(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let n = params.divisions;
     let jitter = jittered();
-    var r = Samples(texel.start, texel.end, chunk.first, 0u, n, 0.0, !jitter);
+    var r = Samples(texel.start, texel.end, chunk.first, 0u, n, 0.0, !jitter, false);
     var scale = 1.0 / (3.0 * f32(n));
     if jitter {
         r.shift = jitter_offset(texel.id);
@@ -106,6 +168,10 @@ fn integrate(@builtin(global_invocation_id) gid: vec3<u32>) {
         scale = 1.0 / f32(n);
     } else {
         r.last = min(chunk.first + chunk.count, n + 1u);
+    }
+    if params.decay == 1u {
+        integrate_rms(texel, r, scale);
+        return;
     }
     // B and the tint: each term's sum, and that sum times the term's tint (glow_of).
     var sum = vec4<f32>(0.0);

@@ -10,8 +10,9 @@ use std::time::Instant;
 use clap::{Parser, Subcommand, ValueEnum};
 
 use crate::export::{self, ExportError, FrameSpec, Progress, Target};
+use crate::field::WForm;
 use crate::gpu::{GpuError, HeadlessRenderer};
-use crate::integrate::Integrator;
+use crate::integrate::{Decay, Integrator};
 use crate::output::{self, Format, OutputError};
 use crate::reference;
 use crate::scene::{DEFAULT_SCENE_NAME, MAX_RESOLUTION, Scene, SceneError, limits};
@@ -107,6 +108,15 @@ pub struct RenderArgs {
     /// Override the adaptive integrator's tolerance: the error allowed on B, shared between the sources (default 1e-4).
     #[arg(long, value_parser = parse_tolerance)]
     pub tolerance: Option<f64>,
+    /// Override the scene's decay: `distance` (the papers': each source's energy along the view summed) or `rms`
+    /// (its root mean square along the view: an even spread of moderate energy does not outshine a single intense
+    /// spot).
+    #[arg(long, value_parser = parse_decay)]
+    pub decay: Option<Decay>,
+    /// Override every curve's W form: `continuous` (its W series read at the chain's brightest point: no seam) or
+    /// `nearest` (the papers': at the nearest point).
+    #[arg(long, value_parser = parse_w_form)]
+    pub w_form: Option<WForm>,
     /// Jitter the simpson integrator's samples with this seed: each texel's samples are shifted by a random
     /// fraction of a step, so a low n gives fine noise instead of bands.
     #[arg(long, value_name = "SEED")]
@@ -214,6 +224,18 @@ fn parse_integrator(s: &str) -> Result<Integrator, String> {
             "{s:?} is not an integrator: use adaptive (the default) or simpson (the papers' evenly spaced samples)"
         )),
     }
+}
+
+fn parse_decay(s: &str) -> Result<Decay, String> {
+    Decay::ALL.into_iter().find(|d| d.name() == s).ok_or_else(|| {
+        format!("{s:?} is not a decay: use distance (the papers', the default) or rms (a spot is not outshone by an even spread)")
+    })
+}
+
+fn parse_w_form(s: &str) -> Result<WForm, String> {
+    WForm::ALL.into_iter().find(|f| f.name() == s).ok_or_else(|| {
+        format!("{s:?} is not a W form: use continuous (the chain's brightest point, the default) or nearest (the papers')")
+    })
 }
 
 fn parse_tolerance(s: &str) -> Result<f64, String> {
@@ -432,6 +454,16 @@ fn render(args: &RenderArgs) -> Result<(), CliError> {
     }
     if let Some(t) = args.tolerance {
         scene.integration.tolerance = t;
+    }
+    if let Some(decay) = args.decay {
+        scene.integration.decay = decay;
+    }
+    if let Some(form) = args.w_form {
+        scene
+            .sources
+            .curves
+            .iter_mut()
+            .for_each(|c| c.w_form = form);
     }
     if let Some(seed) = args.jitter {
         if scene.integration.integrator != Integrator::Simpson {

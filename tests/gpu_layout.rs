@@ -143,13 +143,13 @@ fn rust_mirrors_match_the_wgsl_layouts() {
         size_of::<FieldParams>(),
         fields!(FieldParams: center, size, right, resolution, up, divisions, eye, nu, alpha, beta, epsilon,
             point_count, line_count, torus_count, curve_count, integrator, term_tolerance, jitter, seed, gauss_order,
-            layers, search),
+            layers, search, decay, stretch),
     );
     check_struct(
         &field,
         "Chunk",
         size_of::<Chunk>(),
-        fields!(Chunk: first, count, accumulate, pipeline, row_offset),
+        fields!(Chunk: first, count, accumulate, pipeline, row_offset, term, stage),
     );
     check_struct(
         &field,

@@ -886,3 +886,24 @@ fn the_w_form_is_switched_in_the_panel_and_is_an_undo_step() {
     h.run();
     assert!(h.query_by_label("continuous (no seam)").is_none());
 }
+
+#[test]
+fn the_decay_is_chosen_in_the_panel_and_is_an_undo_step() {
+    use common::viewer::{mean_abs_difference, viewport_pixels};
+    use energywave::integrate::Decay;
+    let mut h = harness(light_scene());
+    let distance = viewport_pixels(&mut h);
+    h.get_by_label("rms").scroll_to_me();
+    h.run();
+    h.get_by_label("rms").click();
+    h.run();
+    assert_eq!(h.state().scene().integration.decay, Decay::Rms);
+    let rms = viewport_pixels(&mut h);
+    assert!(
+        mean_abs_difference(&distance, &rms) > 0.001,
+        "the rms decay shows another glow"
+    );
+    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+    h.run();
+    assert_eq!(h.state().scene().integration.decay, Decay::Distance);
+}

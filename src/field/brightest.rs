@@ -203,12 +203,27 @@ pub fn search(pieces: &[Piece], p: DVec3, eps: f64) -> Brightest {
         piece: 0,
         x: 0.0,
     };
+    // The pieces' ends first (each piece's start, and the chain's end), and the piece whose bound is highest (its
+    // largest weight over the least distance it can have from p: a ball around it).
+    let bound = |piece: &Piece| {
+        let reach = (p - piece.center).length() - piece.radius;
+        (piece.weight_max / reach.max(eps), reach)
+    };
+    let (mut first, mut top) = (0, -1.0);
     for (k, piece) in pieces.iter().enumerate() {
         best.offer(pieces, k, 0.0, p, eps);
-        best.offer(pieces, k, 1.0, p, eps);
-        // The stretch's largest weight over the least distance it can have from p.
-        let reach = (p - piece.center).length() - piece.radius;
-        if piece.weight_max / reach.max(eps) <= best.value {
+        if bound(piece).0 > top {
+            (first, top) = (k, bound(piece).0);
+        }
+    }
+    best.offer(pieces, pieces.len() - 1, 1.0, p, eps);
+    // Then the insides of the pieces that could still beat the best, the most promising first: near the chain one
+    // search settles the best, and the others fall to their bounds.
+    let order = std::iter::once(first).chain((0..pieces.len()).filter(|&k| k != first));
+    for k in order {
+        let piece = &pieces[k];
+        let (most, reach) = bound(piece);
+        if most <= best.value {
             continue;
         }
         // The maxima inside; within eps of p also the ends of the flat top's stretches and S's vertex on one.

@@ -13,7 +13,7 @@ use super::frame_average::FrameAverage;
 use super::shaders;
 use crate::field::curve::segments;
 use crate::geometry::Billboard;
-use crate::integrate::Integrator;
+use crate::integrate::{Decay, Integrator};
 use crate::scene::Scene;
 
 /// Rust mirrors of the WGSL structs of `shaders/field_pass.wgsl` and `shaders/field_common.wgsl` (keep in
@@ -47,8 +47,8 @@ pub mod gpu_data {
         pub gauss_order: u32, // 108: adaptive: n of the Gauss-Kronrod pair (integrate::adaptive::kronrod_order)
         pub layers: u32, // 112: the field texture's layers written: 1 (B) or FIELD_LAYERS (and the tint)
         pub search: u32, // 116: 1 where some curve's term reads its brightest point (the SEARCH constant)
-        pub pad1: u32,   // 120
-        pub pad2: u32,   // 124
+        pub decay: u32,  // 120: 0 distance, 1 rms (integrate::Decay)
+        pub stretch: f32, // 124: the rays' span in decay lengths, the rms decay's unit
     }
     const _: () = assert!(size_of::<FieldParams>() == 128);
 
@@ -61,8 +61,10 @@ pub mod gpu_data {
         pub accumulate: u32, // 8
         pub pipeline: u32, // 12: which of `FieldRenderer`'s pipelines runs it (read on the CPU only)
         pub row_offset: u32, // 16: the first texel row of its band
+        pub term: u32,     // 20: simpson with the rms decay: the one term it integrates
+        pub stage: u32, // 24: that term's sums: bit 0, add the scratch's; bit 1, finish (else keep)
     }
-    const _: () = assert!(size_of::<Chunk>() == 20);
+    const _: () = assert!(size_of::<Chunk>() == 28);
 
     /// `PointSource` in `shaders/field_common.wgsl`.
     #[repr(C)]
@@ -243,6 +245,13 @@ fn adaptive_curve_iterations(order: u32, iterations: u64) -> u64 {
     curve_evaluations(order) * (TRACK_NEWTON + iterations + curve_iterations(1, 0) + 1)
 }
 
+/// `Chunk::stage`: the dispatch adds the sums the scratch texture keeps to its own (`KEPT`), and finishes the
+/// term into the field (`FINISH`; else it keeps its sums in the scratch texture).
+const KEPT: u32 = 1;
+const FINISH: u32 = 2;
+/// `FieldParams::decay` of the rms decay.
+const RMS: u32 = 1;
+
 /// The pipelines: simpson's, the adaptive integrator's for points, lines and tori, and for curves.
 const SIMPSON: u32 = 0;
 const ADAPTIVE_SMOOTH: u32 = 1;
@@ -255,7 +264,8 @@ fn plan_chunks(p: &Packed) -> Vec<Chunk> {
         count,
         accumulate: (k > 0) as u32,
         pipeline,
-        row_offset: 0,
+        stage: FINISH,
+        ..Chunk::default()
     };
     let smooth = p.params.point_count + p.params.line_count + p.params.torus_count;
     let curves: Vec<u64> = p
@@ -263,6 +273,37 @@ fn plan_chunks(p: &Packed) -> Vec<Chunk> {
         .iter()
         .map(|c| curve_iterations(c.segment_count, c.piece_count))
         .collect();
+    if p.params.integrator == 0 && p.params.decay == RMS && smooth + p.params.curve_count > 0 {
+        // Simpson with the rms decay: term by term, each term's samples in as few dispatches as the budget allows,
+        // the first ones keeping their sums in the scratch texture, the last finishing the term (the root of its
+        // sum of squares) into the field.
+        let samples = p.params.divisions + 1;
+        let mut chunks = Vec::new();
+        let mut finished = 0;
+        for t in 0..smooth + p.params.curve_count {
+            let per_sample = 4 + if t < smooth {
+                1
+            } else {
+                curves[(t - smooth) as usize]
+            };
+            let per_chunk = (ITERATION_BUDGET / per_sample).clamp(1, samples as u64) as u32;
+            let parts = samples.div_ceil(per_chunk);
+            for j in 0..parts {
+                let last = j + 1 == parts;
+                chunks.push(Chunk {
+                    first: j * per_chunk,
+                    count: per_chunk,
+                    accumulate: (last && finished > 0) as u32,
+                    pipeline: SIMPSON,
+                    row_offset: 0,
+                    term: t,
+                    stage: if j > 0 { KEPT } else { 0 } | if last { FINISH } else { 0 },
+                });
+                finished += last as u32;
+            }
+        }
+        return chunks;
+    }
     if p.params.integrator == 0 {
         // Simpson: ranges of samples, each sample costing a walk over every source.
         let per_sample = 4 + smooth as u64 + curves.iter().sum::<u64>();
@@ -341,6 +382,11 @@ fn pack(scene: &Scene, billboard: &Billboard) -> Packed {
             seed: i.jitter.unwrap_or(0),
             gauss_order: crate::integrate::adaptive::kronrod_order(i.tolerance),
             layers: if tinted { FIELD_LAYERS } else { 1 },
+            decay: match i.decay {
+                Decay::Distance => 0,
+                Decay::Rms => RMS,
+            },
+            stretch: i.stretch as f32,
             ..FieldParams::default()
         },
         points: (s.points.iter())
@@ -687,6 +733,10 @@ pub struct FieldRenderer {
     chunk_stride: u64,
     buffers: [StorageBuffer; 9],
     texture: Option<(wgpu::Texture, wgpu::TextureView)>,
+    /// Where simpson with the rms decay keeps a term's sums between its dispatches (B's and the color series'
+    /// integrals of squares, four layers): as large as the field where a term takes several dispatches, else one
+    /// texel, which nothing reads.
+    scratch: (wgpu::Texture, wgpu::TextureView),
     bind_group: Option<wgpu::BindGroup>,
     uploaded: Option<Packed>,
     /// Rows per band of the next upload's dispatches (0: the whole texture in one band).
@@ -751,6 +801,16 @@ impl FieldRenderer {
                 storage(9),
                 storage(10),
                 storage(11),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 12,
+                    visibility: wgpu::ShaderStages::COMPUTE,
+                    ty: wgpu::BindingType::StorageTexture {
+                        access: wgpu::StorageTextureAccess::ReadWrite,
+                        format: wgpu::TextureFormat::R32Float,
+                        view_dimension: wgpu::TextureViewDimension::D2Array,
+                    },
+                    count: None,
+                },
                 // A read-only storage buffer rather than a uniform one: lavapipe recompiles a shader for the
                 // values of uniforms that bound its loops (to unroll them), and a chunk's range bounds the term
                 // loop, so every new range meant a new compile (seconds each, minutes for some).
@@ -799,6 +859,7 @@ impl FieldRenderer {
             chunk_stride,
             buffers,
             texture: None,
+            scratch: field_texture(device, "energywave.field.scratch", 1, FIELD_LAYERS),
             bind_group: None,
             uploaded: None,
             band_rows: 0,
@@ -921,6 +982,13 @@ impl FieldRenderer {
                 self.texture = Some(field_texture(device, "energywave.field.storage", w, layers));
                 rebind = true;
             }
+            let kept = packed.chunks.iter().any(|c| c.stage != FINISH);
+            let side = if kept { w } else { 1 };
+            if self.scratch.0.width() != side {
+                self.scratch =
+                    field_texture(device, "energywave.field.scratch", side, FIELD_LAYERS);
+                rebind = true;
+            }
             if rebind {
                 self.bind_group = Some(self.make_bind_group(device));
             }
@@ -954,6 +1022,10 @@ impl FieldRenderer {
         entries.push(wgpu::BindGroupEntry {
             binding: 7,
             resource: wgpu::BindingResource::TextureView(view),
+        });
+        entries.push(wgpu::BindGroupEntry {
+            binding: 12,
+            resource: wgpu::BindingResource::TextureView(&self.scratch.1),
         });
         entries.push(wgpu::BindGroupEntry {
             binding: 8,
@@ -1185,7 +1257,9 @@ impl FieldRenderer {
         let texture = self.texture.as_ref().map_or(0, |(t, _)| {
             field_texture_bytes(t.width(), t.depth_or_array_layers())
         });
+        let scratch = &self.scratch.0;
         texture
+            + field_texture_bytes(scratch.width(), scratch.depth_or_array_layers())
             + self.params.size()
             + self.buffers.iter().map(|b| b.buffer.size()).sum::<u64>()
             + self.average.gpu_bytes()

@@ -98,16 +98,49 @@ fn kronrod(g: &impl Fn(f64) -> f64, a: f64, b: f64, order: u32) -> (f64, f64) {
 /// rounding of a sum of nodes (the f32 twin's is `4e-6`).
 pub const ROUNDING: f64 = 1e-13;
 
+/// How much a term's Gauss and Kronrod values may differ per unit of u: the term's tolerance on B shared evenly
+/// along its u. With the distance decay B is the term's integral, so the share is fixed; with the rms decay B is
+/// `sqrt(J / stretch)` of the integral J of the squared term, and an error dJ costs about `dJ / (2 sqrt(stretch J))`
+/// of B, so J may err by `tolerance sqrt(stretch J)` (half what B allows), J read as the running sum of the parts
+/// accepted so far and the part at hand (a lower bound of the whole: the integrand is not negative), and at least
+/// `tolerance^2 stretch` (`|sqrt(x) - sqrt(y)| <= sqrt(|x - y|)`).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Allowance {
+    /// The term's tolerance on B.
+    pub(super) tolerance: f64,
+    /// The u length its tolerance is shared along.
+    pub(super) length: f64,
+    /// The factor the integrand was taken without: `|b|`, or `b^2` for the rms decay.
+    pub(super) scale: f64,
+    /// The ray's stretch, for the rms decay; `None` for the distance decay.
+    pub(super) rms: Option<f64>,
+}
+
+impl Allowance {
+    /// The allowance per unit of u where the parts accepted so far and the part at hand sum to `running`
+    /// (without `scale`).
+    pub(super) fn at(&self, running: f64) -> f64 {
+        let per_b = match self.rms {
+            None => self.tolerance,
+            Some(stretch) => (self.tolerance * (stretch * self.scale * running.max(0.0)).sqrt())
+                .max(self.tolerance * self.tolerance * stretch),
+        };
+        per_b / (self.scale * self.length.max(1e-300))
+    }
+}
+
 /// `g` on `[a, b]`, refined where its Gauss and Kronrod values differ by more than `allowance` per unit of
 /// length: the parts of a dyadic bisection of `[a, b]`, visited in order (without a stack: after a part is
 /// accepted the next starts where it ended, as large as its position allows), each accepted with its Kronrod
 /// value once within its share of the allowance, at `MAX_DEPTH`, or once the term's `refinements` are spent.
+/// `running` is the sum of the term's parts accepted before this panel; it is carried on.
 fn integrate_panel(
     g: &impl Fn(f64) -> f64,
     (a, b): (f64, f64),
     order: u32,
-    allowance: f64,
+    allowance: &Allowance,
     refinements: &mut u32,
+    running: &mut f64,
 ) -> f64 {
     let end = 1u32 << MAX_DEPTH;
     let (mut at, mut level, mut sum) = (0u32, 0u32, 0.0);
@@ -116,9 +149,11 @@ fn integrate_panel(
         let x0 = a + (b - a) * (at as f64 / end as f64);
         let x1 = a + (b - a) * ((at + size) as f64 / end as f64);
         let (k, gauss) = kronrod(g, x0, x1, order);
-        let settled = (k - gauss).abs() <= (allowance * (x1 - x0)).max(ROUNDING * k.abs());
+        let per_unit = allowance.at(*running + k.max(0.0));
+        let settled = (k - gauss).abs() <= (per_unit * (x1 - x0)).max(ROUNDING * k.abs());
         if settled || level == MAX_DEPTH || *refinements == 0 {
             sum += k;
+            *running += k;
             at += size;
             // Up while this part ended its parent.
             while level > 0 && at & ((end >> (level - 1)) - 1) == 0 {
@@ -345,7 +380,7 @@ pub(super) fn integrate_pieces(
     found: &Features,
     (c, f): (f64, &impl Fn(f64) -> f64),
     order: u32,
-    tolerance: f64,
+    (tolerance, rms): (f64, Option<f64>),
     mut parts: impl FnMut(&Peak, (f64, bool), (f64, bool)) -> ([(f64, f64); 2], usize),
 ) -> f64 {
     let pieces = found.peaks[..found.count].iter().map(|p| {
@@ -354,8 +389,14 @@ pub(super) fn integrate_pieces(
         (p, u0, u1)
     });
     let length: f64 = pieces.clone().map(|(_, u0, u1)| (u1 - u0).max(0.0)).sum();
-    let allowance = tolerance / (c.abs() * length.max(1e-300));
+    let allowance = Allowance {
+        tolerance,
+        length,
+        scale: c.abs(),
+        rms,
+    };
     let mut refinements = refinement_budget(order);
+    let mut running = 0.0;
     let mut sum = 0.0;
     for (p, u0, u1) in pieces {
         if u1 <= u0 {
@@ -387,8 +428,9 @@ pub(super) fn integrate_pieces(
                         &mapped,
                         (pa, pa + width),
                         order,
-                        allowance,
+                        &allowance,
                         &mut refinements,
+                        &mut running,
                     );
                 }
             }

@@ -14,7 +14,7 @@ use crate::integrate::adaptive::{
     PARAM_JUMP, PEAK_NEWTON, PEAK_SETTLED, SCAN, SWITCH_INSET, SWITCH_ROUNDS, kink_bracket,
     kronrod_order,
 };
-use crate::integrate::{Integration, zeta};
+use crate::integrate::{Decay, Integration, zeta};
 
 /// The features of a chain along `s -> e` (at most `MAX_PEAKS`), sorted along the ray, each owning its piece,
 /// and its kinks: those of its nearest point, or in the continuous W form (`pieces` not empty) those of its
@@ -779,16 +779,17 @@ fn split_at_switch(
     }
 }
 
-/// One chain's integral along `s -> e` within `tolerance` on B, on the pieces of its features, cut at its kinks.
+/// One chain's part of B along `s -> e` within `tolerance`, on the pieces of its features, cut at its kinks.
 fn integrate_term(c: &Curve, s: DVec3, e: DVec3, settings: &Integration, tolerance: f64) -> f64 {
-    integrate_weighted(c, s, e, settings, tolerance, &|t| {
-        wseries::evaluate(&c.weights, t)
-    })
+    let power = settings.power();
+    settings.finish(integrate_weighted(c, s, e, settings, tolerance, &|t| {
+        wseries::evaluate(&c.weights, t).powi(power)
+    }))
 }
 
-/// A chain's term with `weight(t*)` in the place of its W series `Sw(t*)`: `b weight(t*) / max(eps, d)`
-/// integrated along `s -> e` within `tolerance`, on the same features and cuts (they depend on where the nearest
-/// point jumps, not on the weight).
+/// A chain's term to the decay's power without its W series, times `weight(t)` at the point the term reads:
+/// the integral of `(b falloff zeta)^power weight(t)` along `s -> e` within `tolerance` on B, on the same features
+/// and cuts whatever the weight (as `simpson::curve_weighted`).
 fn integrate_weighted(
     c: &Curve,
     s: DVec3,
@@ -823,6 +824,7 @@ fn integrate_weighted(
     let degenerate = curve::is_degenerate(cp);
     // In the continuous form every node searches the whole chain for its brightest point (the term is continuous,
     // with kinks where that point jumps, cut at by `bright_kinks`).
+    let power = settings.power();
     let f = |t: f64| {
         let p = s + dir * t;
         let n = if !pieces.is_empty() {
@@ -835,13 +837,15 @@ fn integrate_weighted(
         } else {
             curve::nearest_on_chain(cp, p)
         };
-        weight(n.t) * falloff(n.distance, settings.epsilon) * zeta(t, settings.alpha, settings.beta)
+        (falloff(n.distance, settings.epsilon) * zeta(t, settings.alpha, settings.beta)).powi(power)
+            * weight(n.t)
     };
+    let rms = (settings.decay == Decay::Rms).then_some(settings.stretch);
     integrate_pieces(
         &found,
-        (c.coefficient, &f),
+        (c.coefficient.powi(power), &f),
         order,
-        tolerance,
+        (tolerance, rms),
         |p, (a, singular_a), (b, singular_b)| {
             segment.set(None);
             let at = |u: f64| s + dir * (p.center + p.width * f64::sinh(u)).clamp(p.lo, p.hi);
@@ -866,8 +870,8 @@ pub fn brightness(sources: &Sources, settings: &Integration, s: DVec3, e: DVec3)
         .sum()
 }
 
-/// Curve `k`'s term with `weight(t*)` in the place of its W series (`integrate_weighted`), within its share
-/// of the tolerance times `scale` (the weight's largest size against the W series').
+/// Curve `k`'s term to the decay's power times `weight(t)` in the place of its W series (`integrate_weighted`),
+/// within its share of the tolerance times `scale` (the weight's largest size against the W series').
 pub fn term_weighted(
     sources: &Sources,
     k: usize,

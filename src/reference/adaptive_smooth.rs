@@ -12,7 +12,7 @@ use crate::integrate::adaptive::{
     CLOSED_FORM_CONDITION, MAX_PEAKS, MAX_WIDTH, MIN_AXIS_WIDTH, RING_NEWTON, RING_STEP,
     kronrod_order,
 };
-use crate::integrate::{Integration, zeta};
+use crate::integrate::{Decay, Integration, zeta};
 
 /// One smooth source's term along a ray.
 #[derive(Clone, Copy)]
@@ -268,7 +268,9 @@ fn integrate_term(term: Smooth, s: DVec3, e: DVec3, settings: &Integration, tole
         Smooth::Line(l) => Some(line_approach(s, e - s, l.point, l.direction)),
         Smooth::Torus(_) => None,
     };
+    // The closed form is the distance decay's (the rms decay's square has its own, which only the tests take).
     if let Some((center, d2, a)) = approach
+        && settings.decay == Decay::Distance
         && let Some(v) = falloff_integral(center, d2, a, eps, alpha, beta, CLOSED_FORM_CONDITION)
     {
         return c * v;
@@ -276,11 +278,18 @@ fn integrate_term(term: Smooth, s: DVec3, e: DVec3, settings: &Integration, tole
     let order = kronrod_order(settings.tolerance);
     let found = features(term, s, e, eps);
     let dir = e - s;
-    let f = |t: f64| falloff(term.distance(s + dir * t), eps) * zeta(t, alpha, beta);
+    let power = settings.power();
+    let f = |t: f64| (falloff(term.distance(s + dir * t), eps) * zeta(t, alpha, beta)).powi(power);
+    let rms = (settings.decay == Decay::Rms).then_some(settings.stretch);
     // No kinks and no segments: every cut stretch is one part.
-    integrate_pieces(&found, (c, &f), order, tolerance, |_, (a, _), (b, _)| {
-        ([(a, b); 2], 1)
-    })
+    let integral = integrate_pieces(
+        &found,
+        (c.powi(power), &f),
+        order,
+        (tolerance, rms),
+        |_, (a, _), (b, _)| ([(a, b); 2], 1),
+    );
+    settings.finish(integral)
 }
 
 /// The points', lines' and tori's part of the brightness B of the segment `s -> e`, each term within an equal

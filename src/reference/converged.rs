@@ -7,8 +7,8 @@
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::simpson::simpson_refined;
-use crate::integrate::zeta;
+use super::simpson::{simpson, simpson_refined};
+use crate::integrate::{Decay, zeta};
 use crate::scene::Scene;
 
 /// The converged reference: f64 Simpson with this many divisions, refined (`simpson::simpson_refined`) wherever
@@ -42,18 +42,30 @@ pub fn converged_reference(scene: &Scene, stride: u32) -> (Vec<f64>, ReferenceSt
             let i = &s.integration;
             let per_depth = (p - s.camera.eye) / plane;
             let span = reach.stretch;
-            let f = |t: f64| {
-                let sigma = t * span;
-                field.psi(p + per_depth * (sigma * i.decay_length), i.epsilon)
-                    * zeta(sigma, i.alpha, i.beta)
-                    * span
-            };
-            simpson_refined(
-                f,
-                REFERENCE_DIVISIONS,
-                REFERENCE_TOLERANCE,
-                REFERENCE_MAX_DEPTH,
-            )
+            let at = |t: f64| p + per_depth * (t * span * i.decay_length);
+            let zeta = |t: f64| zeta(t * span, i.alpha, i.beta);
+            match i.decay {
+                Decay::Distance => simpson_refined(
+                    |t| field.psi(at(t), i.epsilon) * zeta(t) * span,
+                    REFERENCE_DIVISIONS,
+                    REFERENCE_TOLERANCE,
+                    REFERENCE_MAX_DEPTH,
+                ),
+                // Each term the root of its own integral J of the square. An error dJ costs dJ / (2 sqrt(J)) of B,
+                // so J is refined to the tolerance times sqrt(J) (J first estimated unrefined), and at least to its
+                // square (|sqrt(x) - sqrt(y)| <= sqrt(|x - y|)).
+                Decay::Rms => (0..s.sources.len())
+                    .map(|k| {
+                        let f = |t: f64| (field.term(k, at(t), i.epsilon) * zeta(t)).powi(2) * span;
+                        let rough = simpson(f, REFERENCE_DIVISIONS);
+                        let tolerance = (REFERENCE_TOLERANCE * rough.max(0.0).sqrt())
+                            .max(REFERENCE_TOLERANCE * REFERENCE_TOLERANCE);
+                        let (sq, n) =
+                            simpson_refined(f, REFERENCE_DIVISIONS, tolerance, REFERENCE_MAX_DEPTH);
+                        (sq.max(0.0).sqrt(), n + REFERENCE_DIVISIONS as u64 + 1)
+                    })
+                    .fold((0.0, 0), |(b, n), (x, m)| (b + x, n + m)),
+            }
         })
         .collect();
     // Without refinement, a texel spends the n + 1 samples and 2 more a pair of intervals, to check them.

@@ -9,7 +9,7 @@ use super::simpson::jitter_offset;
 use super::{adaptive_curves, adaptive_smooth, simpson};
 use crate::field::{Sources, wseries};
 use crate::geometry::{Billboard, Reach, ray_end};
-use crate::integrate::{Integration, Integrator};
+use crate::integrate::{Decay, Integration, Integrator};
 use crate::scene::Scene;
 
 /// The brightness B of the segment from `s` to `e` (3.30): the integral over [0, 1] of
@@ -84,13 +84,26 @@ pub fn tint_of(
             if scale == 0.0 {
                 continue;
             }
-            let weight = |t: f64| wseries::evaluate(&curve.weights, t) * color(t);
-            *out += match settings.integrator {
-                Integrator::Simpson => {
-                    simpson::curve_weighted(curve, settings, (s, e), xi, &weight)
-                }
+            // The integral of the term (to the decay's power) weighed by `weight(t)` in the place of its W series.
+            let weighed = |weight: &dyn Fn(f64) -> f64, scale: f64| match settings.integrator {
+                Integrator::Simpson => simpson::curve_weighted(curve, settings, (s, e), xi, weight),
                 Integrator::Adaptive => {
-                    adaptive_curves::term_weighted(sources, index, settings, (s, e), &weight, scale)
+                    adaptive_curves::term_weighted(sources, index, settings, (s, e), weight, scale)
+                }
+            };
+            let w = |t: f64| wseries::evaluate(&curve.weights, t);
+            *out += match settings.decay {
+                // The term times the series.
+                Decay::Distance => weighed(&|t| w(t) * color(t), scale),
+                // B_i times the series' mean, weighed as B_i's integral weighs the term: its square.
+                Decay::Rms => {
+                    let i = weighed(&|t| w(t) * w(t), 1.0);
+                    let j = weighed(&|t| w(t) * w(t) * color(t), scale);
+                    if i > 0.0 {
+                        settings.finish(i) * j / i
+                    } else {
+                        0.0
+                    }
                 }
             };
         }

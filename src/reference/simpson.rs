@@ -6,13 +6,23 @@
 use glam::DVec3;
 
 use crate::field::{Curve, Sources, falloff};
-use crate::integrate::{Integration, zeta};
+use crate::integrate::{Decay, Integration, zeta};
 
 /// The brightness B of the segment from `s` to `e` by the papers' rule with the settings' `divisions`:
-/// Simpson's, or the shifted rectangle rule with offset `xi` where the settings jitter.
+/// Simpson's, or the shifted rectangle rule with offset `xi` where the settings jitter. With the distance decay the
+/// sum over the sources is taken inside the integral; with the rms decay each term is its own integral.
 pub fn brightness(sources: &Sources, settings: &Integration, s: DVec3, e: DVec3, xi: f64) -> f64 {
     let field = sources.field();
-    along_ray(settings, (s, e), xi, |p| field.psi(p, settings.epsilon))
+    match settings.decay {
+        Decay::Distance => along_ray(settings, (s, e), xi, |p| field.psi(p, settings.epsilon)),
+        Decay::Rms => (0..sources.len())
+            .map(|k| {
+                settings.finish(along_ray(settings, (s, e), xi, |p| {
+                    field.term(k, p, settings.epsilon)
+                }))
+            })
+            .sum(),
+    }
 }
 
 /// The part of B of term `k` of psi alone (`Sources::term`), by the same rule as `brightness`.
@@ -25,11 +35,15 @@ pub fn term_brightness(
     xi: f64,
 ) -> f64 {
     let field = sources.field();
-    along_ray(settings, (s, e), xi, |p| field.term(k, p, settings.epsilon))
+    settings.finish(along_ray(settings, (s, e), xi, |p| {
+        field.term(k, p, settings.epsilon)
+    }))
 }
 
-/// Curve `c`'s term with `weight(t)` in the place of its W series at the point it reads (`Curve::point_seen`: the
-/// nearest point, or the brightest in the continuous form), by the same rule as `brightness`.
+/// Curve `c`'s term to the decay's power (`Integration::power`) without its W series, times `weight(t)` at the
+/// point the term reads (`Curve::point_seen`: the nearest point, or the brightest in the continuous form), by the
+/// same rule as `brightness`: the integral of `(b falloff zeta)^power weight(t)`, with `weight` the W series (to
+/// the same power) times whatever the caller weighs it with.
 pub fn curve_weighted(
     c: &Curve,
     settings: &Integration,
@@ -38,21 +52,33 @@ pub fn curve_weighted(
     weight: &dyn Fn(f64) -> f64,
 ) -> f64 {
     let pieces = c.pieces();
-    along_ray(settings, (s, e), xi, |p| {
-        let n = c.point_seen(&pieces, p, settings.epsilon);
-        c.coefficient * weight(n.t) * falloff(n.distance, settings.epsilon)
-    })
+    let power = settings.power();
+    let f = |t: f64| {
+        let n = c.point_seen(&pieces, s + (e - s) * t, settings.epsilon);
+        let x = c.coefficient
+            * falloff(n.distance, settings.epsilon)
+            * zeta(t, settings.alpha, settings.beta);
+        x.powi(power) * weight(n.t)
+    };
+    by_rule(settings, xi, f)
 }
 
-/// The integral over [0, 1] of `field((1 - t) S + t E) zeta(t)` by the settings' rule: Simpson's, or the
-/// shifted rectangle rule with offset `xi` where they jitter.
+/// The integral over [0, 1] of `(field((1 - t) S + t E) zeta(t))^power` (the decay's power) by the settings' rule:
+/// Simpson's, or the shifted rectangle rule with offset `xi` where they jitter.
 fn along_ray(
     settings: &Integration,
     (s, e): (DVec3, DVec3),
     xi: f64,
     field: impl Fn(DVec3) -> f64,
 ) -> f64 {
-    let f = |t: f64| field(s + (e - s) * t) * zeta(t, settings.alpha, settings.beta);
+    let power = settings.power();
+    by_rule(settings, xi, |t: f64| {
+        (field(s + (e - s) * t) * zeta(t, settings.alpha, settings.beta)).powi(power)
+    })
+}
+
+/// The integral over [0, 1] of `f` by the settings' rule.
+fn by_rule(settings: &Integration, xi: f64, f: impl Fn(f64) -> f64) -> f64 {
     match settings.jitter {
         None => simpson(f, settings.divisions),
         Some(_) => shifted_rectangle(f, settings.divisions, xi),

@@ -73,6 +73,8 @@ pub(crate) struct IntegrationFile {
     pub alpha: Option<f64>,
     pub beta: Option<f64>,
     pub epsilon: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub decay: Option<String>,
 }
 
 #[derive(Debug, Default, Deserialize, Serialize)]

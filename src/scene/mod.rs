@@ -21,7 +21,7 @@ use file::{FieldPath, Locator, SceneFile};
 use crate::animation::Animation;
 use crate::field::{Curve, Line, Look, Point, Sources, Torus, WForm};
 use crate::geometry::{self, Billboard, Camera};
-use crate::integrate::{Integration, Integrator};
+use crate::integrate::{Decay, Integration, Integrator};
 
 /// The scene used when none is given, embedded in the binary.
 pub const DEFAULT_SCENE_TOML: &str = include_str!("../../assets/scenes/default.toml");
@@ -302,6 +302,8 @@ impl Scene {
                 alpha: Some(self.integration.alpha),
                 beta: Some(self.integration.beta),
                 epsilon: Some(self.integration.epsilon),
+                decay: (self.integration.decay != Decay::default())
+                    .then(|| self.integration.decay.name().to_owned()),
             }),
             colors: Some(file::ColorsFile {
                 energy: Some(self.colors.energy),
@@ -790,15 +792,27 @@ fn check_integration(c: &mut Checker<'_, '_>, file: &SceneFile) -> (Integration,
             "epsilon must be positive (it bounds 1 / distance on the sources)",
         )
     });
+    let decay = match int.and_then(|i| i.decay.as_deref()) {
+        None => defaults.decay,
+        Some(name) => Decay::ALL.into_iter().find(|d| d.name() == name).unwrap_or_else(|| {
+            c.fail(
+                &int_path.key("decay"),
+                format!("{name:?} is not a decay: use \"distance\" (the papers': each source's energy along the view summed, the default) or \"rms\" (its root mean square: a single intense spot is not outshone by an even spread)"),
+            );
+            defaults.decay
+        }),
+    };
     let settings = Integration {
         integrator,
         divisions,
         tolerance,
         jitter,
+        decay,
         decay_length: decay_length.unwrap_or(0.0),
         alpha,
         beta,
         epsilon,
+        stretch: 1.0,
     };
     (settings, nu, decay_length)
 }

@@ -10,7 +10,7 @@ use crate::animation::{Animation, Key, Parameter, SourceKind, Track, Value};
 use crate::export::Target;
 use crate::field::{Curve, Line, Point, Torus, WForm};
 use crate::geometry::Camera;
-use crate::integrate::Integrator;
+use crate::integrate::{Decay, Integrator};
 use crate::scene::{Blend, Glare, Scene};
 
 /// One request from the UI.
@@ -67,6 +67,8 @@ pub enum Edit {
     Set(Parameter, Value),
     Camera(Camera),
     Integrator(Integrator),
+    /// How each term's energy along the view adds up to its part of B.
+    Decay(Decay),
     Tolerance(f64),
     /// Simpson's division count (even).
     Divisions(u32),
@@ -155,6 +157,7 @@ impl Edit {
                     scene.integration.jitter = None;
                 }
             }
+            Edit::Decay(decay) => scene.integration.decay = decay,
             Edit::Tolerance(t) => scene.integration.tolerance = t,
             Edit::Divisions(n) => scene.integration.divisions = n,
             Edit::Jitter(seed) => scene.integration.jitter = seed,

@@ -10,7 +10,7 @@ use super::context::{
 };
 use super::fields::{Edits, color_field, number};
 use crate::animation::{IntegrationSetting, Parameter};
-use crate::integrate::Integrator;
+use crate::integrate::{Decay, Integrator};
 use crate::scene::{Blend, Glare, MAX_GLARE_SIZE, MAX_INTENSITY};
 
 pub(super) fn render_section(
@@ -100,6 +100,24 @@ pub(super) fn render_section(
                             }
                         }
                     }
+                    ui.label("decay");
+                    ui.horizontal(|ui| {
+                        for decay in Decay::ALL {
+                            let hint = match decay {
+                                Decay::Distance => "The papers': each source's energy along the view summed                                     (a long even spread outshines an intense spot)",
+                                Decay::Rms => "Each source's energy along the view as its root mean square:                                     an intense spot outshines an even spread of the same energy",
+                            };
+                            if ui
+                                .selectable_label(i.decay == decay, decay.name())
+                                .on_hover_text(hint)
+                                .clicked()
+                                && i.decay != decay
+                            {
+                                edit(out, Edit::Decay(decay));
+                            }
+                        }
+                    });
+                    ui.end_row();
                     let step = 0.005 * i.decay_length;
                     let setting = |k| Parameter::Integration(k);
                     number(
