@@ -144,23 +144,16 @@ fn map_node(p: Peak, u: f32) -> vec2<f32> {
     return vec2<f32>(clamp(p.center + p.width * 0.5 * (e - 1.0 / e), p.lo, p.hi), p.width * 0.5 * (e + 1.0 / e));
 }
 
-// How much a term's Gauss and Kronrod values may differ per unit of u (twin of Allowance): its tolerance on B shared
-// along its u; for the rms decay, B = sqrt(J / stretch) of the integral J of its square, which may err by
-// tolerance sqrt(stretch J), J read as the running sum of the parts accepted so far and the part at hand, and at
-// least by tolerance^2 stretch. scale: the factor the integrand was taken without (|b|, or b^2 for rms).
-struct Allowance {
-    tolerance: f32,
-    length: f32,
-    scale: f32,
-}
-
-fn allowance_at(a: Allowance, running: f32) -> f32 {
-    var per_b = a.tolerance;
-    if params.decay == 1u {
-        let stretch = params.stretch;
-        per_b = max(a.tolerance * sqrt(stretch * a.scale * max(running, 0.0)), a.tolerance * a.tolerance * stretch);
-    }
-    return per_b / (a.scale * max(a.length, 1e-30));
+// The allowance of a term with the rms decay (twin of rms_allowance): B = sqrt(J / stretch) of the integral J of the
+// squared term, and an error dJ costs about dJ / (2 sqrt(stretch J)) of B, so J may err by tolerance sqrt(stretch J)
+// (half what B allows), J estimated by the term's panels unrefined, and at least by tolerance^2 stretch
+// (|sqrt(x) - sqrt(y)| <= sqrt(|x - y|)); shared evenly along its u length. estimate: J without the factor scale
+// (b^2) the integrand was taken without.
+fn rms_allowance(estimate: f32, scale: f32, length: f32) -> f32 {
+    let tolerance = params.term_tolerance;
+    let stretch = params.stretch;
+    let per_b = max(tolerance * sqrt(stretch * scale * max(estimate, 0.0)), tolerance * tolerance * stretch);
+    return per_b / (scale * max(length, 1e-30));
 }
 
 // The weighed energy v of a term at a node, squared for the rms decay (Integration::power).

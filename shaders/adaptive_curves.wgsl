@@ -863,6 +863,52 @@ fn track_nearest(c: CurveSource, ray: Ray, t: f32, track: ptr<function, Track>) 
     return n;
 }
 
+// The brightest point of a chain (the continuous W form) at the ray's point t, carried from the track's last node
+// (whose segment, u and rate here name its piece, x and dx/dt): between a part's cuts it stays on one piece and
+// moves smoothly (the cuts are where it jumps or passes a piece's end), so TRACK_NEWTON Newton steps on the piece's
+// h from where its rate takes it find it, and it stands where every other piece's bound is below its value. Else
+// (a part's first node, a step that has not settled, a point at a piece's end or on the flat top, or a part solved
+// whole) the whole chain is searched (curve_search, one call site). The f64 twin searches every node; both find the
+// same point, to f32 rounding.
+fn bright_track(c: CurveSource, ray: Ray, t: f32, track: ptr<function, Track>) -> Bright {
+    let p = ray.start + ray.dir * t;
+    let k = (*track).segment;
+    if k != NO_SEGMENT && !(*track).whole && abs((*track).rate * (t - (*track).t)) <= TRACK_REACH {
+        let q = pieces[k];
+        let h = stationary_quartic(q, p);
+        var x = clamp((*track).u + (*track).rate * (t - (*track).t), 0.0, 1.0);
+        var step = 1.0;
+        var falls = true;
+        for (var i = 0u; i < TRACK_NEWTON; i++) {
+            let f = quartic_at(h, x);
+            falls = f.y < 0.0;
+            let next = select(x, clamp(x - f.x / f.y, 0.0, 1.0), falls);
+            step = next - x;
+            x = next;
+        }
+        let d = length(piece_at(q, x) - p);
+        let value = piece_weight(q, x) / max(EPSILON, d);
+        var stands = falls && abs(step) <= TRACK_SETTLED && x > 0.0 && x < 1.0 && d > EPSILON;
+        for (var i = 0u; i < c.piece_count; i++) {
+            let j = c.first_piece + i;
+            let o = pieces[j];
+            let bound = o.weight_max / max(EPSILON, length(p - o.center) - o.radius);
+            stands = stands && (j == k || bound <= value);
+        }
+        if stands {
+            *track = Track(k, x, piece_rate(q, x, p, ray.dir), t, false);
+            return Bright(value, mix(q.t0, q.t1, x), d, x, k);
+        }
+    }
+    let b = curve_search(c, p);
+    let whole = (*track).whole;
+    *track = Track(NO_SEGMENT, 0.0, 0.0, t, whole);
+    if b.x > 0.0 && b.x < 1.0 && b.distance > EPSILON {
+        *track = Track(b.piece, b.x, piece_rate(pieces[b.piece], b.x, p, ray.dir), t, whole);
+    }
+    return b;
+}
+
 // The Kronrod and Gauss values on [a, b] in u of a curve's term: f = w / max(eps, d) zeta(t) (before the
 // coefficient) at each node, t clamped to the piece. The nodes go in order along the ray, so that each carries
 // the nearest point on from the last (track_nearest). Twin of kronrod.
@@ -886,7 +932,7 @@ fn curve_kronrod(ray: Ray, p: Peak, a: f32, b: f32, panel: vec2<f32>, singular: 
         // The continuous W form searches the whole chain at every node (twin of integrate_weighted).
         var n: vec2<f32>;
         if SEARCH != 0u && c.piece_count > 0u {
-            let b = curve_search(c, ray.start + ray.dir * m.x);
+            let b = bright_track(c, ray, m.x, track);
             n = vec2<f32>(b.t, b.distance);
         } else {
             n = track_nearest(c, ray, m.x, track);
@@ -919,7 +965,7 @@ fn toward_singular(v: f32, panel: vec2<f32>, singular: vec2<bool>) -> vec2<f32> 
 }
 
 // A curve's term on the panel [a, b] in u, refined where the pair disagrees. Twin of integrate_panel.
-fn curve_panel(ray: Ray, p: Peak, a: f32, b: f32, singular: vec2<bool>, allowance: Allowance, refinements: ptr<function, u32>, track: ptr<function, Track>, running: ptr<function, f32>) -> vec4<f32> {
+fn curve_panel(ray: Ray, p: Peak, a: f32, b: f32, singular: vec2<bool>, allowance: f32, refinements: ptr<function, u32>, track: ptr<function, Track>) -> vec4<f32> {
     let end = 1u << MAX_DEPTH;
     var at = 0u;
     var level = 0u;
@@ -928,10 +974,8 @@ fn curve_panel(ray: Ray, p: Peak, a: f32, b: f32, singular: vec2<bool>, allowanc
         let x = part_bounds(a, b, at, level);
         let rule = curve_kronrod(ray, p, x.x, x.y, vec2<f32>(a, b), singular, track);
         let kg = rule.kg;
-        let per_unit = allowance_at(allowance, *running + max(kg.x, 0.0));
-        if settled(kg, per_unit, x.y - x.x) || level == MAX_DEPTH || *refinements == 0u {
+        if settled(kg, allowance, x.y - x.x) || level == MAX_DEPTH || *refinements == 0u {
             sum += vec4<f32>(kg.x, rule.colored);
-            *running += kg.x;
             let next = next_part(at, level);
             at = next.x;
             level = next.y;
@@ -974,10 +1018,17 @@ fn integrate_curve_term(index: u32, s_point: vec3<f32>, e_point: vec3<f32>) -> v
         degenerate = degenerate || starts_at_rest(s) || ends_at_rest(s);
     }
     let features = curve_features(ray);
-    let allowance = Allowance(params.term_tolerance, pieces_length(features.found), abs(decayed(coefficient)));
-    var refinements = select(COARSE_REFINEMENTS, MAX_REFINEMENTS, gauss_order() > COARSE_ORDER);
-    var running = 0.0;
+    let length = pieces_length(features.found);
+    var allowance = params.term_tolerance / (abs(coefficient) * max(length, 1e-30));
+    // The rms decay's allowance comes from an estimate of its integral: the same panels unrefined, a pass before.
+    let passes = select(1u, 2u, params.decay == 1u);
     var sum = vec4<f32>(0.0);
+    for (var sweep = 0u; sweep < passes; sweep++) {
+    var refinements = select(COARSE_REFINEMENTS, MAX_REFINEMENTS, gauss_order() > COARSE_ORDER);
+    if sweep + 1u < passes {
+        refinements = 0u;
+    }
+    sum = vec4<f32>(0.0);
     for (var k = 0u; k < features.found.count; k++) {
         let p = features.found.peaks[k];
         let u0 = stable_asinh((p.lo - p.center) / p.width);
@@ -1048,7 +1099,11 @@ fn integrate_curve_term(index: u32, s_point: vec3<f32>, e_point: vec3<f32>) -> v
             // and both sides are solved on the whole chain at every node. So is a part that begins or ends at rest,
             // where the nodes crowd toward the cut.
             let inset = SWITCH_INSET * (b - a);
-            let ends = vec2<u32>(nearest_segment_index(c, ray, p, a + inset), nearest_segment_index(c, ray, p, b - inset));
+            // (Not for a curve that reads its brightest point: its nearest point's segments say nothing of it.)
+            var ends = vec2<u32>(0u);
+            if !(SEARCH != 0u && c.piece_count > 0u) {
+                ends = vec2<u32>(nearest_segment_index(c, ray, p, a + inset), nearest_segment_index(c, ray, p, b - inset));
+            }
             let switched = ends.x != ends.y;
             var split = b;
             if switched {
@@ -1079,10 +1134,14 @@ fn integrate_curve_term(index: u32, s_point: vec3<f32>, e_point: vec3<f32>) -> v
                 for (var i = 0u; i < panels; i++) {
                     let pa = pa0 + width * f32(i);
                     let singular = vec2<bool>(singular_a && first && i == 0u, singular_b && last && i + 1u == panels);
-                    sum += curve_panel(ray, p, pa, pa + width, singular, allowance, &refinements, &track, &running);
+                    sum += curve_panel(ray, p, pa, pa + width, singular, allowance, &refinements, &track);
                 }
             }
         }
+    }
+    if sweep + 1u < passes {
+        allowance = rms_allowance(sum.x, coefficient * coefficient, length);
+    }
     }
     if params.decay == 1u {
         // B_i, and the color series' mean weighed by the term's square (twin of tint_of).

@@ -240,7 +240,7 @@ fn smooth_kronrod(ray: Ray, p: Peak, a: f32, b: f32) -> vec2<f32> {
 
 // A point's, a line's or a torus's term on the panel [a, b] in u, refined where the pair disagrees. Twin of
 // integrate_panel.
-fn smooth_panel(ray: Ray, p: Peak, a: f32, b: f32, allowance: Allowance, refinements: ptr<function, u32>, running: ptr<function, f32>) -> f32 {
+fn smooth_panel(ray: Ray, p: Peak, a: f32, b: f32, allowance: f32, refinements: ptr<function, u32>) -> f32 {
     let end = 1u << MAX_DEPTH;
     var at = 0u;
     var level = 0u;
@@ -248,10 +248,8 @@ fn smooth_panel(ray: Ray, p: Peak, a: f32, b: f32, allowance: Allowance, refinem
     while at < end {
         let x = part_bounds(a, b, at, level);
         let kg = smooth_kronrod(ray, p, x.x, x.y);
-        let per_unit = allowance_at(allowance, *running + max(kg.x, 0.0));
-        if settled(kg, per_unit, x.y - x.x) || level == MAX_DEPTH || *refinements == 0u {
+        if settled(kg, allowance, x.y - x.x) || level == MAX_DEPTH || *refinements == 0u {
             sum += kg.x;
-            *running += kg.x;
             let next = next_part(at, level);
             at = next.x;
             level = next.y;
@@ -279,11 +277,17 @@ fn integrate_smooth_term(kind: u32, index: u32, s_point: vec3<f32>, e_point: vec
         }
     }
     let found = smooth_features(ray);
-    let scale = abs(decayed(coefficient));
-    let allowance = Allowance(params.term_tolerance, pieces_length(found), scale);
-    var refinements = select(COARSE_REFINEMENTS, MAX_REFINEMENTS, gauss_order() > COARSE_ORDER);
-    var running = 0.0;
+    let length = pieces_length(found);
+    var allowance = params.term_tolerance / (abs(coefficient) * max(length, 1e-30));
+    // The rms decay's allowance comes from an estimate of its integral: the same panels unrefined, a pass before.
+    let passes = select(1u, 2u, params.decay == 1u);
     var sum = 0.0;
+    for (var sweep = 0u; sweep < passes; sweep++) {
+    var refinements = select(COARSE_REFINEMENTS, MAX_REFINEMENTS, gauss_order() > COARSE_ORDER);
+    if sweep + 1u < passes {
+        refinements = 0u;
+    }
+    sum = 0.0;
     for (var k = 0u; k < found.count; k++) {
         let p = found.peaks[k];
         let u0 = stable_asinh((p.lo - p.center) / p.width);
@@ -307,9 +311,14 @@ fn integrate_smooth_term(kind: u32, index: u32, s_point: vec3<f32>, e_point: vec
             let width = (b - a) / f32(panels);
             for (var i = 0u; i < panels; i++) {
                 let pa = a + width * f32(i);
-                sum += smooth_panel(ray, p, pa, pa + width, allowance, &refinements, &running);
+                sum += smooth_panel(ray, p, pa, pa + width, allowance, &refinements);
             }
         }
+    }
+    if sweep + 1u < passes {
+        let scale = coefficient * coefficient;
+        allowance = rms_allowance(sum, scale, length);
+    }
     }
     return finish(decayed(coefficient) * sum);
 }

@@ -272,10 +272,10 @@ fn curve_search(c: CurveSource, p: vec3<f32>) -> Bright {
         if q.weight_max / max(EPSILON, reach) <= best.value {
             continue;
         }
-        // The maxima inside; within eps of p also the ends of the flat top's stretches and S's vertex on one (one
-        // call site of the walk: drivers inline every call).
-        for (var mode = 0u; mode < select(1u, 2u, reach < EPSILON); mode++) {
-            best = piece_roots(best, q, k, p, mode);
+        // The maxima inside; within eps of p also the ends of the flat top's stretch and S's vertex on it.
+        best = piece_maxima(best, q, k, p);
+        if reach < EPSILON {
+            best = flat_top(best, q, k, p);
         }
     }
     return best;
@@ -291,19 +291,27 @@ fn bright_motion(b: Bright, p: vec3<f32>, dir: vec3<f32>) -> vec2<f32> {
     if d <= EPSILON {
         return vec2<f32>(0.0);
     }
-    let s = piece_weight(q, x);
-    let slope = s * dot(off, dir) / (d * d * d);
+    let slope = piece_weight(q, x) * dot(off, dir) / (d * d * d);
     if x <= 0.0 || x >= 1.0 {
         return vec2<f32>(0.0, slope);
     }
+    return vec2<f32>(piece_rate(q, x, p, dir) * (q.t1 - q.t0), slope);
+}
+
+// dx/dt of a maximum of S / sqrt(D) at x inside piece q as p moves along dir: along the stationary curve
+// h(x, p) = 0, -(dh/dp . dir) / (dh/dx), with D = |off|^2, D' = 2 C'.off, D'' = 2 (|C'|^2 + C''.off),
+// dD/dp = -2 off and dD'/dp = -2 C'; 0 where that is not finite.
+fn piece_rate(q: CurvePiece, x: f32, p: vec3<f32>, dir: vec3<f32>) -> f32 {
+    let off = piece_at(q, x) - p;
+    let s = piece_weight(q, x);
     let ds = 2.0 * q.s2 * x + q.s1;
     let d1 = 2.0 * q.c2 * x + q.c1;
     let dd = 2.0 * dot(d1, off);
     let ddd = 2.0 * (dot(d1, d1) + dot(2.0 * q.c2, off));
     let dh_dx = 4.0 * q.s2 * dot(off, off) + ds * dd - s * ddd;
     let dh_dp = -4.0 * ds * off + 2.0 * s * d1;
-    let rate = -dot(dh_dp, dir) / dh_dx * (q.t1 - q.t0);
-    return vec2<f32>(select(0.0, rate, abs(rate) < 1e30), slope);
+    let rate = -dot(dh_dp, dir) / dh_dx;
+    return select(0.0, rate, abs(rate) < 1e30);
 }
 
 fn piece_at(q: CurvePiece, x: f32) -> vec3<f32> {
@@ -401,28 +409,13 @@ fn sign_changes(b: Quartic) -> u32 {
     return changes;
 }
 
-// The distance quartic D - eps^2 on a piece, D = |C(x) - p|^2: negative on the stretches closer than eps.
-fn flat_quartic(q: CurvePiece, p: vec3<f32>) -> Quartic {
-    let e = q.c0 - p;
-    return Quartic(
-        vec4<f32>(dot(e, e) - EPSILON * EPSILON, 2.0 * dot(q.c1, e), dot(q.c1, q.c1) + 2.0 * dot(q.c2, e), 2.0 * dot(q.c1, q.c2)),
-        dot(q.c2, q.c2),
-    );
-}
-
-// The points a piece offers inside it (twin of piece_roots): mode 0, the maxima of S / sqrt(D), where h falls through
-// zero; mode 1, the ends of its stretches closer than eps (where D - eps^2 changes sign) and S's vertex if it lies
-// on one, where the term's flat top S / eps is largest. The roots are isolated on dyadic parts of [0, 1] by their
-// Bernstein coefficients' signs, visited in order without a stack (as next_part walks panels).
-fn piece_roots(best_in: Bright, q: CurvePiece, k: u32, p: vec3<f32>, mode: u32) -> Bright {
+// The maxima of S / sqrt(D) inside a piece (twin of piece_maxima): the roots of h where it falls through zero,
+// isolated on dyadic parts of [0, 1] by their Bernstein coefficients' signs, visited in order without a stack (as
+// next_part walks panels).
+fn piece_maxima(best_in: Bright, q: CurvePiece, k: u32, p: vec3<f32>) -> Bright {
     var best = best_in;
-    var a = stationary_quartic(q, p);
-    if mode == 1u {
-        a = flat_quartic(q, p);
-    }
-    let levels = select(ROOT_LEVELS, FLAT_LEVELS, mode == 1u);
-    let most = select(ROOT_VISITS, FLAT_VISITS, mode == 1u);
-    let end = 1u << levels;
+    let a = stationary_quartic(q, p);
+    let end = 1u << ROOT_LEVELS;
     var at = 0u;
     var level = 0u;
     var visits = 0u;
@@ -433,16 +426,16 @@ fn piece_roots(best_in: Bright, q: CurvePiece, k: u32, p: vec3<f32>, mode: u32) 
         let b = bernstein_on(a, u, v);
         let changes = sign_changes(b);
         visits++;
-        if changes >= 2u && level < levels && visits < most {
+        if changes >= 2u && level < ROOT_LEVELS && visits < ROOT_VISITS {
             level++;
             continue;
         }
-        // A root where the ends' signs differ (of h: a maximum only where it falls); where the walk gave up
-        // halving a part, its middle stands in for its maxima.
+        // A maximum where h falls through zero; where the walk gave up halving a part, its middle stands in for
+        // its maxima.
         var x = -1.0;
-        if (b.low.x > 0.0 && b.a4 < 0.0) || (mode == 1u && b.low.x < 0.0 && b.a4 > 0.0) {
-            x = bracketed_root(a, q, p, mode, u, v);
-        } else if changes >= 2u && mode == 0u {
+        if b.low.x > 0.0 && b.a4 < 0.0 {
+            x = bracketed_root(a, q, p, 0u, u, v);
+        } else if changes >= 2u {
             x = 0.5 * (u + v);
         }
         if x >= 0.0 {
@@ -453,25 +446,52 @@ fn piece_roots(best_in: Bright, q: CurvePiece, k: u32, p: vec3<f32>, mode: u32) 
             level--;
         }
     }
-    if mode == 1u && q.s2 < 0.0 {
+    return best;
+}
+
+// Within eps of p the falloff is flat and the term S / eps (twin of flat_top): the best of best and the largest S on
+// the stretch of the piece within eps around its nearest point, at the stretch's ends or at S's vertex.
+fn flat_top(best_in: Bright, q: CurvePiece, k: u32, p: vec3<f32>) -> Bright {
+    var best = best_in;
+    let nearest = nearest_on_segment(CurveSegment(q.c2, 0.0, q.c1, 0.0, q.c0, 0.0), p);
+    if nearest.y >= EPSILON {
+        return best;
+    }
+    // The stretch's ends: where |C(x) - p| crosses eps between the nearest point and each end of the piece (one call
+    // site of the root finder, in a loop).
+    let unused = Quartic(vec4<f32>(0.0), 0.0);
+    var ends = vec2<f32>(0.0, 1.0);
+    for (var side = 0u; side < 2u; side++) {
+        let far = f32(side);
+        var x = far;
+        if length(piece_at(q, far) - p) > EPSILON {
+            x = bracketed_root(unused, q, p, 1u, nearest.x, far);
+        }
+        if side == 0u {
+            ends.x = x;
+        } else {
+            ends.y = x;
+        }
+        best = offer_point(best, q, k, x, p);
+    }
+    if q.s2 < 0.0 {
         let vertex = -q.s1 / (2.0 * q.s2);
-        if vertex > 0.0 && vertex < 1.0 && length(piece_at(q, vertex) - p) < EPSILON {
+        if vertex > ends.x && vertex < ends.y {
             best = offer_point(best, q, k, vertex, p);
         }
     }
     return best;
 }
 
-// The root in [u, v] of h (mode 0) or of D - eps^2 (mode 1, evaluated from the point itself, not the quartic's
-// coefficients, which cancel where D is small), whose signs differ at u and v: Newton's method from the secant's root,
-// kept in the bracket. Twin of bracketed_root.
+// The root between u and v of h (mode 0) or of D - eps^2 (mode 1, evaluated from the point itself), whose signs
+// differ at u and v: Newton's method from the secant's root, kept in the bracket. Twin of bracketed_root.
 fn bracketed_root(a: Quartic, q: CurvePiece, p: vec3<f32>, mode: u32, u: f32, v: f32) -> f32 {
     let fu = root_function(a, q, p, mode, u).x;
     let fv = root_function(a, q, p, mode, v).x;
     // lo keeps the sign of u, hi that of v.
     var lo = u;
     var hi = v;
-    var x = clamp(u + (v - u) * fu / (fu - fv), u, v);
+    var x = clamp(u + (v - u) * fu / (fu - fv), min(u, v), max(u, v));
     for (var i = 0u; i < ROOT_NEWTON; i++) {
         let f = root_function(a, q, p, mode, x);
         if f.x == 0.0 {

@@ -85,14 +85,18 @@ fn sources_can_be_added_duplicated_and_deleted() {
     h.get_by_label("+ line").click();
     h.run();
     assert_eq!(count(&h), (1, 1, 1, 1));
-    // The first Duplicate button belongs to the first source listed, the point.
-    h.get_all_by_label("Duplicate").next().unwrap().click();
-    h.run();
+    // The first Duplicate button belongs to the first source listed, the point (scrolled to: the Rendering
+    // section's rows push the sources' editors down).
+    let first = |h: &mut Harness<'static, ViewerApp>, label: &str| {
+        h.get_all_by_label(label).next().unwrap().scroll_to_me();
+        h.run();
+        h.get_all_by_label(label).next().unwrap().click();
+        h.run();
+    };
+    first(&mut h, "Duplicate");
     assert_eq!(count(&h), (2, 1, 1, 1));
-    h.get_all_by_label("Delete").next().unwrap().click();
-    h.run();
-    h.get_all_by_label("Delete").next().unwrap().click();
-    h.run();
+    first(&mut h, "Delete");
+    first(&mut h, "Delete");
     assert_eq!(count(&h), (0, 1, 1, 1));
     h.get_by_label("+ curve").click();
     h.run();

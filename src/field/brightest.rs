@@ -15,11 +15,11 @@
 //! `h = 2 S' D - S D'` (its fifth powers cancel); `S / sqrt(D)` rises where h > 0. The largest value of the
 //! term is then at an end of a piece, at a root of h where h falls through zero, or, within eps of the chain,
 //! where the falloff's flat top `S / eps` is largest (an end of the stretch closer than eps, or S's vertex).
-//! The roots of h, and of `D - eps^2` (the ends of the stretches closer than eps), are isolated by the signs of
-//! their Bernstein coefficients on dyadic parts of [0, 1] (no sign change: no root; one: exactly one, found by
-//! Newton's method kept inside its bracket; more: the part is halved), which needs no cubic and no sampling. A
-//! piece is skipped where even its largest weight over its nearest possible distance (a ball around its control
-//! polygon) cannot beat the best value found.
+//! The roots of h are isolated by the signs of their Bernstein coefficients on dyadic parts of [0, 1] (no sign
+//! change: no root; one: exactly one, found by Newton's method kept inside its bracket; more: the part is halved),
+//! which needs no cubic and no sampling; the flat top's stretch lies around the piece's nearest point, its ends
+//! found by bracketed Newton on `D - eps^2` on either side. A piece is skipped where even its largest weight over its
+//! nearest possible distance (a ball around its control polygon) cannot beat the best value found.
 //!
 //! `shaders/field_pass.wgsl` (`curve_search`) mirrors this in f32; its pieces are packed from `pieces`.
 
@@ -54,11 +54,6 @@ impl WForm {
 
 /// Levels of halving the search of a piece's stationary points goes down at most: parts of 1/64 of the piece.
 pub const ROOT_LEVELS: u32 = 6;
-/// Levels and visits of the walk for the flat top's ends: deeper, since a stretch closer than eps can be as narrow as
-/// the ray grazes it, and the walk can tell its two ends apart only on a part narrower than it (missing one costs
-/// about `|S'| 2^-FLAT_LEVELS` relative, the stretch's extent).
-pub const FLAT_LEVELS: u32 = 20;
-pub const FLAT_VISITS: u32 = 64;
 /// Newton steps the shader takes at most on a root (f32 settles in fewer; the f64 twin goes on to f64's precision).
 pub const ROOT_NEWTON: u32 = 16;
 /// Parts of a piece the search visits at most (the walk's budget: a piece has at most four stationary points,
@@ -226,16 +221,11 @@ pub fn search(pieces: &[Piece], p: DVec3, eps: f64) -> Brightest {
         if most <= best.value {
             continue;
         }
-        // The maxima inside; within eps of p also the ends of the flat top's stretches and S's vertex on one.
-        let modes: &[Roots] = if reach < eps {
-            &[Roots::Maxima, Roots::FlatTop]
-        } else {
-            &[Roots::Maxima]
-        };
-        for &mode in modes {
-            piece_roots(piece, p, eps, mode, &mut |x| {
-                best.offer(pieces, k, x, p, eps)
-            });
+        // The maxima inside; within eps of p also the ends of the flat top's stretch and S's vertex on it.
+        let mut offer = |x: f64| best.offer(pieces, k, x, p, eps);
+        piece_maxima(piece, p, &mut offer);
+        if reach < eps {
+            flat_top(piece, p, eps, &mut offer);
         }
     }
     best
@@ -365,41 +355,12 @@ fn sign_changes(b: &[f64; 5]) -> u32 {
     changes
 }
 
-/// Which points of a piece `piece_roots` offers.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Roots {
-    /// The maxima of `S / sqrt(D)`: where h falls through zero.
-    Maxima,
-    /// The ends of the stretches closer than eps (where `D - eps^2` changes sign) and S's vertex on one: where the
-    /// flat top `S / eps` is largest.
-    FlatTop,
-}
-
-/// The power-form coefficients of `D - eps^2` on a piece: negative on the stretches closer than eps.
-fn flat_quartic(piece: &Piece, p: DVec3, eps: f64) -> [f64; 5] {
-    let Segment { c2, c1, c0 } = piece.segment;
-    let e = c0 - p;
-    [
-        e.length_squared() - eps * eps,
-        2.0 * c1.dot(e),
-        c1.length_squared() + 2.0 * c2.dot(e),
-        2.0 * c1.dot(c2),
-        c2.length_squared(),
-    ]
-}
-
-/// Offers a piece's points of kind `mode`, their roots isolated on dyadic parts of [0, 1] by their Bernstein
-/// coefficients (twin of the shader's walk, which visits the same parts in the same order, without a stack).
-fn piece_roots(piece: &Piece, p: DVec3, eps: f64, mode: Roots, offer: &mut impl FnMut(f64)) {
-    let a = match mode {
-        Roots::Maxima => stationary_quartic(piece, p),
-        Roots::FlatTop => flat_quartic(piece, p, eps),
-    };
-    let (levels, most) = match mode {
-        Roots::Maxima => (ROOT_LEVELS, ROOT_VISITS),
-        Roots::FlatTop => (FLAT_LEVELS, FLAT_VISITS),
-    };
-    let end = 1u32 << levels;
+/// Offers the maxima of `S / sqrt(D)` inside a piece: the roots of h where it falls through zero, isolated on dyadic
+/// parts of [0, 1] by their Bernstein coefficients (twin of the shader's walk, which visits the same parts in the
+/// same order, without a stack).
+fn piece_maxima(piece: &Piece, p: DVec3, offer: &mut impl FnMut(f64)) {
+    let a = stationary_quartic(piece, p);
+    let end = 1u32 << ROOT_LEVELS;
     let (mut at, mut level, mut visits) = (0u32, 0u32, 0u32);
     while at < end {
         let size = end >> level;
@@ -407,16 +368,14 @@ fn piece_roots(piece: &Piece, p: DVec3, eps: f64, mode: Roots, offer: &mut impl 
         let b = bernstein_on(&a, u, v);
         let changes = sign_changes(&b);
         visits += 1;
-        if changes >= 2 && level < levels && visits < most {
+        if changes >= 2 && level < ROOT_LEVELS && visits < ROOT_VISITS {
             level += 1;
             continue;
         }
-        let falls = b[0] > 0.0 && b[4] < 0.0;
-        let rises = b[0] < 0.0 && b[4] > 0.0;
-        if falls || (mode == Roots::FlatTop && rises) {
-            // One root (unless the walk gave up halving): of h, a maximum only where it falls.
-            offer(bracketed_root(&a, piece, p, eps, mode, u, v));
-        } else if changes >= 2 && mode == Roots::Maxima {
+        if b[0] > 0.0 && b[4] < 0.0 {
+            // h falls through zero on [u, v]: a maximum (one, unless the walk gave up halving).
+            offer(bracketed_root(|x| quartic_at(&a, x), u, v));
+        } else if changes >= 2 {
             // The walk gave up halving a part whose roots it could not separate: its middle stands in for them.
             offer(0.5 * (u + v));
         }
@@ -425,42 +384,50 @@ fn piece_roots(piece: &Piece, p: DVec3, eps: f64, mode: Roots, offer: &mut impl 
             level -= 1;
         }
     }
+}
+
+/// Within eps of the chain the falloff is flat, and the term is `S / eps`: offers the largest S on the stretch of
+/// the piece that lies within eps of `p` around its nearest point, at the stretch's ends (where `D - eps^2`, taken
+/// from the point itself, crosses zero between the nearest point and each end of the piece) or at S's vertex.
+fn flat_top(piece: &Piece, p: DVec3, eps: f64, offer: &mut impl FnMut(f64)) {
+    let s = &piece.segment;
+    let nearest = s.nearest(p);
+    if nearest.distance >= eps {
+        return;
+    }
+    let excess = |x: f64| {
+        let off = s.at(x) - p;
+        (
+            off.length_squared() - eps * eps,
+            2.0 * off.dot(2.0 * s.c2 * x + s.c1),
+        )
+    };
+    let mut ends = [0.0, 1.0];
+    for (side, end) in ends.iter_mut().enumerate() {
+        let far = side as f64;
+        *end = if (s.at(far) - p).length() > eps {
+            bracketed_root(excess, nearest.t, far)
+        } else {
+            far
+        };
+        offer(*end);
+    }
     let [s2, s1, _] = piece.weight;
-    if mode == Roots::FlatTop && s2 < 0.0 {
+    if s2 < 0.0 {
         let vertex = -s1 / (2.0 * s2);
-        if vertex > 0.0 && vertex < 1.0 && (piece.segment.at(vertex) - p).length() < eps {
+        if vertex > ends[0] && vertex < ends[1] {
             offer(vertex);
         }
     }
 }
 
-/// The root in [u, v] of h (`Maxima`) or of `D - eps^2` (`FlatTop`, evaluated from the point itself, not the
-/// quartic's coefficients, which cancel where D is small), whose signs differ at u and v: Newton's method from the
+/// The root between `u` and `v` of `f` (value and derivative), whose signs differ there: Newton's method from the
 /// secant's root, kept in the bracket.
-fn bracketed_root(
-    a: &[f64; 5],
-    piece: &Piece,
-    p: DVec3,
-    eps: f64,
-    mode: Roots,
-    u: f64,
-    v: f64,
-) -> f64 {
-    let f = |x: f64| match mode {
-        Roots::Maxima => quartic_at(a, x),
-        Roots::FlatTop => {
-            let s = &piece.segment;
-            let off = s.at(x) - p;
-            (
-                off.length_squared() - eps * eps,
-                2.0 * off.dot(2.0 * s.c2 * x + s.c1),
-            )
-        }
-    };
+fn bracketed_root(f: impl Fn(f64) -> (f64, f64), u: f64, v: f64) -> f64 {
     let (fu, fv) = (f(u).0, f(v).0);
     // lo keeps the sign of u, hi that of v.
     let (mut lo, mut hi) = (u, v);
-    let mut x = (u + (v - u) * fu / (fu - fv)).clamp(u, v);
+    let mut x = (u + (v - u) * fu / (fu - fv)).clamp(u.min(v), u.max(v));
     for _ in 0..64 {
         let (fx, dfx) = f(x);
         if fx == 0.0 {

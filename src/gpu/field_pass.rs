@@ -223,12 +223,13 @@ const fn smooth_iterations(order: u32) -> u64 {
 }
 
 /// Loop iterations of one evaluation of a source's distance (a curve loops over its segments and roots), or of its
-/// brightest point (`pieces` > 0: over its pieces, each with its two walks, the parts they visit and the Newton steps
-/// on the two maxima and the four ends of the flat top a quartic has at most).
+/// brightest point (`pieces` > 0: over its pieces twice, the parts each walk visits and the Newton steps on the two
+/// maxima a piece has at most and on the flat top's two ends, and the adaptive pass's check of every piece's bound
+/// where it carries the point on).
 fn curve_iterations(segments: u32, pieces: u32) -> u64 {
-    use crate::field::brightest::{FLAT_VISITS, ROOT_NEWTON, ROOT_VISITS};
+    use crate::field::brightest::{ROOT_NEWTON, ROOT_VISITS};
     if pieces > 0 {
-        1 + pieces as u64 * (2 + (ROOT_VISITS + FLAT_VISITS) as u64 + 6 * ROOT_NEWTON as u64)
+        2 + pieces as u64 * (4 + ROOT_VISITS as u64 + 4 * ROOT_NEWTON as u64)
     } else {
         1 + 12 * segments as u64
     }

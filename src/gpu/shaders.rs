@@ -80,7 +80,7 @@ pub fn shared_constants() -> String {
     use crate::field::brightest as b;
     use crate::integrate::adaptive as a;
     use std::fmt::Write;
-    let integers: [(&str, u64); 21] = [
+    let integers: [(&str, u64); 19] = [
         ("SCAN", a::SCAN as u64),
         ("BRIGHT_SCAN", a::BRIGHT_SCAN as u64),
         ("CUT_BISECTIONS", a::CUT_BISECTIONS as u64),
@@ -99,8 +99,6 @@ pub fn shared_constants() -> String {
         ("ROOT_LEVELS", b::ROOT_LEVELS as u64),
         ("ROOT_VISITS", b::ROOT_VISITS as u64),
         ("ROOT_NEWTON", b::ROOT_NEWTON as u64),
-        ("FLAT_LEVELS", b::FLAT_LEVELS as u64),
-        ("FLAT_VISITS", b::FLAT_VISITS as u64),
         ("KRONROD_ROWS", a::KRONROD.len() as u64),
     ];
     let reals: [(&str, f64); 16] = [

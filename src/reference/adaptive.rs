@@ -70,7 +70,9 @@
 //! along the ray and carries each nearest point on from the last node's (its rate du/dt, then two Newton
 //! steps on the segment, over at most `TRACK_REACH` of it), solving the cubic in closed form only where a part
 //! begins or Newton has not settled; this twin solves every node in closed form. Both find the same nearest
-//! point, to f32 rounding there. And in f32 two rules agreeing within 4e-6 of their value count as agreeing
+//! point, to f32 rounding there. So with a curve's brightest point (the continuous W form): the shader carries it
+//! on its piece by Newton's method on the piece's h where every other piece's bound stays below its value, and
+//! this twin searches the whole chain at every node. And in f32 two rules agreeing within 4e-6 of their value count as agreeing
 //! (`ROUNDING` here is 1e-13). The tests hold the GPU to this twin.
 
 use crate::integrate::adaptive::{
@@ -98,49 +100,32 @@ fn kronrod(g: &impl Fn(f64) -> f64, a: f64, b: f64, order: u32) -> (f64, f64) {
 /// rounding of a sum of nodes (the f32 twin's is `4e-6`).
 pub const ROUNDING: f64 = 1e-13;
 
-/// How much a term's Gauss and Kronrod values may differ per unit of u: the term's tolerance on B shared evenly
-/// along its u. With the distance decay B is the term's integral, so the share is fixed; with the rms decay B is
-/// `sqrt(J / stretch)` of the integral J of the squared term, and an error dJ costs about `dJ / (2 sqrt(stretch J))`
-/// of B, so J may err by `tolerance sqrt(stretch J)` (half what B allows), J read as the running sum of the parts
-/// accepted so far and the part at hand (a lower bound of the whole: the integrand is not negative), and at least
-/// `tolerance^2 stretch` (`|sqrt(x) - sqrt(y)| <= sqrt(|x - y|)`).
-#[derive(Clone, Copy, Debug)]
-pub(super) struct Allowance {
-    /// The term's tolerance on B.
-    pub(super) tolerance: f64,
-    /// The u length its tolerance is shared along.
-    pub(super) length: f64,
-    /// The factor the integrand was taken without: `|b|`, or `b^2` for the rms decay.
-    pub(super) scale: f64,
-    /// The ray's stretch, for the rms decay; `None` for the distance decay.
-    pub(super) rms: Option<f64>,
-}
-
-impl Allowance {
-    /// The allowance per unit of u where the parts accepted so far and the part at hand sum to `running`
-    /// (without `scale`).
-    pub(super) fn at(&self, running: f64) -> f64 {
-        let per_b = match self.rms {
-            None => self.tolerance,
-            Some(stretch) => (self.tolerance * (stretch * self.scale * running.max(0.0)).sqrt())
-                .max(self.tolerance * self.tolerance * stretch),
-        };
-        per_b / (self.scale * self.length.max(1e-300))
-    }
+/// How much a term's Gauss and Kronrod values may differ per unit of u with the rms decay: B is `sqrt(J / stretch)`
+/// of the integral J of the squared term, and an error dJ costs about `dJ / (2 sqrt(stretch J))` of B, so J may err
+/// by `tolerance sqrt(stretch J)` (half what B allows), J estimated by the term's panels unrefined, and at least by
+/// `tolerance^2 stretch` (`|sqrt(x) - sqrt(y)| <= sqrt(|x - y|)`); shared evenly along its u `length`. `estimate`
+/// is J without the factor `scale` (`b^2`) the integrand was taken without.
+pub(super) fn rms_allowance(
+    (tolerance, stretch): (f64, f64),
+    estimate: f64,
+    scale: f64,
+    length: f64,
+) -> f64 {
+    let per_b = (tolerance * (stretch * scale * estimate.max(0.0)).sqrt())
+        .max(tolerance * tolerance * stretch);
+    per_b / (scale * length.max(1e-300))
 }
 
 /// `g` on `[a, b]`, refined where its Gauss and Kronrod values differ by more than `allowance` per unit of
 /// length: the parts of a dyadic bisection of `[a, b]`, visited in order (without a stack: after a part is
 /// accepted the next starts where it ended, as large as its position allows), each accepted with its Kronrod
 /// value once within its share of the allowance, at `MAX_DEPTH`, or once the term's `refinements` are spent.
-/// `running` is the sum of the term's parts accepted before this panel; it is carried on.
 fn integrate_panel(
     g: &impl Fn(f64) -> f64,
     (a, b): (f64, f64),
     order: u32,
-    allowance: &Allowance,
+    allowance: f64,
     refinements: &mut u32,
-    running: &mut f64,
 ) -> f64 {
     let end = 1u32 << MAX_DEPTH;
     let (mut at, mut level, mut sum) = (0u32, 0u32, 0.0);
@@ -149,11 +134,9 @@ fn integrate_panel(
         let x0 = a + (b - a) * (at as f64 / end as f64);
         let x1 = a + (b - a) * ((at + size) as f64 / end as f64);
         let (k, gauss) = kronrod(g, x0, x1, order);
-        let per_unit = allowance.at(*running + k.max(0.0));
-        let settled = (k - gauss).abs() <= (per_unit * (x1 - x0)).max(ROUNDING * k.abs());
+        let settled = (k - gauss).abs() <= (allowance * (x1 - x0)).max(ROUNDING * k.abs());
         if settled || level == MAX_DEPTH || *refinements == 0 {
             sum += k;
-            *running += k;
             at += size;
             // Up while this part ended its parent.
             while level > 0 && at & ((end >> (level - 1)) - 1) == 0 {
@@ -389,51 +372,58 @@ pub(super) fn integrate_pieces(
         (p, u0, u1)
     });
     let length: f64 = pieces.clone().map(|(_, u0, u1)| (u1 - u0).max(0.0)).sum();
-    let allowance = Allowance {
-        tolerance,
-        length,
-        scale: c.abs(),
-        rms,
-    };
-    let mut refinements = refinement_budget(order);
-    let mut running = 0.0;
+    let mut allowance = tolerance / (c.abs() * length.max(1e-300));
+    // The rms decay's allowance comes from an estimate of its integral: the same panels unrefined, a pass before.
+    let passes = if rms.is_some() { 2 } else { 1 };
     let mut sum = 0.0;
-    for (p, u0, u1) in pieces {
-        if u1 <= u0 {
-            continue;
-        }
-        // The integrand in u: f(s(u)) ds/du.
-        let g = |u: f64| {
-            let t = (p.center + p.width * u.sinh()).clamp(p.lo, p.hi);
-            f(t) * p.width * u.cosh()
+    for pass in 0..passes {
+        let mut refinements = if pass + 1 < passes {
+            0
+        } else {
+            refinement_budget(order)
         };
-        let (cut, n) = cuts(p, u0, u1, &found.kinks);
-        for w in cut[..n].windows(2) {
-            let ((a, singular_a), (b, singular_b)) = (w[0], w[1]);
-            let (split, count) = parts(p, (a, singular_a), (b, singular_b));
-            for (k, &(a, b)) in split[..count].iter().enumerate() {
-                if b <= a {
-                    continue;
-                }
-                let (singular_a, singular_b) = (singular_a && k == 0, singular_b && k + 1 == count);
-                let panels = ((b - a) / U_PANEL)
-                    .ceil()
-                    .clamp(1.0, MAX_GAUSS_PANELS as f64) as u32;
-                let width = (b - a) / panels as f64;
-                for i in 0..panels {
-                    let pa = a + width * i as f64;
-                    let ends = (singular_a && i == 0, singular_b && i + 1 == panels);
-                    let mapped = toward_singular(&g, (pa, pa + width), ends);
-                    sum += integrate_panel(
-                        &mapped,
-                        (pa, pa + width),
-                        order,
-                        &allowance,
-                        &mut refinements,
-                        &mut running,
-                    );
+        sum = 0.0;
+        for (p, u0, u1) in pieces.clone() {
+            if u1 <= u0 {
+                continue;
+            }
+            // The integrand in u: f(s(u)) ds/du.
+            let g = |u: f64| {
+                let t = (p.center + p.width * u.sinh()).clamp(p.lo, p.hi);
+                f(t) * p.width * u.cosh()
+            };
+            let (cut, n) = cuts(p, u0, u1, &found.kinks);
+            for w in cut[..n].windows(2) {
+                let ((a, singular_a), (b, singular_b)) = (w[0], w[1]);
+                let (split, count) = parts(p, (a, singular_a), (b, singular_b));
+                for (k, &(a, b)) in split[..count].iter().enumerate() {
+                    if b <= a {
+                        continue;
+                    }
+                    let (singular_a, singular_b) =
+                        (singular_a && k == 0, singular_b && k + 1 == count);
+                    let panels = ((b - a) / U_PANEL)
+                        .ceil()
+                        .clamp(1.0, MAX_GAUSS_PANELS as f64)
+                        as u32;
+                    let width = (b - a) / panels as f64;
+                    for i in 0..panels {
+                        let pa = a + width * i as f64;
+                        let ends = (singular_a && i == 0, singular_b && i + 1 == panels);
+                        let mapped = toward_singular(&g, (pa, pa + width), ends);
+                        sum += integrate_panel(
+                            &mapped,
+                            (pa, pa + width),
+                            order,
+                            allowance,
+                            &mut refinements,
+                        );
+                    }
                 }
             }
+        }
+        if let (Some(stretch), true) = (rms, pass + 1 < passes) {
+            allowance = rms_allowance((tolerance, stretch), sum, c.abs(), length);
         }
     }
     c * sum
