@@ -151,7 +151,7 @@ fn map_node(p: Peak, u: f32) -> vec2<f32> {
 // (b^2) the integrand was taken without.
 fn rms_allowance(estimate: f32, scale: f32, length: f32) -> f32 {
     let tolerance = params.term_tolerance;
-    let stretch = params.stretch;
+    let stretch = STRETCH;
     let per_b = max(tolerance * sqrt(stretch * scale * max(estimate, 0.0)), tolerance * tolerance * stretch);
     return per_b / (scale * max(length, 1e-30));
 }
@@ -164,7 +164,7 @@ fn decayed(v: f32) -> f32 {
 // A term's part of B from the integral of its weighed energy to the decay's power (twin of Integration::finish).
 fn finish(integral: f32) -> f32 {
     if params.decay == 1u {
-        return sqrt(max(integral, 0.0) / params.stretch);
+        return sqrt(max(integral, 0.0) / STRETCH);
     }
     return integral;
 }

@@ -83,12 +83,14 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     let field = sample_field(in.uv);
     let b = field.x;
     let glow = b * params.energy.rgb + field.yzw;
+    let cb = textureLoad(background, vec2<i32>(in.position.xy), 0);
     if params.mode == 1u {
         // Associated (premultiplied) alpha, unclamped: "over" any background Cb gives (1 - B) Cb + G wherever
         // B <= 1, and over black G everywhere (clamped on display, as the opaque blend). B < 0 is transparent.
-        return vec4<f32>(max(glow, vec3<f32>(0.0)), clamp(b, 0.0, 1.0));
+        // Over what lies behind (transparent, or the objects, opaque), premultiplied "over" again.
+        let a = clamp(b, 0.0, 1.0);
+        return vec4<f32>(max(glow, vec3<f32>(0.0)) + (1.0 - a) * cb.rgb, a + (1.0 - a) * cb.a);
     }
-    let cb = textureLoad(background, vec2<i32>(in.position.xy), 0);
     if params.mode == 2u {
         // The transparent export composited over the background, for every B.
         let over = max(glow, vec3<f32>(0.0)) + (1.0 - clamp(b, 0.0, 1.0)) * cb.rgb;

@@ -31,6 +31,10 @@ struct FieldParams {
     search: u32,        // 1 where some curve's term reads its brightest point (read on the CPU: the SEARCH constant)
     decay: u32,         // 0: distance (the papers'), 1: rms (integrate::Decay)
     stretch: f32,       // the rays' span in decay lengths: the rms decay's unit
+    clipped: u32,       // 1 where the scene has objects: each texel's ray ends at its clip (binding 13)
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
 }
 
 @group(0) @binding(0) var<storage, read> params: FieldParams;
@@ -98,10 +102,13 @@ fn jittered() -> bool {
 var<private> ALPHA: f32;
 var<private> BETA: f32;
 var<private> EPSILON: f32;
+// The rays' span in decay lengths (the rms decay's unit), this texel's share of it once clipped (begin_texel).
+var<private> STRETCH: f32;
 fn load_scalars() {
     ALPHA = params.alpha;
     BETA = params.beta;
     EPSILON = params.epsilon;
+    STRETCH = params.stretch;
 }
 
 @group(0) @binding(1) var<storage, read> points: array<PointSource>;
@@ -120,6 +127,9 @@ fn load_scalars() {
 @group(0) @binding(10) var<storage, read> colors: array<vec4<f32>>;
 // The pieces of the curves whose term reads their brightest point (CurveSource::first_piece, piece_count).
 @group(0) @binding(11) var<storage, read> pieces: array<CurvePiece>;
+// The share c of each texel's ray S -> E before the first surface of the scene's objects, row-major from the
+// top (objects::clip, computed in f64 on the CPU); a single 1 where the scene has no objects.
+@group(0) @binding(13) var<storage, read> clips: array<f32>;
 
 // One dispatch's share of the work: a range of Simpson samples, or of the adaptive integrator's terms (points,
 // then lines, tori, curves). A texel's loops must stay under what some drivers allow one invocation (Mesa's
@@ -540,8 +550,29 @@ fn begin_texel(gid: vec3<u32>) -> Texel {
     if id.x >= w || id.y >= w {
         return Texel(id, vec3<f32>(0.0), vec3<f32>(0.0), false);
     }
-    let seg = texel_segment(id);
+    var seg = texel_segment(id);
+    // Up to the first surface: the shortened ray S -> S + c (E - S), the decay mapped onto it as
+    // Integration::on_ray(c) maps it (alpha / c, beta / c, the span times c); where a surface hides the texel
+    // (c = 0) every integrand is zero with alpha.
+    let c = clip_of(id);
+    if c < 1.0 {
+        if c > 0.0 {
+            seg[1] = seg[0] + c * (seg[1] - seg[0]);
+            ALPHA /= c;
+            BETA /= c;
+            STRETCH *= c;
+        } else {
+            ALPHA = 0.0;
+        }
+    }
     return Texel(id, seg[0], seg[1], true);
+}
+
+fn clip_of(id: vec2<u32>) -> f32 {
+    if params.clipped == 0u {
+        return 1.0;
+    }
+    return clips[id.y * params.resolution + id.x];
 }
 
 // The texel's segment S -> E (4.2, 4.3): texel center on the billboard, column from the left, row from the top.

@@ -141,7 +141,7 @@ fn integrate_rms(texel: Texel, r_in: Samples, scale: f32) {
         textureStore(scratch, at, 3, vec4<f32>(sums.w, 0.0, 0.0, 1.0));
         return;
     }
-    let b = sqrt(max(sums.x * scale, 0.0) / params.stretch);
+    let b = sqrt(max(sums.x * scale, 0.0) / STRETCH);
     var glow = glow_of(chunk.term, b);
     if sums.x > 0.0 {
         glow += vec4<f32>(0.0, b * sums.yzw / sums.x);

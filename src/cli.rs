@@ -91,6 +91,11 @@ pub struct RenderArgs {
     /// modes (Unity URP "Premultiply", Godot `BLEND_MODE_PREMULT_ALPHA`). An EXR is associated either way.
     #[arg(long, requires = "transparent")]
     pub premultiplied: bool,
+    /// With `--transparent`, leave the scene's objects out of the picture while they still hide the glow: the
+    /// glow alone, alpha 0 and no glow wherever an object hides it, for layering over a render of the same scene
+    /// (and camera) made elsewhere.
+    #[arg(long, requires = "transparent")]
+    pub holdout: bool,
     /// Write the billboard's brightness B itself (W x W, before the blend, unclamped, rows from the top) as a
     /// float EXR (R = G = B = brightness) instead of the composed frame.
     #[arg(long)]
@@ -521,19 +526,19 @@ fn render(args: &RenderArgs) -> Result<(), CliError> {
             if args.brightness {
                 output::write_brightness_exr(&args.output, texture.resolution, &texture.values)?;
             } else {
-                let pixels = reference::compose_frame(
+                let pixels = reference::compose_frame_over(
                     &scene,
                     &billboard,
                     &texture,
-                    width,
-                    height,
-                    args.transparent,
+                    (width, height),
+                    backdrop(args),
                 );
                 output::write_rgba(&args.output, width, height, &pixels, alpha)?;
             }
         }
         Backend::Gpu => {
             let mut gpu = HeadlessRenderer::new()?;
+            gpu.set_holdout(args.holdout);
             if args.verbose {
                 eprintln!("adapter: {}", gpu.ctx.adapter_summary());
             }
@@ -584,7 +589,11 @@ fn render_frames(
         }
     }
     let mut gpu = match args.backend {
-        Backend::Gpu => Some(HeadlessRenderer::new()?),
+        Backend::Gpu => {
+            let mut gpu = HeadlessRenderer::new()?;
+            gpu.set_holdout(args.holdout);
+            Some(gpu)
+        }
         Backend::Cpu => None,
     };
     // Many frames of one structure: its specialised pipelines pay for their compile after a few.
@@ -640,7 +649,7 @@ fn render_frames(
             frames.clone(),
             (width, height),
             output::Alpha::of(args.transparent, args.premultiplied),
-            |at| compose(at, gpu.as_mut(), width, height, args.transparent),
+            |at| compose(at, gpu.as_mut(), width, height, backdrop(args)),
             |_, frame| {
                 progress.frame_done(frame);
                 std::ops::ControlFlow::Continue(())
@@ -671,8 +680,9 @@ fn compose(
     gpu: Option<&mut HeadlessRenderer>,
     width: u32,
     height: u32,
-    transparent: bool,
+    backdrop: reference::Backdrop,
 ) -> Result<Vec<[f64; 4]>, CliError> {
+    let transparent = backdrop != reference::Backdrop::Opaque;
     Ok(match gpu {
         Some(gpu) => {
             let frame = gpu.render(scene, width, height, transparent)?;
@@ -681,7 +691,16 @@ fn compose(
         None => {
             let billboard = scene.place_billboard(width as f64 / height as f64);
             let texture = reference::render_brightness(scene, &billboard);
-            reference::compose_frame(scene, &billboard, &texture, width, height, transparent)
+            reference::compose_frame_over(scene, &billboard, &texture, (width, height), backdrop)
         }
     })
+}
+
+/// What lies behind the glow in the command's pictures.
+fn backdrop(args: &RenderArgs) -> reference::Backdrop {
+    match (args.transparent, args.holdout) {
+        (false, _) => reference::Backdrop::Opaque,
+        (true, false) => reference::Backdrop::Transparent,
+        (true, true) => reference::Backdrop::Holdout,
+    }
 }

@@ -3,6 +3,7 @@
 //! - [`field`]: the energy field psi and its sources, in f64 (the reference the GPU is checked against);
 //! - [`integrate`]: how a scene integrates along a texel's ray: the integrator, its settings, the decay zeta;
 //! - [`geometry`]: the camera, the billboard and its rays;
+//! - [`objects`]: spheres, boxes, planes and glTF meshes that hide the glow and are lit by it;
 //! - [`reference`]: the f64 CPU renderer, one module for each GPU pass it twins, named alike;
 //! - [`gpu`]: the same on the GPU: WGSL compute and render passes, headless or in the viewer;
 //! - [`scene`]: TOML scene files, validated field by field;
@@ -21,6 +22,7 @@ pub mod field;
 pub mod geometry;
 pub mod gpu;
 pub mod integrate;
+pub mod objects;
 pub mod output;
 pub mod reference;
 pub mod scene;

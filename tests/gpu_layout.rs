@@ -143,7 +143,7 @@ fn rust_mirrors_match_the_wgsl_layouts() {
         size_of::<FieldParams>(),
         fields!(FieldParams: center, size, right, resolution, up, divisions, eye, nu, alpha, beta, epsilon,
             point_count, line_count, torus_count, curve_count, integrator, term_tolerance, jitter, seed, gauss_order,
-            layers, search, decay, stretch),
+            layers, search, decay, stretch, clipped, pad0, pad1, pad2),
     );
     check_struct(
         &field,
@@ -194,6 +194,13 @@ fn rust_mirrors_match_the_wgsl_layouts() {
         "GridParams",
         size_of::<energywave::gpu::grid_pass::gpu_data::GridParams>(),
         fields!(energywave::gpu::grid_pass::gpu_data::GridParams: view_proj),
+    );
+    let objects = parse_and_validate("objects", shaders::OBJECT_PASS);
+    check_struct(
+        &objects,
+        "ObjectParams",
+        size_of::<energywave::gpu::object_pass::gpu_data::ObjectParams>(),
+        fields!(energywave::gpu::object_pass::gpu_data::ObjectParams: view_proj),
     );
     let billboard = parse_and_validate("billboard", shaders::BILLBOARD_PASS);
     check_struct(

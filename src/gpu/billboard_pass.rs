@@ -147,6 +147,7 @@ impl BillboardRenderer {
                         blend: None,
                         write_mask: wgpu::ColorWrites::ALL,
                     },
+                    depth: None,
                 },
             )
         });

@@ -60,6 +60,7 @@ impl BlitPass {
                     blend: None,
                     write_mask: wgpu::ColorWrites::ALL,
                 },
+                depth: None,
             },
         );
         let sampler = device.create_sampler(&wgpu::SamplerDescriptor {

@@ -96,6 +96,8 @@ pub struct RenderPipelineSpec<'a> {
     /// Values of the fragment stage's pipeline-overridable constants.
     pub constants: &'a [(&'a str, f64)],
     pub target: wgpu::ColorTargetState,
+    /// The depth test, where the pass has a depth attachment (the objects).
+    pub depth: Option<wgpu::DepthStencilState>,
 }
 
 /// A render pass's pipeline (the billboard, the grid, the blit): what every one of them builds alike.
@@ -114,7 +116,7 @@ pub fn render_pipeline(device: &wgpu::Device, spec: RenderPipelineSpec) -> wgpu:
             cull_mode: None,
             ..Default::default()
         },
-        depth_stencil: None,
+        depth_stencil: spec.depth,
         multisample: wgpu::MultisampleState::default(),
         fragment: Some(wgpu::FragmentState {
             module: spec.module,

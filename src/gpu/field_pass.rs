@@ -14,6 +14,7 @@ use super::shaders;
 use crate::field::curve::segments;
 use crate::geometry::Billboard;
 use crate::integrate::{Decay, Integrator};
+use crate::objects::clip::clip_fractions;
 use crate::scene::Scene;
 
 /// Rust mirrors of the WGSL structs of `shaders/field_pass.wgsl` and `shaders/field_common.wgsl` (keep in
@@ -49,8 +50,12 @@ pub mod gpu_data {
         pub search: u32, // 116: 1 where some curve's term reads its brightest point (the SEARCH constant)
         pub decay: u32,  // 120: 0 distance, 1 rms (integrate::Decay)
         pub stretch: f32, // 124: the rays' span in decay lengths, the rms decay's unit
+        pub clipped: u32, // 128: 1 where the scene has objects: each texel's ray ends at its clip (binding 13)
+        pub pad0: u32,
+        pub pad1: u32,
+        pub pad2: u32,
     }
-    const _: () = assert!(size_of::<FieldParams>() == 128);
+    const _: () = assert!(size_of::<FieldParams>() == 144);
 
     /// `Chunk` in `shaders/field_pass.wgsl`: one dispatch's range of samples or terms.
     #[repr(C)]
@@ -178,6 +183,9 @@ struct Packed {
     colors: Vec<[f32; 4]>,
     /// The pieces of the curves whose term reads their brightest point (`CurveSource::first_piece`).
     pieces: Vec<CurvePiece>,
+    /// The share of each texel's ray before the first surface of the scene's objects (`objects::clip`), or
+    /// nothing without objects.
+    clips: Vec<f32>,
     /// The dispatches that together integrate the texture.
     chunks: Vec<Chunk>,
 }
@@ -467,6 +475,12 @@ fn pack(scene: &Scene, billboard: &Billboard) -> Packed {
         });
     }
     packed.params.search = packed.curves.iter().any(|c| c.piece_count > 0) as u32;
+    let eye = scene.camera.eye;
+    let w = scene.billboard.resolution;
+    if let Some(clips) = clip_fractions(&scene.objects, eye, billboard, reach, w) {
+        packed.clips = clips.into_iter().map(|c| c as f32).collect();
+        packed.params.clipped = 1;
+    }
     packed.chunks = plan_chunks(&packed);
     packed
 }
@@ -732,7 +746,7 @@ pub struct FieldRenderer {
     /// The chunks, one per `chunk_stride` bytes (bound with a dynamic offset).
     chunks: wgpu::Buffer,
     chunk_stride: u64,
-    buffers: [StorageBuffer; 9],
+    buffers: [StorageBuffer; 10],
     texture: Option<(wgpu::Texture, wgpu::TextureView)>,
     /// Where simpson with the rms decay keeps a term's sums between its dispatches (B's and the color series'
     /// integrals of squares, four layers): as large as the field where a term takes several dispatches, else one
@@ -802,6 +816,7 @@ impl FieldRenderer {
                 storage(9),
                 storage(10),
                 storage(11),
+                storage(13),
                 wgpu::BindGroupLayoutEntry {
                     binding: 12,
                     visibility: wgpu::ShaderStages::COMPUTE,
@@ -843,6 +858,7 @@ impl FieldRenderer {
             "energywave.field.tints",
             "energywave.field.colors",
             "energywave.field.pieces",
+            "energywave.field.clips",
         ]
         .map(|label| StorageBuffer::new(device, label, &[]));
         let chunk_stride = (device.limits().min_storage_buffer_offset_alignment as u64)
@@ -938,7 +954,7 @@ impl FieldRenderer {
         }
         checked(device, || {
             let mut rebind = self.bind_group.is_none();
-            let data: [&[u8]; 9] = [
+            let data: [&[u8]; 10] = [
                 bytemuck::cast_slice(&packed.points),
                 bytemuck::cast_slice(&packed.lines),
                 bytemuck::cast_slice(&packed.tori),
@@ -948,6 +964,7 @@ impl FieldRenderer {
                 bytemuck::cast_slice(&packed.tints),
                 bytemuck::cast_slice(&packed.colors),
                 bytemuck::cast_slice(&packed.pieces),
+                bytemuck::cast_slice(&packed.clips),
             ];
             for (buffer, bytes) in self.buffers.iter_mut().zip(data) {
                 rebind |= buffer.write(device, queue, bytes);
@@ -1013,10 +1030,14 @@ impl FieldRenderer {
             binding: 0,
             resource: self.params.as_entire_binding(),
         }];
-        // Bindings 1 to 6, then the tints at 9, the color series at 10 and the pieces at 11.
+        // Bindings 1 to 6, then the tints at 9, the color series at 10, the pieces at 11 and the clips at 13.
         for (i, b) in self.buffers.iter().enumerate() {
             entries.push(wgpu::BindGroupEntry {
-                binding: if i < 6 { i as u32 + 1 } else { i as u32 + 3 },
+                binding: match i {
+                    0..6 => i as u32 + 1,
+                    6..9 => i as u32 + 3,
+                    _ => 13,
+                },
                 resource: b.buffer.as_entire_binding(),
             });
         }

@@ -6,6 +6,7 @@ use super::billboard_pass::{BillboardRenderer, BlendMode, billboard_params, view
 use super::context::{GpuError, checked, read_texture, texture_2d};
 use super::field_pass::FieldRenderer;
 use super::glare_pass::GlarePass;
+use super::object_pass::{DEPTH_FORMAT, ObjectPass};
 use crate::scene::Scene;
 
 /// Format of composed frames: half floats (renderable on every backend, unlike Rgba32Float on GL), 11 bits of
@@ -19,6 +20,8 @@ pub struct FrameTargets {
     pub background_view: wgpu::TextureView,
     pub color: wgpu::Texture,
     pub color_view: wgpu::TextureView,
+    /// The objects' depth.
+    pub depth_view: wgpu::TextureView,
 }
 
 impl FrameTargets {
@@ -38,8 +41,16 @@ impl FrameTargets {
             FRAME_FORMAT,
             U::RENDER_ATTACHMENT | U::TEXTURE_BINDING | U::COPY_DST | U::COPY_SRC,
         );
+        let depth = texture_2d(
+            device,
+            "energywave.frame.depth",
+            size,
+            DEPTH_FORMAT,
+            U::RENDER_ATTACHMENT,
+        );
         Self {
             size,
+            depth_view: depth.create_view(&Default::default()),
             background_view: background.create_view(&Default::default()),
             color_view: color.create_view(&Default::default()),
             background,
@@ -53,6 +64,10 @@ pub struct SceneRenderer {
     field: FieldRenderer,
     billboard: BillboardRenderer,
     glare: GlarePass,
+    objects: ObjectPass,
+    /// The objects hide the glow but are not drawn: the glow alone with them as a holdout, to layer over a
+    /// render of the same scene made elsewhere.
+    holdout: bool,
 }
 
 impl SceneRenderer {
@@ -61,7 +76,14 @@ impl SceneRenderer {
             field: FieldRenderer::new(device),
             billboard: BillboardRenderer::new(device, FRAME_FORMAT),
             glare: GlarePass::new(device),
+            objects: ObjectPass::new(device),
+            holdout: false,
         }
+    }
+
+    /// Whether the objects are left out of the picture while still hiding the glow (`holdout`).
+    pub fn set_holdout(&mut self, holdout: bool) {
+        self.holdout = holdout;
     }
 
     /// The field pass, for inspection (dispatch count, texture) and for the brightness alone.
@@ -162,6 +184,32 @@ impl SceneRenderer {
                     multiview_mask: None,
                 });
                 behind(&mut pass, view_proj);
+            }
+            if !self.holdout && self.objects.prepare(device, scene) {
+                let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("energywave.frame.objects"),
+                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                        view: &targets.background_view,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Load,
+                            store: wgpu::StoreOp::Store,
+                        },
+                    })],
+                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                        view: &targets.depth_view,
+                        depth_ops: Some(wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(1.0),
+                            store: wgpu::StoreOp::Discard,
+                        }),
+                        stencil_ops: None,
+                    }),
+                    timestamp_writes: None,
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                });
+                self.objects.draw(queue, &mut pass, view_proj);
             }
             // The billboard blends over a copy of what lies behind it.
             encoder.copy_texture_to_texture(

@@ -102,6 +102,7 @@ impl GridPass {
                     }),
                     write_mask: wgpu::ColorWrites::ALL,
                 },
+                depth: None,
             },
         );
         let vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {

@@ -43,6 +43,11 @@ impl HeadlessRenderer {
         self.renderer.field_mut().set_specialise(mode);
     }
 
+    /// Leaves the objects out of the frames while they still hide the glow (a holdout).
+    pub fn set_holdout(&mut self, holdout: bool) {
+        self.renderer.set_holdout(holdout);
+    }
+
     /// Averages up to `frames` jittered renders of an unchanged scene, one more each call
     /// (`FieldRenderer::set_average_frames`); 1, the default, renders each scene once.
     pub fn set_average_frames(&mut self, frames: u32) {
@@ -114,7 +119,7 @@ impl HeadlessRenderer {
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("energywave.headless.encoder"),
         });
-        // Nothing lies behind the billboard here but the background color (the viewer draws more).
+        // Nothing lies behind the billboard here but the background and the objects (the viewer draws more).
         self.renderer.record(
             device,
             queue,

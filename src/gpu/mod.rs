@@ -11,6 +11,7 @@ mod frame_average;
 pub mod glare_pass;
 pub mod grid_pass;
 mod headless;
+pub mod object_pass;
 pub mod shaders;
 mod upsample;
 

@@ -54,6 +54,8 @@ pub const AVERAGE_PASS: &str = include_str!("../../shaders/average.wgsl");
 
 /// The viewer's ground grid.
 pub const GRID_PASS: &str = include_str!("../../shaders/grid.wgsl");
+/// The scene's objects, lit at their vertices.
+pub const OBJECT_PASS: &str = include_str!("../../shaders/objects.wgsl");
 /// The viewer's copy of its offscreen viewport into egui's frame.
 pub const BLIT_PASS: &str = include_str!("../../shaders/blit.wgsl");
 
@@ -179,6 +181,7 @@ pub fn all_modules() -> Vec<(&'static str, String)> {
         ("average.wgsl", AVERAGE_PASS.to_string()),
         ("upsample.wgsl", UPSAMPLE_PASS.to_string()),
         ("grid.wgsl", GRID_PASS.to_string()),
+        ("objects.wgsl", OBJECT_PASS.to_string()),
         ("blit.wgsl", BLIT_PASS.to_string()),
     ]
 }

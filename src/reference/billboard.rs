@@ -7,6 +7,7 @@
 use rayon::prelude::*;
 
 use super::field_pass::BrightnessTexture;
+use super::objects::ObjectImage;
 use crate::geometry::Billboard;
 use crate::scene::{Blend, Scene};
 
@@ -80,6 +81,17 @@ pub fn sample_bilinear_by(w: u32, u: f64, v: f64, texel: impl Fn(usize) -> f64) 
     top * (1.0 - fy) + bottom * fy
 }
 
+/// What lies behind the glow in a composed frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Backdrop {
+    /// The background color and the objects, opaque.
+    Opaque,
+    /// Transparent, the objects opaque over it.
+    Transparent,
+    /// Transparent, and the objects left out though they still hide the glow (a holdout).
+    Holdout,
+}
+
 /// The frame the camera sees, RGBA, rows from the top: the background color everywhere, and over the
 /// billboard the blend of B and the colored sum G = sum B_i Ce_i (both sampled bilinearly, as the GPU's pass
 /// does) by the scene's blend, alpha 1. With `transparent`, the background is transparent and the billboard
@@ -92,11 +104,34 @@ pub fn compose_frame(
     height: u32,
     transparent: bool,
 ) -> Vec<[f64; 4]> {
+    let backdrop = if transparent {
+        Backdrop::Transparent
+    } else {
+        Backdrop::Opaque
+    };
+    compose_frame_over(scene, billboard, texture, (width, height), backdrop)
+}
+
+/// `compose_frame` over `backdrop`: the scene's objects (`super::objects`) drawn behind the glow as the
+/// background is, each pixel's lit color where its ray meets one (the glow itself already ends there, the field
+/// pass clips each texel's ray), then the billboard blended over that as over the background color.
+pub fn compose_frame_over(
+    scene: &Scene,
+    billboard: &Billboard,
+    texture: &BrightnessTexture,
+    (width, height): (u32, u32),
+    backdrop: Backdrop,
+) -> Vec<[f64; 4]> {
+    let transparent = backdrop != Backdrop::Opaque;
     let [r, g, b] = scene.colors.background;
     let clear = if transparent {
         [0.0; 4]
     } else {
         [r, g, b, 1.0]
+    };
+    let objects = match backdrop {
+        Backdrop::Holdout => None,
+        _ => ObjectImage::of(scene),
     };
     let glared = scene.glare.map(|g| super::glare::apply(texture, &g));
     let texture = glared.as_ref().unwrap_or(texture);
@@ -109,6 +144,14 @@ pub fn compose_frame(
                 let dir = scene
                     .camera
                     .pixel_ray(x as f64 + 0.5, y as f64 + 0.5, width, height);
+                let under = match objects
+                    .as_ref()
+                    .and_then(|o| o.color(scene.camera.eye, dir))
+                {
+                    Some([r, g, b]) => [r, g, b, 1.0],
+                    None => clear,
+                };
+                *out = under;
                 if let Some((u, v)) = billboard.hit(scene.camera.eye, dir) {
                     let b = sample_bilinear(&texture.values, texture.resolution, u, v);
                     let tint: [f64; 3] = std::array::from_fn(|c| {
@@ -116,9 +159,16 @@ pub fn compose_frame(
                     });
                     let g = glow(b, tint, scene.colors.energy_color());
                     *out = if transparent {
-                        blend_transparent_glow(b, g)
+                        // Premultiplied "over" what lies behind (transparent, or an opaque object).
+                        let [r, g, bl, a] = blend_transparent_glow(b, g);
+                        [
+                            r + (1.0 - a) * under[0],
+                            g + (1.0 - a) * under[1],
+                            bl + (1.0 - a) * under[2],
+                            a + (1.0 - a) * under[3],
+                        ]
                     } else {
-                        let cb = scene.colors.background;
+                        let cb = [under[0], under[1], under[2]];
                         let [r, g, b] = match scene.colors.blend {
                             Blend::Papers => blend_glow(b, g, cb),
                             Blend::Over => blend_over_glow(b, g, cb),

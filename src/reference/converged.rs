@@ -9,6 +9,7 @@ use serde::Serialize;
 
 use super::simpson::{simpson, simpson_refined};
 use crate::integrate::{Decay, zeta};
+use crate::objects::first_hit;
 use crate::scene::Scene;
 
 /// The converged reference: f64 Simpson with this many divisions, refined (`simpson::simpson_refined`) wherever
@@ -42,8 +43,24 @@ pub fn converged_reference(scene: &Scene, stride: u32) -> (Vec<f64>, ReferenceSt
             let i = &s.integration;
             let per_depth = (p - s.camera.eye) / plane;
             let span = reach.stretch;
-            let at = |t: f64| p + per_depth * (t * span * i.decay_length);
-            let zeta = |t: f64| zeta(t * span, i.alpha, i.beta);
+            // Up to the first surface the ray meets past the billboard (none before it: hidden), at depth
+            // t = keep, the integrals over [0, keep] written over [0, 1] by t = keep u.
+            let keep = match first_hit(
+                &s.objects,
+                s.camera.eye,
+                p - s.camera.eye,
+                0.0,
+                f64::INFINITY,
+            ) {
+                None => 1.0,
+                Some((_, tau)) => ((tau - 1.0) * plane / (span * i.decay_length)).clamp(0.0, 1.0),
+            };
+            if keep == 0.0 {
+                return (0.0, 0);
+            }
+            let at = |t: f64| p + per_depth * (keep * t * span * i.decay_length);
+            let zeta = |t: f64| zeta(keep * t * span, i.alpha, i.beta);
+            let span = keep * span;
             match i.decay {
                 Decay::Distance => simpson_refined(
                     |t| field.psi(at(t), i.epsilon) * zeta(t) * span,

@@ -10,6 +10,7 @@ use super::{adaptive_curves, adaptive_smooth, simpson};
 use crate::field::{Sources, wseries};
 use crate::geometry::{Billboard, Reach, ray_end};
 use crate::integrate::{Decay, Integration, Integrator};
+use crate::objects::clip::clip_fraction;
 use crate::scene::Scene;
 
 /// The brightness B of the segment from `s` to `e` (3.30): the integral over [0, 1] of
@@ -135,6 +136,9 @@ pub fn render_brightness(scene: &Scene, billboard: &Billboard) -> BrightnessText
         .for_each(|(j, (row, tint_row))| {
             for (i, (out, tint_out)) in row.iter_mut().zip(tint_row).enumerate() {
                 let ray = texel_ray(scene, billboard, reach, i as u32, j as u32);
+                if ray.hidden {
+                    continue;
+                }
                 *out = brightness(&scene.sources, &ray.settings, ray.s, ray.e, ray.xi);
                 *tint_out = tint_of(scene, &tints, &ray.settings, (ray.s, ray.e), ray.xi);
             }
@@ -149,6 +153,9 @@ pub fn render_brightness(scene: &Scene, billboard: &Billboard) -> BrightnessText
 /// B of a single texel, for tests that probe one ray.
 pub fn texel_brightness(scene: &Scene, billboard: &Billboard, i: u32, j: u32) -> f64 {
     let ray = texel_ray(scene, billboard, scene.ray_reach(billboard), i, j);
+    if ray.hidden {
+        return 0.0;
+    }
     brightness(&scene.sources, &ray.settings, ray.s, ray.e, ray.xi)
 }
 
@@ -158,9 +165,12 @@ struct TexelRay {
     e: DVec3,
     xi: f64,
     settings: Integration,
+    /// A surface lies between the eye and the billboard: the texel shows no glow.
+    hidden: bool,
 }
 
-/// The ray of texel `(i, j)` with the frame's `reach` already known.
+/// The ray of texel `(i, j)` with the frame's `reach` already known, up to the first surface of the scene's
+/// objects (`objects::clip`): the shortened ray with the decay mapped onto it.
 fn texel_ray(scene: &Scene, billboard: &Billboard, reach: Reach, i: u32, j: u32) -> TexelRay {
     let w = scene.billboard.resolution;
     let s: DVec3 = billboard.texel_center(i, j, w);
@@ -170,5 +180,21 @@ fn texel_ray(scene: &Scene, billboard: &Billboard, reach: Reach, i: u32, j: u32)
         .jitter
         .map_or(0.5, |seed| jitter_offset(seed, i, j, w));
     let settings = scene.integration.on_ray(reach.stretch);
-    TexelRay { s, e, xi, settings }
+    let c = clip_fraction(&scene.objects, scene.camera.eye, s, reach.nu);
+    if c < 1.0 && c > 0.0 {
+        return TexelRay {
+            s,
+            e: s + (e - s) * c,
+            xi,
+            settings: settings.on_ray(c),
+            hidden: false,
+        };
+    }
+    TexelRay {
+        s,
+        e,
+        xi,
+        settings,
+        hidden: c <= 0.0,
+    }
 }

@@ -29,7 +29,8 @@ pub mod billboard;
 pub mod converged;
 pub mod field_pass;
 pub mod glare;
+pub mod objects;
 pub mod simpson;
 
-pub use billboard::compose_frame;
+pub use billboard::{Backdrop, compose_frame, compose_frame_over};
 pub use field_pass::{BrightnessTexture, brightness, render_brightness, texel_brightness};

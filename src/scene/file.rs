@@ -31,6 +31,8 @@ pub(crate) struct SceneFile {
     pub tori: Vec<TorusFile>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub curves: Vec<CurveFile>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub objects: Vec<ObjectFile>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub animation: Option<AnimationFile>,
 }
@@ -160,6 +162,34 @@ pub(crate) struct CurveFile {
     pub color_series: Option<Vec<[f64; 3]>>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub w_form: Option<String>,
+}
+
+/// `[[objects]]`: a sphere, box, plane or glTF mesh; which keys it takes depends on its shape (checked in
+/// `scene::check_objects`).
+#[derive(Debug, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct ObjectFile {
+    pub shape: String,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub center: Option<[f64; 3]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub radius: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub size: Option<ValueFile>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rotation: Option<[f64; 3]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub point: Option<[f64; 3]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub normal: Option<[f64; 3]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub path: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub translation: Option<[f64; 3]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scale: Option<ValueFile>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub color: Option<[f64; 3]>,
 }
 
 /// `[animation]`: the timeline and the keyed parameters.

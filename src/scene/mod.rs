@@ -10,6 +10,9 @@ mod file;
 pub mod format;
 mod keyed;
 pub mod limits;
+mod objects_file;
+
+pub use objects_file::DEFAULT_ALBEDO;
 
 use std::path::{Path, PathBuf};
 
@@ -22,6 +25,7 @@ use crate::animation::Animation;
 use crate::field::{Curve, Line, Look, Point, Sources, Torus, WForm};
 use crate::geometry::{self, Billboard, Camera};
 use crate::integrate::{Decay, Integration, Integrator};
+use crate::objects::Object;
 
 /// The scene used when none is given, embedded in the binary.
 pub const DEFAULT_SCENE_TOML: &str = include_str!("../../assets/scenes/default.toml");
@@ -158,6 +162,8 @@ pub struct Scene {
     /// The fog glow over the glow, or none (the papers' look).
     pub glare: Option<Glare>,
     pub sources: Sources,
+    /// What stands around the effect: it hides the glow behind it and is lit by it (`crate::objects`).
+    pub objects: Vec<Object>,
     /// Time: `None` for a still scene (see `crate::animation`).
     pub animation: Option<Animation>,
 }
@@ -264,7 +270,8 @@ impl Scene {
             }
         })?;
         let mut problems = Vec::new();
-        let mut scene = validate(&file, &locator, &mut problems);
+        let base = path.parent().unwrap_or(Path::new(""));
+        let mut scene = validate(&file, &locator, base, &mut problems);
         scene.animation = animation_file::validate(&file, &scene, &locator, &mut problems);
         if problems.is_empty() {
             Ok(scene)
@@ -357,6 +364,7 @@ impl Scene {
                     w_form: (s.w_form != WForm::default()).then(|| s.w_form.name().to_owned()),
                 })
                 .collect(),
+            objects: objects_file::write(&self.objects),
             animation: None,
         };
         animation_file::write(self, &mut file);
@@ -527,7 +535,12 @@ impl Checker<'_, '_> {
     }
 }
 
-fn validate(file: &SceneFile, locator: &Locator<'_>, problems: &mut Vec<Problem>) -> Scene {
+fn validate(
+    file: &SceneFile,
+    locator: &Locator<'_>,
+    base: &Path,
+    problems: &mut Vec<Problem>,
+) -> Scene {
     let mut c = Checker { locator, problems };
     let camera = check_camera(&mut c, file);
     let billboard = check_billboard(&mut c, file, camera.eye);
@@ -559,6 +572,7 @@ fn validate(file: &SceneFile, locator: &Locator<'_>, problems: &mut Vec<Problem>
         colors,
         glare: check_glare(&mut c, file),
         sources,
+        objects: objects_file::check_objects(&mut c, file, base),
         animation: None,
     }
 }

@@ -254,6 +254,7 @@ fn same_effect(a: &Scene, b: &Scene) -> bool {
         colors,
         glare,
         sources,
+        objects,
         animation,
     } = a;
     *billboard == b.billboard
@@ -261,6 +262,7 @@ fn same_effect(a: &Scene, b: &Scene) -> bool {
         && *colors == b.colors
         && *glare == b.glare
         && *sources == b.sources
+        && *objects == b.objects
         && *animation == b.animation
 }
 

@@ -1,0 +1,182 @@
+//! The scene's objects on the GPU: their triangles with the colors `objects::lighting` lit their vertices with,
+//! drawn with depth into what lies behind the billboard (`shaders/objects.wgsl`). Lit again only when the
+//! objects, the sources or their colors change: orbiting draws the same buffers.
+
+use wgpu::util::DeviceExt;
+
+use super::context::{RenderPipelineSpec, pass_layouts, render_pipeline, uniform_buffer};
+use super::frame::FRAME_FORMAT;
+use super::shaders::OBJECT_PASS;
+use crate::objects::{Lit, LitKey, lit};
+use crate::scene::Scene;
+
+/// The depth buffer's format.
+pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+/// Rust mirrors of `shaders/objects.wgsl` (keep in sync; `tests/gpu_layout.rs` checks them).
+pub mod gpu_data {
+    use bytemuck::{Pod, Zeroable};
+
+    /// `ObjectParams` in `shaders/objects.wgsl`.
+    #[repr(C)]
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+    pub struct ObjectParams {
+        pub view_proj: [[f32; 4]; 4], // 0
+    }
+    const _: () = assert!(size_of::<ObjectParams>() == 64);
+
+    /// One vertex (attributes 0 and 1 of `vs_main`): world position and lit color.
+    #[repr(C)]
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+    pub struct ObjectVertex {
+        pub position: [f32; 3], // 0
+        pub color: [f32; 3],    // 12
+    }
+    const _: () = assert!(size_of::<ObjectVertex>() == 24);
+}
+
+use gpu_data::{ObjectParams, ObjectVertex};
+
+/// The objects' pipeline and the buffers of the last scene's lit triangles.
+pub struct ObjectPass {
+    pipeline: wgpu::RenderPipeline,
+    params: wgpu::Buffer,
+    bind_group: wgpu::BindGroup,
+    vertices: Option<wgpu::Buffer>,
+    indices: Option<wgpu::Buffer>,
+    count: u32,
+    /// What the buffers were lit from.
+    key: Option<LitKey>,
+}
+
+impl ObjectPass {
+    pub fn new(device: &wgpu::Device) -> Self {
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("energywave.objects.shader"),
+            source: wgpu::ShaderSource::Wgsl(OBJECT_PASS.into()),
+        });
+        let (layout, pipeline_layout) = pass_layouts(
+            device,
+            "objects",
+            &[wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::VERTEX,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: false,
+                    min_binding_size: wgpu::BufferSize::new(size_of::<ObjectParams>() as u64),
+                },
+                count: None,
+            }],
+        );
+        let params = uniform_buffer::<ObjectParams>(device, "energywave.objects.params");
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("energywave.objects.bind_group"),
+            layout: &layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: params.as_entire_binding(),
+            }],
+        });
+        let pipeline = render_pipeline(
+            device,
+            RenderPipelineSpec {
+                name: "objects",
+                module: &module,
+                layout: &pipeline_layout,
+                vertex_buffers: &[Some(wgpu::VertexBufferLayout {
+                    array_stride: size_of::<ObjectVertex>() as u64,
+                    step_mode: wgpu::VertexStepMode::Vertex,
+                    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3],
+                })],
+                topology: wgpu::PrimitiveTopology::TriangleList,
+                fragment_entry: "fs_main",
+                constants: &[],
+                target: wgpu::ColorTargetState {
+                    format: FRAME_FORMAT,
+                    blend: None,
+                    write_mask: wgpu::ColorWrites::ALL,
+                },
+                depth: Some(wgpu::DepthStencilState {
+                    format: DEPTH_FORMAT,
+                    depth_write_enabled: Some(true),
+                    depth_compare: Some(wgpu::CompareFunction::Less),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+            },
+        );
+        Self {
+            pipeline,
+            params,
+            bind_group,
+            vertices: None,
+            indices: None,
+            count: 0,
+            key: None,
+        }
+    }
+
+    /// Lights and uploads `scene`'s objects where they, the sources or their colors changed since the last
+    /// call. Returns whether there is anything to draw.
+    pub fn prepare(&mut self, device: &wgpu::Device, scene: &Scene) -> bool {
+        if scene.objects.is_empty() {
+            self.count = 0;
+            self.key = None;
+            return false;
+        }
+        if self.key.as_ref().is_some_and(|k| k.matches(scene)) {
+            return self.count > 0;
+        }
+        let Lit { surface, colors } = lit(scene);
+        let vertices: Vec<ObjectVertex> = (surface.positions.iter().zip(&colors))
+            .map(|(p, c)| ObjectVertex {
+                position: p.as_vec3().to_array(),
+                color: c.map(|x| x as f32),
+            })
+            .collect();
+        self.vertices = Some(
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("energywave.objects.vertices"),
+                contents: bytemuck::cast_slice(&vertices),
+                usage: wgpu::BufferUsages::VERTEX,
+            }),
+        );
+        self.indices = Some(
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("energywave.objects.indices"),
+                contents: bytemuck::cast_slice(&surface.indices),
+                usage: wgpu::BufferUsages::INDEX,
+            }),
+        );
+        self.count = surface.indices.len() as u32;
+        self.key = Some(LitKey::of(scene));
+        self.count > 0
+    }
+
+    /// Draws the prepared triangles into `pass` (which has a `DEPTH_FORMAT` depth attachment) with the
+    /// projection `view_proj` (written before the submit that runs the pass).
+    pub fn draw(
+        &self,
+        queue: &wgpu::Queue,
+        pass: &mut wgpu::RenderPass<'_>,
+        view_proj: [[f32; 4]; 4],
+    ) {
+        let (Some(vertices), Some(indices)) = (&self.vertices, &self.indices) else {
+            return;
+        };
+        if self.count == 0 {
+            return;
+        }
+        queue.write_buffer(
+            &self.params,
+            0,
+            bytemuck::bytes_of(&ObjectParams { view_proj }),
+        );
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &self.bind_group, &[]);
+        pass.set_vertex_buffer(0, vertices.slice(..));
+        pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
+        pass.draw_indexed(0..self.count, 0, 0..1);
+    }
+}

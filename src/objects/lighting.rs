@@ -1,0 +1,130 @@
+//! How the wave lights the objects: every source is a light at the point of it that its term reads from the
+//! surface (a point's position, a line's or a ring's nearest point, a curve's nearest or brightest point), of
+//! the source's color, whose strength there is the source's own term of psi: `psi_i(X) = b_i W / max(eps, d)`.
+//!
+//! Why that falloff: the method's field is what the artist sees glow; lighting with it makes a surface exactly
+//! as bright as the glow's energy at it (twice the coefficient, twice the light; the same eps keeps a surface
+//! through a source finite), and a long source lights like the line light it is (1 / d) rather than a point
+//! light (1 / d^2) squeezed onto its nearest point. Lambert's cosine with the direction to that point, a hard
+//! shadow where another object crosses the segment to it, and a small ambient term so that unlit sides keep
+//! their shape:
+//!
+//! `L(X) = albedo * (AMBIENT + sum_i Ce_i psi_i(X) max(0, n . l_i) [X sees its point of source i])`.
+//!
+//! Evaluated in f64 at the vertices of the objects' triangles (`tessellate`) and interpolated across them.
+
+use glam::DVec3;
+use rayon::prelude::*;
+
+use super::tessellate::Surface;
+use super::{Object, blocked};
+use crate::field::{Sources, brightest, curve};
+use crate::scene::Colors;
+
+/// The light every surface gets whatever the sources: a share of its albedo.
+pub const AMBIENT: f64 = 0.06;
+
+/// A source seen from a surface point: where its light comes from, its strength there (the source's term of
+/// psi) and its color.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightSample {
+    pub from: DVec3,
+    pub strength: f64,
+    pub color: [f64; 3],
+}
+
+/// Every source as a light, prepared once for many surface points.
+pub struct Lights<'a> {
+    sources: &'a Sources,
+    colors: &'a Colors,
+    pieces: Vec<Vec<brightest::Piece>>,
+    epsilon: f64,
+}
+
+impl<'a> Lights<'a> {
+    pub fn new(sources: &'a Sources, colors: &'a Colors, epsilon: f64) -> Self {
+        Lights {
+            sources,
+            colors,
+            pieces: sources.curves.iter().map(|c| c.pieces()).collect(),
+            epsilon,
+        }
+    }
+
+    /// Every source's light at `x`, in the order of the field's terms.
+    pub fn at(&self, x: DVec3) -> impl Iterator<Item = LightSample> + '_ {
+        let s = self.sources;
+        let eps = self.epsilon;
+        let c = self.colors;
+        let points = s.points.iter().map(move |p| LightSample {
+            from: p.position,
+            strength: p.field(x, eps),
+            color: c.color_of(&p.look),
+        });
+        let lines = s.lines.iter().map(move |l| LightSample {
+            from: l.point + l.direction * (x - l.point).dot(l.direction),
+            strength: l.field(x, eps),
+            color: c.color_of(&l.look),
+        });
+        let tori = s.tori.iter().map(move |t| {
+            let q = x - t.center;
+            let across = q - t.axis * q.dot(t.axis);
+            // On the axis every point of the ring is nearest: any will do.
+            let radial = across
+                .try_normalize()
+                .unwrap_or_else(|| t.axis.any_orthonormal_vector());
+            LightSample {
+                from: t.center + radial * t.major_radius,
+                strength: t.field(x, eps),
+                color: c.color_of(&t.look),
+            }
+        });
+        let curves = s.curves.iter().zip(&self.pieces).map(move |(k, pieces)| {
+            let seen = k.point_seen(pieces, x, eps);
+            LightSample {
+                from: curve::chain_frame(&k.control_points, seen.t).0,
+                strength: k.term_at(seen, eps),
+                color: c.color_along(k, seen.t),
+            }
+        });
+        points.chain(lines).chain(tori).chain(curves)
+    }
+
+    /// The light reaching the surface point `x` of normal `n` (unit), shadows by `objects`, before the albedo.
+    pub fn irradiance(&self, objects: &[Object], x: DVec3, n: DVec3) -> [f64; 3] {
+        let mut e = [AMBIENT; 3];
+        for light in self.at(x) {
+            let to = light.from - x;
+            let d = to.length();
+            // At the source itself the light comes from every side: full strength.
+            let cosine = if d > 0.0 { n.dot(to / d).max(0.0) } else { 1.0 };
+            if cosine == 0.0 || light.strength == 0.0 || blocked(objects, x, light.from) {
+                continue;
+            }
+            for (c, e) in e.iter_mut().enumerate() {
+                *e += light.color[c] * light.strength * cosine;
+            }
+        }
+        e
+    }
+}
+
+/// The lit color of every vertex of `surface`: the albedo of its object times its irradiance (unclamped: an
+/// HDR export keeps it, the display clamps it).
+pub fn light_surface(
+    surface: &Surface,
+    objects: &[Object],
+    sources: &Sources,
+    colors: &Colors,
+    epsilon: f64,
+) -> Vec<[f64; 3]> {
+    let lights = Lights::new(sources, colors, epsilon);
+    (0..surface.positions.len())
+        .into_par_iter()
+        .map(|k| {
+            let albedo = objects[surface.object[k] as usize].color;
+            let e = lights.irradiance(objects, surface.positions[k], surface.normals[k]);
+            [albedo[0] * e[0], albedo[1] * e[1], albedo[2] * e[2]]
+        })
+        .collect()
+}

@@ -1,0 +1,277 @@
+//! Objects as the triangles the GPU draws and the CPU twin ray-casts: positions, normals (the lit side) and
+//! indices, in world space.
+
+use glam::DVec3;
+
+use super::{Object, Shape, plane_axes, rotation_matrix};
+
+/// Triangles sharing vertices: what lighting evaluates (once a vertex) and what is drawn.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Surface {
+    pub positions: Vec<DVec3>,
+    pub normals: Vec<DVec3>,
+    /// The object each vertex belongs to (its index in the scene), for its albedo.
+    pub object: Vec<u32>,
+    pub indices: Vec<u32>,
+}
+
+/// Quads a side of a sphere's longitude and latitude: its outline within 0.1 % of its radius (1 - cos(pi / 64)).
+const SPHERE_SLICES: u32 = 64;
+const SPHERE_STACKS: u32 = 32;
+/// Cells along each edge of a box's face and of a finite plane: lighting is read at their corners.
+const BOX_CELLS: u32 = 16;
+const PLANE_CELLS: u32 = 96;
+/// An infinite plane is drawn as a disc of rings around the effect's foot on it, from `INNER` to `OUTER` times
+/// the effect's size, spaced geometrically (fine near the effect, where the light changes, coarse far away).
+const PLANE_RINGS: u32 = 96;
+const PLANE_SEGMENTS: u32 = 256;
+const INNER: f64 = 0.02;
+const OUTER: f64 = 500.0;
+
+impl Surface {
+    fn vertex(&mut self, p: DVec3, n: DVec3, object: u32) -> u32 {
+        self.positions.push(p);
+        self.normals.push(n);
+        self.object.push(object);
+        self.positions.len() as u32 - 1
+    }
+
+    /// A grid of `(nu + 1) x (nv + 1)` vertices `at(i, j)` with normals `normal(i, j)`, two triangles a cell,
+    /// wound counter-clockwise seen from the normal's side.
+    fn grid(
+        &mut self,
+        (nu, nv): (u32, u32),
+        object: u32,
+        at: impl Fn(u32, u32) -> DVec3,
+        normal: impl Fn(u32, u32) -> DVec3,
+    ) {
+        let base = self.positions.len() as u32;
+        for j in 0..=nv {
+            for i in 0..=nu {
+                self.vertex(at(i, j), normal(i, j), object);
+            }
+        }
+        let k = |i: u32, j: u32| base + j * (nu + 1) + i;
+        for j in 0..nv {
+            for i in 0..nu {
+                self.indices.extend([
+                    k(i, j),
+                    k(i + 1, j),
+                    k(i + 1, j + 1),
+                    k(i, j),
+                    k(i + 1, j + 1),
+                    k(i, j + 1),
+                ]);
+            }
+        }
+    }
+
+    /// The triangles of every object; `focus` and `extent` place and size an infinite plane's disc (the effect's
+    /// center and size).
+    pub fn of(objects: &[Object], focus: DVec3, extent: f64) -> Surface {
+        let mut s = Surface::default();
+        for (k, o) in objects.iter().enumerate() {
+            s.add(o, k as u32, focus, extent);
+        }
+        s
+    }
+
+    fn add(&mut self, object: &Object, k: u32, focus: DVec3, extent: f64) {
+        use std::f64::consts::{PI, TAU};
+        match &object.shape {
+            Shape::Sphere { center, radius } => {
+                let dir = |i: u32, j: u32| {
+                    let phi = TAU * i as f64 / SPHERE_SLICES as f64;
+                    let theta = PI * j as f64 / SPHERE_STACKS as f64;
+                    // From the north pole (+y) down, counter-clockwise seen from outside.
+                    DVec3::new(
+                        theta.sin() * phi.cos(),
+                        theta.cos(),
+                        theta.sin() * phi.sin(),
+                    )
+                };
+                self.grid(
+                    (SPHERE_SLICES, SPHERE_STACKS),
+                    k,
+                    |i, j| *center + dir(i, j) * *radius,
+                    dir,
+                );
+            }
+            Shape::Box {
+                center,
+                size,
+                rotation,
+            } => {
+                let r = rotation_matrix(*rotation);
+                let half = *size * 0.5;
+                // Each face: its normal axis and sign, and the two axes spanning it (u x v along the normal).
+                for (axis, sign) in [
+                    (0, 1.0),
+                    (0, -1.0),
+                    (1, 1.0),
+                    (1, -1.0),
+                    (2, 1.0),
+                    (2, -1.0),
+                ] {
+                    let n = DVec3::AXES[axis] * sign;
+                    let u = DVec3::AXES[(axis + 1) % 3] * sign;
+                    let v = n.cross(u);
+                    let (hu, hv) = (u.abs().dot(half), v.abs().dot(half));
+                    let at = |i: u32, j: u32| {
+                        let a = (i as f64 / BOX_CELLS as f64 * 2.0 - 1.0) * hu;
+                        let b = (j as f64 / BOX_CELLS as f64 * 2.0 - 1.0) * hv;
+                        *center + r * (n * n.abs().dot(half) + u * a + v * b)
+                    };
+                    let world_n = r * n;
+                    self.grid((BOX_CELLS, BOX_CELLS), k, at, |_, _| world_n);
+                }
+            }
+            Shape::Plane {
+                point,
+                normal,
+                size,
+            } => {
+                let (u, v) = plane_axes(*normal);
+                match size {
+                    Some(size) => {
+                        let at = |i: u32, j: u32| {
+                            let a = (i as f64 / PLANE_CELLS as f64 - 0.5) * size;
+                            let b = (j as f64 / PLANE_CELLS as f64 - 0.5) * size;
+                            *point + u * a + v * b
+                        };
+                        self.grid((PLANE_CELLS, PLANE_CELLS), k, at, |_, _| *normal);
+                    }
+                    None => {
+                        // The effect's foot on the plane, and rings around it.
+                        let foot = focus - *normal * normal.dot(focus - *point);
+                        let extent = extent.max(1e-3);
+                        let radius = |j: u32| {
+                            if j == 0 {
+                                0.0
+                            } else {
+                                let x = (j - 1) as f64 / (PLANE_RINGS - 1) as f64;
+                                extent * INNER * (OUTER / INNER).powf(x)
+                            }
+                        };
+                        let at = |i: u32, j: u32| {
+                            let a = TAU * i as f64 / PLANE_SEGMENTS as f64;
+                            foot + (u * a.cos() + v * a.sin()) * radius(j)
+                        };
+                        // Rings outward: u x v is the normal, so (i, j) runs counter-clockwise seen from it
+                        // with the grid's winding reversed; swap to keep the normal's side the front.
+                        let base = self.positions.len() as u32;
+                        self.grid((PLANE_SEGMENTS, PLANE_RINGS), k, at, |_, _| *normal);
+                        flip(&mut self.indices, base);
+                    }
+                }
+            }
+            Shape::Mesh(m) => {
+                let (_, forward) = m.inverse();
+                let normal_matrix = forward.inverse().transpose();
+                for t in &m.data.triangles {
+                    let p = t.map(|p| forward * p + m.translation);
+                    let n = (normal_matrix * (t[1] - t[0]).cross(t[2] - t[0])).normalize_or_zero();
+                    let i = p.map(|p| self.vertex(p, n, k));
+                    self.indices.extend(i);
+                }
+            }
+        }
+    }
+}
+
+/// Reverses the winding of every triangle whose vertices start at `base`.
+fn flip(indices: &mut [u32], base: u32) {
+    for t in indices.chunks_exact_mut(3) {
+        if t[0] >= base {
+            t.swap(1, 2);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn objects() -> Vec<Object> {
+        let color = [0.5; 3];
+        vec![
+            Object {
+                shape: Shape::Sphere {
+                    center: DVec3::new(1.0, 2.0, 3.0),
+                    radius: 0.5,
+                },
+                color,
+            },
+            Object {
+                shape: Shape::Box {
+                    center: DVec3::ZERO,
+                    size: DVec3::new(1.0, 2.0, 3.0),
+                    rotation: DVec3::new(10.0, 20.0, 30.0),
+                },
+                color,
+            },
+            Object {
+                shape: Shape::Plane {
+                    point: DVec3::new(0.0, -1.0, 0.0),
+                    normal: DVec3::Y,
+                    size: None,
+                },
+                color,
+            },
+            Object {
+                shape: Shape::Plane {
+                    point: DVec3::new(0.0, -1.0, 0.0),
+                    normal: DVec3::new(0.0, 0.6, 0.8),
+                    size: Some(4.0),
+                },
+                color,
+            },
+        ]
+    }
+
+    #[test]
+    fn every_vertex_lies_on_its_shape_and_every_triangle_faces_its_normal() {
+        let objects = objects();
+        let s = Surface::of(&objects, DVec3::ZERO, 2.0);
+        for t in s.indices.chunks_exact(3) {
+            let p: [DVec3; 3] = std::array::from_fn(|i| s.positions[t[i] as usize]);
+            let face = (p[1] - p[0]).cross(p[2] - p[0]);
+            if face.length() < 1e-12 {
+                continue; // the sphere's poles
+            }
+            let n = s.normals[t[0] as usize] + s.normals[t[1] as usize] + s.normals[t[2] as usize];
+            assert!(
+                face.dot(n) > 0.0,
+                "a triangle of object {} faces away",
+                s.object[t[0] as usize]
+            );
+        }
+        for (k, p) in s.positions.iter().enumerate() {
+            let o = &objects[s.object[k] as usize];
+            let n = s.normals[k];
+            // A ray from just outside along -n meets the surface at the vertex (a box's or a square's a hair
+            // toward its center, off the edges, where rounding may pass either side).
+            let inward = match o.kind() {
+                crate::objects::ShapeKind::Sphere => DVec3::ZERO,
+                _ => {
+                    let c = o.center() - *p;
+                    let across = c - n * n.dot(c);
+                    if across.length() > 1e-9 {
+                        across.normalize() * 1e-6
+                    } else {
+                        DVec3::ZERO
+                    }
+                }
+            };
+            let from = *p + inward + n * 1e-3;
+            let t = o
+                .hit(from, -n, 0.0, 1.0)
+                .expect("the vertex is on the surface");
+            assert!(
+                (t - 1e-3).abs() < 1e-9,
+                "object {}: {t} at {p} normal {n} inward {inward}",
+                s.object[k]
+            );
+        }
+    }
+}

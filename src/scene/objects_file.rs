@@ -1,0 +1,281 @@
+//! `[[objects]]` in scene files: each shape's keys checked with located errors, meshes read from their glTF
+//! files, and the objects written back as they were given.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use glam::DVec3;
+
+use super::file::{FieldPath, ObjectFile, SceneFile, ValueFile};
+use super::{Checker, MAX_COORDINATE};
+use crate::objects::{MeshData, MeshObject, Object, Shape, ShapeKind};
+
+/// The kinds a file may name, in the order the messages list them.
+const KINDS: [ShapeKind; 4] = [
+    ShapeKind::Sphere,
+    ShapeKind::Box,
+    ShapeKind::Plane,
+    ShapeKind::Mesh,
+];
+
+/// Which keys each shape takes besides `shape` and `color`.
+fn keys_of(kind: ShapeKind) -> &'static [&'static str] {
+    match kind {
+        ShapeKind::Sphere => &["center", "radius"],
+        ShapeKind::Box => &["center", "size", "rotation"],
+        ShapeKind::Plane => &["point", "normal", "size"],
+        ShapeKind::Mesh => &["path", "translation", "rotation", "scale"],
+    }
+}
+
+/// The objects of the file; `base` is the scene file's folder, against which a mesh's relative path is read.
+pub(super) fn check_objects(c: &mut Checker<'_, '_>, file: &SceneFile, base: &Path) -> Vec<Object> {
+    let root = FieldPath::default().key("objects");
+    let mut out = Vec::new();
+    for (i, o) in file.objects.iter().enumerate() {
+        let path = root.index(i);
+        let Some(kind) = KINDS.into_iter().find(|k| k.name() == o.shape) else {
+            c.fail(
+                &path.key("shape"),
+                format!(
+                    "\"{}\" is not a shape: one of \"sphere\", \"box\", \"plane\", \"mesh\"",
+                    o.shape
+                ),
+            );
+            continue;
+        };
+        let given: [(&'static str, bool); 10] = [
+            ("center", o.center.is_some()),
+            ("radius", o.radius.is_some()),
+            ("size", o.size.is_some()),
+            ("rotation", o.rotation.is_some()),
+            ("point", o.point.is_some()),
+            ("normal", o.normal.is_some()),
+            ("path", o.path.is_some()),
+            ("translation", o.translation.is_some()),
+            ("scale", o.scale.is_some()),
+            ("color", o.color.is_some()),
+        ];
+        let allowed = keys_of(kind);
+        for (key, present) in given {
+            if present && key != "color" && !allowed.contains(&key) {
+                c.fail(
+                    &path.key(key),
+                    format!(
+                        "a {} has no {key} (its keys: {}, color)",
+                        kind.name(),
+                        allowed.join(", ")
+                    ),
+                );
+            }
+        }
+        let color = match o.color {
+            Some(a) => c.color(&path.key("color"), a),
+            None => DEFAULT_ALBEDO,
+        };
+        let shape = match kind {
+            ShapeKind::Sphere => {
+                let center = o
+                    .center
+                    .map_or(DVec3::ZERO, |a| c.position(&path.key("center"), a));
+                let radius = required(c, &path, "radius", o.radius);
+                positive(c, &path.key("radius"), radius, "a sphere's radius");
+                Shape::Sphere { center, radius }
+            }
+            ShapeKind::Box => {
+                let center = o
+                    .center
+                    .map_or(DVec3::ZERO, |a| c.position(&path.key("center"), a));
+                let size = match &o.size {
+                    None => {
+                        c.fail(&path, "a box needs its size: [x, y, z], its side lengths");
+                        DVec3::ONE
+                    }
+                    Some(v) => vector_or_scalar(c, &path.key("size"), v, "a box's side lengths"),
+                };
+                let rotation = o
+                    .rotation
+                    .map_or(DVec3::ZERO, |a| angles(c, &path.key("rotation"), a));
+                Shape::Box {
+                    center,
+                    size,
+                    rotation,
+                }
+            }
+            ShapeKind::Plane => {
+                let point = o
+                    .point
+                    .map_or(DVec3::ZERO, |a| c.position(&path.key("point"), a));
+                let normal = match o.normal {
+                    Some(a) => c.direction(&path.key("normal"), a),
+                    None => DVec3::Y,
+                };
+                let size = match &o.size {
+                    None => None,
+                    Some(ValueFile::Number(x)) => {
+                        positive(c, &path.key("size"), *x, "a finite plane's side length");
+                        Some(*x)
+                    }
+                    Some(ValueFile::Vector(_)) => {
+                        c.fail(&path.key("size"), "a plane's size is one number: the side of its square (leave it out for an infinite plane)");
+                        None
+                    }
+                };
+                Shape::Plane {
+                    point,
+                    normal,
+                    size,
+                }
+            }
+            ShapeKind::Mesh => {
+                let translation = o
+                    .translation
+                    .map_or(DVec3::ZERO, |a| c.position(&path.key("translation"), a));
+                let rotation = o
+                    .rotation
+                    .map_or(DVec3::ZERO, |a| angles(c, &path.key("rotation"), a));
+                let scale = match &o.scale {
+                    None => DVec3::ONE,
+                    Some(v) => vector_or_scalar(c, &path.key("scale"), v, "a mesh's scale"),
+                };
+                let Some(file_path) = &o.path else {
+                    c.fail(
+                        &path,
+                        "a mesh needs its path: a glTF 2.0 file (.gltf or .glb)",
+                    );
+                    continue;
+                };
+                let written = PathBuf::from(file_path);
+                let full = if written.is_absolute() {
+                    written.clone()
+                } else {
+                    base.join(&written)
+                };
+                match MeshData::load(&full) {
+                    Ok(data) => Shape::Mesh(MeshObject {
+                        path: written,
+                        translation,
+                        rotation,
+                        scale,
+                        data: Arc::new(data),
+                    }),
+                    Err(e) => {
+                        c.fail(&path.key("path"), format!("{}: {e}", full.display()));
+                        continue;
+                    }
+                }
+            }
+        };
+        out.push(Object { shape, color });
+    }
+    out
+}
+
+/// An object's albedo where the file gives none: a light grey, lit to white by a source of coefficient 1 at
+/// distance 1 seen head on.
+pub const DEFAULT_ALBEDO: [f64; 3] = [0.8, 0.8, 0.8];
+
+fn required(c: &mut Checker<'_, '_>, path: &FieldPath, key: &'static str, x: Option<f64>) -> f64 {
+    match x {
+        Some(x) => x,
+        None => {
+            c.fail(path, format!("missing {key}"));
+            1.0
+        }
+    }
+}
+
+fn positive(c: &mut Checker<'_, '_>, path: &FieldPath, x: f64, what: &str) {
+    if c.finite(path, x) && !(x > 0.0 && x <= MAX_COORDINATE) {
+        c.fail(
+            path,
+            format!("{x} is out of range: {what} must be positive"),
+        );
+    }
+}
+
+/// A vector of three positive lengths, or one length for all three.
+fn vector_or_scalar(c: &mut Checker<'_, '_>, path: &FieldPath, v: &ValueFile, what: &str) -> DVec3 {
+    let v = match v {
+        ValueFile::Number(x) => DVec3::splat(*x),
+        ValueFile::Vector(a) if a.len() == 3 => DVec3::new(a[0], a[1], a[2]),
+        ValueFile::Vector(a) => {
+            c.fail(
+                path,
+                format!(
+                    "{} numbers: {what} is [x, y, z] or one number for all three",
+                    a.len()
+                ),
+            );
+            return DVec3::ONE;
+        }
+    };
+    if !v.is_finite() || v.min_element() <= 0.0 || v.max_element() > MAX_COORDINATE {
+        c.fail(
+            path,
+            format!("{:?}: {what} must be positive numbers", v.to_array()),
+        );
+        return DVec3::ONE;
+    }
+    v
+}
+
+/// Rotation angles in degrees, finite.
+fn angles(c: &mut Checker<'_, '_>, path: &FieldPath, a: [f64; 3]) -> DVec3 {
+    let v = c.vector(path, a);
+    if v.abs().max_element() > 1e6 {
+        c.fail(
+            path,
+            format!("{a:?}: rotation angles are in degrees, within +-1e6"),
+        );
+        return DVec3::ZERO;
+    }
+    v
+}
+
+/// The objects as the file writes them: every key of each shape, the mesh's path as it was given.
+pub(super) fn write(objects: &[Object]) -> Vec<ObjectFile> {
+    let v = |p: DVec3| Some(p.to_array());
+    let vector = |p: DVec3| Some(ValueFile::Vector(p.to_array().to_vec()));
+    objects
+        .iter()
+        .map(|o| {
+            let mut f = ObjectFile {
+                shape: o.kind().name().to_owned(),
+                color: Some(o.color),
+                ..ObjectFile::default()
+            };
+            match &o.shape {
+                Shape::Sphere { center, radius } => {
+                    f.center = v(*center);
+                    f.radius = Some(*radius);
+                }
+                Shape::Box {
+                    center,
+                    size,
+                    rotation,
+                } => {
+                    f.center = v(*center);
+                    f.size = vector(*size);
+                    f.rotation = v(*rotation);
+                }
+                Shape::Plane {
+                    point,
+                    normal,
+                    size,
+                } => {
+                    f.point = v(*point);
+                    f.normal = v(*normal);
+                    f.size = size.map(ValueFile::Number);
+                }
+                Shape::Mesh(m) => {
+                    f.path = Some(m.path.to_string_lossy().into_owned());
+                    f.translation = v(m.translation);
+                    f.rotation = v(m.rotation);
+                    f.scale = vector(m.scale);
+                }
+            }
+            f
+        })
+        .collect()
+}

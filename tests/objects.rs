@@ -1,0 +1,735 @@
+//! Objects in a scene: their ray hits against an independent root finder, the glow's integral up to the first
+//! surface against a direct quadrature and the converged reference, lighting against closed forms, shadows,
+//! the GPU against its f64 twin, holdouts, glTF meshes and scene files.
+
+mod common;
+
+use std::path::Path;
+use std::sync::{Mutex, MutexGuard, OnceLock};
+
+use energywave::field::{Point, Sources};
+use energywave::gpu::HeadlessRenderer;
+use energywave::integrate::Integrator;
+use energywave::objects::lighting::{AMBIENT, Lights};
+use energywave::objects::{Object, Shape, lit, plane_axes, rotation_matrix};
+use energywave::reference::{
+    self, Backdrop, converged::converged_reference, simpson::simpson_refined,
+};
+use energywave::scene::{Colors, Scene};
+use glam::DVec3;
+
+fn gpu() -> MutexGuard<'static, HeadlessRenderer> {
+    static GPU: OnceLock<Mutex<HeadlessRenderer>> = OnceLock::new();
+    GPU.get_or_init(|| Mutex::new(HeadlessRenderer::new().expect("a GPU adapter (lavapipe in CI)")))
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+}
+
+struct Lcg(u64);
+impl Lcg {
+    fn unit(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn range(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * self.unit()
+    }
+    fn vec(&mut self, s: f64) -> DVec3 {
+        DVec3::new(self.range(-s, s), self.range(-s, s), self.range(-s, s))
+    }
+}
+
+/// Whether `p` is inside the shape (or, for a plane, on its normal's side), from its definition alone.
+fn inside(shape: &Shape, p: DVec3) -> bool {
+    match shape {
+        Shape::Sphere { center, radius } => (p - *center).length() < *radius,
+        Shape::Box {
+            center,
+            size,
+            rotation,
+        } => {
+            let local = rotation_matrix(*rotation).transpose() * (p - *center);
+            (local.abs() - *size * 0.5).max_element() < 0.0
+        }
+        _ => unreachable!(),
+    }
+}
+
+/// The first t in (0, t_max] where the ray crosses the shape's surface: a scan of 20000 steps for a change of
+/// side, then bisection. Planes: where the signed distance changes sign inside the square.
+fn crossing(shape: &Shape, o: DVec3, d: DVec3, t_max: f64) -> Option<f64> {
+    let side = |t: f64| -> bool {
+        let p = o + d * t;
+        match shape {
+            Shape::Plane { point, normal, .. } => normal.dot(p - *point) > 0.0,
+            _ => inside(shape, p),
+        }
+    };
+    let within = |t: f64| match shape {
+        Shape::Plane {
+            point,
+            normal,
+            size: Some(size),
+        } => {
+            let (u, v) = plane_axes(*normal);
+            let q = o + d * t - *point;
+            q.dot(u).abs() <= size * 0.5 && q.dot(v).abs() <= size * 0.5
+        }
+        _ => true,
+    };
+    let n = 20000;
+    let mut last = side(1e-12);
+    for k in 1..=n {
+        let t = t_max * k as f64 / n as f64;
+        let now = side(t);
+        if now != last {
+            let (mut lo, mut hi) = (t_max * (k - 1) as f64 / n as f64, t);
+            for _ in 0..80 {
+                let mid = 0.5 * (lo + hi);
+                if side(mid) == last {
+                    lo = mid
+                } else {
+                    hi = mid
+                }
+            }
+            let t = 0.5 * (lo + hi);
+            if within(t) {
+                return Some(t);
+            }
+        }
+        last = now;
+    }
+    None
+}
+
+#[test]
+fn ray_hits_are_the_crossings_a_root_finder_finds() {
+    let mut rng = Lcg(3);
+    let mut hits = [0usize; 4];
+    for trial in 0..400 {
+        let shape = match trial % 4 {
+            0 => Shape::Sphere {
+                center: rng.vec(1.0),
+                radius: rng.range(0.3, 1.5),
+            },
+            1 => Shape::Box {
+                center: rng.vec(1.0),
+                size: DVec3::new(
+                    rng.range(0.2, 2.0),
+                    rng.range(0.2, 2.0),
+                    rng.range(0.2, 2.0),
+                ),
+                rotation: rng.vec(180.0),
+            },
+            2 => Shape::Plane {
+                point: rng.vec(1.0),
+                normal: rng.vec(1.0).normalize(),
+                size: None,
+            },
+            _ => Shape::Plane {
+                point: rng.vec(1.0),
+                normal: rng.vec(1.0).normalize(),
+                size: Some(rng.range(0.5, 3.0)),
+            },
+        };
+        let object = Object {
+            shape: shape.clone(),
+            color: [0.5; 3],
+        };
+        // From outside, toward the shape's middle with a spread (many hit, some graze, some miss), and from
+        // inside for the solids.
+        let o = if trial % 8 == 4 || trial % 8 == 5 {
+            object.center() + rng.vec(0.1)
+        } else {
+            rng.vec(6.0)
+        };
+        let d = (object.center() + rng.vec(1.2) - o).normalize();
+        let want = crossing(&shape, o, d, 20.0);
+        let got = object.hit(o, d, 0.0, 20.0);
+        match (got, want) {
+            (Some(g), Some(w)) => {
+                assert!(
+                    (g - w).abs() < 1e-6,
+                    "trial {trial}: {g} against {w} ({shape:?})"
+                );
+                hits[trial % 4] += 1;
+            }
+            (None, None) => {}
+            // A ray that only grazes (the scan steps over a sliver thinner than its step) may go either way.
+            (g, w) => {
+                let t = g.or(w).unwrap();
+                let p = o + d * t;
+                let margin = match &shape {
+                    Shape::Sphere { center, radius } => {
+                        let closest = (*center - o).dot(d);
+                        ((o + d * closest - *center).length() - radius).abs()
+                    }
+                    _ => 0.0,
+                };
+                assert!(
+                    margin < 1e-3,
+                    "trial {trial}: {g:?} against {w:?} at {p} ({shape:?})"
+                );
+            }
+        }
+    }
+    assert!(hits.iter().all(|&h| h > 20), "hits by shape: {hits:?}");
+    // And in closed form: a ray along an axis meets a sphere at D - r, a box at its face, a plane at its point.
+    let sphere = Object {
+        shape: Shape::Sphere {
+            center: DVec3::new(0.0, 0.0, -10.0),
+            radius: 2.0,
+        },
+        color: [1.0; 3],
+    };
+    assert_eq!(sphere.hit(DVec3::ZERO, -DVec3::Z, 0.0, 100.0), Some(8.0));
+    let cube = Object {
+        shape: Shape::Box {
+            center: DVec3::new(0.0, 0.0, -10.0),
+            size: DVec3::new(2.0, 4.0, 6.0),
+            rotation: DVec3::ZERO,
+        },
+        color: [1.0; 3],
+    };
+    assert_eq!(cube.hit(DVec3::ZERO, -DVec3::Z, 0.0, 100.0), Some(7.0));
+    let floor = Object {
+        shape: Shape::Plane {
+            point: DVec3::new(0.0, -1.0, 0.0),
+            normal: DVec3::Y,
+            size: None,
+        },
+        color: [1.0; 3],
+    };
+    assert_eq!(
+        floor.hit(DVec3::ZERO, DVec3::new(0.0, -1.0, -1.0), 0.0, 100.0),
+        Some(1.0)
+    );
+    assert_eq!(
+        floor.hit(DVec3::ZERO, DVec3::new(0.0, 1.0, -1.0), 0.0, 100.0),
+        None
+    );
+}
+
+fn point_scene(objects: Vec<Object>, integrator: Integrator) -> Scene {
+    let mut scene = Scene::parse(
+        "[camera]\neye = [0.0, 0.3, 8.0]\ntarget = [0.0, 0.0, 0.0]\n[billboard]\nresolution = 24\n\
+         [integration]\ntolerance = 1e-5\n[[points]]\nposition = [0.2, 0.1, 0.0]\ncoefficient = 1.5\n\
+         [[lines]]\npoint = [0.0, -0.5, 0.0]\ndirection = [1.0, 0.2, 0.0]\ncoefficient = 0.4\n",
+        Path::new("points.toml"),
+    )
+    .unwrap();
+    scene.objects = objects;
+    scene.integration.integrator = integrator;
+    scene
+}
+
+fn blockers() -> Vec<Object> {
+    vec![
+        // Behind the sources, cutting the rays past them; in front of the billboard, hiding texels whole.
+        Object {
+            shape: Shape::Sphere {
+                center: DVec3::new(0.6, 0.0, -0.7),
+                radius: 0.6,
+            },
+            color: [0.8; 3],
+        },
+        Object {
+            shape: Shape::Box {
+                center: DVec3::new(-1.4, 1.0, 5.5),
+                size: DVec3::new(0.4, 0.5, 0.3),
+                rotation: DVec3::new(0.0, 30.0, 10.0),
+            },
+            color: [0.8; 3],
+        },
+        Object {
+            shape: Shape::Plane {
+                point: DVec3::new(0.0, -1.2, 0.0),
+                normal: DVec3::new(0.0, 1.0, 0.3).normalize(),
+                size: None,
+            },
+            color: [0.8; 3],
+        },
+    ]
+}
+
+#[test]
+fn the_clipped_integral_is_the_integral_up_to_the_first_surface() {
+    // Texel by texel: the integral of psi zeta over s in [0, c] (c the share of S -> E before the first surface,
+    // found here by the root finder above) by a refined quadrature of the definition, against both integrators
+    // on the CPU, which integrate the shortened ray with the decay mapped onto it.
+    for integrator in [Integrator::Simpson, Integrator::Adaptive] {
+        let mut scene = point_scene(blockers(), integrator);
+        scene.integration.divisions = 4000;
+        let bb = scene.place_billboard(1.0);
+        let reach = scene.ray_reach(&bb);
+        let settings = scene.integration.on_ray(reach.stretch);
+        let w = scene.billboard.resolution;
+        let (mut hidden, mut cut, mut whole) = (0, 0, 0);
+        for j in 0..w {
+            for i in 0..w {
+                let s = bb.texel_center(i, j, w);
+                let eye = scene.camera.eye;
+                let tau = (scene.objects.iter())
+                    .filter_map(|o| crossing(&o.shape, eye, s - eye, reach.nu))
+                    .fold(f64::INFINITY, f64::min);
+                let c = ((tau - 1.0) / (reach.nu - 1.0)).clamp(0.0, 1.0);
+                let e = eye + (s - eye) * reach.nu;
+                let want = if c == 0.0 {
+                    0.0
+                } else {
+                    let f = |u: f64| {
+                        let x = s + (e - s) * u;
+                        scene.sources.psi(x, settings.epsilon)
+                            * energywave::integrate::zeta(u, settings.alpha, settings.beta)
+                    };
+                    // Over [0, c] as u = c v.
+                    simpson_refined(|v| c * f(c * v), 2000, 1e-10, 30).0
+                };
+                let got = reference::texel_brightness(&scene, &bb, i, j);
+                let allowed = match integrator {
+                    Integrator::Adaptive => scene.integration.tolerance,
+                    Integrator::Simpson => 1e-6 * want.abs().max(1.0),
+                };
+                assert!(
+                    (got - want).abs() <= allowed,
+                    "{integrator:?}, texel ({i}, {j}), c = {c}: {got} against {want}"
+                );
+                match c {
+                    0.0 => hidden += 1,
+                    1.0 => whole += 1,
+                    _ => cut += 1,
+                }
+            }
+        }
+        assert!(
+            hidden > 5 && cut > 50 && whole > 50,
+            "{hidden} hidden, {cut} cut, {whole} whole"
+        );
+    }
+}
+
+#[test]
+fn the_gpu_clips_as_its_f64_twin_and_both_meet_the_converged_reference() {
+    let mut g = gpu();
+    for (name, mut scene) in [
+        (
+            "points".to_owned(),
+            point_scene(blockers(), Integrator::Adaptive),
+        ),
+        ("floor.toml".to_owned(), common::shipped_scene("floor.toml")),
+    ] {
+        scene.billboard.resolution = 24;
+        scene.integration.divisions = 4000;
+        for integrator in [Integrator::Simpson, Integrator::Adaptive] {
+            scene.integration.integrator = integrator;
+            let bb = scene.place_billboard(1.0);
+            let cpu = reference::render_brightness(&scene, &bb).values;
+            let gpu_b = g.brightness(&scene, &bb).unwrap();
+            let want = converged_reference(&scene, 1).0;
+            let tolerance = match integrator {
+                Integrator::Adaptive => scene.integration.tolerance,
+                // n = 4000 on a cut ray: its own error, relative.
+                Integrator::Simpson => 1e-4,
+            };
+            let tolerance = |b: f64| match integrator {
+                Integrator::Adaptive => tolerance,
+                Integrator::Simpson => tolerance * b.abs().max(1.0),
+            };
+            for k in 0..cpu.len() {
+                assert!(
+                    (gpu_b[k] as f64 - cpu[k]).abs() <= 1e-4 * cpu[k].abs().max(1.0),
+                    "{name}, {integrator:?}, texel {k}: GPU {} against CPU {}",
+                    gpu_b[k],
+                    cpu[k]
+                );
+                assert!(
+                    (cpu[k] - want[k]).abs() <= tolerance(want[k]),
+                    "{name}, {integrator:?}, texel {k}: CPU {} against the converged {}",
+                    cpu[k],
+                    want[k]
+                );
+            }
+            assert!(cpu.contains(&0.0), "{name}: some texel is hidden");
+        }
+    }
+}
+
+#[test]
+fn a_sphere_under_a_point_source_is_lit_by_lamberts_law_with_the_fields_falloff() {
+    // Sphere of radius r at the origin, a point source b at height D on its axis: a surface point at angle
+    // theta from the axis is d = sqrt(r^2 + D^2 - 2 r D cos theta) from the source, the light meets it at
+    // cos i = (D cos theta - r) / d (the law of cosines), and its color is albedo (ambient + Ce b / d cos i).
+    let (r, dd, b) = (0.8, 2.5, 1.7);
+    let ce = [0.2, 0.6, 1.0];
+    let albedo = [0.9, 0.5, 0.25];
+    let mut scene = point_scene(
+        vec![Object {
+            shape: Shape::Sphere {
+                center: DVec3::ZERO,
+                radius: r,
+            },
+            color: albedo,
+        }],
+        Integrator::Adaptive,
+    );
+    scene.sources = Sources {
+        points: vec![Point {
+            position: DVec3::new(0.0, dd, 0.0),
+            coefficient: b,
+            look: Default::default(),
+        }],
+        ..Sources::default()
+    };
+    scene.colors.energy = ce;
+    let l = lit(&scene);
+    let mut lit_count = 0;
+    for (k, p) in l.surface.positions.iter().enumerate() {
+        let cos_theta = p.y / r;
+        let d = (r * r + dd * dd - 2.0 * r * dd * cos_theta).sqrt();
+        let cos_i = ((dd * cos_theta - r) / d).max(0.0);
+        for c in 0..3 {
+            let want = albedo[c] * (AMBIENT + ce[c] * b / d * cos_i);
+            assert!(
+                (l.colors[k][c] - want).abs() < 1e-12,
+                "vertex {k} at {p}: {} against {want}",
+                l.colors[k][c]
+            );
+        }
+        lit_count += (cos_i > 0.0) as usize;
+    }
+    assert!(lit_count > 100 && lit_count < l.surface.positions.len());
+}
+
+#[test]
+fn a_point_behind_an_object_is_in_its_shadow() {
+    // A floor under a point source, a small sphere between them: the floor right under the sphere gets the
+    // ambient light alone, a point beside the shadow the source's light, and the shadow's edge lies where the
+    // ray to the source grazes the sphere (the cone's half angle asin(r / h)).
+    let source = DVec3::new(0.0, 3.0, 0.0);
+    let (sphere_c, r) = (DVec3::new(0.0, 1.5, 0.0), 0.3);
+    let objects = vec![
+        Object {
+            shape: Shape::Plane {
+                point: DVec3::ZERO,
+                normal: DVec3::Y,
+                size: None,
+            },
+            color: [1.0; 3],
+        },
+        Object {
+            shape: Shape::Sphere {
+                center: sphere_c,
+                radius: r,
+            },
+            color: [1.0; 3],
+        },
+    ];
+    let sources = Sources {
+        points: vec![Point {
+            position: source,
+            coefficient: 1.0,
+            look: Default::default(),
+        }],
+        ..Sources::default()
+    };
+    let colors = Colors {
+        energy: [1.0; 3],
+        ..Colors::default()
+    };
+    let lights = Lights::new(&sources, &colors, 0.01);
+    let half_angle = (r / 1.5f64).asin();
+    let edge = 3.0 * half_angle.tan();
+    for x in [
+        0.0,
+        0.2,
+        0.5 * edge,
+        0.95 * edge,
+        1.05 * edge,
+        1.5 * edge,
+        3.0,
+    ] {
+        let p = DVec3::new(x, 0.0, 0.0);
+        let e = lights.irradiance(&objects, p, DVec3::Y)[0];
+        let d = (source - p).length();
+        let open = AMBIENT + 1.0 / d * (3.0 / d);
+        let want = if x < edge { AMBIENT } else { open };
+        assert!(
+            (e - want).abs() < 1e-12,
+            "x = {x} (edge {edge}): {e} against {want}"
+        );
+    }
+}
+
+#[test]
+fn the_floor_preset_composes_alike_on_the_gpu_and_the_cpu_opaque_transparent_and_held_out() {
+    let mut scene = common::shipped_scene("floor.toml");
+    scene.billboard.resolution = 64;
+    let (w, h) = (96, 72);
+    let bb = scene.place_billboard(w as f64 / h as f64);
+    let tex = reference::render_brightness(&scene, &bb);
+    let mut g = gpu();
+    for (backdrop, transparent, holdout) in [
+        (Backdrop::Opaque, false, false),
+        (Backdrop::Transparent, true, false),
+        (Backdrop::Holdout, true, true),
+    ] {
+        let cpu = reference::compose_frame_over(&scene, &bb, &tex, (w, h), backdrop);
+        g.set_holdout(holdout);
+        let frame = g.render(&scene, w, h, transparent).unwrap();
+        g.set_holdout(false);
+        // Off by more than a few 8-bit steps only where a pixel's center lies on an object's edge.
+        let off = (cpu.iter().zip(&frame.pixels))
+            .filter(|(c, p)| {
+                (0..4).any(|k| {
+                    (c[k].clamp(0.0, 1.0) - (p[k] as f64).clamp(0.0, 1.0)).abs() > 4.0 / 255.0
+                })
+            })
+            .count();
+        assert!(off * 100 <= cpu.len(), "{backdrop:?}: {off} pixels differ");
+        let alpha0 = cpu.iter().filter(|p| p[3] == 0.0).count();
+        match backdrop {
+            // The floor fills the bottom: opaque there; the sky over it is the glow alone.
+            Backdrop::Transparent => {
+                assert!(cpu[(h as usize - 1) * w as usize][3] == 1.0 && cpu[0][3] < 1.0)
+            }
+            // Held out: the objects are not drawn; where the sphere hides the glow, alpha 0.
+            Backdrop::Holdout => {
+                assert!(
+                    alpha0 > 20 && cpu[(h as usize - 1) * w as usize][3] < 1.0,
+                    "{alpha0}"
+                )
+            }
+            Backdrop::Opaque => assert!(cpu.iter().all(|p| p[3] == 1.0)),
+        }
+    }
+}
+
+/// A tetrahedron as glTF 2.0: positions and indices in one buffer, as a data URI (`.gltf`) or the binary
+/// chunk (`.glb`), under a node that moves it up by 1.
+fn tetrahedron(binary: bool) -> Vec<u8> {
+    let positions: [[f32; 3]; 4] = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, 0.0, 1.0],
+    ];
+    let indices: [u16; 12] = [0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3];
+    let mut buffer: Vec<u8> = bytemuck::cast_slice(&positions).to_vec();
+    buffer.extend_from_slice(bytemuck::cast_slice(&indices));
+    let uri = if binary {
+        String::new()
+    } else {
+        use std::fmt::Write;
+        const B64: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+        let mut s = String::from(",\"uri\":\"data:application/octet-stream;base64,");
+        for c in buffer.chunks(3) {
+            let n = (c[0] as u32) << 16
+                | (*c.get(1).unwrap_or(&0) as u32) << 8
+                | *c.get(2).unwrap_or(&0) as u32;
+            for k in 0..4 {
+                if k <= c.len() {
+                    s.push(B64[(n >> (18 - 6 * k) & 63) as usize] as char);
+                } else {
+                    s.push('=');
+                }
+            }
+        }
+        write!(s, "\"").unwrap();
+        s
+    };
+    let json = format!(
+        r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],
+"nodes":[{{"mesh":0,"translation":[0,1,0]}}],
+"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"indices":1}}]}}],
+"buffers":[{{"byteLength":{len}{uri}}}],
+"bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":48}},{{"buffer":0,"byteOffset":48,"byteLength":24}}],
+"accessors":[{{"bufferView":0,"componentType":5126,"count":4,"type":"VEC3","min":[0,0,0],"max":[1,1,1]}},
+{{"bufferView":1,"componentType":5123,"count":12,"type":"SCALAR"}}]}}"#,
+        len = buffer.len()
+    );
+    if !binary {
+        return json.into_bytes();
+    }
+    let mut json = json.into_bytes();
+    while !json.len().is_multiple_of(4) {
+        json.push(b' ');
+    }
+    while !buffer.len().is_multiple_of(4) {
+        buffer.push(0);
+    }
+    let total = 12 + 8 + json.len() + 8 + buffer.len();
+    let mut out = Vec::new();
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&(total as u32).to_le_bytes());
+    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(&json);
+    out.extend_from_slice(&(buffer.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"BIN\0");
+    out.extend_from_slice(&buffer);
+    out
+}
+
+#[test]
+fn a_gltf_mesh_loads_hits_and_saves_back_losslessly() {
+    let dir = std::env::temp_dir().join(format!("energywave-gltf-{}", std::process::id()));
+    std::fs::create_dir_all(dir.join("models")).unwrap();
+    for (file, binary) in [("tetra.gltf", false), ("tetra.glb", true)] {
+        std::fs::write(dir.join("models").join(file), tetrahedron(binary)).unwrap();
+        let text = format!(
+            "[[points]]\nposition = [0.0, 0.0, 0.0]\ncoefficient = 1.0\n\n[[objects]]\nshape = \"mesh\"\n\
+             path = \"models/{file}\"\ntranslation = [2.0, 0.0, 0.0]\nrotation = [0.0, 90.0, 0.0]\nscale = 2.0\n\
+             color = [0.2, 0.4, 0.6]\n"
+        );
+        let scene_path = dir.join("scene.toml");
+        std::fs::write(&scene_path, &text).unwrap();
+        let scene = Scene::load(&scene_path).unwrap();
+        let Shape::Mesh(mesh) = &scene.objects[0].shape else {
+            panic!("a mesh");
+        };
+        assert_eq!(mesh.data.triangles.len(), 4, "{file}");
+        // The node's translation applied: the base triangle (z = 0 in the file) at y from 1 to 2.
+        assert!(
+            mesh.data
+                .triangles
+                .iter()
+                .flatten()
+                .all(|p| p.y >= 1.0 && p.y <= 2.0)
+        );
+        // Placed: scaled by 2, turned 90 degrees about y (x -> -z), moved by 2 along x. The file's face x = 0
+        // (the triangle (0,0,0), (0,1,0), (0,0,1) moved up 1) lies in the plane z = 0 after the turn; a ray down
+        // -z from (2.5, 2.5, 5) meets it at t = 5.
+        let o = &scene.objects[0];
+        let t = o
+            .hit(DVec3::new(2.5, 2.5, 5.0), -DVec3::Z, 0.0, 100.0)
+            .unwrap();
+        assert!((t - 5.0).abs() < 1e-12, "{file}: {t}");
+        assert!(
+            o.hit(DVec3::new(10.0, 2.5, 5.0), -DVec3::Z, 0.0, 100.0)
+                .is_none()
+        );
+        // Saved and read back: the same scene, the path as written.
+        let saved = scene.to_toml();
+        assert!(saved.contains(&format!("models/{file}")), "{saved}");
+        let back = Scene::parse(&saved, &scene_path).unwrap();
+        assert_eq!(back, scene, "{file}");
+        // Lit and drawn: its vertices lie on the placed triangles.
+        let l = lit(&scene);
+        assert_eq!(l.surface.positions.len(), 12);
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+fn invalid(text: &str) -> String {
+    match Scene::parse(text, Path::new("bad.toml")) {
+        Err(e) => e.to_string(),
+        Ok(_) => panic!("accepted: {text}"),
+    }
+}
+
+#[test]
+fn objects_in_scene_files_are_checked_with_located_errors_and_saved_back() {
+    let point = "[[points]]\nposition = [0.0, 0.0, 0.0]\ncoefficient = 1.0\n";
+    let all = format!(
+        "{point}\n[[objects]]\nshape = \"sphere\"\ncenter = [1.0, 2.0, 3.0]\nradius = 0.5\n\n\
+         [[objects]]\nshape = \"box\"\ncenter = [0.0, 1.0, 0.0]\nsize = [1.0, 2.0, 3.0]\nrotation = [0.0, 45.0, 0.0]\ncolor = [0.1, 0.2, 0.3]\n\n\
+         [[objects]]\nshape = \"plane\"\npoint = [0.0, -1.0, 0.0]\nnormal = [0.0, 2.0, 0.0]\n\n\
+         [[objects]]\nshape = \"plane\"\nnormal = [0.0, 0.0, 1.0]\nsize = 4.0\n"
+    );
+    let scene = Scene::parse(&all, Path::new("s.toml")).unwrap();
+    assert_eq!(scene.objects.len(), 4);
+    assert!(
+        matches!(scene.objects[2].shape, Shape::Plane { normal, size: None, .. } if normal == DVec3::Y)
+    );
+    assert_eq!(
+        Scene::parse(&scene.to_toml(), Path::new("s.toml")).unwrap(),
+        scene
+    );
+    for (text, line, field, says) in [
+        ("shape = \"cone\"\n", 6, "objects[0].shape", "not a shape"),
+        ("shape = \"sphere\"\n", 5, "objects[0]", "missing radius"),
+        (
+            "shape = \"sphere\"\nradius = -1.0\n",
+            7,
+            "objects[0].radius",
+            "must be positive",
+        ),
+        (
+            "shape = \"sphere\"\nradius = 1.0\nnormal = [0.0, 1.0, 0.0]\n",
+            8,
+            "objects[0].normal",
+            "a sphere has no normal",
+        ),
+        (
+            "shape = \"box\"\nsize = [1.0, 0.0, 1.0]\n",
+            7,
+            "objects[0].size",
+            "positive",
+        ),
+        (
+            "shape = \"plane\"\nnormal = [0.0, 0.0, 0.0]\n",
+            7,
+            "objects[0].normal",
+            "zero vector",
+        ),
+        (
+            "shape = \"plane\"\nsize = [1.0, 2.0]\n",
+            7,
+            "objects[0].size",
+            "one number",
+        ),
+        (
+            "shape = \"sphere\"\nradius = 1.0\ncolor = [2.0, 0.0, 0.0]\n",
+            8,
+            "objects[0].color",
+            "0..1",
+        ),
+        (
+            "shape = \"mesh\"\npath = \"nowhere/missing.glb\"\n",
+            7,
+            "objects[0].path",
+            "missing.glb",
+        ),
+        ("shape = \"mesh\"\n", 5, "objects[0]", "needs its path"),
+    ] {
+        let msg = invalid(&format!("{point}\n[[objects]]\n{text}"));
+        assert!(
+            msg.contains(&format!("bad.toml:{line}:")) && msg.contains(field) && msg.contains(says),
+            "{text}: {msg}"
+        );
+    }
+}
+
+#[test]
+fn a_missing_mesh_is_an_input_error_on_the_command_line() {
+    let dir = std::env::temp_dir().join(format!("energywave-mesh-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("s.toml");
+    std::fs::write(
+        &scene,
+        "[[points]]\nposition = [0.0, 0.0, 0.0]\ncoefficient = 1.0\n[[objects]]\nshape = \"mesh\"\npath = \"gone.gltf\"\n",
+    )
+    .unwrap();
+    let out = dir.join("out.png");
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_energywave"))
+        .args([
+            "render",
+            scene.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(run.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("gone.gltf") && err.contains("objects[0].path"),
+        "{err}"
+    );
+    assert!(!out.exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
