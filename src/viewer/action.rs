@@ -11,7 +11,8 @@ use crate::export::Target;
 use crate::field::{Curve, Line, Point, Torus, WForm};
 use crate::geometry::Camera;
 use crate::integrate::{Decay, Integrator};
-use crate::scene::{Blend, Glare, Scene};
+use crate::objects::{Object, Shape, ShapeKind};
+use crate::scene::{Blend, DEFAULT_ALBEDO, Glare, Scene};
 
 /// One request from the UI.
 #[derive(Clone, Debug, PartialEq)]
@@ -50,6 +51,10 @@ pub enum Action {
     CancelExport,
     /// Select a source (or none): its handles are ringed in the viewport, its entry highlighted in the panel.
     Select(Option<(SourceKind, usize)>),
+    /// Select an object (or none): its handle ringed, its entry highlighted.
+    SelectObject(Option<usize>),
+    /// Add the glTF mesh at this path (relative to the scene file's folder, or absolute) at a point.
+    AddMesh(String, DVec3),
     /// Tell the user something (an error when `is_error`).
     Notify {
         text: String,
@@ -112,6 +117,15 @@ pub enum Edit {
     Unkey(Parameter),
     /// The animation as a whole: timeline, pulses and keys (`None`: a still scene).
     Animation(Option<Animation>),
+    /// A new object of a shape (not a mesh: `Action::AddMesh` reads its file) at a point.
+    AddObject(ShapeKind, DVec3),
+    /// An object appended as it is (a mesh read from its file).
+    InsertObject(Object),
+    /// Object `i` replaced: any of its settings edited, or moved by its handle.
+    SetObject(usize, Object),
+    /// A copy of object `i`, listed right after it.
+    DuplicateObject(usize),
+    DeleteObject(usize),
 }
 
 impl Action {
@@ -163,6 +177,42 @@ impl Edit {
             Edit::Jitter(seed) => scene.integration.jitter = seed,
             Edit::Resolution(w) => scene.billboard.resolution = w,
             Edit::Blend(b) => scene.colors.blend = b,
+            Edit::AddObject(kind, at) => {
+                let shape = match kind {
+                    ShapeKind::Sphere => Shape::Sphere {
+                        center: at,
+                        radius: 0.5,
+                    },
+                    ShapeKind::Box => Shape::Box {
+                        center: at,
+                        size: DVec3::ONE,
+                        rotation: DVec3::ZERO,
+                    },
+                    // A floor under the point.
+                    ShapeKind::Plane => Shape::Plane {
+                        point: at - DVec3::Y * 1.5,
+                        normal: DVec3::Y,
+                        size: None,
+                    },
+                    ShapeKind::Mesh => return,
+                };
+                scene.objects.push(Object {
+                    shape,
+                    color: DEFAULT_ALBEDO,
+                });
+            }
+            Edit::InsertObject(object) => scene.objects.push(object),
+            Edit::SetObject(i, object) => {
+                if let Some(o) = scene.objects.get_mut(i) {
+                    *o = object;
+                }
+            }
+            Edit::DuplicateObject(i) => {
+                duplicate(&mut scene.objects, i);
+            }
+            Edit::DeleteObject(i) => {
+                remove(&mut scene.objects, i);
+            }
             Edit::Glare(g) => scene.glare = g,
             Edit::AddSeriesColor(i) => {
                 let colors = scene.colors.clone();

@@ -26,6 +26,8 @@ pub enum HandleId {
         curve: usize,
         index: usize,
     },
+    /// An object's center (a plane's point, a mesh's translation).
+    Object(usize),
 }
 
 /// How close (in points) the pointer must be to grab a handle.
@@ -37,15 +39,24 @@ const DIRECTION_REACH: f64 = 0.125;
 const AXIS_REACH: f64 = 0.5;
 
 impl HandleId {
-    /// The source the handle belongs to.
-    pub fn source(self) -> (SourceKind, usize) {
-        match self {
+    /// The source the handle belongs to (none for an object's).
+    pub fn source(self) -> Option<(SourceKind, usize)> {
+        Some(match self {
             HandleId::Point(i) => (SourceKind::Points, i),
             HandleId::LinePoint(i) | HandleId::LineDirection(i) => (SourceKind::Lines, i),
             HandleId::TorusCenter(i) | HandleId::TorusRadius(i) | HandleId::TorusAxis(i) => {
                 (SourceKind::Tori, i)
             }
             HandleId::Control { curve, .. } => (SourceKind::Curves, curve),
+            HandleId::Object(_) => return None,
+        })
+    }
+
+    /// The object the handle belongs to, if it is an object's.
+    pub fn object(self) -> Option<usize> {
+        match self {
+            HandleId::Object(i) => Some(i),
+            _ => None,
         }
     }
 
@@ -98,6 +109,7 @@ pub fn handles(scene: &Scene) -> Vec<(HandleId, DVec3)> {
                 .map(|(k, &p)| (HandleId::Control { curve: c, index: k }, p)),
         );
     }
+    v.extend((scene.objects.iter().enumerate()).map(|(i, o)| (HandleId::Object(i), o.center())));
     v
 }
 
@@ -107,6 +119,14 @@ pub fn get(scene: &Scene, id: HandleId) -> Option<DVec3> {
         .into_iter()
         .find(|(h, _)| *h == id)
         .map(|(_, p)| p)
+}
+
+/// The edit that puts an object's handle at `q`: the object moved there. `None` for a source's handle (`edit`)
+/// or an object that no longer exists.
+pub fn object_edit(scene: &Scene, id: HandleId, q: DVec3) -> Option<crate::viewer::action::Edit> {
+    let i = id.object()?;
+    let moved = scene.objects.get(i)?.moved_to(q);
+    Some(crate::viewer::action::Edit::SetObject(i, moved))
 }
 
 /// The edit that puts handle `id` at `q`: a position moves there; a direction handle turns its line or torus
@@ -152,6 +172,7 @@ pub fn edit(scene: &Scene, id: HandleId, q: DVec3) -> Option<(Parameter, Value)>
                 Value::Number(in_plane.length().max(1e-3)),
             )
         }
+        HandleId::Object(_) => return None,
     })
 }
 
@@ -236,6 +257,7 @@ pub fn draw(
     scene: &Scene,
     highlight: Option<HandleId>,
     selected: Option<(SourceKind, usize)>,
+    selected_object: Option<usize>,
 ) {
     let cam = &scene.camera;
     let screen = |p: DVec3| to_screen(cam, rect, p);
@@ -293,12 +315,26 @@ pub fn draw(
             let active = highlight == Some(id);
             let radius = if active { 6.0 } else { 4.5 };
             let fill = if active { ACTIVE } else { HANDLE };
-            let outline = if selected == Some(id.source()) {
+            let chosen = match id.object() {
+                Some(i) => selected_object == Some(i),
+                None => selected.is_some() && selected == id.source(),
+            };
+            let outline = if chosen {
                 Stroke::new(2.0, SELECTED)
             } else {
                 Stroke::new(1.0, Color32::BLACK)
             };
-            if id.is_position() {
+            if id.object().is_some() {
+                // Objects: diamonds.
+                let r = radius * 1.3;
+                let diamond = vec![
+                    s + Vec2::new(0.0, -r),
+                    s + Vec2::new(r, 0.0),
+                    s + Vec2::new(0.0, r),
+                    s + Vec2::new(-r, 0.0),
+                ];
+                painter.add(egui::Shape::convex_polygon(diamond, fill, outline));
+            } else if id.is_position() {
                 painter.circle(s, radius, fill, outline);
             } else {
                 // Directions and sizes: squares.
@@ -404,7 +440,7 @@ mod tests {
             } else {
                 assert!((now - *p).length() > 1e-3, "{id:?} moved");
             }
-            let (kind, i) = id.source();
+            let (kind, i) = id.source().unwrap();
             let mut others = moved.clone();
             match kind {
                 SourceKind::Points => others.sources.points[i] = scene.sources.points[i].clone(),

@@ -53,7 +53,8 @@ impl ViewerApp {
             }
             .or(under.first().copied());
             self.picked = next.map(|h| (h, at));
-            self.selection = next.map(HandleId::source);
+            self.selection = next.and_then(HandleId::source);
+            self.selected_object = next.and_then(HandleId::object);
             self.scroll_to_selection = next.is_some();
         }
         if response.drag_started() {
@@ -77,7 +78,8 @@ impl ViewerApp {
             if response.dragged_by(PointerButton::Primary)
                 && let Some(id) = handle
             {
-                self.selection = Some(id.source());
+                self.selection = id.source();
+                self.selected_object = id.object();
                 self.scroll_to_selection = true;
             }
             self.gesture = if response.dragged_by(PointerButton::Primary) {
@@ -107,10 +109,12 @@ impl ViewerApp {
                         *start,
                         now - *press,
                     );
-                    if handles::get(&shown, *id) != Some(q)
-                        && let Some((parameter, value)) = handles::edit(&shown, *id, q)
-                    {
-                        out.push(Action::Edit(Edit::Set(parameter, value)));
+                    if handles::get(&shown, *id) != Some(q) {
+                        if let Some((parameter, value)) = handles::edit(&shown, *id, q) {
+                            out.push(Action::Edit(Edit::Set(parameter, value)));
+                        } else if let Some(edit) = handles::object_edit(&shown, *id, q) {
+                            out.push(Action::Edit(edit));
+                        }
                     }
                 }
                 Gesture::Orbit { start, press } => {
@@ -153,6 +157,7 @@ impl ViewerApp {
                 &shown,
                 dragged_handle.or(self.hovered),
                 self.selection,
+                self.selected_object,
             );
         }
         if let Some(error) = self.report().error {
@@ -167,8 +172,16 @@ impl ViewerApp {
         out
     }
 
-    /// The selection follows its source when an edit renumbers the sources (and goes with it).
+    /// The selection follows its source or object when an edit renumbers them (and goes with it).
     pub(super) fn follow_renumbering(&mut self, edit: &Edit) {
+        if let Some(j) = self.selected_object {
+            self.selected_object = match *edit {
+                Edit::DeleteObject(i) if i == j => None,
+                Edit::DeleteObject(i) if i < j => Some(j - 1),
+                Edit::DuplicateObject(i) if i < j => Some(j + 1),
+                _ => Some(j),
+            };
+        }
         let Some((kind, j)) = self.selection else {
             return;
         };
@@ -182,6 +195,9 @@ impl ViewerApp {
 
     /// Drops a selection whose source is gone (an undo, a reload, another file).
     pub(super) fn check_selection(&mut self) {
+        if self.selected_object >= Some(self.doc.scene.objects.len()) {
+            self.selected_object = None;
+        }
         let s = &self.doc.scene.sources;
         if let Some((kind, i)) = self.selection {
             let count = match kind {

@@ -12,6 +12,7 @@ use std::sync::{Arc, Mutex};
 use std::time::{Instant, SystemTime};
 
 use egui::{Color32, Key, KeyboardShortcut, Modifiers, PointerButton, Sense};
+use glam::DVec3;
 
 use super::action::{Action, Edit};
 use super::animation_panel::{self, AnimationForm};
@@ -111,6 +112,8 @@ pub struct ViewerApp {
     hovered: Option<HandleId>,
     /// The selected source: ringed in the viewport, highlighted in the panel.
     selection: Option<(SourceKind, usize)>,
+    /// The selected object, if any (a source or an object is selected, not both).
+    selected_object: Option<usize>,
     /// The handle the last click picked, and where: a second click there goes on to the next handle under it.
     picked: Option<(HandleId, egui::Pos2)>,
     /// The panel scrolls to the selected source's entry at its next frame (a selection made in the viewport).
@@ -166,6 +169,7 @@ impl ViewerApp {
             gesture: None,
             hovered: None,
             selection: None,
+            selected_object: None,
             picked: None,
             scroll_to_selection: false,
             dialog: None,
@@ -315,6 +319,11 @@ impl ViewerApp {
         self.selection
     }
 
+    /// The selected object, if any.
+    pub fn selected_object(&self) -> Option<usize> {
+        self.selected_object
+    }
+
     /// The animation's current frame and transport.
     pub fn playback(&self) -> &Playback {
         &self.playback
@@ -462,12 +471,53 @@ impl ViewerApp {
             Action::Notify { text, is_error } => self.notify(text, is_error),
             Action::Select(selection) => {
                 self.selection = selection;
+                if selection.is_some() {
+                    self.selected_object = None;
+                }
                 self.picked = None;
             }
+            Action::SelectObject(selected) => {
+                self.selected_object = selected;
+                if selected.is_some() {
+                    self.selection = None;
+                }
+                self.picked = None;
+            }
+            Action::AddMesh(path, at) => self.add_mesh(&path, at),
             Action::Edit(edit) => {
                 self.follow_renumbering(&edit);
                 edit.apply(&mut self.doc.scene, self.playback.frame as f64);
             }
+        }
+    }
+
+    /// Reads the glTF file at `path` (relative to the scene file's folder, or absolute) and adds it as a mesh
+    /// object at `at`; a file that does not read is reported and adds nothing.
+    fn add_mesh(&mut self, path: &str, at: DVec3) {
+        let written = std::path::PathBuf::from(path.trim());
+        let base = (self.doc.path().and_then(|p| p.parent()))
+            .map(|p| p.to_path_buf())
+            .unwrap_or_default();
+        let full = if written.is_absolute() {
+            written.clone()
+        } else {
+            base.join(&written)
+        };
+        match crate::objects::MeshData::load(&full) {
+            Ok(data) => {
+                let object = crate::objects::Object {
+                    shape: crate::objects::Shape::Mesh(crate::objects::MeshObject {
+                        path: written,
+                        translation: at,
+                        rotation: DVec3::ZERO,
+                        scale: DVec3::ONE,
+                        data: std::sync::Arc::new(data),
+                    }),
+                    color: crate::scene::DEFAULT_ALBEDO,
+                };
+                self.apply(Action::Edit(Edit::InsertObject(object)));
+            }
+            Err(e) => self.notify(format!("{}: {e}", full.display()), true),
         }
     }
 
@@ -536,6 +586,7 @@ impl ViewerApp {
                             aspect: self.aspect(),
                             frame: self.playback.frame,
                             selected: self.selection,
+                            selected_object: self.selected_object,
                             scroll_to_selected: std::mem::take(&mut self.scroll_to_selection),
                             recent: self.recent.files(),
                         };

@@ -67,6 +67,8 @@ pub struct Context<'a> {
     pub frame: u32,
     /// The selected source: its entry is highlighted.
     pub selected: Option<(SourceKind, usize)>,
+    /// The selected object: its entry is highlighted.
+    pub selected_object: Option<usize>,
     /// Scroll the selected source's entry into view (it was selected in the viewport).
     pub scroll_to_selected: bool,
     /// The files opened and saved lately, newest first.

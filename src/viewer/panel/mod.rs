@@ -4,12 +4,13 @@
 //! directions, ...), so the GPU never sees them.
 //!
 //! One file a section: `file` (the document, files, screenshots), `view` (the camera), `render` (integration,
-//! billboard, colors), `sources`; `fields` holds the editors with their key buttons, `context` what the panel
+//! billboard, colors), `sources`, `objects`; `fields` holds the editors with their key buttons, `context` what the panel
 //! reads and its own settings.
 
 mod context;
 mod fields;
 mod file;
+mod objects;
 mod render;
 mod sources;
 mod view;
@@ -36,5 +37,7 @@ pub fn show(ui: &mut Ui, cx: &Context, path: &mut String, view: &mut ViewSetting
     render::render_section(ui, cx, view, &mut out);
     ui.separator();
     sources::sources_section(ui, cx, &mut out);
+    ui.separator();
+    objects::objects_section(ui, cx, &mut out);
     out.actions
 }

@@ -1,0 +1,200 @@
+//! The Objects section: spheres, boxes, planes and glTF meshes standing around the effect, each with its
+//! editors, Duplicate and Delete, and selection. Objects are not animated: an edit replaces the object whole
+//! (`Edit::SetObject`), one undo step a settled edit like every other.
+
+use egui::{DragValue, Ui};
+use glam::DVec3;
+
+use super::super::action::{Action, Edit};
+use super::super::widgets::{ERROR_COLOR, color, direction, labelled, vec3};
+use super::context::Context;
+use super::fields::Edits;
+use crate::objects::{Object, Shape, ShapeKind};
+
+/// The section: adding (the glTF path typed is kept in egui's memory), and every object's entry.
+pub(super) fn objects_section(ui: &mut Ui, cx: &Context, out: &mut Edits<'_>) {
+    let target = cx.shown.camera.target;
+    ui.horizontal(|ui| {
+        ui.strong("Objects");
+        for (label, kind) in [
+            ("+ sphere", ShapeKind::Sphere),
+            ("+ box", ShapeKind::Box),
+            ("+ plane", ShapeKind::Plane),
+        ] {
+            if ui.button(label).clicked() {
+                out.push(Action::Edit(Edit::AddObject(kind, target)));
+            }
+        }
+    });
+    ui.horizontal(|ui| {
+        let id = ui.make_persistent_id("energywave.objects.mesh_path");
+        let mut path: String = ui.data_mut(|d| d.get_temp(id).unwrap_or_default());
+        let field = ui.add(
+            egui::TextEdit::singleline(&mut path)
+                .hint_text("model.glb")
+                .desired_width(160.0),
+        );
+        ui.data_mut(|d| d.insert_temp(id, path.clone()));
+        let enter = field.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
+        if (ui
+            .add_enabled(!path.trim().is_empty(), egui::Button::new("+ mesh"))
+            .on_hover_text("A glTF 2.0 file (.gltf or .glb), relative to the scene file's folder")
+            .clicked()
+            || enter)
+            && !path.trim().is_empty()
+        {
+            out.push(Action::AddMesh(path, target));
+        }
+    });
+    if cx.shown.objects.is_empty() {
+        ui.weak("None: the glow alone. Objects hide the glow behind them and are lit by it.");
+    }
+    for (i, object) in cx.shown.objects.iter().enumerate() {
+        let selected = cx.selected_object == Some(i);
+        let frame = if selected {
+            egui::Frame::NONE
+                .fill(ui.visuals().selection.bg_fill.gamma_multiply(0.25))
+                .stroke(ui.visuals().selection.stroke)
+                .corner_radius(3.0)
+        } else {
+            egui::Frame::NONE
+        };
+        frame.show(ui, |ui| {
+            let id = ui.make_persistent_id(("energywave.object", i));
+            let state = egui::collapsing_header::CollapsingState::load_with_default_open(
+                ui.ctx(),
+                id,
+                true,
+            );
+            let (_, header, _) = state
+                .show_header(ui, |ui| {
+                    let name = ui
+                        .selectable_label(selected, title(object, i))
+                        .on_hover_text("Select: its handle is ringed in the viewport");
+                    if name.clicked() {
+                        out.push(Action::SelectObject((!selected).then_some(i)));
+                    }
+                    name
+                })
+                .body(|ui| {
+                    if let Some(edited) = editor(ui, object) {
+                        out.push(Action::Edit(Edit::SetObject(i, edited)));
+                    }
+                    ui.horizontal(|ui| {
+                        if ui.small_button("Duplicate").clicked() {
+                            out.push(Action::Edit(Edit::DuplicateObject(i)));
+                        }
+                        if ui.small_button("Delete").clicked() {
+                            out.push(Action::Edit(Edit::DeleteObject(i)));
+                        }
+                    });
+                });
+            if selected && cx.scroll_to_selected {
+                header.inner.scroll_to_me(Some(egui::Align::TOP));
+            }
+        });
+    }
+}
+
+fn title(object: &Object, i: usize) -> String {
+    let kind = match object.kind() {
+        ShapeKind::Sphere => "Sphere",
+        ShapeKind::Box => "Box",
+        ShapeKind::Plane => "Plane",
+        ShapeKind::Mesh => "Mesh",
+    };
+    format!("{kind} {}", i + 1)
+}
+
+/// The editors of one object; the object as edited when the user changed something.
+fn editor(ui: &mut Ui, object: &Object) -> Option<Object> {
+    let mut o = object.clone();
+    let mut changed = false;
+    match &mut o.shape {
+        Shape::Sphere { center, radius } => {
+            changed |= vec3(ui, "center", center, 0.02).0;
+            changed |= length(ui, "radius", radius);
+        }
+        Shape::Box {
+            center,
+            size,
+            rotation,
+        } => {
+            changed |= vec3(ui, "center", center, 0.02).0;
+            changed |= lengths(ui, "size", size);
+            changed |= vec3(ui, "rotation", rotation, 0.5).0;
+        }
+        Shape::Plane {
+            point,
+            normal,
+            size,
+        } => {
+            changed |= vec3(ui, "point", point, 0.02).0;
+            if let (Some(n), _) = direction(ui, "normal", *normal) {
+                *normal = n;
+                changed = true;
+            }
+            ui.horizontal(|ui| {
+                let mut finite = size.is_some();
+                if ui
+                    .checkbox(&mut finite, "finite")
+                    .on_hover_text("A square of this side around the point; off: the whole plane")
+                    .changed()
+                {
+                    *size = finite.then_some(10.0);
+                    changed = true;
+                }
+                if let Some(side) = size {
+                    changed |= length(ui, "side", side);
+                }
+            });
+        }
+        Shape::Mesh(m) => {
+            ui.label(format!(
+                "{} ({} triangles)",
+                m.path.display(),
+                m.data.triangles.len()
+            ));
+            changed |= vec3(ui, "translation", &mut m.translation, 0.02).0;
+            changed |= vec3(ui, "rotation", &mut m.rotation, 0.5).0;
+            changed |= lengths(ui, "scale", &mut m.scale);
+        }
+    }
+    if let (Some(c), _) = color(ui, "albedo", o.color) {
+        o.color = c;
+        changed = true;
+    }
+    (changed && o != *object).then_some(o)
+}
+
+/// A positive length.
+fn length(ui: &mut Ui, label: &str, x: &mut f64) -> bool {
+    ui.horizontal(|ui| {
+        labelled(
+            ui,
+            label,
+            DragValue::new(x)
+                .range(1e-3..=1e6)
+                .speed(0.01)
+                .max_decimals(4),
+        )
+        .changed()
+    })
+    .inner
+}
+
+/// Three positive lengths (a box's sides, a mesh's scale); a zero or negative one is refused, and said so.
+fn lengths(ui: &mut Ui, label: &str, v: &mut DVec3) -> bool {
+    let mut edited = *v;
+    let (changed, _) = vec3(ui, label, &mut edited, 0.01);
+    if !changed {
+        return false;
+    }
+    if edited.min_element() > 0.0 {
+        *v = edited;
+        true
+    } else {
+        ui.colored_label(ERROR_COLOR, format!("{label} must be positive"));
+        false
+    }
+}
