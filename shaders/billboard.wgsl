@@ -15,17 +15,33 @@ struct BillboardParams {
     mode: u32,         // 0: clamp((1 - B) Cb + G); 1: premultiplied G and alpha min(B, 1), unclamped;
                        // 2: clamp(G + (1 - min(B, 1)) Cb) (gpu::billboard_pass::BlendMode)
     energy: vec4<f32>, // Ce in rgb, its intensity applied
+    near: f32,         // the projection's depth range (gpu::billboard_pass::depth_range)
+    far: f32,
+    nu: f32,           // E = V + nu (S - V)
+    pad0: f32,
 }
 
 // Whether the field texture holds the tint (layers 1 to 3) beside B: false where every source has the scene's
 // color. A constant, so that the tint's loads are compiled out where there is none (gpu::billboard_pass keeps
 // a pipeline of each).
 override TINTED: bool = true;
+// Whether the scene has objects (gpu::billboard_pass keeps a pipeline of each): then a pixel whose object lies
+// in front of the billboard shows no glow, and the glow elsewhere is interpolated from the texels whose rays
+// end about where the pixel's does (sample_near_clip), so that an object's edge is as sharp as its pixels.
+override OBJECTS: bool = false;
 
 @group(0) @binding(0) var<uniform> params: BillboardParams;
 // The field pass's texture: layer 0 B, layers 1 to 3 the tint sum B_i (Ce_i - Ce), G = B Ce + tint.
 @group(0) @binding(1) var field: texture_2d_array<f32>;
 @group(0) @binding(2) var background: texture_2d<f32>;
+// The objects' depth in the frame's projection (cleared to 1 where none is drawn), read where OBJECTS.
+@group(0) @binding(3) var depth: texture_depth_2d;
+// Each texel's share c of its ray S -> E before the first surface (objects::clip), rows from the top, read where
+// OBJECTS.
+@group(0) @binding(4) var<storage, read> clips: array<f32>;
+
+// Texels whose clip differs from the pixel's by more than this share of the ray do not shade it.
+const CLIP_MATCH: f32 = 0.05;
 
 struct VertexOut {
     @builtin(position) position: vec4<f32>,
@@ -78,9 +94,79 @@ fn sample_field(uv: vec2<f32>) -> vec4<f32> {
     return out;
 }
 
+// The distance along the view axis of a depth in [0, 1] of the frame's projection.
+fn view_depth(d: f32) -> f32 {
+    return params.near * params.far / (params.far - d * (params.far - params.near));
+}
+
+// sample_field over the texels whose ray ends about where the pixel's does (their clip within CLIP_MATCH of
+// `clip`, the pixel's own), their weights renormalised; where none does, the texel whose clip is nearest. An
+// object's edge then cuts the glow as sharply as its pixels rather than in a staircase of texels: the glow on
+// either side is read from the texels on that side. Twin of reference::billboard::sample_near_clip.
+fn sample_near_clip(uv: vec2<f32>, clip: f32) -> vec4<f32> {
+    let s = bilinear_at(uv);
+    let corners = array<vec2<i32>, 4>(
+        vec2<i32>(s.i0.x, s.i0.y),
+        vec2<i32>(s.i1.x, s.i0.y),
+        vec2<i32>(s.i0.x, s.i1.y),
+        vec2<i32>(s.i1.x, s.i1.y),
+    );
+    let weights = vec4<f32>((1.0 - s.f.x) * (1.0 - s.f.y), s.f.x * (1.0 - s.f.y), (1.0 - s.f.x) * s.f.y, s.f.x * s.f.y);
+    let w = i32(params.resolution);
+    var sum = vec4<f32>(0.0);
+    var total = 0.0;
+    var nearest = 0;
+    var nearest_gap = 2.0;
+    for (var k = 0; k < 4; k++) {
+        let gap = abs(clips[corners[k].y * w + corners[k].x] - clip);
+        if gap < nearest_gap {
+            nearest_gap = gap;
+            nearest = k;
+        }
+        if gap <= CLIP_MATCH {
+            sum += weights[k] * texel_at(corners[k]);
+            total += weights[k];
+        }
+    }
+    if total > 0.0 {
+        return sum / total;
+    }
+    return texel_at(corners[nearest]);
+}
+
+fn texel_at(at: vec2<i32>) -> vec4<f32> {
+    var texel = vec4<f32>(textureLoad(field, at, 0, 0).r, 0.0, 0.0, 0.0);
+    if TINTED {
+        texel = vec4<f32>(
+            texel.x,
+            textureLoad(field, at, 1, 0).r,
+            textureLoad(field, at, 2, 0).r,
+            textureLoad(field, at, 3, 0).r,
+        );
+    }
+    return texel;
+}
+
 @fragment
 fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
-    let field = sample_field(in.uv);
+    var field: vec4<f32>;
+    if OBJECTS {
+        // An object in front of the billboard hides the glow at this pixel.
+        let d = textureLoad(depth, vec2<i32>(in.position.xy), 0);
+        if d < in.position.z {
+            field = vec4<f32>(0.0);
+        } else {
+            // The pixel's own clip: where along S -> E its ray meets the object behind the billboard (1: none).
+            var clip = 1.0;
+            if d < 1.0 {
+                let tau = view_depth(d) / view_depth(in.position.z);
+                clip = clamp((tau - 1.0) / (params.nu - 1.0), 0.0, 1.0);
+            }
+            field = sample_near_clip(in.uv, clip);
+        }
+    } else {
+        field = sample_field(in.uv);
+    }
     let b = field.x;
     let glow = b * params.energy.rgb + field.yzw;
     let cb = textureLoad(background, vec2<i32>(in.position.xy), 0);

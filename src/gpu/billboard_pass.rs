@@ -23,8 +23,12 @@ pub mod gpu_data {
         pub up: [f32; 3],             // 96
         pub mode: u32,                // 108: BlendMode
         pub energy: [f32; 4],         // 112
+        pub near: f32,                // 128: the projection's depth range (`depth_range`)
+        pub far: f32,                 // 132
+        pub nu: f32,                  // 136: E = V + nu (S - V) (`geometry::Reach`)
+        pub pad0: f32,                // 140
     }
-    const _: () = assert!(size_of::<BillboardParams>() == 128);
+    const _: () = assert!(size_of::<BillboardParams>() == 144);
 }
 
 use gpu_data::BillboardParams;
@@ -32,12 +36,16 @@ use gpu_data::BillboardParams;
 /// The camera's view-projection matrix (right-handed, depth in [0, 1]) for a frame of `aspect`, with near and
 /// far planes around the billboard (nothing else is drawn by this pass).
 pub fn view_projection(camera: &Camera, billboard: &Billboard, aspect: f64) -> DMat4 {
-    let distance = (billboard.center - camera.eye).length().max(1e-9);
-    let near = 1e-3 * distance;
-    let far = 1e3 * (distance + billboard.size);
+    let (near, far) = depth_range(camera, billboard);
     let frame = camera.frame();
     let proj = DMat4::perspective_rh(camera.fov_y_degrees.to_radians(), aspect, near, far);
     proj * DMat4::look_at_rh(camera.eye, camera.eye + frame.forward, frame.up)
+}
+
+/// The near and far planes of `view_projection`.
+pub fn depth_range(camera: &Camera, billboard: &Billboard) -> (f64, f64) {
+    let distance = (billboard.center - camera.eye).length().max(1e-9);
+    (1e-3 * distance, 1e3 * (distance + billboard.size))
 }
 
 /// What the billboard pass writes: the glow blended over the background, or the glow alone for compositing.
@@ -70,8 +78,14 @@ pub fn billboard_params(
     energy: [f64; 3],
     aspect: f64,
     mode: BlendMode,
+    nu: f64,
 ) -> BillboardParams {
+    let (near, far) = depth_range(camera, billboard);
     BillboardParams {
+        near: near as f32,
+        far: far as f32,
+        nu: nu as f32,
+        pad0: 0.0,
         view_proj: view_projection(camera, billboard, aspect)
             .as_mat4()
             .to_cols_array_2d(),
@@ -87,10 +101,14 @@ pub fn billboard_params(
 
 /// The pipeline of the billboard pass for one target format.
 pub struct BillboardRenderer {
-    /// B alone, and B with the tint (`field_pass::layers_of`).
-    pipelines: [wgpu::RenderPipeline; 2],
+    /// B alone, and B with the tint (`field_pass::layers_of`); each without objects and with them.
+    pipelines: [[wgpu::RenderPipeline; 2]; 2],
     layout: wgpu::BindGroupLayout,
     params: wgpu::Buffer,
+    /// Each texel's share of its ray before the first surface (`objects::clip`), where the scene has objects.
+    clips: wgpu::Buffer,
+    /// What `clips` holds.
+    uploaded: Option<std::sync::Arc<Vec<f32>>>,
 }
 
 impl BillboardRenderer {
@@ -126,56 +144,92 @@ impl BillboardRenderer {
                 },
                 texture(1, wgpu::TextureViewDimension::D2Array),
                 texture(2, wgpu::TextureViewDimension::D2),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 3,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Depth,
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 4,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Storage { read_only: true },
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
             ],
         );
         // Two pipelines, B alone and B with the tint (the shader's TINTED): a branch on a uniform around the
         // tint's loads cost lavapipe 14 % of the billboard even where it is never taken (measured, a 4096^2
         // frame).
         let pipelines = [0.0, 1.0].map(|tinted| {
-            render_pipeline(
-                device,
-                RenderPipelineSpec {
-                    name: "billboard",
-                    module: &module,
-                    layout: &pipeline_layout,
-                    vertex_buffers: &[],
-                    topology: wgpu::PrimitiveTopology::TriangleStrip,
-                    fragment_entry: "fs_main",
-                    constants: &[("TINTED", tinted)],
-                    target: wgpu::ColorTargetState {
-                        format,
-                        blend: None,
-                        write_mask: wgpu::ColorWrites::ALL,
+            [0.0, 1.0].map(|objects| {
+                render_pipeline(
+                    device,
+                    RenderPipelineSpec {
+                        name: "billboard",
+                        module: &module,
+                        layout: &pipeline_layout,
+                        vertex_buffers: &[],
+                        topology: wgpu::PrimitiveTopology::TriangleStrip,
+                        fragment_entry: "fs_main",
+                        constants: &[("TINTED", tinted), ("OBJECTS", objects)],
+                        target: wgpu::ColorTargetState {
+                            format,
+                            blend: None,
+                            write_mask: wgpu::ColorWrites::ALL,
+                        },
+                        depth: None,
                     },
-                    depth: None,
-                },
-            )
+                )
+            })
         });
         let params = uniform_buffer::<BillboardParams>(device, "energywave.billboard.params");
         Self {
             pipelines,
             layout,
             params,
+            clips: clip_buffer(device, 4),
+            uploaded: None,
         }
     }
 
     /// Records the billboard into `target` (loaded, not cleared), reading `background` (a copy of what lies
-    /// behind, same size as the target) and `brightness` (the field pass's texture, of `layers` layers: B, or B
-    /// and the tint). The parameters are
-    /// written through the queue, so one draw per submission.
+    /// behind, same size as the target), `brightness` (the field pass's texture, of `layers` layers: B, or B
+    /// and the tint) and, where `objects`, the objects' `depth`. The parameters are written through the queue,
+    /// so one draw per submission.
     #[allow(clippy::too_many_arguments)]
     pub fn draw(
-        &self,
+        &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         encoder: &mut wgpu::CommandEncoder,
         target: &wgpu::TextureView,
         background: &wgpu::TextureView,
         brightness: &wgpu::TextureView,
+        (depth, clips): (&wgpu::TextureView, Option<std::sync::Arc<Vec<f32>>>),
         layers: u32,
         params: &BillboardParams,
     ) {
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(params));
+        let objects = clips.is_some();
+        if let Some(clips) = clips
+            && self.uploaded.as_ref() != Some(&clips)
+        {
+            let bytes: &[u8] = bytemuck::cast_slice(&clips);
+            if bytes.len() as u64 > self.clips.size() {
+                self.clips = clip_buffer(device, bytes.len() as u64);
+            }
+            queue.write_buffer(&self.clips, 0, bytes);
+            self.uploaded = Some(clips);
+        }
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("energywave.billboard.bind_group"),
             layout: &self.layout,
@@ -191,6 +245,14 @@ impl BillboardRenderer {
                 wgpu::BindGroupEntry {
                     binding: 2,
                     resource: wgpu::BindingResource::TextureView(background),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: wgpu::BindingResource::TextureView(depth),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 4,
+                    resource: self.clips.as_entire_binding(),
                 },
             ],
         });
@@ -210,8 +272,17 @@ impl BillboardRenderer {
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_pipeline(&self.pipelines[(layers > 1) as usize]);
+        pass.set_pipeline(&self.pipelines[(layers > 1) as usize][objects as usize]);
         pass.set_bind_group(0, &bind_group, &[]);
         pass.draw(0..4, 0..1);
     }
+}
+
+fn clip_buffer(device: &wgpu::Device, size: u64) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("energywave.billboard.clips"),
+        size: size.max(4),
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
 }

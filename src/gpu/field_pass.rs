@@ -14,7 +14,7 @@ use super::shaders;
 use crate::field::curve::segments;
 use crate::geometry::Billboard;
 use crate::integrate::{Decay, Integrator};
-use crate::objects::clip::clip_fractions;
+use crate::objects::clip::shared_clip_fractions;
 use crate::scene::Scene;
 
 /// Rust mirrors of the WGSL structs of `shaders/field_pass.wgsl` and `shaders/field_common.wgsl` (keep in
@@ -477,8 +477,8 @@ fn pack(scene: &Scene, billboard: &Billboard) -> Packed {
     packed.params.search = packed.curves.iter().any(|c| c.piece_count > 0) as u32;
     let eye = scene.camera.eye;
     let w = scene.billboard.resolution;
-    if let Some(clips) = clip_fractions(&scene.objects, eye, billboard, reach, w) {
-        packed.clips = clips.into_iter().map(|c| c as f32).collect();
+    if let Some(clips) = shared_clip_fractions(&scene.objects, eye, billboard, reach, w) {
+        packed.clips = clips.to_vec();
         packed.params.clipped = 1;
     }
     packed.chunks = plan_chunks(&packed);

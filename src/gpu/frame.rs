@@ -7,6 +7,7 @@ use super::context::{GpuError, checked, read_texture, texture_2d};
 use super::field_pass::FieldRenderer;
 use super::glare_pass::GlarePass;
 use super::object_pass::{DEPTH_FORMAT, ObjectPass};
+use crate::objects::clip::shared_clip_fractions;
 use crate::scene::Scene;
 
 /// Format of composed frames: half floats (renderable on every backend, unlike Rgba32Float on GL), 11 bits of
@@ -46,7 +47,7 @@ impl FrameTargets {
             "energywave.frame.depth",
             size,
             DEPTH_FORMAT,
-            U::RENDER_ATTACHMENT,
+            U::RENDER_ATTACHMENT | U::TEXTURE_BINDING,
         );
         Self {
             size,
@@ -185,7 +186,10 @@ impl SceneRenderer {
                 });
                 behind(&mut pass, view_proj);
             }
-            if !self.holdout && self.objects.prepare(device, scene) {
+            // The objects with depth (a holdout: their depth alone), which the billboard reads to hide the glow
+            // in front of them pixel by pixel.
+            let objects = self.objects.prepare(device, scene);
+            if objects {
                 let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                     label: Some("energywave.frame.objects"),
                     color_attachments: &[Some(wgpu::RenderPassColorAttachment {
@@ -201,7 +205,7 @@ impl SceneRenderer {
                         view: &targets.depth_view,
                         depth_ops: Some(wgpu::Operations {
                             load: wgpu::LoadOp::Clear(1.0),
-                            store: wgpu::StoreOp::Discard,
+                            store: wgpu::StoreOp::Store,
                         }),
                         stencil_ops: None,
                     }),
@@ -209,7 +213,8 @@ impl SceneRenderer {
                     occlusion_query_set: None,
                     multiview_mask: None,
                 });
-                self.objects.draw(queue, &mut pass, view_proj);
+                self.objects
+                    .draw(queue, &mut pass, view_proj, !self.holdout);
             }
             // The billboard blends over a copy of what lies behind it.
             encoder.copy_texture_to_texture(
@@ -217,6 +222,7 @@ impl SceneRenderer {
                 targets.color.as_image_copy(),
                 targets.background.size(),
             );
+            let reach = scene.ray_reach(&billboard);
             let params = billboard_params(
                 &scene.camera,
                 &billboard,
@@ -224,7 +230,19 @@ impl SceneRenderer {
                 scene.colors.energy_color(),
                 aspect,
                 BlendMode::of(transparent, scene.colors.blend),
+                reach.nu,
             );
+            // Where objects stand, the billboard reads the clips of the texture it shows (`resolution`).
+            let clips = match objects {
+                true => shared_clip_fractions(
+                    &scene.objects,
+                    scene.camera.eye,
+                    &billboard,
+                    reach,
+                    resolution,
+                ),
+                false => None,
+            };
             self.billboard.draw(
                 device,
                 queue,
@@ -232,6 +250,7 @@ impl SceneRenderer {
                 &targets.color_view,
                 &targets.background_view,
                 brightness,
+                (&targets.depth_view, clips),
                 layers,
                 &params,
             );

@@ -39,7 +39,8 @@ use gpu_data::{ObjectParams, ObjectVertex};
 
 /// The objects' pipeline and the buffers of the last scene's lit triangles.
 pub struct ObjectPass {
-    pipeline: wgpu::RenderPipeline,
+    /// Color and depth; depth alone (a holdout).
+    pipelines: [wgpu::RenderPipeline; 2],
     params: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
     vertices: Option<wgpu::Buffer>,
@@ -78,36 +79,38 @@ impl ObjectPass {
                 resource: params.as_entire_binding(),
             }],
         });
-        let pipeline = render_pipeline(
-            device,
-            RenderPipelineSpec {
-                name: "objects",
-                module: &module,
-                layout: &pipeline_layout,
-                vertex_buffers: &[Some(wgpu::VertexBufferLayout {
-                    array_stride: size_of::<ObjectVertex>() as u64,
-                    step_mode: wgpu::VertexStepMode::Vertex,
-                    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3],
-                })],
-                topology: wgpu::PrimitiveTopology::TriangleList,
-                fragment_entry: "fs_main",
-                constants: &[],
-                target: wgpu::ColorTargetState {
-                    format: FRAME_FORMAT,
-                    blend: None,
-                    write_mask: wgpu::ColorWrites::ALL,
+        let pipelines = [wgpu::ColorWrites::ALL, wgpu::ColorWrites::empty()].map(|write_mask| {
+            render_pipeline(
+                device,
+                RenderPipelineSpec {
+                    name: "objects",
+                    module: &module,
+                    layout: &pipeline_layout,
+                    vertex_buffers: &[Some(wgpu::VertexBufferLayout {
+                        array_stride: size_of::<ObjectVertex>() as u64,
+                        step_mode: wgpu::VertexStepMode::Vertex,
+                        attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3],
+                    })],
+                    topology: wgpu::PrimitiveTopology::TriangleList,
+                    fragment_entry: "fs_main",
+                    constants: &[],
+                    target: wgpu::ColorTargetState {
+                        format: FRAME_FORMAT,
+                        blend: None,
+                        write_mask,
+                    },
+                    depth: Some(wgpu::DepthStencilState {
+                        format: DEPTH_FORMAT,
+                        depth_write_enabled: Some(true),
+                        depth_compare: Some(wgpu::CompareFunction::Less),
+                        stencil: Default::default(),
+                        bias: Default::default(),
+                    }),
                 },
-                depth: Some(wgpu::DepthStencilState {
-                    format: DEPTH_FORMAT,
-                    depth_write_enabled: Some(true),
-                    depth_compare: Some(wgpu::CompareFunction::Less),
-                    stencil: Default::default(),
-                    bias: Default::default(),
-                }),
-            },
-        );
+            )
+        });
         Self {
-            pipeline,
+            pipelines,
             params,
             bind_group,
             vertices: None,
@@ -155,12 +158,14 @@ impl ObjectPass {
     }
 
     /// Draws the prepared triangles into `pass` (which has a `DEPTH_FORMAT` depth attachment) with the
-    /// projection `view_proj` (written before the submit that runs the pass).
+    /// projection `view_proj` (written before the submit that runs the pass): their colors and depth, or their
+    /// depth alone where not `color`.
     pub fn draw(
         &self,
         queue: &wgpu::Queue,
         pass: &mut wgpu::RenderPass<'_>,
         view_proj: [[f32; 4]; 4],
+        color: bool,
     ) {
         let (Some(vertices), Some(indices)) = (&self.vertices, &self.indices) else {
             return;
@@ -173,7 +178,7 @@ impl ObjectPass {
             0,
             bytemuck::bytes_of(&ObjectParams { view_proj }),
         );
-        pass.set_pipeline(&self.pipeline);
+        pass.set_pipeline(&self.pipelines[!color as usize]);
         pass.set_bind_group(0, &self.bind_group, &[]);
         pass.set_vertex_buffer(0, vertices.slice(..));
         pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);

@@ -8,6 +8,8 @@
 //! shortened ray `S -> S + c (E - S)` with the settings `Integration::on_ray(c)` (the decay mapped onto it as
 //! `geometry::Reach` maps it onto a ray of several decay lengths): the integrators run unchanged.
 
+use std::sync::{Arc, Mutex};
+
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -44,4 +46,54 @@ pub fn clip_fractions(
             }
         });
     Some(out)
+}
+
+/// What a frame's clips depend on.
+#[derive(Clone, Debug, PartialEq)]
+struct ClipKey {
+    objects: Vec<Object>,
+    eye: DVec3,
+    billboard: Billboard,
+    nu: f64,
+    w: u32,
+}
+
+/// `clip_fractions` in f32, kept for the last few frames' keys: the field pass and the billboard pass of a
+/// frame ask for the same clips, and a still view asks again every frame.
+pub fn shared_clip_fractions(
+    objects: &[Object],
+    eye: DVec3,
+    billboard: &Billboard,
+    reach: Reach,
+    w: u32,
+) -> Option<Arc<Vec<f32>>> {
+    if objects.is_empty() {
+        return None;
+    }
+    static CACHE: Mutex<Vec<(ClipKey, Arc<Vec<f32>>)>> = Mutex::new(Vec::new());
+    let key = ClipKey {
+        objects: objects.to_vec(),
+        eye,
+        billboard: *billboard,
+        nu: reach.nu,
+        w,
+    };
+    if let Ok(cache) = CACHE.lock()
+        && let Some((_, clips)) = cache.iter().find(|(k, _)| *k == key)
+    {
+        return Some(clips.clone());
+    }
+    let clips: Arc<Vec<f32>> = Arc::new(
+        clip_fractions(objects, eye, billboard, reach, w)?
+            .into_iter()
+            .map(|c| c as f32)
+            .collect(),
+    );
+    if let Ok(mut cache) = CACHE.lock() {
+        if cache.len() >= 4 {
+            cache.remove(0);
+        }
+        cache.push((key, clips.clone()));
+    }
+    Some(clips)
 }

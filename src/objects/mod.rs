@@ -53,7 +53,7 @@ pub enum Shape {
 
 /// A triangle mesh read from a glTF 2.0 file, placed by `translation`, `rotation` and `scale` (applied in the
 /// order scale, rotation, translation, after the transforms of the file's own nodes).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug)]
 pub struct MeshObject {
     /// The path as the scene file gives it (relative to the scene file's folder, or absolute).
     pub path: PathBuf,
@@ -202,6 +202,18 @@ impl Object {
                 Some((c - half, c + half))
             }
         }
+    }
+}
+
+impl PartialEq for MeshObject {
+    /// The same file placed alike; its triangles compared only where they are not shared (every frame compares
+    /// the scene with the last one's).
+    fn eq(&self, other: &Self) -> bool {
+        self.path == other.path
+            && self.translation == other.translation
+            && self.rotation == other.rotation
+            && self.scale == other.scale
+            && (Arc::ptr_eq(&self.data, &other.data) || self.data == other.data)
     }
 }
 

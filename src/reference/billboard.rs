@@ -4,11 +4,13 @@
 //! Colors are display values in [0, 1] (as an artist picks them), blended as they are, the way the papers
 //! blend: `color = clamp((1 - B) Cb + B Ce)`. B above 1 blows the glow out toward white by design.
 
+use glam::DVec3;
 use rayon::prelude::*;
 
 use super::field_pass::BrightnessTexture;
 use super::objects::ObjectImage;
 use crate::geometry::Billboard;
+use crate::objects::clip::clip_fractions;
 use crate::scene::{Blend, Scene};
 
 /// `clamp((1 - B) Cb + B Ce, 0, 1)` per channel.
@@ -81,6 +83,58 @@ pub fn sample_bilinear_by(w: u32, u: f64, v: f64, texel: impl Fn(usize) -> f64) 
     top * (1.0 - fy) + bottom * fy
 }
 
+/// Where (in units of `dir`) the ray from `eye` along `dir` meets the billboard's plane.
+fn billboard_distance(billboard: &Billboard, eye: DVec3, dir: DVec3) -> f64 {
+    (billboard.center - eye).dot(billboard.normal) / dir.dot(billboard.normal)
+}
+
+/// Texels whose clip differs from the pixel's by more than this share of the ray do not shade it.
+pub const CLIP_MATCH: f64 = 0.05;
+
+/// B and the tint at `(u, v)` interpolated bilinearly from the texels whose ray ends about where the pixel's
+/// does (their clip, the share of S -> E before the first surface, within `CLIP_MATCH` of `clip`, the pixel's
+/// own), their weights renormalised; where none does, the texel whose clip is nearest. Where objects stand, an
+/// object's edge then cuts the glow as sharply as its pixels rather than in a staircase of texels: the glow on
+/// either side is read from the texels on that side. Twin of the billboard shader's `sample_near_clip`.
+pub fn sample_near_clip(
+    texture: &BrightnessTexture,
+    clips: &[f64],
+    (u, v): (f64, f64),
+    clip: f64,
+) -> (f64, [f64; 3]) {
+    let w = texture.resolution;
+    let w_i = w as i64;
+    let (x, y) = (u * w as f64 - 0.5, v * w as f64 - 0.5);
+    let (x0, y0) = (x.floor(), y.floor());
+    let (fx, fy) = (x - x0, y - y0);
+    let (x0, y0) = (x0 as i64, y0 as i64);
+    let at = |i: i64, j: i64| (j.clamp(0, w_i - 1) * w_i + i.clamp(0, w_i - 1)) as usize;
+    let corners = [
+        (at(x0, y0), (1.0 - fx) * (1.0 - fy)),
+        (at(x0 + 1, y0), fx * (1.0 - fy)),
+        (at(x0, y0 + 1), (1.0 - fx) * fy),
+        (at(x0 + 1, y0 + 1), fx * fy),
+    ];
+    let (mut b, mut tint, mut total) = (0.0, [0.0; 3], 0.0);
+    let mut nearest = (corners[0].0, f64::INFINITY);
+    for (k, weight) in corners {
+        let gap = (clips[k] - clip).abs();
+        if gap < nearest.1 {
+            nearest = (k, gap);
+        }
+        if gap <= CLIP_MATCH {
+            b += weight * texture.values[k];
+            (0..3).for_each(|c| tint[c] += weight * texture.tint[k][c]);
+            total += weight;
+        }
+    }
+    if total > 0.0 {
+        (b / total, tint.map(|x| x / total))
+    } else {
+        (texture.values[nearest.0], texture.tint[nearest.0])
+    }
+}
+
 /// What lies behind the glow in a composed frame.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Backdrop {
@@ -129,10 +183,17 @@ pub fn compose_frame_over(
     } else {
         [r, g, b, 1.0]
     };
-    let objects = match backdrop {
-        Backdrop::Holdout => None,
-        _ => ObjectImage::of(scene),
-    };
+    // Held out, the objects are not drawn but still hide the glow in front of them.
+    let objects = ObjectImage::of(scene);
+    let reach = scene.ray_reach(billboard);
+    let clips = clip_fractions(
+        &scene.objects,
+        scene.camera.eye,
+        billboard,
+        reach,
+        texture.resolution,
+    );
+    let drawn = backdrop != Backdrop::Holdout;
     let glared = scene.glare.map(|g| super::glare::apply(texture, &g));
     let texture = glared.as_ref().unwrap_or(texture);
     let mut pixels = vec![clear; width as usize * height as usize];
@@ -144,19 +205,36 @@ pub fn compose_frame_over(
                 let dir = scene
                     .camera
                     .pixel_ray(x as f64 + 0.5, y as f64 + 0.5, width, height);
-                let under = match objects
-                    .as_ref()
-                    .and_then(|o| o.color(scene.camera.eye, dir))
-                {
-                    Some([r, g, b]) => [r, g, b, 1.0],
-                    None => clear,
+                let hit = objects.as_ref().and_then(|o| o.hit(scene.camera.eye, dir));
+                let under = match hit {
+                    Some((_, [r, g, b])) if drawn => [r, g, b, 1.0],
+                    _ => clear,
                 };
                 *out = under;
                 if let Some((u, v)) = billboard.hit(scene.camera.eye, dir) {
-                    let b = sample_bilinear(&texture.values, texture.resolution, u, v);
-                    let tint: [f64; 3] = std::array::from_fn(|c| {
-                        sample_bilinear_by(texture.resolution, u, v, |k| texture.tint[k][c])
-                    });
+                    let (b, tint) = match (&objects, hit) {
+                        (None, _) => (
+                            sample_bilinear(&texture.values, texture.resolution, u, v),
+                            std::array::from_fn(|c| {
+                                sample_bilinear_by(texture.resolution, u, v, |k| texture.tint[k][c])
+                            }),
+                        ),
+                        // An object in front of the billboard hides the glow at this pixel.
+                        (Some(_), Some((t, _)))
+                            if t < billboard_distance(billboard, scene.camera.eye, dir) =>
+                        {
+                            (0.0, [0.0; 3])
+                        }
+                        (Some(_), hit) => {
+                            // The pixel's own clip: where along S -> E its ray meets the object behind the
+                            // billboard (1: none).
+                            let clip = hit.map_or(1.0, |(t, _)| {
+                                let tau = t / billboard_distance(billboard, scene.camera.eye, dir);
+                                ((tau - 1.0) / (reach.nu - 1.0)).clamp(0.0, 1.0)
+                            });
+                            sample_near_clip(texture, clips.as_deref().unwrap_or(&[]), (u, v), clip)
+                        }
+                    };
                     let g = glow(b, tint, scene.colors.energy_color());
                     *out = if transparent {
                         // Premultiplied "over" what lies behind (transparent, or an opaque object).

@@ -33,12 +33,18 @@ impl ObjectImage {
 
     /// The lit color where the ray from `eye` along `dir` first meets a triangle, or none.
     pub fn color(&self, eye: DVec3, dir: DVec3) -> Option<[f64; 3]> {
-        let (_, k) = self.mesh.hit_triangle(eye, dir, 0.0, f64::INFINITY)?;
+        self.hit(eye, dir).map(|(_, c)| c)
+    }
+
+    /// Where (in units of `dir`) the ray from `eye` along `dir` first meets a triangle, and its lit color there.
+    pub fn hit(&self, eye: DVec3, dir: DVec3) -> Option<(f64, [f64; 3])> {
+        let (t, k) = self.mesh.hit_triangle(eye, dir, 0.0, f64::INFINITY)?;
         let corners = &self.lit.surface.indices[3 * k..3 * k + 3];
         let (_, w) = triangle_barycentric(&self.mesh.triangles[k], eye, dir)?;
         let c = |i: usize| self.lit.colors[corners[i] as usize];
-        Some(std::array::from_fn(|ch| {
-            w[0] * c(0)[ch] + w[1] * c(1)[ch] + w[2] * c(2)[ch]
-        }))
+        Some((
+            t,
+            std::array::from_fn(|ch| w[0] * c(0)[ch] + w[1] * c(1)[ch] + w[2] * c(2)[ch]),
+        ))
     }
 }
