@@ -52,6 +52,9 @@ pub struct BenchArgs {
     /// is filled only by larger textures; the f64 reference costs the same at every size (a 256 x 256 subset).
     #[arg(long, value_delimiter = ',', value_parser = clap::value_parser!(u32).range(16..=16384))]
     pub equal_error_sizes: Vec<u32>,
+    /// The scene the viewer's frames are timed on, instead of the embedded default scene.
+    #[arg(long)]
+    pub viewer_scene: Option<PathBuf>,
 }
 
 #[derive(Debug, Default, clap::Args)]
@@ -319,14 +322,20 @@ fn bench(args: &BenchArgs) -> Result<(), CliError> {
             )));
         }
     }
+    let viewer_scene = match &args.viewer_scene {
+        Some(path) => Some((Scene::load(path)?, path.display().to_string())),
+        None => None,
+    };
+    let (scene, label) = viewer_scene.unwrap_or_else(|| (Scene::default_scene(), "default".into()));
     let report = crate::bench::run(
         crate::bench::BenchOptions {
             quick: args.quick,
             sections: crate::bench::Sections::only(&args.only),
             equal_error_sizes: (!args.equal_error_sizes.is_empty())
                 .then(|| args.equal_error_sizes.clone()),
+            viewer_scene: label,
         },
-        &mut bench_viewer,
+        &mut || bench_viewer_on(scene.clone()),
         |p| eprintln!("{p}"),
     )?;
     print!("{}", report.table());
@@ -339,8 +348,15 @@ fn bench(args: &BenchArgs) -> Result<(), CliError> {
 
 /// The viewer the bench times: the real one, drawn offscreen at the bench's size, on the default scene.
 pub fn bench_viewer() -> Result<Box<dyn crate::bench::TimedViewer>, crate::gpu::GpuError> {
+    bench_viewer_on(Scene::default_scene())
+}
+
+/// `bench_viewer` on `scene`.
+pub fn bench_viewer_on(
+    scene: Scene,
+) -> Result<Box<dyn crate::bench::TimedViewer>, crate::gpu::GpuError> {
     let [w, h] = crate::bench::VIEWER_SIZE;
-    let doc = Document::new(Scene::default_scene(), None);
+    let doc = Document::new(scene, None);
     Ok(Box::new(OffscreenViewer::new(doc, w, h)?))
 }
 

@@ -733,3 +733,51 @@ fn a_missing_mesh_is_an_input_error_on_the_command_line() {
     assert!(!out.exists());
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn a_travelling_pulse_lights_the_floor_where_it_passes() {
+    // The pulse preset over a floor: the floor under the chain's start is lit most while the pulse is at the
+    // start, and under its end while the pulse is at the end; each frame's light is the field's of that frame.
+    let mut scene = common::shipped_scene("pulse_travelling.toml");
+    scene.objects = vec![Object {
+        shape: Shape::Plane {
+            point: DVec3::new(0.0, -2.0, 0.0),
+            normal: DVec3::Y,
+            size: None,
+        },
+        color: [1.0; 3],
+    }];
+    let start = DVec3::new(-3.0, -2.0, -1.0);
+    let end = DVec3::new(3.0, -2.0, 1.0);
+    let light_at = |frame: f64, p: DVec3| {
+        let at = scene.at_frame(frame);
+        let colors = at.colors.clone();
+        Lights::new(&at.sources, &colors, at.integration.epsilon).irradiance(
+            &at.objects,
+            p,
+            DVec3::Y,
+        )[2]
+    };
+    // When is the pulse at either end: the frames where the first and the last weight peak.
+    let frames: Vec<f64> = (0..92).map(f64::from).collect();
+    let brightest = |p: DVec3| {
+        frames
+            .iter()
+            .copied()
+            .max_by(|&a, &b| light_at(a, p).total_cmp(&light_at(b, p)))
+            .unwrap()
+    };
+    let (at_start, at_end) = (brightest(start), brightest(end));
+    // The pulse loops every 92 frames and crosses its seven weights in 42 (7 frames apart): the end's peak
+    // follows the start's by about that, around the loop.
+    let later = (at_end - at_start).rem_euclid(92.0);
+    assert!(
+        (30.0..=55.0).contains(&later),
+        "the light passes from the start (frame {at_start}) to the end (frame {at_end})"
+    );
+    assert!(light_at(at_start, start) > 2.0 * light_at(at_end, start));
+    assert!(light_at(at_end, end) > 2.0 * light_at(at_start, end));
+    // The lit vertices follow: the floor's lit colors change from frame to frame.
+    let (a, b) = (lit(&scene.at_frame(at_start)), lit(&scene.at_frame(at_end)));
+    assert_ne!(a.colors, b.colors);
+}

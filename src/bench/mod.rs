@@ -66,6 +66,8 @@ pub struct BenchOptions {
     pub sections: Sections,
     /// The equal-error comparison's billboard resolutions, instead of 256 and 512 (256 with `quick`).
     pub equal_error_sizes: Option<Vec<u32>>,
+    /// The name of the scene the viewer's frames are timed on (the opener loads it).
+    pub viewer_scene: String,
 }
 
 /// One part of the benchmark, for `bench --only`.
@@ -120,6 +122,7 @@ impl Default for BenchOptions {
             quick: false,
             sections: Sections::ALL,
             equal_error_sizes: None,
+            viewer_scene: "default".into(),
         }
     }
 }
@@ -303,7 +306,7 @@ pub fn run(
     })
 }
 
-/// Whole viewer frames at 1280 x 720 on the default scene: idle (settled), orbiting and dragging a control point
+/// Whole viewer frames at 1280 x 720 on the default scene (or another): idle (settled), orbiting and dragging a control point
 /// as the viewer draws them (a coarse field while moving), orbiting with the whole field every frame, and the
 /// time from the last move to the full picture.
 #[cfg(test)]

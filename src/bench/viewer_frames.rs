@@ -23,7 +23,7 @@ pub trait TimedViewer {
     fn set_progressive(&mut self, on: bool);
 }
 
-/// Opens the viewer to time, at `VIEWER_SIZE` on the default scene.
+/// Opens the viewer to time, at `VIEWER_SIZE` on the scene `BenchOptions::viewer_scene` names.
 pub type OpenViewer<'a> = &'a mut dyn FnMut() -> Result<Box<dyn TimedViewer>, GpuError>;
 
 pub(super) fn viewer_frames(
@@ -32,7 +32,10 @@ pub(super) fn viewer_frames(
     progress: &mut impl FnMut(&str),
 ) -> Result<ViewerFrameRow, GpuError> {
     let [width, height] = VIEWER_SIZE;
-    progress(&format!("viewer: {width} x {height}, default scene"));
+    progress(&format!(
+        "viewer: {width} x {height}, {} scene",
+        options.viewer_scene
+    ));
     let mut viewer = open()?;
     let viewer = viewer.as_mut();
     let timed = |viewer: &mut dyn TimedViewer| -> Result<f64, GpuError> {
@@ -79,14 +82,14 @@ pub(super) fn viewer_frames(
     let orbit = |v: &mut dyn TimedViewer| v.orbit(0.01);
     let (orbiting, orbiting_resolution) = gesture(viewer, &orbit)?;
     let (refine_ms, refine_frames, refine_longest_frame_ms) = settle(viewer)?;
+    // A curve's control point, else a ring's center, else a point (a source moved: objects are lit again).
     let drag = |v: &mut dyn TimedViewer| {
-        if let Some(p) = v
-            .scene_mut()
-            .sources
-            .curves
-            .first_mut()
+        let s = &mut v.scene_mut().sources;
+        let moved = (s.curves.first_mut())
             .and_then(|c| c.control_points.get_mut(1))
-        {
+            .or(s.tori.first_mut().map(|t| &mut t.center))
+            .or(s.points.first_mut().map(|p| &mut p.position));
+        if let Some(p) = moved {
             p.y += 0.01;
         }
     };
@@ -107,7 +110,7 @@ pub(super) fn viewer_frames(
     Ok(ViewerFrameRow {
         width,
         height,
-        scene: "default".into(),
+        scene: options.viewer_scene.clone(),
         idle: Timing::of(idle),
         orbiting: Timing::of(orbiting),
         orbiting_resolution,
