@@ -25,22 +25,7 @@ fn gpu() -> MutexGuard<'static, HeadlessRenderer> {
         .unwrap_or_else(|e| e.into_inner())
 }
 
-struct Lcg(u64);
-impl Lcg {
-    fn unit(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.unit()
-    }
-    fn vec(&mut self, s: f64) -> DVec3 {
-        DVec3::new(self.range(-s, s), self.range(-s, s), self.range(-s, s))
-    }
-}
+use common::Lcg;
 
 /// Whether `p` is inside the shape (or, for a plane, on its normal's side), from its definition alone.
 fn inside(shape: &Shape, p: DVec3) -> bool {

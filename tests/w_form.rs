@@ -9,30 +9,7 @@ use energywave::field::curve::chain_frame;
 use energywave::field::{Curve, Look, Sources, WForm, brightest, wseries};
 use glam::DVec3;
 
-/// A small deterministic generator (the tests need no crate for it).
-struct Lcg(u64);
-
-impl Lcg {
-    fn unit(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.unit()
-    }
-
-    fn vec(&mut self, scale: f64) -> DVec3 {
-        DVec3::new(
-            self.range(-scale, scale),
-            self.range(-scale, scale),
-            self.range(-scale, scale),
-        )
-    }
-}
+use common::Lcg;
 
 /// The continuous term's value `Sw(t) / max(eps, |p - C(t)|)` at chain parameter t.
 fn value_at(cps: &[DVec3], weights: &[f64], p: DVec3, eps: f64, t: f64) -> f64 {

@@ -245,25 +245,7 @@ fn slab(lo: DVec3, hi: DVec3, o: DVec3, inv: DVec3, t_min: f64, t_max: f64) -> b
 
 /// The ray's parameter where it crosses the triangle (Moller-Trumbore, both faces), or none.
 pub fn triangle_hit(t: &[DVec3; 3], o: DVec3, d: DVec3) -> Option<f64> {
-    let e1 = t[1] - t[0];
-    let e2 = t[2] - t[0];
-    let p = d.cross(e2);
-    let det = e1.dot(p);
-    if det == 0.0 || !det.is_finite() {
-        return None;
-    }
-    let inv = 1.0 / det;
-    let s = o - t[0];
-    let u = s.dot(p) * inv;
-    if !(0.0..=1.0).contains(&u) {
-        return None;
-    }
-    let q = s.cross(e1);
-    let v = d.dot(q) * inv;
-    if v < 0.0 || u + v > 1.0 {
-        return None;
-    }
-    Some(e2.dot(q) * inv)
+    triangle_barycentric(t, o, d).map(|(t, _)| t)
 }
 
 /// The barycentric weights of the corners of `t` at the ray's crossing (Moller-Trumbore), and its parameter.

@@ -8,6 +8,31 @@ use energywave::scene::Scene;
 
 pub mod viewer;
 
+/// A small deterministic generator (the tests need no crate for it).
+pub struct Lcg(pub u64);
+
+impl Lcg {
+    pub fn unit(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * self.unit()
+    }
+
+    pub fn vec(&mut self, scale: f64) -> glam::DVec3 {
+        glam::DVec3::new(
+            self.range(-scale, scale),
+            self.range(-scale, scale),
+            self.range(-scale, scale),
+        )
+    }
+}
+
 /// `assets/scenes`.
 pub fn scenes_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes")

@@ -9,6 +9,7 @@ use super::super::action::{Action, Edit};
 use super::super::widgets::{ERROR_COLOR, color, direction, labelled, vec3};
 use super::context::Context;
 use super::fields::Edits;
+use super::sources::Entry;
 use crate::objects::{Object, Shape, ShapeKind};
 
 /// The section: adding (the glTF path typed is kept in egui's memory), and every object's entry.
@@ -51,46 +52,19 @@ pub(super) fn objects_section(ui: &mut Ui, cx: &Context, out: &mut Edits<'_>) {
     }
     for (i, object) in cx.shown.objects.iter().enumerate() {
         let selected = cx.selected_object == Some(i);
-        let frame = if selected {
-            egui::Frame::NONE
-                .fill(ui.visuals().selection.bg_fill.gamma_multiply(0.25))
-                .stroke(ui.visuals().selection.stroke)
-                .corner_radius(3.0)
-        } else {
-            egui::Frame::NONE
+        let entry = Entry {
+            id: ui.make_persistent_id(("energywave.object", i)),
+            title: title(object, i),
+            hover: "Select: its handle is ringed in the viewport",
+            selected,
+            scroll: selected && cx.scroll_to_selected,
+            select: Action::SelectObject((!selected).then_some(i)),
+            duplicate: Edit::DuplicateObject(i),
+            delete: Edit::DeleteObject(i),
         };
-        frame.show(ui, |ui| {
-            let id = ui.make_persistent_id(("energywave.object", i));
-            let state = egui::collapsing_header::CollapsingState::load_with_default_open(
-                ui.ctx(),
-                id,
-                true,
-            );
-            let (_, header, _) = state
-                .show_header(ui, |ui| {
-                    let name = ui
-                        .selectable_label(selected, title(object, i))
-                        .on_hover_text("Select: its handle is ringed in the viewport");
-                    if name.clicked() {
-                        out.push(Action::SelectObject((!selected).then_some(i)));
-                    }
-                    name
-                })
-                .body(|ui| {
-                    if let Some(edited) = editor(ui, object) {
-                        out.push(Action::Edit(Edit::SetObject(i, edited)));
-                    }
-                    ui.horizontal(|ui| {
-                        if ui.small_button("Duplicate").clicked() {
-                            out.push(Action::Edit(Edit::DuplicateObject(i)));
-                        }
-                        if ui.small_button("Delete").clicked() {
-                            out.push(Action::Edit(Edit::DeleteObject(i)));
-                        }
-                    });
-                });
-            if selected && cx.scroll_to_selected {
-                header.inner.scroll_to_me(Some(egui::Align::TOP));
+        entry.show(ui, out, |ui, out| {
+            if let Some(edited) = editor(ui, object) {
+                out.push(Action::Edit(Edit::SetObject(i, edited)));
             }
         });
     }

@@ -320,8 +320,43 @@ pub(super) fn list<T>(
 ) {
     for (i, item) in items.iter().enumerate() {
         let selected = cx.selected == Some((kind, i));
-        let id = ui.make_persistent_id((label, i));
-        let frame = if selected {
+        let entry = Entry {
+            id: ui.make_persistent_id((label, i)),
+            title: format!("{label} {}", i + 1),
+            hover: "Select: its handles are ringed in the viewport",
+            selected,
+            scroll: selected && cx.scroll_to_selected,
+            select: Action::Select((!selected).then_some((kind, i))),
+            duplicate: Edit::DuplicateSource(kind, i),
+            delete: Edit::DeleteSource(kind, i),
+        };
+        entry.show(ui, out, |ui, out| editor(ui, out, i, item));
+    }
+}
+
+/// One entry of a list in the panel (a source, an object): framed and highlighted when selected, its name a
+/// selectable label that selects it (or clears the selection), its editors, then Duplicate and Delete.
+pub(super) struct Entry {
+    pub(super) id: egui::Id,
+    pub(super) title: String,
+    pub(super) hover: &'static str,
+    pub(super) selected: bool,
+    /// Scroll the entry into view (it was selected in the viewport).
+    pub(super) scroll: bool,
+    /// What a click on its name asks for.
+    pub(super) select: Action,
+    pub(super) duplicate: Edit,
+    pub(super) delete: Edit,
+}
+
+impl Entry {
+    pub(super) fn show(
+        self,
+        ui: &mut Ui,
+        out: &mut Edits<'_>,
+        body: impl FnOnce(&mut Ui, &mut Edits<'_>),
+    ) {
+        let frame = if self.selected {
             egui::Frame::NONE
                 .fill(ui.visuals().selection.bg_fill.gamma_multiply(0.25))
                 .stroke(ui.visuals().selection.stroke)
@@ -329,6 +364,16 @@ pub(super) fn list<T>(
         } else {
             egui::Frame::NONE
         };
+        let Entry {
+            id,
+            title,
+            hover,
+            selected,
+            scroll,
+            select,
+            duplicate,
+            delete,
+        } = self;
         frame.show(ui, |ui| {
             let state = egui::collapsing_header::CollapsingState::load_with_default_open(
                 ui.ctx(),
@@ -337,26 +382,24 @@ pub(super) fn list<T>(
             );
             let (_, header, _) = state
                 .show_header(ui, |ui| {
-                    let name = ui
-                        .selectable_label(selected, format!("{label} {}", i + 1))
-                        .on_hover_text("Select: its handles are ringed in the viewport");
+                    let name = ui.selectable_label(selected, title).on_hover_text(hover);
                     if name.clicked() {
-                        out.push(Action::Select((!selected).then_some((kind, i))));
+                        out.push(select);
                     }
                     name
                 })
                 .body(|ui| {
-                    editor(ui, out, i, item);
+                    body(ui, out);
                     ui.horizontal(|ui| {
                         if ui.small_button("Duplicate").clicked() {
-                            out.push(Action::Edit(Edit::DuplicateSource(kind, i)));
+                            out.push(Action::Edit(duplicate));
                         }
                         if ui.small_button("Delete").clicked() {
-                            out.push(Action::Edit(Edit::DeleteSource(kind, i)));
+                            out.push(Action::Edit(delete));
                         }
                     });
                 });
-            if selected && cx.scroll_to_selected {
+            if scroll {
                 header.inner.scroll_to_me(Some(egui::Align::TOP));
             }
         });
