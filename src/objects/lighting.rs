@@ -92,38 +92,93 @@ impl<'a> Lights<'a> {
 
     /// The light reaching the surface point `x` of normal `n` (unit), shadows by `objects`, before the albedo.
     pub fn irradiance(&self, objects: &[Object], x: DVec3, n: DVec3) -> [f64; 3] {
+        self.shade(objects, x, n).0
+    }
+
+    /// `irradiance`, and which sources an object shadows there (bit `k % 64` for term k, where the source
+    /// faces the surface): where the shadows of neighbouring vertices differ, a shadow's edge crosses between
+    /// them.
+    pub fn shade(&self, objects: &[Object], x: DVec3, n: DVec3) -> ([f64; 3], u64) {
         let mut e = [AMBIENT; 3];
-        for light in self.at(x) {
+        let mut shadowed = 0u64;
+        for (k, light) in self.at(x).enumerate() {
             let to = light.from - x;
             let d = to.length();
             // At the source itself the light comes from every side: full strength.
             let cosine = if d > 0.0 { n.dot(to / d).max(0.0) } else { 1.0 };
-            if cosine == 0.0 || light.strength == 0.0 || blocked(objects, x, light.from) {
+            if cosine == 0.0 || light.strength == 0.0 {
+                continue;
+            }
+            if blocked(objects, x, light.from) {
+                shadowed |= 1 << (k % 64);
                 continue;
             }
             for (c, e) in e.iter_mut().enumerate() {
                 *e += light.color[c] * light.strength * cosine;
             }
         }
-        e
+        (e, shadowed)
     }
 }
 
-/// The lit color of every vertex of `surface`: the albedo of its object times its irradiance (unclamped: an
-/// HDR export keeps it, the display clamps it).
+/// How many times a triangle across a shadow's edge is split in four (its vertices' shadows differ): the edge
+/// then runs through triangles an eighth of the tessellation's size.
+const SHADOW_REFINEMENTS: u32 = 3;
+
+/// Lights every vertex of `surface`, splitting the triangles a shadow's edge crosses (`SHADOW_REFINEMENTS`
+/// times; their edges' midpoints become vertices, lit in turn): the lit color of every vertex, the albedo of its
+/// object times its irradiance (unclamped: an HDR export keeps it, the display clamps it).
 pub fn light_surface(
-    surface: &Surface,
+    surface: &mut Surface,
     objects: &[Object],
     sources: &Sources,
     colors: &Colors,
     epsilon: f64,
 ) -> Vec<[f64; 3]> {
     let lights = Lights::new(sources, colors, epsilon);
-    (0..surface.positions.len())
-        .into_par_iter()
-        .map(|k| {
+    let shade = |s: &Surface, range: std::ops::Range<usize>| -> Vec<([f64; 3], u64)> {
+        range
+            .into_par_iter()
+            .map(|k| lights.shade(objects, s.positions[k], s.normals[k]))
+            .collect()
+    };
+    let mut shades = shade(surface, 0..surface.positions.len());
+    for _ in 0..SHADOW_REFINEMENTS {
+        let first_new = surface.positions.len();
+        let mut midpoints = std::collections::HashMap::new();
+        let mut indices = Vec::with_capacity(surface.indices.len());
+        let old = std::mem::take(&mut surface.indices);
+        for t in old.chunks_exact(3) {
+            let (a, b, c) = (t[0], t[1], t[2]);
+            let mask = |v: u32| shades[v as usize].1;
+            if mask(a) == mask(b) && mask(b) == mask(c) {
+                indices.extend_from_slice(t);
+                continue;
+            }
+            let mut mid = |p: u32, q: u32| -> u32 {
+                *midpoints.entry((p.min(q), p.max(q))).or_insert_with(|| {
+                    let (p, q) = (p as usize, q as usize);
+                    let position = (surface.positions[p] + surface.positions[q]) * 0.5;
+                    let normal =
+                        (surface.normals[p] + surface.normals[q]).normalize_or(surface.normals[p]);
+                    surface.positions.push(position);
+                    surface.normals.push(normal);
+                    surface.object.push(surface.object[p]);
+                    surface.positions.len() as u32 - 1
+                })
+            };
+            let (ab, bc, ca) = (mid(a, b), mid(b, c), mid(c, a));
+            indices.extend_from_slice(&[a, ab, ca, ab, b, bc, ca, bc, c, ab, bc, ca]);
+        }
+        surface.indices = indices;
+        if surface.positions.len() == first_new {
+            break;
+        }
+        shades.extend(shade(surface, first_new..surface.positions.len()));
+    }
+    (shades.iter().enumerate())
+        .map(|(k, (e, _))| {
             let albedo = objects[surface.object[k] as usize].color;
-            let e = lights.irradiance(objects, surface.positions[k], surface.normals[k]);
             [albedo[0] * e[0], albedo[1] * e[1], albedo[2] * e[2]]
         })
         .collect()

@@ -373,12 +373,12 @@ pub fn focus(sources: &crate::field::Sources) -> (DVec3, f64) {
     }
 }
 
-/// The scene's objects tessellated and lit.
+/// The scene's objects tessellated and lit, finer where a shadow's edge crosses them.
 pub fn lit(scene: &crate::scene::Scene) -> Lit {
     let (center, extent) = focus(&scene.sources);
-    let surface = tessellate::Surface::of(&scene.objects, center, extent);
+    let mut surface = tessellate::Surface::of(&scene.objects, center, extent);
     let colors = lighting::light_surface(
-        &surface,
+        &mut surface,
         &scene.objects,
         &scene.sources,
         &scene.colors,
