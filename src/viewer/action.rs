@@ -45,6 +45,8 @@ pub enum Action {
         frames: std::ops::Range<u32>,
         size: (u32, u32),
         transparent: bool,
+        /// With `transparent`: the objects left out, still hiding the glow.
+        holdout: bool,
         description: String,
     },
     /// Stop the export running (what it wrote is removed).

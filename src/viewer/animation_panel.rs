@@ -32,6 +32,8 @@ pub struct AnimationForm {
     pub export_path: String,
     pub export_kind: ExportKind,
     pub transparent: bool,
+    /// With `transparent`: the objects left out, still hiding the glow (a holdout).
+    pub holdout: bool,
     /// Width and height of exported frames, pixels.
     pub size: [u32; 2],
     /// A sheet's padding and power-of-two sides (its columns are as square as they get).
@@ -45,6 +47,7 @@ impl Default for AnimationForm {
             export_path: String::new(),
             export_kind: ExportKind::Sequence,
             transparent: false,
+            holdout: false,
             size: [256, 256],
             sheet: crate::export::SheetOptions::default(),
         }
@@ -413,6 +416,16 @@ fn export_section(
                 .on_hover_text(
                     "alpha = min(B, 1), to composite over anything (not in a GIF; in a video, WebM only)",
                 );
+                if !shown.objects.is_empty() {
+                    ui.add_enabled(
+                        form.transparent && form.export_kind != ExportKind::Gif,
+                        egui::Checkbox::new(&mut form.holdout, "holdout"),
+                    )
+                    .on_hover_text(
+                        "The objects left out but still hiding the glow: the glow alone, to layer over a render \
+                         of the same scene made elsewhere",
+                    );
+                }
             });
             if form.export_kind == ExportKind::Sheet {
                 ui.horizontal(|ui| {
@@ -508,6 +521,7 @@ fn export_section(
                             frames: 0..frames,
                             size: (form.size[0], form.size[1]),
                             transparent,
+                            holdout: transparent && form.holdout,
                             description: path.display().to_string(),
                         });
                         if let Some(w) = warning {

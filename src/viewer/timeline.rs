@@ -96,13 +96,14 @@ pub struct ExportJob {
 }
 
 impl ExportJob {
-    /// Starts exporting `frames` of `scene` to `target` at `size` pixels.
+    /// Starts exporting `frames` of `scene` to `target` at `size` pixels, transparent or not, its objects held
+    /// out or not.
     pub fn start(
         scene: Scene,
         target: Target,
         frames: Range<u32>,
         size: (u32, u32),
-        transparent: bool,
+        (transparent, holdout): (bool, bool),
         description: String,
     ) -> Self {
         let status = Arc::new(Mutex::new(ExportStatus {
@@ -117,6 +118,7 @@ impl ExportJob {
             let progress = shared.clone();
             let result = (|| -> Result<Vec<PathBuf>, String> {
                 let mut gpu = HeadlessRenderer::new().map_err(|e| e.to_string())?;
+                gpu.set_holdout(holdout);
                 // Many frames of one structure: its specialised pipelines pay for their compile.
                 if frames.len() > 4 {
                     gpu.set_specialise(crate::gpu::Specialise::Blocking);

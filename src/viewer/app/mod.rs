@@ -450,6 +450,7 @@ impl ViewerApp {
                 frames,
                 size,
                 transparent,
+                holdout,
                 description,
             } => {
                 if self.export_job.is_none() {
@@ -458,7 +459,7 @@ impl ViewerApp {
                         target,
                         frames,
                         size,
-                        transparent,
+                        (transparent, holdout),
                         description,
                     ));
                 }
