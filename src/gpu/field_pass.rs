@@ -6,8 +6,8 @@
 use wgpu::util::DeviceExt;
 
 use super::context::{
-    FIELD_LAYERS, GpuError, checked, field_texture, field_texture_bytes, pass_layouts,
-    storage_buffer_entry,
+    FIELD_LAYERS, GpuError, checked, field_storage_entry, field_texture, field_texture_bytes,
+    pass_layouts, storage_buffer_entry,
 };
 use super::frame_average::FrameAverage;
 use super::shaders;
@@ -185,7 +185,7 @@ struct Packed {
     pieces: Vec<CurvePiece>,
     /// The share of each texel's ray before the first surface of the scene's objects (`objects::clip`), or
     /// nothing without objects.
-    clips: Vec<f32>,
+    clips: std::sync::Arc<Vec<f32>>,
     /// The dispatches that together integrate the texture.
     chunks: Vec<Chunk>,
 }
@@ -478,7 +478,7 @@ fn pack(scene: &Scene, billboard: &Billboard) -> Packed {
     let eye = scene.camera.eye;
     let w = scene.billboard.resolution;
     if let Some(clips) = shared_clip_fractions(&scene.objects, eye, billboard, reach, w) {
-        packed.clips = clips.to_vec();
+        packed.clips = clips;
         packed.params.clipped = 1;
     }
     packed.chunks = plan_chunks(&packed);
@@ -803,30 +803,12 @@ impl FieldRenderer {
                 storage(4),
                 storage(5),
                 storage(6),
-                wgpu::BindGroupLayoutEntry {
-                    binding: 7,
-                    visibility: wgpu::ShaderStages::COMPUTE,
-                    ty: wgpu::BindingType::StorageTexture {
-                        access: wgpu::StorageTextureAccess::ReadWrite,
-                        format: wgpu::TextureFormat::R32Float,
-                        view_dimension: wgpu::TextureViewDimension::D2Array,
-                    },
-                    count: None,
-                },
+                field_storage_entry(7, wgpu::StorageTextureAccess::ReadWrite),
                 storage(9),
                 storage(10),
                 storage(11),
                 storage(13),
-                wgpu::BindGroupLayoutEntry {
-                    binding: 12,
-                    visibility: wgpu::ShaderStages::COMPUTE,
-                    ty: wgpu::BindingType::StorageTexture {
-                        access: wgpu::StorageTextureAccess::ReadWrite,
-                        format: wgpu::TextureFormat::R32Float,
-                        view_dimension: wgpu::TextureViewDimension::D2Array,
-                    },
-                    count: None,
-                },
+                field_storage_entry(12, wgpu::StorageTextureAccess::ReadWrite),
                 // A read-only storage buffer rather than a uniform one: lavapipe recompiles a shader for the
                 // values of uniforms that bound its loops (to unroll them), and a chunk's range bounds the term
                 // loop, so every new range meant a new compile (seconds each, minutes for some).
@@ -964,7 +946,7 @@ impl FieldRenderer {
                 bytemuck::cast_slice(&packed.tints),
                 bytemuck::cast_slice(&packed.colors),
                 bytemuck::cast_slice(&packed.pieces),
-                bytemuck::cast_slice(&packed.clips),
+                bytemuck::cast_slice(packed.clips.as_slice()),
             ];
             for (buffer, bytes) in self.buffers.iter_mut().zip(data) {
                 rebind |= buffer.write(device, queue, bytes);

@@ -121,11 +121,6 @@ impl MeshData {
         }
     }
 
-    /// The box around every triangle, or none without triangles.
-    pub fn bounds(&self) -> Option<(DVec3, DVec3)> {
-        self.nodes.first().map(|n| (n.lo, n.hi))
-    }
-
     /// The smallest t in `(t_min, t_max)` where `o + t d` meets a triangle (either face).
     pub fn hit(&self, o: DVec3, d: DVec3, t_min: f64, t_max: f64) -> Option<f64> {
         self.hit_triangle(o, d, t_min, t_max).map(|(t, _)| t)

@@ -165,44 +165,6 @@ impl Object {
         }?;
         (t > t_min && t < t_max).then_some(t)
     }
-
-    /// An axis-aligned box around the object, or none for an infinite plane.
-    pub fn bounds(&self) -> Option<(DVec3, DVec3)> {
-        match &self.shape {
-            Shape::Sphere { center, radius } => Some((*center - *radius, *center + *radius)),
-            Shape::Box {
-                center,
-                size,
-                rotation,
-            } => {
-                let r = rotation_matrix(*rotation);
-                let half = (r.x_axis * size.x).abs()
-                    + (r.y_axis * size.y).abs()
-                    + (r.z_axis * size.z).abs();
-                Some((*center - half * 0.5, *center + half * 0.5))
-            }
-            Shape::Plane {
-                point,
-                normal,
-                size: Some(size),
-            } => {
-                let (u, v) = plane_axes(*normal);
-                let half = (u.abs() + v.abs()) * (size * 0.5);
-                Some((*point - half, *point + half))
-            }
-            Shape::Plane { size: None, .. } => None,
-            Shape::Mesh(m) => {
-                let (lo, hi) = m.data.bounds()?;
-                let (lo, hi) = (lo * m.scale, hi * m.scale);
-                let (lo, hi) = (lo.min(hi), lo.max(hi));
-                let r = rotation_matrix(m.rotation);
-                let c = r * ((lo + hi) * 0.5) + m.translation;
-                let e = (hi - lo) * 0.5;
-                let half = (r.x_axis * e.x).abs() + (r.y_axis * e.y).abs() + (r.z_axis * e.z).abs();
-                Some((c - half, c + half))
-            }
-        }
-    }
 }
 
 impl PartialEq for MeshObject {

@@ -31,11 +31,6 @@ impl ObjectImage {
         })
     }
 
-    /// The lit color where the ray from `eye` along `dir` first meets a triangle, or none.
-    pub fn color(&self, eye: DVec3, dir: DVec3) -> Option<[f64; 3]> {
-        self.hit(eye, dir).map(|(_, c)| c)
-    }
-
     /// Where (in units of `dir`) the ray from `eye` along `dir` first meets a triangle, and its lit color there.
     pub fn hit(&self, eye: DVec3, dir: DVec3) -> Option<(f64, [f64; 3])> {
         let (t, k) = self.mesh.hit_triangle(eye, dir, 0.0, f64::INFINITY)?;
