@@ -96,7 +96,8 @@ pub fn check_directory(path: &Path) -> Result<(), OutputError> {
     Ok(())
 }
 
-fn parent_dir(path: &Path) -> &Path {
+/// The folder `path` is in (the working directory for a bare file name).
+pub fn parent_dir(path: &Path) -> &Path {
     match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),

@@ -3,10 +3,14 @@
 //!
 //! Everything a user can get wrong (the range, the pattern, the extension, the directory) is checked by
 //! [`Target::for_output`] and [`FrameSpec::resolve`] before any rendering. Every file is written atomically;
-//! a GIF and a sheet are written once, at the end, so an interrupted export leaves no partial animation.
+//! a sequence's frames go into a folder beside their destination and move into place only when the last is
+//! written (`staged`), and a GIF, a sheet and a video are written once, at the end: an export that is
+//! cancelled, fails or is interrupted leaves the destination as it found it (an earlier export of the same
+//! names whole).
 
 pub mod progress;
 pub mod sheet;
+mod staged;
 pub mod video;
 
 use std::ops::{ControlFlow, Range};
@@ -30,7 +34,7 @@ pub enum ExportError {
     Target { path: PathBuf, why: String },
     #[error("{0}")]
     Output(#[from] OutputError),
-    /// Stopped before the last frame; the files it had written are removed.
+    /// Stopped before the last frame; nothing it wrote is left, and nothing that was there is changed.
     #[error("cancelled: nothing written")]
     Cancelled,
 }
@@ -309,6 +313,8 @@ pub struct FrameSink {
     gif_frames: u32,
     sheet: Option<(SheetLayout, Vec<[f64; 4]>)>,
     video: Option<video::VideoWriter>,
+    /// A sequence's frames, written beside the destination until the last is.
+    staged: Option<staged::Staged>,
     written: Vec<PathBuf>,
 }
 
@@ -334,8 +340,15 @@ impl FrameSink {
             gif_frames: 0,
             sheet: None,
             video: None,
+            staged: None,
             written: Vec::new(),
         };
+        if let Target::Single { path, .. }
+        | Target::Sequence { pattern: path, .. }
+        | Target::Sheet { path, .. } = target
+        {
+            sink.staged = Some(staged::Staged::beside(path)?);
+        }
         match target {
             Target::Gif { path } => {
                 // Speed 10 of NeuQuant's 1..30: a good palette per frame in a fraction of the render time.
@@ -375,13 +388,13 @@ impl FrameSink {
         let (w, h) = (self.width, self.height);
         match &self.target {
             Target::Single { path, .. } => {
-                output::write_rgba(path, w, h, pixels, self.alpha)?;
-                self.written.push(path.clone());
+                let staged = self.staged.as_mut().expect("made with the target");
+                output::write_rgba(&staged.stage(path), w, h, pixels, self.alpha)?;
             }
             Target::Sequence { pattern, .. } => {
-                let path = frame_path(pattern, frame);
+                let staged = self.staged.as_mut().expect("made with the target");
+                let path = staged.stage(&frame_path(pattern, frame));
                 output::write_rgba(&path, w, h, pixels, self.alpha)?;
-                self.written.push(path);
             }
             Target::Gif { path } => {
                 let rgba = image::RgbaImage::from_raw(w, h, to_rgba8(pixels, false))
@@ -418,17 +431,22 @@ impl FrameSink {
         Ok(())
     }
 
-    /// Removes the files written so far (an export stopped before its end leaves nothing half done).
+    /// Removes what was written so far (an export stopped before its end leaves nothing half done, and the files
+    /// of the same names that were there before it as they were).
     pub fn abandon(mut self) {
         if let Some(v) = self.video.take() {
             v.abandon();
+        }
+        if let Some(s) = self.staged.take() {
+            s.discard();
         }
         for path in &self.written {
             let _ = std::fs::remove_file(path);
         }
     }
 
-    /// Writes the GIF or the sheet (and its layout); returns every file written.
+    /// Writes the GIF or the sheet (and its layout), and moves what was staged into place; returns every file
+    /// written.
     pub fn finish(mut self) -> Result<Vec<PathBuf>, ExportError> {
         match &self.target {
             Target::Gif { path } => {
@@ -445,14 +463,18 @@ impl FrameSink {
             }
             Target::Sheet { path, .. } => {
                 let (layout, pixels) = self.sheet.take().expect("made with the target");
-                // Cells past the last frame stay transparent (black in an opaque sheet).
-                output::write_rgba(path, layout.width(), layout.height(), &pixels, self.alpha)?;
-                let json = sheet::layout_path(path);
+                let staged = self.staged.as_mut().expect("made with the target");
+                // Cells past the last frame stay transparent (black in an opaque sheet). The sheet and its layout
+                // move into place together: never a new sheet beside an old layout.
+                let (w, h) = (layout.width(), layout.height());
+                output::write_rgba(&staged.stage(path), w, h, &pixels, self.alpha)?;
+                let json = staged.stage(&sheet::layout_path(path));
                 output::write_atomically(&json, layout.to_json().as_bytes())?;
-                self.written.push(path.clone());
-                self.written.push(json);
             }
             _ => {}
+        }
+        if let Some(staged) = self.staged.take() {
+            self.written.extend(staged.commit()?);
         }
         Ok(self.written)
     }
@@ -460,8 +482,8 @@ impl FrameSink {
 
 /// Renders `frames` of `scene`'s animation with `render` (the composed frame of a scene at one frame, RGBA
 /// display values, `size` pixels) into `target`; `on_frame(done, frame)` after each. Returns the files
-/// written. `on_frame` may stop the export (`ControlFlow::Break`): the files written so far are then removed
-/// and it ends with `ExportError::Cancelled`, as after a failure. The command line and the viewer's export both
+/// written. `on_frame` may stop the export (`ControlFlow::Break`): what it wrote so far is then removed, the
+/// files of the same names from before left whole, and it ends with `ExportError::Cancelled`, as after a failure. The command line and the viewer's export both
 /// run this.
 pub fn export_frames<E: From<ExportError>>(
     scene: &Scene,
@@ -516,6 +538,106 @@ mod tests {
         for bad in ["", "a..b", "-1..3", "3..-1", "1...2", "..=", "1..2..3"] {
             assert!(FrameSpec::parse(bad).is_err(), "{bad}");
         }
+    }
+
+    /// Every file in `dir` with its bytes, by name.
+    fn listing(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
+        let mut out: Vec<_> = std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| {
+                let p = e.unwrap().path();
+                let bytes = std::fs::read(&p).unwrap();
+                (p, bytes)
+            })
+            .collect();
+        out.sort();
+        out
+    }
+
+    #[test]
+    fn a_cancelled_or_failed_export_leaves_the_folder_as_it_found_it() {
+        // A folder holding an earlier export of the same names (frames 0 to 9 of another render), and a file of
+        // the user's: a cancelled export, one failing on a frame and one stopped after its only frame leave every
+        // byte of it as it was; a whole export replaces the frames and nothing else.
+        let dir = std::env::temp_dir().join(format!("energywave-earlier-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut scene = Scene::default_scene();
+        scene.animation = Some(crate::animation::Animation {
+            frames: 10,
+            ..Default::default()
+        });
+        let target = Target::Sequence {
+            pattern: dir.join("f_##.png"),
+            format: crate::output::Format::Png,
+        };
+        let earlier = vec![[0.1, 0.9, 0.2, 1.0]; 8 * 6];
+        let render = |pixels: &Vec<[f64; 4]>, stop: u32| {
+            export_frames::<ExportError>(
+                &scene,
+                &target,
+                0..10,
+                (8, 6),
+                Alpha::Opaque,
+                |_| Ok(pixels.clone()),
+                |done, _| match done == stop {
+                    true => ControlFlow::Break(()),
+                    false => ControlFlow::Continue(()),
+                },
+            )
+        };
+        assert_eq!(render(&earlier, 0).unwrap().len(), 10);
+        std::fs::write(dir.join("notes.txt"), b"the user's").unwrap();
+        let before = listing(&dir);
+        assert_eq!(before.len(), 11);
+        let pixels = vec![[0.5, 0.25, 1.0, 1.0]; 8 * 6];
+        for stop in [1, 4, 10] {
+            assert!(matches!(render(&pixels, stop), Err(ExportError::Cancelled)));
+            assert_eq!(listing(&dir), before, "cancelled after {stop} frames");
+        }
+        let rendered = std::cell::Cell::new(0);
+        let failing = export_frames::<ExportError>(
+            &scene,
+            &target,
+            0..10,
+            (8, 6),
+            Alpha::Opaque,
+            |_| match rendered.replace(rendered.get() + 1) >= 3 {
+                true => Err(ExportError::Target {
+                    path: dir.clone(),
+                    why: "the device was lost".into(),
+                }),
+                false => Ok(pixels.clone()),
+            },
+            |_, _| ControlFlow::Continue(()),
+        );
+        assert!(failing.is_err());
+        assert_eq!(listing(&dir), before, "a failed render");
+        // A single image stopped after its frame keeps the image that was there.
+        let single = Target::Single {
+            path: dir.join("f_03.png"),
+            format: crate::output::Format::Png,
+        };
+        let stopped = export_frames::<ExportError>(
+            &scene,
+            &single,
+            3..4,
+            (8, 6),
+            Alpha::Opaque,
+            |_| Ok(pixels.clone()),
+            |_, _| ControlFlow::Break(()),
+        );
+        assert!(matches!(stopped, Err(ExportError::Cancelled)));
+        assert_eq!(listing(&dir), before, "a single image");
+        // Whole, it replaces the ten frames and leaves the user's file.
+        assert_eq!(render(&pixels, 0).unwrap().len(), 10);
+        let after = listing(&dir);
+        assert_eq!(after.len(), 11);
+        let changed = (before.iter().zip(&after))
+            .filter(|(b, a)| b.1 != a.1)
+            .count();
+        assert_eq!(changed, 10, "every frame new, the notes as they were");
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]
