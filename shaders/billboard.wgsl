@@ -34,8 +34,10 @@ override OBJECTS: bool = false;
 // The field pass's texture: layer 0 B, layers 1 to 3 the tint sum B_i (Ce_i - Ce), G = B Ce + tint.
 @group(0) @binding(1) var field: texture_2d_array<f32>;
 @group(0) @binding(2) var background: texture_2d<f32>;
-// The objects' depth in the frame's projection (cleared to 1 where none is drawn), read where OBJECTS.
-@group(0) @binding(3) var depth: texture_depth_2d;
+// The objects' depth in the frame's projection (cleared to 1 where none is drawn), read where OBJECTS: the bits
+// of the depth the objects pass writes beside its color (gpu::object_pass::DEPTH_VALUE_FORMAT: GL reads no depth
+// texture).
+@group(0) @binding(3) var depth: texture_2d<u32>;
 // Each texel's share c of its ray S -> E before the first surface (objects::clip), rows from the top, read where
 // OBJECTS.
 @group(0) @binding(4) var<storage, read> clips: array<f32>;
@@ -180,7 +182,7 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     var field: vec4<f32>;
     if OBJECTS {
         // An object in front of the billboard hides the glow at this pixel.
-        let d = textureLoad(depth, vec2<i32>(in.position.xy), 0);
+        let d = bitcast<f32>(textureLoad(depth, vec2<i32>(in.position.xy), 0).r);
         if d < in.position.z {
             field = vec4<f32>(0.0);
         } else {

@@ -22,8 +22,15 @@ fn vs_main(@location(0) position: vec3<f32>, @location(1) color: vec3<f32>) -> V
     return out;
 }
 
-// The lit color, unclamped (an HDR export keeps it; the display clamps), opaque.
+struct FragmentOut {
+    // The lit color, unclamped (an HDR export keeps it; the display clamps), opaque.
+    @location(0) color: vec4<f32>,
+    // The bits of the fragment's depth, a copy of what the depth test keeps, for the billboard to read (a depth
+    // texture cannot be read on GL, nor r32float rendered there: gpu::object_pass::DEPTH_VALUE_FORMAT).
+    @location(1) depth: u32,
+}
+
 @fragment
-fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
-    return vec4<f32>(in.color, 1.0);
+fn fs_main(in: VertexOut) -> FragmentOut {
+    return FragmentOut(vec4<f32>(in.color, 1.0), bitcast<u32>(in.position.z));
 }

@@ -148,7 +148,7 @@ impl BillboardRenderer {
                     binding: 3,
                     visibility: wgpu::ShaderStages::FRAGMENT,
                     ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Depth,
+                        sample_type: wgpu::TextureSampleType::Uint,
                         view_dimension: wgpu::TextureViewDimension::D2,
                         multisampled: false,
                     },
@@ -181,11 +181,11 @@ impl BillboardRenderer {
                         topology: wgpu::PrimitiveTopology::TriangleStrip,
                         fragment_entry: "fs_main",
                         constants: &[("TINTED", tinted), ("OBJECTS", objects)],
-                        target: wgpu::ColorTargetState {
+                        targets: &[Some(wgpu::ColorTargetState {
                             format,
                             blend: None,
                             write_mask: wgpu::ColorWrites::ALL,
-                        },
+                        })],
                         depth: None,
                     },
                 )

@@ -55,11 +55,11 @@ impl BlitPass {
                     "fs_display"
                 },
                 constants: &[],
-                target: wgpu::ColorTargetState {
+                targets: &[Some(wgpu::ColorTargetState {
                     format: target_format,
                     blend: None,
                     write_mask: wgpu::ColorWrites::ALL,
-                },
+                })],
                 depth: None,
             },
         );

@@ -95,7 +95,8 @@ pub struct RenderPipelineSpec<'a> {
     pub fragment_entry: &'a str,
     /// Values of the fragment stage's pipeline-overridable constants.
     pub constants: &'a [(&'a str, f64)],
-    pub target: wgpu::ColorTargetState,
+    /// The color targets, by location (the objects write their depth to a second one).
+    pub targets: &'a [Option<wgpu::ColorTargetState>],
     /// The depth test, where the pass has a depth attachment (the objects).
     pub depth: Option<wgpu::DepthStencilState>,
 }
@@ -125,7 +126,7 @@ pub fn render_pipeline(device: &wgpu::Device, spec: RenderPipelineSpec) -> wgpu:
                 constants: spec.constants,
                 ..Default::default()
             },
-            targets: &[Some(spec.target)],
+            targets: spec.targets,
         }),
         multiview_mask: None,
         cache: None,
@@ -209,8 +210,20 @@ pub fn field_storage_entry(
 /// (`field_pass::layers_of`), as much memory and work as before there were colors.
 pub const FIELD_LAYERS: u32 = 4;
 
-/// A `w` x `w` field texture of `layers` r32float layers (1, B alone, or `FIELD_LAYERS`), for storage,
-/// sampling and copies both ways, and its view of every layer (a texture array, whatever the count).
+/// The layers a field texture of `layers` is made with on `device`. GL makes a texture of one layer a plain 2D
+/// texture (wgpu's GL backend picks the texture's target from its layer count), which a shader's
+/// `texture_2d_array` then silently reads as zeros; there a texture of B alone gets a second layer, never written
+/// nor read. Every other backend makes what is asked.
+pub fn field_texture_layers(device: &wgpu::Device, layers: u32) -> u32 {
+    match device.adapter_info().backend {
+        wgpu::Backend::Gl => layers.max(2),
+        _ => layers,
+    }
+}
+
+/// A `w` x `w` field texture of `layers` r32float layers (1, B alone, or `FIELD_LAYERS`; on GL at least 2,
+/// `field_texture_layers`), for storage, sampling and copies both ways, and its view of every layer (a texture
+/// array, whatever the count).
 pub fn field_texture(
     device: &wgpu::Device,
     label: &str,
@@ -222,7 +235,7 @@ pub fn field_texture(
         size: wgpu::Extent3d {
             width: w,
             height: w,
-            depth_or_array_layers: layers,
+            depth_or_array_layers: field_texture_layers(device, layers),
         },
         mip_level_count: 1,
         sample_count: 1,

@@ -7,7 +7,7 @@ use wgpu::util::DeviceExt;
 
 use super::context::{
     FIELD_LAYERS, GpuError, checked, field_storage_entry, field_texture, field_texture_bytes,
-    pass_layouts, storage_buffer_entry,
+    field_texture_layers, pass_layouts, storage_buffer_entry,
 };
 use super::frame_average::FrameAverage;
 use super::shaders;
@@ -977,7 +977,9 @@ impl FieldRenderer {
             }
             queue.write_buffer(&self.chunks, 0, &bytes);
             let layers = packed.params.layers;
-            let stale = |t: &wgpu::Texture| t.width() != w || t.depth_or_array_layers() != layers;
+            let stale = |t: &wgpu::Texture| {
+                t.width() != w || t.depth_or_array_layers() != field_texture_layers(device, layers)
+            };
             if self.texture.as_ref().is_none_or(|(t, _)| stale(t)) {
                 self.texture = Some(field_texture(device, "energywave.field.storage", w, layers));
                 rebind = true;

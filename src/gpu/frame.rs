@@ -6,7 +6,7 @@ use super::billboard_pass::{BillboardRenderer, BlendMode, billboard_params, view
 use super::context::{GpuError, checked, read_texture, texture_2d};
 use super::field_pass::FieldRenderer;
 use super::glare_pass::GlarePass;
-use super::object_pass::{DEPTH_FORMAT, ObjectPass};
+use super::object_pass::{DEPTH_FORMAT, DEPTH_VALUE_CLEAR, DEPTH_VALUE_FORMAT, ObjectPass};
 use crate::objects::clip::shared_clip_fractions;
 use crate::scene::Scene;
 
@@ -21,8 +21,10 @@ pub struct FrameTargets {
     pub background_view: wgpu::TextureView,
     pub color: wgpu::Texture,
     pub color_view: wgpu::TextureView,
-    /// The objects' depth.
+    /// The objects' depth buffer (the depth test).
     pub depth_view: wgpu::TextureView,
+    /// The copy of the objects' depth the billboard reads (`DEPTH_VALUE_FORMAT`).
+    pub depth_value_view: wgpu::TextureView,
 }
 
 impl FrameTargets {
@@ -47,11 +49,19 @@ impl FrameTargets {
             "energywave.frame.depth",
             size,
             DEPTH_FORMAT,
+            U::RENDER_ATTACHMENT,
+        );
+        let depth_value = texture_2d(
+            device,
+            "energywave.frame.depth_value",
+            size,
+            DEPTH_VALUE_FORMAT,
             U::RENDER_ATTACHMENT | U::TEXTURE_BINDING,
         );
         Self {
             size,
             depth_view: depth.create_view(&Default::default()),
+            depth_value_view: depth_value.create_view(&Default::default()),
             background_view: background.create_view(&Default::default()),
             color_view: color.create_view(&Default::default()),
             background,
@@ -192,15 +202,27 @@ impl SceneRenderer {
             if objects {
                 let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                     label: Some("energywave.frame.objects"),
-                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                        view: &targets.background_view,
-                        depth_slice: None,
-                        resolve_target: None,
-                        ops: wgpu::Operations {
-                            load: wgpu::LoadOp::Load,
-                            store: wgpu::StoreOp::Store,
-                        },
-                    })],
+                    color_attachments: &[
+                        Some(wgpu::RenderPassColorAttachment {
+                            view: &targets.background_view,
+                            depth_slice: None,
+                            resolve_target: None,
+                            ops: wgpu::Operations {
+                                load: wgpu::LoadOp::Load,
+                                store: wgpu::StoreOp::Store,
+                            },
+                        }),
+                        // The depth's copy, cleared to the far plane as the depth buffer is.
+                        Some(wgpu::RenderPassColorAttachment {
+                            view: &targets.depth_value_view,
+                            depth_slice: None,
+                            resolve_target: None,
+                            ops: wgpu::Operations {
+                                load: wgpu::LoadOp::Clear(DEPTH_VALUE_CLEAR),
+                                store: wgpu::StoreOp::Store,
+                            },
+                        }),
+                    ],
                     depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                         view: &targets.depth_view,
                         depth_ops: Some(wgpu::Operations {
@@ -250,7 +272,7 @@ impl SceneRenderer {
                 &targets.color_view,
                 &targets.background_view,
                 brightness,
-                (&targets.depth_view, clips),
+                (&targets.depth_value_view, clips),
                 layers,
                 &params,
             );

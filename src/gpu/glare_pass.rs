@@ -3,7 +3,8 @@
 //! (`scene::Glare::kernel`).
 
 use super::context::{
-    compute_pass, field_storage_entry, field_texture, loaded_field_entry, storage_buffer_entry,
+    compute_pass, field_storage_entry, field_texture, field_texture_layers, loaded_field_entry,
+    storage_buffer_entry,
 };
 use super::shaders;
 use crate::scene::{Glare, MAX_GLARE_RADIUS};
@@ -112,7 +113,8 @@ impl GlarePass {
         }
         self.last = Some(key);
         let stale = self.targets.as_ref().is_none_or(|[(t, _), _]| {
-            t.width() != resolution || t.depth_or_array_layers() != layers
+            t.width() != resolution
+                || t.depth_or_array_layers() != field_texture_layers(device, layers)
         });
         if stale {
             self.targets = Some([

@@ -85,7 +85,7 @@ impl GridPass {
                 topology: wgpu::PrimitiveTopology::LineList,
                 fragment_entry: "fs_main",
                 constants: &[],
-                target: wgpu::ColorTargetState {
+                targets: &[Some(wgpu::ColorTargetState {
                     format: FRAME_FORMAT,
                     // Lines over the background; alpha stays 1 (the billboard copies it).
                     blend: Some(wgpu::BlendState {
@@ -101,7 +101,7 @@ impl GridPass {
                         },
                     }),
                     write_mask: wgpu::ColorWrites::ALL,
-                },
+                })],
                 depth: None,
             },
         );

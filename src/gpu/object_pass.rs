@@ -13,6 +13,20 @@ use crate::scene::Scene;
 /// The depth buffer's format.
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
+/// The format of the copy of the objects' depth the billboard reads, written beside their color by the same
+/// draw: the bits of the fragment's depth, exactly what the depth buffer holds. A depth texture cannot be read
+/// by `textureLoad` on GL (naga writes no GLSL for it), and GL without `EXT_color_buffer_float` (llvmpipe)
+/// cannot render into `r32float`; every backend renders into `r32uint` and reads it back.
+pub const DEPTH_VALUE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
+
+/// The clear value of the depth's copy: the bits of the far plane's depth, 1.0 (as the depth buffer is cleared).
+pub const DEPTH_VALUE_CLEAR: wgpu::Color = wgpu::Color {
+    r: 0x3f80_0000 as f64,
+    g: 0.0,
+    b: 0.0,
+    a: 0.0,
+};
+
 /// Rust mirrors of `shaders/objects.wgsl` (keep in sync; `tests/gpu_layout.rs` checks them).
 pub mod gpu_data {
     use bytemuck::{Pod, Zeroable};
@@ -39,7 +53,7 @@ use gpu_data::{ObjectParams, ObjectVertex};
 
 /// The objects' pipeline and the buffers of the last scene's lit triangles.
 pub struct ObjectPass {
-    /// Color and depth; depth alone (a holdout).
+    /// Color and depth; depth alone (a holdout). Each writes the depth's copy too.
     pipelines: [wgpu::RenderPipeline; 2],
     params: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
@@ -94,11 +108,18 @@ impl ObjectPass {
                     topology: wgpu::PrimitiveTopology::TriangleList,
                     fragment_entry: "fs_main",
                     constants: &[],
-                    target: wgpu::ColorTargetState {
-                        format: FRAME_FORMAT,
-                        blend: None,
-                        write_mask,
-                    },
+                    targets: &[
+                        Some(wgpu::ColorTargetState {
+                            format: FRAME_FORMAT,
+                            blend: None,
+                            write_mask,
+                        }),
+                        Some(wgpu::ColorTargetState {
+                            format: DEPTH_VALUE_FORMAT,
+                            blend: None,
+                            write_mask: wgpu::ColorWrites::ALL,
+                        }),
+                    ],
                     depth: Some(wgpu::DepthStencilState {
                         format: DEPTH_FORMAT,
                         depth_write_enabled: Some(true),
@@ -157,7 +178,8 @@ impl ObjectPass {
         self.count > 0
     }
 
-    /// Draws the prepared triangles into `pass` (which has a `DEPTH_FORMAT` depth attachment) with the
+    /// Draws the prepared triangles into `pass` (which has a `DEPTH_FORMAT` depth attachment, and a
+    /// `DEPTH_VALUE_FORMAT` color attachment beside the frame's for the depth the billboard reads) with the
     /// projection `view_proj` (written before the submit that runs the pass): their colors and depth, or their
     /// depth alone where not `color`.
     pub fn draw(

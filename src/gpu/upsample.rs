@@ -2,7 +2,9 @@
 //! integrates a coarse field while the view moves and shows it through the same billboard pass as the full
 //! one, upsampled by Catmull-Rom (no blocks, no creases between texels).
 
-use super::context::{compute_pass, field_storage_entry, field_texture, loaded_field_entry};
+use super::context::{
+    compute_pass, field_storage_entry, field_texture, field_texture_layers, loaded_field_entry,
+};
 use super::shaders;
 
 /// The pipeline, and the W x W output with its bind group over one source texture.
@@ -52,7 +54,7 @@ impl Upsample {
         let stale = self.bound.as_ref().is_none_or(|b| {
             &b.source != source
                 || b.output.width() != resolution
-                || b.output.depth_or_array_layers() != layers
+                || b.output.depth_or_array_layers() != field_texture_layers(device, layers)
         });
         if stale {
             let (output, view) =
