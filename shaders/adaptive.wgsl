@@ -169,10 +169,11 @@ fn decayed(v: f32) -> f32 {
     return select(v, v * v, params.decay == 1u);
 }
 
-// A term's part of B from the integral of its weighed energy to the decay's power (twin of Integration::finish).
-fn finish(integral: f32) -> f32 {
+// A term's part of B from the integral of its weighed energy to the decay's power, for a term of `coefficient`:
+// with the rms decay the root takes back the sign the square dropped (twin of Integration::finish).
+fn finish(integral: f32, coefficient: f32) -> f32 {
     if params.decay == 1u {
-        return sqrt(max(integral, 0.0) / STRETCH);
+        return signed_root(integral, coefficient);
     }
     return integral;
 }

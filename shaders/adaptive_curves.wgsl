@@ -1145,7 +1145,7 @@ fn integrate_curve_term(index: u32, s_point: vec3<f32>, e_point: vec3<f32>) -> v
     }
     if params.decay == 1u {
         // B_i, and the color series' mean weighed by the term's square (twin of tint_of).
-        let b = finish(coefficient * coefficient * sum.x);
+        let b = finish(coefficient * coefficient * sum.x, coefficient);
         return vec4<f32>(b, select(vec3<f32>(0.0), b * sum.yzw / sum.x, sum.x > 0.0));
     }
     return coefficient * sum;

@@ -320,7 +320,7 @@ fn integrate_smooth_term(kind: u32, index: u32, s_point: vec3<f32>, e_point: vec
         allowance = rms_allowance(sum, scale, length);
     }
     }
-    return finish(decayed(coefficient) * sum);
+    return finish(decayed(coefficient) * sum, coefficient);
 }
 
 @compute @workgroup_size(8, 8)

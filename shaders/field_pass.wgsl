@@ -585,6 +585,12 @@ fn texel_segment(id: vec2<u32>) -> array<vec3<f32>, 2> {
     return array<vec3<f32>, 2>(s_point, e_point);
 }
 
+// The rms decay's B_i from the integral of its squared weighed energy over s: sign(c) sqrt(integral / stretch),
+// the root taking back the sign of the term's coefficient that the square dropped (twin of Integration::finish).
+fn signed_root(integral: f32, coefficient: f32) -> f32 {
+    return select(1.0, -1.0, coefficient < 0.0) * sqrt(max(integral, 0.0) / STRETCH);
+}
+
 // The decay zeta(t) along the ray.
 fn zeta_at(t: f32) -> f32 {
     return ALPHA / ((t + BETA) * (t + BETA));

@@ -114,13 +114,30 @@ fn term_samples(r: Samples, t: u32) -> vec4<f32> {
     return curve_samples(r, curves[t - first_curve]);
 }
 
+// Term t's coefficient (points, lines, tori, curves).
+fn term_coefficient(t: u32) -> f32 {
+    let first_line = point_count();
+    let first_torus = first_line + line_count();
+    let first_curve = first_torus + torus_count();
+    if t < first_line {
+        return points[t].coefficient;
+    }
+    if t < first_torus {
+        return lines[t - first_line].coefficient;
+    }
+    if t < first_curve {
+        return tori[t - first_torus].coefficient;
+    }
+    return curves[t - first_curve].coefficient;
+}
+
 // The scratch texture: a term's sums between the dispatches of simpson with the rms decay (gpu::field_pass's
 // scratch; one texel where no term takes more than one dispatch).
 @group(0) @binding(12) var scratch: texture_storage_2d_array<r32float, read_write>;
 
 // Simpson's rule (or the shifted rectangle rule) with the rms decay, one term a dispatch or several: its sums of
 // squares over the dispatch's samples, added to those kept from its earlier dispatches, then kept again, or
-// finished into the field: B_t = sqrt(sum scale / stretch), and its color series' mean weighed alike.
+// finished into the field: B_t = sign(c_t) sqrt(sum scale / stretch), and its color series' mean weighed alike.
 fn integrate_rms(texel: Texel, r_in: Samples, scale: f32) {
     var r = r_in;
     r.squared = true;
@@ -141,7 +158,7 @@ fn integrate_rms(texel: Texel, r_in: Samples, scale: f32) {
         textureStore(scratch, at, 3, vec4<f32>(sums.w, 0.0, 0.0, 1.0));
         return;
     }
-    let b = sqrt(max(sums.x * scale, 0.0) / STRETCH);
+    let b = signed_root(sums.x * scale, term_coefficient(chunk.term));
     var glow = glow_of(chunk.term, b);
     if sums.x > 0.0 {
         glow += vec4<f32>(0.0, b * sums.yzw / sums.x);

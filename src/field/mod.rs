@@ -247,6 +247,22 @@ impl Sources {
         }
     }
 
+    /// The coefficient of term `k`, in the order of `looks`; 0 past the last.
+    pub fn coefficient(&self, k: usize) -> f64 {
+        let (n_p, n_l, n_t) = (self.points.len(), self.lines.len(), self.tori.len());
+        if k < n_p {
+            self.points[k].coefficient
+        } else if k < n_p + n_l {
+            self.lines[k - n_p].coefficient
+        } else if k < n_p + n_l + n_t {
+            self.tori[k - n_p - n_l].coefficient
+        } else {
+            self.curves
+                .get(k - n_p - n_l - n_t)
+                .map_or(0.0, |c| c.coefficient)
+        }
+    }
+
     /// Total number of sources.
     pub fn len(&self) -> usize {
         self.points.len() + self.lines.len() + self.tori.len() + self.curves.len()

@@ -32,8 +32,9 @@ impl Integrator {
 /// With the papers' distance decay, B_i is the integral of the term weighed by zeta along the ray: the sum of its
 /// energy along the view, so a moderate energy spread evenly along a long stretch (a beam seen end on, a ring
 /// seen edge on) outshines a single intense spot, and the look changes as the camera orbits (thesis 5.6). The
-/// rms decay takes the root of the mean square instead, `B_i = sqrt(integral of (psi_i zeta)^2 dsigma)` over the
-/// ray in decay lengths: for a given total energy it is least where the energy is spread evenly (Cauchy-Schwarz:
+/// rms decay takes the root of the mean square instead, `B_i = sign(c_i) sqrt(integral of (psi_i zeta)^2 dsigma)`
+/// over the ray in decay lengths (the sign of the term's coefficient, as every term is its coefficient times a
+/// positive shape: a negative source subtracts as under the distance decay): for a given total energy it is least where the energy is spread evenly (Cauchy-Schwarz:
 /// `(integral f)^2 <= L integral f^2` over a stretch L, with equality for an even f) and grows as the energy
 /// concentrates, so an even spread outshines a spot only where it carries sqrt(L / w) times the spot's total
 /// energy (a stretch L against a spot w wide) rather than merely more. It keeps each term's scale (twice the
@@ -44,7 +45,7 @@ pub enum Decay {
     /// The papers': `B_i = integral of psi_i zeta`.
     #[default]
     Distance,
-    /// `B_i = sqrt(integral of (psi_i zeta)^2 dsigma)`, sigma the depth in decay lengths.
+    /// `B_i = sign(c_i) sqrt(integral of (psi_i zeta)^2 dsigma)`, sigma the depth in decay lengths.
     Rms,
 }
 
@@ -133,13 +134,16 @@ impl Integration {
         }
     }
 
-    /// A term's part of B from the integral over s in [0, 1] of its weighed energy to the decay's power (`power`):
-    /// the integral itself (distance), or `sqrt(integral / stretch)` (rms: `dsigma = stretch ds` and
-    /// `zeta_sigma = zeta_s / stretch`).
-    pub fn finish(&self, integral: f64) -> f64 {
+    /// A term's part of B from the integral over s in [0, 1] of its weighed energy to the decay's power (`power`),
+    /// for a term of `coefficient`: the integral itself (distance), or `sign(c) sqrt(integral / stretch)` (rms:
+    /// `dsigma = stretch ds` and `zeta_sigma = zeta_s / stretch`). The square drops the term's sign, which the
+    /// root gives back: a negative source subtracts energy under either decay.
+    pub fn finish(&self, integral: f64, coefficient: f64) -> f64 {
         match self.decay {
             Decay::Distance => integral,
-            Decay::Rms => (integral.max(0.0) / self.stretch).sqrt(),
+            Decay::Rms => (integral.max(0.0) / self.stretch)
+                .sqrt()
+                .copysign(coefficient),
         }
     }
 }

@@ -782,9 +782,10 @@ fn split_at_switch(
 /// One chain's part of B along `s -> e` within `tolerance`, on the pieces of its features, cut at its kinks.
 fn integrate_term(c: &Curve, s: DVec3, e: DVec3, settings: &Integration, tolerance: f64) -> f64 {
     let power = settings.power();
-    settings.finish(integrate_weighted(c, s, e, settings, tolerance, &|t| {
+    let integral = integrate_weighted(c, s, e, settings, tolerance, &|t| {
         wseries::evaluate(&c.weights, t).powi(power)
-    }))
+    });
+    settings.finish(integral, c.coefficient)
 }
 
 /// A chain's term to the decay's power without its W series, times `weight(t)` at the point the term reads:

@@ -289,7 +289,7 @@ fn integrate_term(term: Smooth, s: DVec3, e: DVec3, settings: &Integration, tole
         (tolerance, rms),
         |_, (a, _), (b, _)| ([(a, b); 2], 1),
     );
-    settings.finish(integral)
+    settings.finish(integral, c)
 }
 
 /// The points', lines' and tori's part of the brightness B of the segment `s -> e`, each term within an equal

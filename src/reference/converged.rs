@@ -70,7 +70,8 @@ pub fn converged_reference(scene: &Scene, stride: u32) -> (Vec<f64>, ReferenceSt
                 ),
                 // Each term the root of its own integral J of the square. An error dJ costs dJ / (2 sqrt(J)) of B,
                 // so J is refined to the tolerance times sqrt(J) (J first estimated unrefined), and at least to its
-                // square (|sqrt(x) - sqrt(y)| <= sqrt(|x - y|)).
+                // square (|sqrt(x) - sqrt(y)| <= sqrt(|x - y|)). The root takes the sign of the term's coefficient
+                // back (the square dropped it): a negative source subtracts.
                 Decay::Rms => (0..s.sources.len())
                     .map(|k| {
                         let f = |t: f64| (field.term(k, at(t), i.epsilon) * zeta(t)).powi(2) * span;
@@ -79,7 +80,10 @@ pub fn converged_reference(scene: &Scene, stride: u32) -> (Vec<f64>, ReferenceSt
                             .max(REFERENCE_TOLERANCE * REFERENCE_TOLERANCE);
                         let (sq, n) =
                             simpson_refined(f, REFERENCE_DIVISIONS, tolerance, REFERENCE_MAX_DEPTH);
-                        (sq.max(0.0).sqrt(), n + REFERENCE_DIVISIONS as u64 + 1)
+                        (
+                            sq.max(0.0).sqrt().copysign(s.sources.coefficient(k)),
+                            n + REFERENCE_DIVISIONS as u64 + 1,
+                        )
                     })
                     .fold((0.0, 0), |(b, n), (x, m)| (b + x, n + m)),
             }

@@ -101,7 +101,7 @@ pub fn tint_of(
                     let i = weighed(&|t| w(t) * w(t), 1.0);
                     let j = weighed(&|t| w(t) * w(t) * color(t), scale);
                     if i > 0.0 {
-                        settings.finish(i) * j / i
+                        settings.finish(i, curve.coefficient) * j / i
                     } else {
                         0.0
                     }

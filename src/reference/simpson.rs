@@ -17,9 +17,10 @@ pub fn brightness(sources: &Sources, settings: &Integration, s: DVec3, e: DVec3,
         Decay::Distance => along_ray(settings, (s, e), xi, |p| field.psi(p, settings.epsilon)),
         Decay::Rms => (0..sources.len())
             .map(|k| {
-                settings.finish(along_ray(settings, (s, e), xi, |p| {
-                    field.term(k, p, settings.epsilon)
-                }))
+                settings.finish(
+                    along_ray(settings, (s, e), xi, |p| field.term(k, p, settings.epsilon)),
+                    sources.coefficient(k),
+                )
             })
             .sum(),
     }
@@ -35,9 +36,10 @@ pub fn term_brightness(
     xi: f64,
 ) -> f64 {
     let field = sources.field();
-    settings.finish(along_ray(settings, (s, e), xi, |p| {
-        field.term(k, p, settings.epsilon)
-    }))
+    settings.finish(
+        along_ray(settings, (s, e), xi, |p| field.term(k, p, settings.epsilon)),
+        sources.coefficient(k),
+    )
 }
 
 /// Curve `c`'s term to the decay's power (`Integration::power`) without its W series, times `weight(t)` at the
