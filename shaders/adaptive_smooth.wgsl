@@ -127,11 +127,41 @@ fn decay_between(lo: f32, hi: f32) -> f32 {
     return (hi - lo) / ((lo + BETA) * (hi + BETA));
 }
 
+// The integral of u / sqrt(Q(u)) from u_b to u_a for a source near the decay's pole, as a series in powers of u:
+// sum_n p_n (u_a^(n+2) - u_b^(n+2)) / ((n + 2) sqrt(a)), p_n = rho^n P_n(w_c / rho) by the Legendre recurrence,
+// the differences of the powers by D_(m+1) = u_a D_m + u_b^m (u_a - u_b). Twin of pole_series, with
+// POLE_SERIES_TERMS_F32 terms.
+fn pole_series(w_c: f32, rho2: f32, a: f32, u_a: f32, u_b: f32, length: f32) -> f32 {
+    let delta = length * u_a * u_b;
+    var d = u_a * delta + u_b * delta;
+    var power = u_b * u_b;
+    var previous = 0.0;
+    var p = 1.0;
+    var sum = 0.0;
+    for (var k = 0u; k < POLE_SERIES_TERMS_F32; k++) {
+        let n = f32(k);
+        sum += p * d / (n + 2.0);
+        let next = ((2.0 * n + 1.0) * w_c * p - n * rho2 * previous) / (n + 1.0);
+        previous = p;
+        p = next;
+        d = u_a * d + power * delta;
+        power *= u_b;
+    }
+    return sum / sqrt(a);
+}
+
 // The part [lo, hi] (where d >= eps) of falloff_integral's integral: alpha (I(u_a) - I(u_b)), (value, 1) or
-// (0, 0) where it cancels beyond CLOSED_FORM_CONDITION. w_c = c + beta, k = a h2, big_a = A.
+// (0, 0) where it cancels beyond CLOSED_FORM_CONDITION; by the pole series where the source lies within
+// POLE_SERIES_REACH of the decay's pole (twin of falloff_piece and closed_piece). w_c = c + beta, big_a = A.
 fn falloff_piece(lo: f32, hi: f32, c: f32, h2: f32, a: f32, w_c: f32, big_a: f32) -> vec2<f32> {
     if hi <= lo {
         return vec2<f32>(0.0, 1.0);
+    }
+    let rho2 = w_c * w_c + h2 / a;
+    // Within POLE_SERIES_REACH of the pole, against the distance from there to the piece (1 / u_a).
+    let reach = POLE_SERIES_REACH * (lo + BETA);
+    if rho2 <= reach * reach {
+        return vec2<f32>(ALPHA * pole_series(w_c, rho2, a, 1.0 / (lo + BETA), 1.0 / (hi + BETA), hi - lo), 1.0);
     }
     let big_b = -a * w_c;
     let k = a * h2;

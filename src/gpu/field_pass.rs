@@ -224,10 +224,13 @@ const fn curve_evaluations(order: u32) -> u64 {
         + MAX_KINKS as u64
         + rules(cuts) * rule_iterations(order)
 }
-/// Loop iterations of a point's, a line's or a torus's term at most: Newton on the ring, then three pieces of
-/// three cuts, each of its rules a loop over its nodes, and the bisection's walk up after each.
+/// Loop iterations of a point's, a line's or a torus's term at most: the pole series on the closed form's two
+/// pieces (where it then declines), Newton on the ring, then three pieces of three cuts, each of its rules a loop
+/// over its nodes, and the bisection's walk up after each.
 const fn smooth_iterations(order: u32) -> u64 {
-    20 + rules(3 * 3) * rule_iterations(order)
+    2 * crate::integrate::adaptive::POLE_SERIES_TERMS_F32 as u64
+        + 20
+        + rules(3 * 3) * rule_iterations(order)
 }
 
 /// Loop iterations of one evaluation of a source's distance (a curve loops over its segments and roots), or of its

@@ -287,6 +287,21 @@ pub const RING_STEP: f64 = 0.125;
 
 /// Most cancellation the closed form of a point's or a line's term may suffer before the integrator takes it
 /// numerically instead (`falloff_integral`'s `condition`): in f32 (the shader, which uses the same
-/// bound) a term's error stays within about 2e-5 of it, measured over 200 000 random rays; the terms declined
-/// are those of a source close to the decay's pole at s = -beta.
+/// bound) a term's error stays within about 2e-5 of it, measured over 200 000 random rays. Its cancellation grows
+/// as the source nears the decay's pole at s = -beta (about 3.7 / z at `z = POLE_SERIES_REACH`), where the pole
+/// series takes the term instead; what it still declines is rare.
 pub const CLOSED_FORM_CONDITION: f64 = 16.0;
+
+/// Where a point's or a line's term on a piece of the ray is summed as a series about the decay's pole
+/// (`falloff_integral`): where the source lies within `z` of the pole, z the ratio of its distance from the pole
+/// point `S - beta (E - S)` to the distance from there to the piece's start. There the closed form's two parts
+/// grow as 1 / A^(3/2) (A the squared distance of source and pole) while their difference stays finite, so it
+/// loses every digit to cancellation as the source reaches the pole (a line through the eye, the pole at the
+/// papers' settings); the series converges as z^n. At this reach the closed form cancels at most about 12x.
+pub const POLE_SERIES_REACH: f64 = 0.3;
+
+/// Terms of the pole series in f64: `POLE_SERIES_REACH^32` is below 2e-17.
+pub const POLE_SERIES_TERMS: u32 = 32;
+
+/// Terms of the pole series in f32 (the shader): `POLE_SERIES_REACH^16` is below 5e-9.
+pub const POLE_SERIES_TERMS_F32: u32 = 16;
