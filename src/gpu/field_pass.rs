@@ -1168,6 +1168,9 @@ impl FieldRenderer {
 
     /// Starts compiling `structure`'s pipelines on a thread of its own, unless a compile is under way (one at
     /// a time: a burst of structure changes compiles what is drawn when the compile before it has finished).
+    /// Never on GL: there every call holds the one GL context, so a compile on another thread (seconds on
+    /// llvmpipe) holds up every frame, and wgpu gives up on the context after 6 s with a panic; the generic
+    /// pipelines draw there instead.
     fn start_compile(
         cache: &mut SpecialisedPipelines,
         device: &wgpu::Device,
@@ -1175,7 +1178,7 @@ impl FieldRenderer {
         layout: &wgpu::PipelineLayout,
         structure: Structure,
     ) {
-        if cache.compiling.is_some() {
+        if cache.compiling.is_some() || device.adapter_info().backend == wgpu::Backend::Gl {
             return;
         }
         let slot = CompileSlot::default();

@@ -19,9 +19,9 @@ pub use billboard_pass::{BillboardRenderer, billboard_params, view_projection};
 pub use blit_pass::BlitPass;
 pub use context::{
     FIELD_LAYERS, GpuContext, GpuError, checked, describe, field_texture, field_texture_bytes,
-    map_read, read_texture, read_texture_layer, texture_2d, uniform_buffer,
+    field_texture_layers, map_read, read_texture, read_texture_layer, texture_2d, uniform_buffer,
 };
-pub use field_pass::{FieldInputs, FieldRenderer, Specialise, Structure};
+pub use field_pass::{FieldInputs, FieldRenderer, Specialise, Structure, layers_of};
 pub use frame::{FRAME_FORMAT, FrameTargets, SceneRenderer, f16_to_f32, read_frame};
 pub use grid_pass::GridPass;
 pub use headless::{Frame, HeadlessRenderer};
