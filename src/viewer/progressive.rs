@@ -60,6 +60,18 @@ pub enum Plan {
     Refine { band_rows: u32, bands: u32 },
 }
 
+/// How the coarse field's side and the refining bands are chosen.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Pacing {
+    /// From the measured cost of the frames, to hold the frame budget (the viewer's screen).
+    #[default]
+    Measured,
+    /// The same every frame whatever the machine's load: a coarse field of `preview` texels a side while the view
+    /// moves (the full field where it is no larger), and bands of `band_rows` rows while it refines. Tests drive
+    /// the viewer so, since a loaded machine measures other costs and would choose other fields.
+    Fixed { preview: u32, band_rows: u32 },
+}
+
 /// The running estimates of what frames cost.
 #[derive(Clone, Debug)]
 pub struct FrameBudget {
@@ -131,6 +143,21 @@ impl FrameBudget {
     /// The field's share of a moving frame, in milliseconds.
     fn moving_budget(&self) -> f64 {
         (self.idle_ms * (MOVING_FACTOR - 1.0)).max(2.0)
+    }
+
+    /// `plan` as `pacing` says: from the measured costs, or fixed.
+    pub fn plan_paced(&mut self, pacing: Pacing, moved: bool, w: u32) -> Plan {
+        match pacing {
+            Pacing::Measured => self.plan(moved, w),
+            Pacing::Fixed { preview, .. } if moved && preview < w => Plan::Preview {
+                resolution: preview.max(1),
+            },
+            Pacing::Fixed { .. } if moved => Plan::Full,
+            Pacing::Fixed { band_rows, .. } => Plan::Refine {
+                band_rows: band_rows.clamp(1, w.max(1)).div_ceil(8) * 8,
+                bands: 1,
+            },
+        }
     }
 
     /// What to integrate in a frame whose field inputs changed since the last frame (`moved`) or not, for a

@@ -5,7 +5,7 @@
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
-use super::progressive::{FrameBudget, PREVIEW_TOLERANCE, Plan, Work};
+use super::progressive::{FrameBudget, PREVIEW_TOLERANCE, Pacing, Plan, Work};
 use crate::gpu::{
     BlitPass, FieldInputs, FieldRenderer, FrameTargets, GpuError, GridPass, SceneRenderer,
     Specialise, Upsample, checked, read_frame,
@@ -29,6 +29,8 @@ pub struct ViewportView {
     /// Whether a moving view may show a coarse field while the full one is refined (`progressive`); the
     /// viewer's screen does, screenshots never.
     pub progressive: bool,
+    /// How the coarse field and the refining bands are chosen (`progressive::Pacing`).
+    pub pacing: Pacing,
 }
 
 /// What the GPU side reports back to the UI.
@@ -207,7 +209,7 @@ impl ViewportGpu {
                 bands: 1,
             }
         } else {
-            self.budget.plan(moved, w)
+            self.budget.plan_paced(view.pacing, moved, w)
         };
         let mut work = Work::Nothing;
         let mut preview = None;

@@ -362,6 +362,7 @@ impl ViewerApp {
             show_grid: self.view.show_grid,
             average_frames: self.view.average_frames,
             progressive: self.view.progressive,
+            pacing: self.view.pacing,
         }
     }
 

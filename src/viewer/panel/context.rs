@@ -36,6 +36,8 @@ pub struct ViewSettings {
     /// While the view moves, show a coarse field sized to the frame budget and refine it once still
     /// (`progressive`); off: every frame integrates the full field.
     pub progressive: bool,
+    /// How the coarse field and the bands are chosen: from the measured frame costs, or fixed (tests).
+    pub pacing: crate::viewer::progressive::Pacing,
     /// Screenshot size relative to the viewport: 1, 2 or 4.
     pub screenshot_scale: u32,
 }
@@ -47,6 +49,7 @@ impl Default for ViewSettings {
             show_handles: true,
             average_frames: DEFAULT_AVERAGE_FRAMES,
             progressive: true,
+            pacing: Default::default(),
             screenshot_scale: 1,
         }
     }
