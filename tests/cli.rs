@@ -419,3 +419,76 @@ fn sizes_beyond_the_gpu_limit_are_refused_before_rendering_naming_their_origin()
     assert_eq!(r.status.code(), Some(2), "{e}");
     assert!(e.contains("ENERGYWAVE_MAX_TEXTURE_SIZE=\"lots\""), "{e}");
 }
+
+#[test]
+fn holdout_leaves_the_objects_out_and_their_glow_hidden_on_both_backends() {
+    // A bright point behind a sphere that stands before the billboard: the sphere's middle pixel is opaque in a
+    // transparent render (the object drawn), transparent under --holdout (the object left out, the glow it hides
+    // still hidden), and the glow beside it shows in both; --holdout without --transparent is refused.
+    let dir = tmpdir("holdout");
+    let file = dir.join("sphere.toml");
+    std::fs::write(
+        &file,
+        "[camera]\neye = [0.0, 0.0, 8.0]\ntarget = [0.0, 0.0, 0.0]\nfov_y = 30.0\n\
+         [billboard]\nresolution = 48\n\
+         [[points]]\nposition = [0.0, 0.0, 0.0]\ncoefficient = 1.5\n\
+         [[objects]]\nshape = \"sphere\"\ncenter = [0.0, 0.0, 4.0]\nradius = 0.5\ncolor = [0.9, 0.6, 0.3]\n",
+    )
+    .unwrap();
+    let (w, h) = (64u32, 48u32);
+    let size = format!("{w}x{h}");
+    let sphere = file.to_str().unwrap();
+    for backend in ["gpu", "cpu"] {
+        let render = |name: &str, extra: &[&str]| {
+            let out = dir.join(format!("{backend}-{name}.png"));
+            let mut args = vec![
+                "render",
+                sphere,
+                "--backend",
+                backend,
+                "--size",
+                &size,
+                "-o",
+            ];
+            let path = out.to_str().unwrap().to_owned();
+            args.push(&path);
+            args.extend_from_slice(extra);
+            let o = run(&args);
+            assert!(o.status.success(), "{backend} {name}: {}", stderr(&o));
+            image::open(&out).unwrap().to_rgba8()
+        };
+        let drawn = render("transparent", &["--transparent"]);
+        let held = render("holdout", &["--transparent", "--holdout"]);
+        let middle = (w / 2, h / 2);
+        // A little off the sphere's edge, where the point's glow is.
+        let beside = (w / 2 + w / 5, h / 2);
+        assert_eq!(
+            drawn.get_pixel(middle.0, middle.1)[3],
+            255,
+            "{backend}: the sphere drawn"
+        );
+        assert_eq!(
+            held.get_pixel(middle.0, middle.1).0,
+            [0, 0, 0, 0],
+            "{backend}: held out"
+        );
+        for image in [&drawn, &held] {
+            let a = image.get_pixel(beside.0, beside.1)[3];
+            assert!(a > 40, "{backend}: the glow beside the sphere, alpha {a}");
+        }
+        assert_eq!(
+            drawn.get_pixel(beside.0, beside.1),
+            held.get_pixel(beside.0, beside.1)
+        );
+    }
+    let o = run(&[
+        "render",
+        sphere,
+        "--holdout",
+        "-o",
+        dir.join("x.png").to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--transparent"), "{}", stderr(&o));
+    assert!(!dir.join("x.png").exists());
+}

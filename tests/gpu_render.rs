@@ -16,7 +16,7 @@ use std::sync::{Mutex, MutexGuard, OnceLock};
 
 use energywave::field::{Curve, Line, Point, Sources, Torus};
 use energywave::geometry::{Camera, ray_end};
-use energywave::gpu::{GpuError, HeadlessRenderer, field_texture_bytes};
+use energywave::gpu::{GpuError, HeadlessRenderer, field_texture_bytes, field_texture_layers};
 use energywave::integrate::Integrator;
 use energywave::reference;
 use energywave::scene::Scene;
@@ -554,7 +554,8 @@ fn sizes_beyond_the_device_limits_are_refused() {
 #[test]
 fn field_memory_is_w_squared() {
     // One f32 a texel (B), independent of n: 1 MiB at W = 512; four with a color per source (B and the tint's
-    // three channels).
+    // three channels). On GL a texture of B alone holds a second layer, unused (`field_texture_layers`: a texture
+    // of one layer there cannot be read as an array).
     assert_eq!(field_texture_bytes(512, 1), 1 << 20);
     assert_eq!(field_texture_bytes(512, 4), 4 << 20);
     let mut g = gpu();
@@ -564,9 +565,19 @@ fn field_memory_is_w_squared() {
     let bb = scene.place_billboard(1.0);
     g.brightness(&scene, &bb).unwrap();
     let t = g.field().texture().unwrap();
+    let gl = g.ctx.adapter.get_info().backend == wgpu::Backend::Gl;
+    assert_eq!(
+        field_texture_layers(&g.ctx.device, 1),
+        if gl { 2 } else { 1 }
+    );
     assert_eq!(
         (t.width(), t.height(), t.depth_or_array_layers(), t.format()),
-        (48, 48, 1, wgpu::TextureFormat::R32Float)
+        (
+            48,
+            48,
+            field_texture_layers(&g.ctx.device, 1),
+            wgpu::TextureFormat::R32Float
+        )
     );
     // A source in a color of its own: the texture takes the tint's layers.
     scene.sources.points[0].look.color = Some([1.0, 0.0, 0.0]);

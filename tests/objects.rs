@@ -492,6 +492,126 @@ fn the_floor_preset_composes_alike_on_the_gpu_and_the_cpu_opaque_transparent_and
     }
 }
 
+/// A bright point and a line behind a sphere that stands between the eye and the billboard: every ray through the
+/// sphere's silhouette meets it before any glow.
+fn sphere_before_the_glow() -> Scene {
+    let mut scene = point_scene(
+        vec![Object {
+            shape: Shape::Sphere {
+                center: DVec3::new(0.25, 0.1, 4.0),
+                radius: 0.6,
+            },
+            color: [0.9, 0.6, 0.3],
+        }],
+        Integrator::Adaptive,
+    );
+    scene.colors.background = [0.1, 0.15, 0.3];
+    scene
+}
+
+/// Each pixel's place against the sphere of `sphere_before_the_glow`, from the pixel's ray and the sphere alone:
+/// `Some(true)` where the ray passes well inside its silhouette, `Some(false)` well outside it, `None` within 1.5
+/// pixels of the edge.
+fn against_the_sphere(scene: &Scene, (w, h): (u32, u32)) -> Vec<Option<bool>> {
+    let Shape::Sphere { center, radius } = scene.objects[0].shape else {
+        unreachable!()
+    };
+    let eye = scene.camera.eye;
+    let pixel = 2.0 * scene.camera.tan_half_fov() * (center - eye).length() / h as f64;
+    (0..w * h)
+        .map(|k| {
+            let d = scene
+                .camera
+                .pixel_ray((k % w) as f64 + 0.5, (k / w) as f64 + 0.5, w, h);
+            let closest = eye + d * (center - eye).dot(d);
+            let miss = (closest - center).length() - radius;
+            (miss.abs() > 1.5 * pixel).then_some(miss < 0.0)
+        })
+        .collect()
+}
+
+#[test]
+fn on_the_gpu_an_object_before_the_glow_shows_lit_and_unglowing_and_a_holdout_leaves_alpha_zero() {
+    // Pixels whose ray meets the sphere before the billboard: opaque and transparent, the sphere's lit color (the
+    // lit triangles ray-cast on the CPU) with nothing of the glow, although the glow there is bright (B > 0.5 under
+    // the sphere's middle without it); held out, alpha 0 and no color. Pixels off the sphere: the glow, as the f64 twin
+    // composes it, and alpha min(B, 1) under the holdout too.
+    let scene = sphere_before_the_glow();
+    let (w, h) = (80, 60);
+    let bb = scene.place_billboard(w as f64 / h as f64);
+    let tex = reference::render_brightness(&scene, &bb);
+    // The glow the sphere hides: the same scene without it (the field pass clips the hidden texels to 0).
+    let mut bare = scene.clone();
+    bare.objects.clear();
+    let hidden = reference::render_brightness(&bare, &bb);
+    let place = against_the_sphere(&scene, (w, h));
+    let image = reference::objects::ObjectImage::of(&scene).unwrap();
+    let eye = scene.camera.eye;
+    let mut g = gpu();
+    let (mut on, mut off, mut bright) = (0, 0, 0);
+    for (backdrop, transparent, holdout) in [
+        (Backdrop::Opaque, false, false),
+        (Backdrop::Transparent, true, false),
+        (Backdrop::Holdout, true, true),
+    ] {
+        g.set_holdout(holdout);
+        let frame = g.render(&scene, w, h, transparent).unwrap();
+        g.set_holdout(false);
+        let cpu = reference::compose_frame_over(&scene, &bb, &tex, (w, h), backdrop);
+        for (k, (&place, p)) in place.iter().zip(&frame.pixels).enumerate() {
+            let (x, y) = ((k as u32 % w) as f64 + 0.5, (k as u32 / w) as f64 + 0.5);
+            let dir = scene.camera.pixel_ray(x, y, w, h);
+            match place {
+                Some(true) => {
+                    let (_, lit) = image.hit(eye, dir).expect("the ray meets the sphere");
+                    let (u, v) = bb
+                        .hit(eye, dir)
+                        .expect("the sphere is before the billboard");
+                    let b = reference::billboard::sample_bilinear(
+                        &hidden.values,
+                        hidden.resolution,
+                        u,
+                        v,
+                    );
+                    bright += usize::from(b > 0.5);
+                    let want = match backdrop {
+                        Backdrop::Holdout => [0.0; 4],
+                        _ => [lit[0], lit[1], lit[2], 1.0],
+                    };
+                    for c in 0..4 {
+                        assert!(
+                            (p[c] as f64 - want[c]).abs() <= 2.0 / 255.0,
+                            "{backdrop:?}, pixel {k} on the sphere (B {b:.2} behind it): {p:?} against {want:?}"
+                        );
+                    }
+                    on += 1;
+                }
+                Some(false) => {
+                    for c in 0..4 {
+                        let (got, want) =
+                            ((p[c] as f64).clamp(0.0, 1.0), cpu[k][c].clamp(0.0, 1.0));
+                        assert!(
+                            (got - want).abs() <= 4.0 / 255.0,
+                            "{backdrop:?}, pixel {k} off the sphere: {p:?} against the twin's {:?}",
+                            cpu[k]
+                        );
+                    }
+                    off += 1;
+                }
+                None => {}
+            }
+        }
+    }
+    assert!(
+        on > 3 * 150 && off > 3 * 2000,
+        "{on} pixels on the sphere, {off} off it"
+    );
+    assert!(
+        bright > 3 * 40,
+        "the glow is bright behind the sphere: {bright}"
+    );
+}
+
 /// A tetrahedron as glTF 2.0: positions and indices in one buffer, as a data URI (`.gltf`) or the binary
 /// chunk (`.glb`), under a node that moves it up by 1.
 fn tetrahedron(binary: bool) -> Vec<u8> {

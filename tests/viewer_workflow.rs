@@ -290,11 +290,36 @@ fn screenshots_of_a_scene_without_a_file_go_to_a_stated_place() {
     h.get_by_label(&format!("into {}", dir.display()));
 }
 
+/// Every file under `dir`, its subfolders' too (an export stages its frames in a folder of its own), with its
+/// bytes, by path.
+fn files_under(dir: &std::path::Path) -> Vec<(std::path::PathBuf, Vec<u8>)> {
+    let mut out = Vec::new();
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.is_dir() {
+            out.extend(files_under(&path));
+        } else if let Ok(bytes) = std::fs::read(&path) {
+            out.push((path, bytes));
+        }
+    }
+    out.sort();
+    out
+}
+
 #[test]
-fn an_export_can_be_cancelled_and_leaves_nothing() {
+fn an_export_can_be_cancelled_and_leaves_the_folder_as_it_was() {
     let dir = std::env::temp_dir().join(format!("energywave-ui-cancel-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
+    // An earlier export of the same names: a cancelled export leaves every byte of it.
+    for k in 0..3 {
+        std::fs::write(
+            dir.join(format!("frame_{k:04}.png")),
+            format!("earlier {k}"),
+        )
+        .unwrap();
+    }
+    let earlier = files_under(&dir);
     let mut scene = light_scene();
     scene.animation = Some(energywave::animation::Animation {
         frames: 400,
@@ -312,11 +337,15 @@ fn an_export_can_be_cancelled_and_leaves_nothing() {
     h.get_by_label("Export 400 frames").click_accesskit();
     h.run();
     assert!(h.state().is_exporting(), "{:?}", h.state().notice());
-    // Let a few frames land, then stop.
+    // Let a few frames land (beside the destination, until the last is written), then stop.
     let start = std::time::Instant::now();
-    while std::fs::read_dir(&dir).unwrap().count() < 2 && start.elapsed().as_secs() < 60 {
+    while files_under(&dir).len() < earlier.len() + 2 && start.elapsed().as_secs() < 60 {
         std::thread::sleep(std::time::Duration::from_millis(20));
     }
+    assert!(
+        files_under(&dir).len() >= earlier.len() + 2,
+        "frames are being written"
+    );
     h.get_by_label("Cancel").click_accesskit();
     h.run();
     while h.state().is_exporting() && start.elapsed().as_secs() < 120 {
@@ -328,10 +357,83 @@ fn an_export_can_be_cancelled_and_leaves_nothing() {
         Some("Export cancelled: nothing written")
     );
     assert_eq!(
-        std::fs::read_dir(&dir).unwrap().count(),
-        0,
-        "the frames written are gone"
+        files_under(&dir),
+        earlier,
+        "the frames written are gone, the earlier ones whole"
     );
+}
+
+#[test]
+fn the_holdout_checkbox_leaves_the_objects_out_of_an_export() {
+    // A bright point behind a sphere standing before the billboard, two frames exported as a transparent PNG
+    // sequence through the panel: with "holdout" ticked the sphere's middle pixel is transparent (left out, the
+    // glow it hides still hidden), without it opaque; the glow beside it shows in both.
+    let dir = std::env::temp_dir().join(format!("energywave-ui-holdout-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = energywave::scene::Scene::parse(
+        "[camera]\neye = [0.0, 0.0, 8.0]\ntarget = [0.0, 0.0, 0.0]\nfov_y = 30.0\n\
+         [billboard]\nresolution = 32\n[integration]\nintegrator = \"simpson\"\ndivisions = 32\n\
+         [animation]\nframes = 2\n\
+         [[points]]\nposition = [0.0, 0.0, 0.0]\ncoefficient = 1.5\n\
+         [[objects]]\nshape = \"sphere\"\ncenter = [0.0, 0.0, 4.0]\nradius = 0.5\n",
+        std::path::Path::new("sphere.toml"),
+    )
+    .unwrap();
+    let mut h = harness(scene);
+    h.get_by_label("Export").click_accesskit();
+    h.run();
+    let (w, ht) = (64u32, 48u32);
+    let export = |h: &mut egui_kittest::Harness<'static, energywave::viewer::ViewerApp>,
+                  name: &str| {
+        {
+            let form = h.state_mut().animation_form_mut();
+            form.export_path = dir.join(format!("{name}_##.png")).display().to_string();
+            form.size = [w, ht];
+        }
+        h.run();
+        h.get_by_label("Export 2 frames").click_accesskit();
+        h.run();
+        let start = std::time::Instant::now();
+        while h.state().is_exporting() && start.elapsed().as_secs() < 120 {
+            std::thread::sleep(std::time::Duration::from_millis(50));
+            h.step();
+        }
+        let notice = h.state().notice().cloned();
+        assert!(
+            notice
+                .as_ref()
+                .is_some_and(|(t, e)| !e && t.starts_with("Exported")),
+            "{notice:?}"
+        );
+        image::open(dir.join(format!("{name}_00.png")))
+            .unwrap()
+            .to_rgba8()
+    };
+    h.get_by_label("transparent").click_accesskit();
+    h.run();
+    let drawn = export(&mut h, "drawn");
+    h.get_by_label("holdout").click_accesskit();
+    h.run();
+    assert!(h.state_mut().animation_form_mut().holdout, "ticked");
+    let held = export(&mut h, "held");
+    let (middle, beside) = ((w / 2, ht / 2), (w / 2 + w / 5, ht / 2));
+    assert_eq!(
+        drawn.get_pixel(middle.0, middle.1)[3],
+        255,
+        "the sphere drawn"
+    );
+    assert_eq!(
+        held.get_pixel(middle.0, middle.1).0,
+        [0, 0, 0, 0],
+        "held out"
+    );
+    for image in [&drawn, &held] {
+        assert!(
+            image.get_pixel(beside.0, beside.1)[3] > 40,
+            "the glow beside it"
+        );
+    }
 }
 
 #[test]
