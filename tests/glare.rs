@@ -123,3 +123,90 @@ fn glare_in_scene_files() {
         scene
     );
 }
+
+/// The viewport as the viewer last presented it (RGBA, 0..1), cropped out of its window `width` pixels wide.
+fn shown_viewport(
+    v: &energywave::viewer::offscreen::OffscreenViewer,
+    width: usize,
+) -> Vec<[f32; 4]> {
+    let window = v.frame_image().unwrap();
+    let rect = v.app.viewport_rect();
+    let [vw, vh] = v.app.viewport_px();
+    let (x0, y0) = (rect.left().round() as usize, rect.top().round() as usize);
+    let mut out = Vec::with_capacity((vw * vh) as usize);
+    for y in y0..y0 + vh as usize {
+        for x in x0..x0 + vw as usize {
+            let at = 4 * (y * width + x);
+            out.push(std::array::from_fn(|c| window[at + c] as f32 / 255.0));
+        }
+    }
+    out
+}
+
+#[test]
+fn the_viewers_glare_is_never_a_stale_one() {
+    // The viewer reuses its last glare while the field it shows is unchanged. Whatever changed the field (an edit
+    // of a coefficient, the bands of a refinement finishing after an orbit), the viewport it presents then is a
+    // fresh render of the scene with glare.
+    use energywave::gpu::HeadlessRenderer;
+    use energywave::viewer::offscreen::OffscreenViewer;
+    use energywave::viewer::progressive::Pacing;
+    use energywave::viewer::{Document, navigation};
+    let mut scene = shipped_scene("rings_and_beam.toml");
+    scene.billboard.resolution = 64;
+    scene.integration.integrator = energywave::integrate::Integrator::Simpson;
+    scene.integration.divisions = 48;
+    scene.glare = Some(Glare {
+        threshold: 0.3,
+        size: 0.04,
+        strength: 1.5,
+    });
+    let mut v = OffscreenViewer::new(Document::new(scene, None), 800, 480).unwrap();
+    // The viewport alone: no grid behind the glow, no handles over it.
+    v.app.view_mut().show_grid = false;
+    v.app.view_mut().show_handles = false;
+    v.app.view_mut().pacing = Pacing::Fixed {
+        preview: 16,
+        band_rows: 16,
+    };
+    let mut fresh = HeadlessRenderer::new().unwrap();
+    let mut settle_and_check = |v: &mut OffscreenViewer, what: &str| {
+        for _ in 0..40 {
+            v.frame().unwrap();
+            if !v.app.report().wants_frame() {
+                break;
+            }
+        }
+        assert!(
+            !v.app.report().wants_frame(),
+            "{what}: the picture is whole"
+        );
+        let [vw, vh] = v.app.viewport_px();
+        let want = fresh.render(&v.app.frame_scene(), vw, vh, false).unwrap();
+        let shown = shown_viewport(v, 800);
+        let worst = (shown.iter().zip(&want.pixels))
+            .map(|(p, q)| {
+                (0..3)
+                    .map(|c| (p[c] - q[c].clamp(0.0, 1.0)).abs())
+                    .fold(0.0, f32::max)
+            })
+            .fold(0.0, f32::max);
+        assert!(
+            worst <= 1.5 / 255.0,
+            "{what}: off a fresh render by {worst}"
+        );
+        shown
+    };
+    let first = settle_and_check(&mut v, "at first");
+    // A coefficient edited: the field, and so the glare, changes.
+    v.app.scene_mut().sources.tori[0].coefficient *= 1.8;
+    let edited = settle_and_check(&mut v, "after an edit");
+    assert_ne!(first, edited, "the edit shows");
+    // An orbit: coarse fields while moving, then bands, the last of which completes the field.
+    for _ in 0..3 {
+        navigation::orbit(&mut v.app.scene_mut().camera, 0.05, 0.0);
+        v.frame().unwrap();
+        assert_eq!(v.app.report().preview, Some(16));
+    }
+    settle_and_check(&mut v, "after the bands of an orbit");
+}

@@ -94,6 +94,7 @@ fn crossing(shape: &Shape, o: DVec3, d: DVec3, t_max: f64) -> Option<f64> {
 fn ray_hits_are_the_crossings_a_root_finder_finds() {
     let mut rng = Lcg(3);
     let mut hits = [0usize; 4];
+    let mut grazing = 0;
     for trial in 0..400 {
         let shape = match trial % 4 {
             0 => Shape::Sphere {
@@ -143,7 +144,10 @@ fn ray_hits_are_the_crossings_a_root_finder_finds() {
                 hits[trial % 4] += 1;
             }
             (None, None) => {}
-            // A ray that only grazes (the scan steps over a sliver thinner than its step) may go either way.
+            // A ray that only grazes may go either way: where the scan steps (1e-3 apart) over a sliver of the
+            // solid thinner than two of them, or the hit lies on a square's edge. How far from grazing the ray
+            // is, from the geometry: a sphere's tangent, the chord a box's slabs leave the ray (or by how much
+            // they miss it), a hit's distance from the square's edge; an infinite plane never grazes.
             (g, w) => {
                 let t = g.or(w).unwrap();
                 let p = o + d * t;
@@ -152,16 +156,48 @@ fn ray_hits_are_the_crossings_a_root_finder_finds() {
                         let closest = (*center - o).dot(d);
                         ((o + d * closest - *center).length() - radius).abs()
                     }
-                    _ => 0.0,
+                    Shape::Box {
+                        center,
+                        size,
+                        rotation,
+                    } => {
+                        let r = rotation_matrix(*rotation).transpose();
+                        let (lo, dl) = (r * (o - *center), r * d);
+                        let (mut near, mut far) = (f64::NEG_INFINITY, f64::INFINITY);
+                        for k in 0..3 {
+                            let (a, b) = (
+                                (-0.5 * size[k] - lo[k]) / dl[k],
+                                (0.5 * size[k] - lo[k]) / dl[k],
+                            );
+                            near = near.max(a.min(b));
+                            far = far.min(a.max(b));
+                        }
+                        (far - near).abs()
+                    }
+                    Shape::Plane {
+                        point,
+                        normal,
+                        size: Some(size),
+                    } => {
+                        let (u, v) = plane_axes(*normal);
+                        let q = p - *point;
+                        (0.5 * size - q.dot(u).abs())
+                            .abs()
+                            .min((0.5 * size - q.dot(v).abs()).abs())
+                    }
+                    Shape::Plane { size: None, .. } => f64::INFINITY,
+                    Shape::Mesh(_) => unreachable!(),
                 };
                 assert!(
-                    margin < 1e-3,
-                    "trial {trial}: {g:?} against {w:?} at {p} ({shape:?})"
+                    margin < 2e-3,
+                    "trial {trial}: {g:?} against {w:?} at {p}, {margin:e} from grazing ({shape:?})"
                 );
+                grazing += 1;
             }
         }
     }
     assert!(hits.iter().all(|&h| h > 20), "hits by shape: {hits:?}");
+    assert!(grazing <= 4, "{grazing} of 400 rays graze");
     // And in closed form: a ray along an axis meets a sphere at D - r, a box at its face, a plane at its point.
     let sphere = Object {
         shape: Shape::Sphere {
