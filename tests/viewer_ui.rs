@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::viewer::{harness, light_scene, mean_abs_difference, viewport_pixels};
+use common::viewer::{export_and_wait, harness, light_scene, mean_abs_difference, viewport_pixels};
 use egui::accesskit::Role;
 use egui::{Key, Modifiers, Pos2, Vec2};
 use egui_kittest::Harness;
@@ -520,15 +520,7 @@ fn the_viewer_exports_a_sprite_sheet_beside_the_ui() {
         form.size = [20, 16];
     }
     h.run();
-    h.get_by_label("Export 5 frames").click_accesskit();
-    h.run();
-    assert!(h.state().is_exporting(), "{:?}", h.state().notice());
-    let start = std::time::Instant::now();
-    while h.state().is_exporting() && start.elapsed().as_secs() < 120 {
-        std::thread::sleep(std::time::Duration::from_millis(100));
-        h.step();
-    }
-    let notice = h.state().notice().cloned();
+    let notice = export_and_wait(&mut h, "Export 5 frames");
     assert!(
         notice
             .as_ref()

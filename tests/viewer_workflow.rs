@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::viewer::{harness, light_scene};
+use common::viewer::{export_and_wait, harness, light_scene};
 use egui::{Pos2, Vec2};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
@@ -392,14 +392,7 @@ fn the_holdout_checkbox_leaves_the_objects_out_of_an_export() {
             form.size = [w, ht];
         }
         h.run();
-        h.get_by_label("Export 2 frames").click_accesskit();
-        h.run();
-        let start = std::time::Instant::now();
-        while h.state().is_exporting() && start.elapsed().as_secs() < 120 {
-            std::thread::sleep(std::time::Duration::from_millis(50));
-            h.step();
-        }
-        let notice = h.state().notice().cloned();
+        let notice = export_and_wait(h, "Export 2 frames");
         assert!(
             notice
                 .as_ref()
@@ -759,16 +752,7 @@ fn the_viewer_exports_a_video_and_a_padded_sheet() {
     let mut h = harness(scene);
     h.get_by_label("Export").click_accesskit();
     h.run();
-    let export = |h: &mut Harness<'static, ViewerApp>| {
-        h.get_by_label("Export 8 frames").click_accesskit();
-        h.run();
-        let start = std::time::Instant::now();
-        while h.state().is_exporting() && start.elapsed().as_secs() < 120 {
-            std::thread::sleep(std::time::Duration::from_millis(50));
-            h.step();
-        }
-        h.state().notice().cloned()
-    };
+    let export = |h: &mut Harness<'static, ViewerApp>| export_and_wait(h, "Export 8 frames");
     // H.264 has no alpha: a transparent MP4 is refused, and said so.
     {
         let form = h.state_mut().animation_form_mut();

@@ -82,3 +82,16 @@ pub fn mean_abs_difference(a: &[[u8; 4]], b: &[[u8; 4]]) -> f64 {
         .sum();
     sum / (a.len() * 3) as f64
 }
+
+/// Clicks the Export section's button `label` ("Export 5 frames") and steps the viewer until the export, on its
+/// thread, has ended (two minutes at most); returns the notice it left.
+pub fn export_and_wait(h: &mut Harness<'static, ViewerApp>, label: &str) -> Option<(String, bool)> {
+    egui_kittest::kittest::Queryable::get_by_label(h, label).click_accesskit();
+    h.run();
+    let start = std::time::Instant::now();
+    while h.state().is_exporting() && start.elapsed().as_secs() < 120 {
+        std::thread::sleep(std::time::Duration::from_millis(50));
+        h.step();
+    }
+    h.state().notice().cloned()
+}
