@@ -90,11 +90,13 @@ impl Colors {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Blend {
     /// The papers' `clamp((1 - B) Cb + B Ce)`: where B > 1, `(1 - B) Cb` is negative and subtracts the
-    /// background (a light-blue core turns magenta over green).
-    #[default]
+    /// background (a light-blue core turns magenta over green, a lit floor under a ring turns black). The papers'
+    /// presets name it; over the near-black backgrounds of their figures it is the same as `Over`.
     Papers,
     /// `clamp(B Ce + (1 - min(B, 1)) Cb)` (B below 0 taken as 0): the papers' blend wherever 0 <= B <= 1,
     /// white-hot cores over any background, and exactly what the transparent export composites to, for every B.
+    /// The default: a file without `blend`, a new scene.
+    #[default]
     Over,
 }
 
@@ -195,7 +197,7 @@ impl Default for Colors {
             energy: [0.35, 0.65, 1.0],
             energy_intensity: 1.0,
             background: [0.0, 0.0, 0.0],
-            blend: Blend::Papers,
+            blend: Blend::Over,
         }
     }
 }
@@ -859,7 +861,7 @@ fn check_colors(c: &mut Checker<'_, '_>, file: &SceneFile) -> Colors {
         Some(other) => {
             c.fail(
                 &col_path.key("blend"),
-                format!("{other:?} is not a blend: use \"papers\" (clamp((1 - B) Cb + B Ce), the default) or \"over\" (clamp(B Ce + (1 - min(B, 1)) Cb): the same wherever B <= 1, and what the transparent export composites to)"),
+                format!("{other:?} is not a blend: use \"over\" (clamp(B Ce + (1 - min(B, 1)) Cb), the default: what the transparent export composites to) or \"papers\" (clamp((1 - B) Cb + B Ce): the same wherever B <= 1, but where B > 1 it subtracts the background, turning bright backgrounds dark)"),
             );
             default_colors.blend
         }

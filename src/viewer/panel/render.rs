@@ -1,7 +1,7 @@
 //! The Rendering section: the integrator and its settings, the decay, the resolution, the billboard, the
 //! colors and the blend.
 
-use egui::{DragValue, Ui};
+use egui::{DragValue, RichText, Ui};
 
 use super::super::action::{Action, Edit};
 use super::super::widgets::{labelled, vec3};
@@ -11,7 +11,7 @@ use super::context::{
 use super::fields::{Edits, color_field, number};
 use crate::animation::{IntegrationSetting, Parameter};
 use crate::integrate::{Decay, Integrator};
-use crate::scene::{Blend, Glare, MAX_GLARE_SIZE, MAX_INTENSITY};
+use crate::scene::{Blend, Glare, MAX_GLARE_SIZE, MAX_INTENSITY, Scene};
 
 pub(super) fn render_section(
     ui: &mut Ui,
@@ -198,7 +198,9 @@ pub(super) fn render_section(
                 for (blend, hint) in [
                     (
                         Blend::Papers,
-                        "The papers' clamp((1 - B) Cb + B Ce): where B > 1 it subtracts the background",
+                        "The papers' clamp((1 - B) Cb + B Ce): where B > 1 it subtracts the background, so a bright \
+                         background or a lit object under a core turns dark, even black; the same as over on the \
+                         papers' near-black backgrounds",
                     ),
                     (
                         Blend::Over,
@@ -216,6 +218,16 @@ pub(super) fn render_section(
                     }
                 }
             });
+            if scene.colors.blend == Blend::Papers && papers_blend_darkens(scene) {
+                ui.label(
+                    RichText::new(
+                        "papers: where B > 1 the background (and any lit object) is subtracted, so it turns \
+                         dark under a bright core; \"over\" keeps it",
+                    )
+                    .small()
+                    .weak(),
+                );
+            }
             glare_editor(ui, scene.glare, out);
         });
 }
@@ -305,4 +317,10 @@ pub(super) fn billboard_editor(ui: &mut Ui, cx: &Context, out: &mut Edits<'_>) {
             }
         });
     }
+}
+
+/// Whether the papers' blend visibly darkens this scene where B > 1: a background brighter than the papers'
+/// near-black ones, or objects, which the glow lights and the blend then subtracts.
+pub(crate) fn papers_blend_darkens(scene: &Scene) -> bool {
+    !scene.objects.is_empty() || scene.colors.background.iter().any(|&c| c > 0.05)
 }
