@@ -103,7 +103,10 @@ pub struct RenderArgs {
     /// float EXR (R = G = B = brightness) instead of the composed frame.
     #[arg(long)]
     pub brightness: bool,
-    /// Override the scene's billboard resolution W (texels per side).
+    /// Fix the billboard's resolution W (texels per side). Without it, and unless the scene fixes W
+    /// (`[billboard] resolution`), W follows the frame's pixel density: one texel per two pixels of the
+    /// billboard's side in the frame (at least the scene's W, at most 4096 and the GPU's limit), so a thin core stays
+    /// smooth at 1920x1080 as at 512x512.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_RESOLUTION as i64))]
     pub resolution: Option<u32>,
     /// Override the scene's Simpson division count n (even).
@@ -506,8 +509,13 @@ fn render(args: &RenderArgs) -> Result<(), CliError> {
             frames.len()
         )));
     }
-    let scene = scene.at_frame(frames.start as f64);
+    let mut scene = scene.at_frame(frames.start as f64);
     let (width, height) = args.size;
+    let mut gpu = match args.backend {
+        Backend::Gpu => Some(HeadlessRenderer::new()?),
+        Backend::Cpu => None,
+    };
+    follow_pixel_density(&mut scene, frames.start, args, gpu.as_ref());
     let billboard = scene.place_billboard(width as f64 / height as f64);
     let name = args
         .scene
@@ -553,12 +561,12 @@ fn render(args: &RenderArgs) -> Result<(), CliError> {
             }
         }
         Backend::Gpu => {
-            let mut gpu = HeadlessRenderer::new()?;
+            let gpu = gpu.as_mut().expect("made above for the gpu backend");
             gpu.set_holdout(args.holdout);
             if args.verbose {
                 eprintln!("adapter: {}", gpu.ctx.adapter_summary());
             }
-            check_device_limits(&gpu, args, &scene, &name)?;
+            check_device_limits(gpu, args, &scene, &name)?;
             if args.brightness {
                 let values = gpu.brightness(&scene, &billboard)?;
                 let values: Vec<f64> = values.iter().map(|&b| b as f64).collect();
@@ -581,6 +589,26 @@ fn render(args: &RenderArgs) -> Result<(), CliError> {
         eprintln!("wrote {}", args.output.display());
     }
     Ok(())
+}
+
+/// Unless `--resolution` or the scene fixes W, the billboard takes the texels the frame's size needs
+/// (`Scene::resolution_for`, within the device's limit), from the frame the export starts at; a B-only EXR
+/// (`--brightness`, W x W whatever the size) keeps the scene's.
+fn follow_pixel_density(
+    scene: &mut Scene,
+    start: u32,
+    args: &RenderArgs,
+    gpu: Option<&HeadlessRenderer>,
+) {
+    if args.resolution.is_some() || args.brightness {
+        return;
+    }
+    let limit = gpu.map_or(crate::scene::MAX_AUTO_RESOLUTION, |g| {
+        g.ctx.device.limits().max_texture_dimension_2d
+    });
+    scene.billboard.resolution = scene
+        .at_frame(start as f64)
+        .resolution_for(args.size, limit);
 }
 
 /// Renders `frames` of the scene's animation into a sequence, a GIF or a sprite sheet, one renderer for all of
@@ -612,6 +640,9 @@ fn render_frames(
         }
         Backend::Cpu => None,
     };
+    let mut scene = scene.clone();
+    follow_pixel_density(&mut scene, frames.start, args, gpu.as_ref());
+    let scene = &scene;
     // Many frames of one structure: its specialised pipelines pay for their compile after a few.
     if let Some(gpu) = &mut gpu
         && frames.len() > 4

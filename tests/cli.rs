@@ -335,11 +335,7 @@ fn sizes_beyond_the_gpu_limit_are_refused_before_rendering_naming_their_origin()
     let dir = tmpdir("limit");
     let big = dir.join("big.toml");
     let text = std::fs::read_to_string(scene("torus_r0.9_t5.1.toml")).unwrap();
-    let text = text.replace("resolution = 256", "resolution = 128");
-    assert!(
-        text.contains("resolution = 128"),
-        "the preset sets a resolution"
-    );
+    let text = format!("[billboard]\nresolution = 128\n{text}");
     std::fs::write(&big, text).unwrap();
     let out = dir.join("out.png");
     // A GPU whose textures hold at most 64 texels per side.
@@ -409,6 +405,25 @@ fn sizes_beyond_the_gpu_limit_are_refused_before_rendering_naming_their_origin()
     ]);
     assert!(r.status.success(), "{}", stderr(&r));
     assert_eq!(image::open(&out).unwrap().width(), 48);
+    // A scene that leaves W to the export gets what the GPU holds, not the viewer's 256.
+    let preset = scene("torus_r0.9_t5.1.toml");
+    let r = capped(&[
+        "render",
+        &preset,
+        "-o",
+        o,
+        "--size",
+        "48x48",
+        "--divisions",
+        "16",
+        "-v",
+    ]);
+    assert!(r.status.success(), "{}", stderr(&r));
+    assert!(
+        stderr(&r).contains("billboard 64x64 texels"),
+        "{}",
+        stderr(&r)
+    );
 
     let r = bin()
         .env("ENERGYWAVE_MAX_TEXTURE_SIZE", "lots")

@@ -30,6 +30,7 @@ fn curve_scene(control_points: &[[f64; 3]], weights: &[f64], w: u32) -> Scene {
         center: None,
         size: None,
         resolution: w,
+        fixed_resolution: true,
     };
     scene.integration = Integration::default();
     scene.sources = Sources {
@@ -209,6 +210,7 @@ fn a_line_along_the_view_axis_gives_the_closed_form_with_zeta_at_work() {
         center: Some(DVec3::new(0.0, 0.0, 4.0)),
         size: Some(0.1),
         resolution: w,
+        fixed_resolution: true,
     };
     scene.animation = None;
     let c = 0.7;

@@ -95,3 +95,63 @@ fn new_scenes_blend_over_and_the_papers_presets_keep_theirs() {
         assert_eq!(scene.colors.blend, expected, "{name}");
     }
 }
+
+/// The largest difference, over the frame, between the default scene at `size` composed with W texels and
+/// with `reference` texels a side (CPU twin).
+fn beading(scene: &Scene, (w, h): (u32, u32), texels: u32, reference: u32) -> f64 {
+    let frame = |texels: u32| {
+        let mut s = scene.clone();
+        s.billboard.resolution = texels;
+        let bb = s.place_billboard(w as f64 / h as f64);
+        let tex = reference::render_brightness(&s, &bb);
+        reference::compose_frame_over(&s, &bb, &tex, (w, h), Backdrop::Opaque)
+    };
+    let (a, b) = (frame(texels), frame(reference));
+    a.iter()
+        .zip(&b)
+        .flat_map(|(p, q)| (0..3).map(move |k| (p[k] - q[k]).abs()))
+        .fold(0.0, f64::max)
+}
+
+#[test]
+fn an_export_takes_the_texels_its_size_needs_unless_the_scene_fixes_them() {
+    let scene = Scene::default_scene();
+    assert!(!scene.billboard.fixed_resolution);
+    assert_eq!(scene.billboard.resolution, 256);
+    // The billboard spans the frame's width: at 1920 x 1080, one texel per two pixels of it.
+    let full_hd = scene.resolution_for((1920, 1080), 16384);
+    assert!((900..=1000).contains(&full_hd), "{full_hd}");
+    assert_eq!(full_hd % 8, 0);
+    // Never below the viewer's W, never above the device's limit.
+    assert_eq!(scene.resolution_for((64, 36), 16384), 256);
+    assert_eq!(scene.resolution_for((1920, 1080), 600), 600);
+    assert_eq!(scene.resolution_for((1920, 1080), 200), 200);
+    // A scene that names its resolution keeps it.
+    let mut fixed = scene.clone();
+    fixed.billboard.fixed_resolution = true;
+    assert_eq!(fixed.resolution_for((1920, 1080), 16384), 256);
+    let saved = fixed.to_toml();
+    assert!(saved.contains("resolution = 256"), "{saved}");
+    assert!(!scene.to_toml().contains("resolution"));
+    // Measured on the middle third of the 1920 x 1080 frame: a third of the field of view at 640 x 360, so that
+    // the CPU twin stays quick. Its billboard is a third as wide, so 256 / 3 texels there are the full frame's
+    // 256, and its own W the full frame's; a thin core beads at the first and is as smooth as at twice W at
+    // the second.
+    let mut middle = scene.clone();
+    middle.camera.fov_y_degrees = 2.0
+        * ((scene.camera.fov_y_degrees / 2.0).to_radians().tan() / 3.0)
+            .atan()
+            .to_degrees();
+    let size = (640, 360);
+    let own = middle.resolution_for(size, 16384);
+    assert!(
+        own * 3 >= full_hd - 8 && own * 3 <= full_hd + 24,
+        "{own} {full_hd}"
+    );
+    let beaded = beading(&middle, size, 256 / 3, 2 * own);
+    let smooth = beading(&middle, size, own, 2 * own);
+    assert!(
+        beaded > 3.0 * smooth && smooth < 12.0 / 255.0,
+        "{beaded} {smooth}"
+    );
+}

@@ -82,6 +82,8 @@ pub enum Edit {
     /// Jittered sampling with a seed, or none.
     Jitter(Option<u32>),
     Resolution(u32),
+    /// Whether exports keep W (`true`) or follow their pixel density.
+    FixedResolution(bool),
     /// The billboard fixed at a center with a size, or placed automatically (`None`).
     Billboard(Option<(DVec3, f64)>),
     /// A new source of the kind, at a point (the camera's target).
@@ -178,6 +180,7 @@ impl Edit {
             Edit::Divisions(n) => scene.integration.divisions = n,
             Edit::Jitter(seed) => scene.integration.jitter = seed,
             Edit::Resolution(w) => scene.billboard.resolution = w,
+            Edit::FixedResolution(fixed) => scene.billboard.fixed_resolution = fixed,
             Edit::Blend(b) => scene.colors.blend = b,
             Edit::AddObject(kind, at) => {
                 let shape = match kind {

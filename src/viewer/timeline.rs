@@ -119,6 +119,12 @@ impl ExportJob {
             let result = (|| -> Result<Vec<PathBuf>, String> {
                 let mut gpu = HeadlessRenderer::new().map_err(|e| e.to_string())?;
                 gpu.set_holdout(holdout);
+                // W follows the export's pixel density unless the scene fixes it.
+                let limit = gpu.ctx.device.limits().max_texture_dimension_2d;
+                let mut scene = scene;
+                scene.billboard.resolution = scene
+                    .at_frame(frames.start as f64)
+                    .resolution_for(size, limit);
                 // Many frames of one structure: its specialised pipelines pay for their compile.
                 if frames.len() > 4 {
                     gpu.set_specialise(crate::gpu::Specialise::Blocking);

@@ -167,6 +167,20 @@ pub(super) fn render_section(
                         edit(out, Edit::Resolution(w));
                     }
                     ui.end_row();
+                    ui.label("");
+                    let mut fixed = scene.billboard.fixed_resolution;
+                    if ui
+                        .checkbox(&mut fixed, "exports too")
+                        .on_hover_text(
+                            "On: exports keep W whatever their size. Off: an export takes one texel per two pixels \
+                             of the billboard's side in its frame (at least W), so a thin core stays smooth at \
+                             1920 x 1080, as a 2x screenshot doubles W",
+                        )
+                        .changed()
+                    {
+                        edit(out, Edit::FixedResolution(fixed));
+                    }
+                    ui.end_row();
                 });
             billboard_editor(ui, cx, out);
             color_field(ui, out, "energy Ce", Parameter::EnergyColor, scene.colors.energy);
