@@ -13,12 +13,13 @@ struct BillboardParams {
     resolution: u32,   // W of the field texture
     up: vec3<f32>,
     mode: u32,         // 0: clamp((1 - B) Cb + G); 1: premultiplied G and alpha min(B, 1), unclamped;
-                       // 2: clamp(G + (1 - min(B, 1)) Cb) (gpu::billboard_pass::BlendMode)
+                       // 2: clamp(G + (1 - min(B, 1)) Cb) (gpu::billboard_pass::BlendMode); plus 4
+                       // (UNCLAMPED): 0 and 2 clamped below 0 only, for an HDR export
     energy: vec4<f32>, // Ce in rgb, its intensity applied
     near: f32,         // the projection's depth range (gpu::billboard_pass::depth_range)
     far: f32,
     nu: f32,           // E = V + nu (S - V)
-    pad0: f32,
+    cutoff: f32,       // the glow's edge: B at or below it transparent, faded in up to twice it; 0 for none
 }
 
 // Whether the field texture holds the tint (layers 1 to 3) beside B: false where every source has the scene's
@@ -197,20 +198,28 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     } else {
         field = sample_field(in.uv);
     }
+    // The glow's edge (scene::edge_fade), by |B| (a negative glow has its edge too): B and the tint alike, so
+    // the colored sum G fades with B. A select, not a branch: the cutoff is a value per edit.
+    let c = params.cutoff;
+    let fade = select(1.0, smoothstep(c, 2.0 * c, abs(field.x)), c > 0.0);
+    field = field * fade;
     let b = field.x;
     let glow = b * params.energy.rgb + field.yzw;
     let cb = textureLoad(background, vec2<i32>(in.position.xy), 0);
-    if params.mode == 1u {
+    let mode = params.mode & 3u;
+    // The opaque blends' upper bound: 1 for the display, none for an HDR export.
+    let top = select(1.0, 3.0e38, (params.mode & 4u) != 0u);
+    if mode == 1u {
         // Associated (premultiplied) alpha, unclamped: "over" any background Cb gives (1 - B) Cb + G wherever
         // B <= 1, and over black G everywhere (clamped on display, as the opaque blend). B < 0 is transparent.
         // Over what lies behind (transparent, or the objects, opaque), premultiplied "over" again.
         let a = clamp(b, 0.0, 1.0);
         return vec4<f32>(max(glow, vec3<f32>(0.0)) + (1.0 - a) * cb.rgb, a + (1.0 - a) * cb.a);
     }
-    if params.mode == 2u {
+    if mode == 2u {
         // The transparent export composited over the background, for every B.
         let over = max(glow, vec3<f32>(0.0)) + (1.0 - clamp(b, 0.0, 1.0)) * cb.rgb;
-        return vec4<f32>(clamp(over, vec3<f32>(0.0), vec3<f32>(1.0)), cb.a);
+        return vec4<f32>(clamp(over, vec3<f32>(0.0), vec3<f32>(top)), cb.a);
     }
-    return vec4<f32>(clamp((1.0 - b) * cb.rgb + glow, vec3<f32>(0.0), vec3<f32>(1.0)), cb.a);
+    return vec4<f32>(clamp((1.0 - b) * cb.rgb + glow, vec3<f32>(0.0), vec3<f32>(top)), cb.a);
 }

@@ -99,6 +99,11 @@ pub struct RenderArgs {
     /// (and camera) made elsewhere.
     #[arg(long, requires = "transparent")]
     pub holdout: bool,
+    /// Frame the effect: set the camera's field of view (eye and target kept) so that the whole glow, down to
+    /// its edge (`colors.cutoff`), lies inside every frame exported with a small margin. For sprite sheets
+    /// and sequences whose cells must end in alpha 0 all round; the scene needs a cutoff above 0.
+    #[arg(long)]
+    pub fit: bool,
     /// Write the billboard's brightness B itself (W x W, before the blend, unclamped, rows from the top) as a
     /// float EXR (R = G = B = brightness) instead of the composed frame.
     #[arg(long)]
@@ -498,6 +503,16 @@ fn render(args: &RenderArgs) -> Result<(), CliError> {
         scene.integration.jitter = Some(seed);
     }
     let frames = export::frames_to_render(args.frames.as_ref(), &target, scene.frame_count())?;
+    if args.fit {
+        scene.camera.fov_y_degrees =
+            export::fit::fit_field_of_view(&scene, frames.clone(), args.size).map_err(|e| {
+                let name = args
+                    .scene
+                    .as_ref()
+                    .map_or(DEFAULT_SCENE_NAME.to_owned(), |p| p.display().to_string());
+                CliError::Usage(format!("{name}: --fit: {e}"))
+            })?;
+    }
     if target.is_multi_frame() {
         return render_frames(args, &scene, &target, frames);
     }
@@ -550,7 +565,12 @@ fn render(args: &RenderArgs) -> Result<(), CliError> {
             if args.brightness {
                 output::write_brightness_exr(&args.output, texture.resolution, &texture.values)?;
             } else {
-                let pixels = reference::compose_frame_over(
+                let compose = match format {
+                    // An EXR keeps the opaque blend's values above 1.
+                    Format::Exr => reference::compose_frame_unclamped,
+                    Format::Png => reference::compose_frame_over,
+                };
+                let pixels = compose(
                     &scene,
                     &billboard,
                     &texture,
@@ -563,6 +583,7 @@ fn render(args: &RenderArgs) -> Result<(), CliError> {
         Backend::Gpu => {
             let gpu = gpu.as_mut().expect("made above for the gpu backend");
             gpu.set_holdout(args.holdout);
+            gpu.set_unclamped(target.is_exr());
             if args.verbose {
                 eprintln!("adapter: {}", gpu.ctx.adapter_summary());
             }
@@ -620,6 +641,7 @@ fn render_frames(
     frames: std::ops::Range<u32>,
 ) -> Result<(), CliError> {
     let (width, height) = args.size;
+    let hdr = target.is_exr();
     let frame_rate = scene
         .animation
         .as_ref()
@@ -636,6 +658,7 @@ fn render_frames(
         Backend::Gpu => {
             let mut gpu = HeadlessRenderer::new()?;
             gpu.set_holdout(args.holdout);
+            gpu.set_unclamped(hdr);
             Some(gpu)
         }
         Backend::Cpu => None,
@@ -696,7 +719,7 @@ fn render_frames(
             frames.clone(),
             (width, height),
             output::Alpha::of(args.transparent, args.premultiplied),
-            |at| compose(at, gpu.as_mut(), width, height, backdrop(args)),
+            |at| compose(at, gpu.as_mut(), (width, height), backdrop(args), hdr),
             |_, frame| {
                 progress.frame_done(frame);
                 std::ops::ControlFlow::Continue(())
@@ -722,12 +745,14 @@ fn render_frames(
 
 /// The composed frame of `scene` (RGBA display values, rows from the top), on the GPU when given one, else
 /// on the CPU reference.
+/// One frame, by the GPU (set up for `hdr` already) or the CPU twin; with `hdr` (an EXR) the opaque blend is
+/// not clamped above 1.
 fn compose(
     scene: &Scene,
     gpu: Option<&mut HeadlessRenderer>,
-    width: u32,
-    height: u32,
+    (width, height): (u32, u32),
     backdrop: reference::Backdrop,
+    hdr: bool,
 ) -> Result<Vec<[f64; 4]>, CliError> {
     let transparent = backdrop != reference::Backdrop::Opaque;
     Ok(match gpu {
@@ -738,7 +763,11 @@ fn compose(
         None => {
             let billboard = scene.place_billboard(width as f64 / height as f64);
             let texture = reference::render_brightness(scene, &billboard);
-            reference::compose_frame_over(scene, &billboard, &texture, (width, height), backdrop)
+            let compose = match hdr {
+                true => reference::compose_frame_unclamped,
+                false => reference::compose_frame_over,
+            };
+            compose(scene, &billboard, &texture, (width, height), backdrop)
         }
     })
 }

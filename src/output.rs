@@ -135,7 +135,8 @@ pub const SRGB_PRIMARIES: [[f32; 2]; 4] =
 /// What an EXR's values are, in its header (attribute `energywave:values`), and OpenImageIO's colour space
 /// attribute (`oiio:ColorSpace`) to the same effect.
 pub const EXR_VALUES_NOTE: &str = "display-referred: the viewer's colors and blend as they are (sRGB-encoded, \
-     not linear); alpha associated; composite in this space, not in scene-linear";
+     not linear), before the display's clamp: values above 1 kept (an opaque frame's blend, a transparent \
+     one's associated color), below 0 set to 0; alpha associated; composite in this space, not in scene-linear";
 
 /// Writes an RGBA image (rows from the top) as PNG (8-bit) or EXR (32-bit float) by the path's extension. With
 /// an alpha the pixels are premultiplied (associated), as the transparent export makes them: a PNG gets them

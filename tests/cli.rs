@@ -507,3 +507,132 @@ fn holdout_leaves_the_objects_out_and_their_glow_hidden_on_both_backends() {
     assert!(stderr(&o).contains("--transparent"), "{}", stderr(&o));
     assert!(!dir.join("x.png").exists());
 }
+
+#[test]
+fn a_fitted_transparent_sheet_ends_in_alpha_zero_round_every_cell() {
+    let dir = tmpdir("fit");
+    // The travelling pulse with an edge (its preset keeps the papers' endless glow).
+    let text = std::fs::read_to_string(scene("pulse_travelling.toml"))
+        .unwrap()
+        .replace("cutoff = 0.0", "cutoff = 0.2");
+    let file = dir.join("pulse.toml");
+    std::fs::write(&file, text).unwrap();
+    let sheet = dir.join("sheet.png");
+    let (f, s) = (file.to_str().unwrap(), sheet.to_str().unwrap());
+    let common = [
+        "render",
+        f,
+        "-o",
+        s,
+        "--sheet",
+        "--columns",
+        "3",
+        "--frames",
+        "20..26",
+        "--size",
+        "64x48",
+        "--transparent",
+        "--resolution",
+        "96",
+    ];
+    let o = run(&[&common[..], &["--fit"]].concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let img = image::open(&sheet).unwrap().to_rgba8();
+    assert_eq!((img.width(), img.height()), (3 * 64, 2 * 48));
+    let mut lit = 0;
+    for cell in 0..6 {
+        let (x0, y0) = ((cell % 3) * 64, (cell / 3) * 48);
+        for y in 0..48 {
+            for x in 0..64 {
+                let a = img.get_pixel(x0 + x, y0 + y)[3];
+                lit += (a > 0) as u32;
+                if x == 0 || y == 0 || x == 63 || y == 47 {
+                    assert_eq!(a, 0, "cell {cell} at ({x}, {y})");
+                }
+            }
+        }
+    }
+    assert!(
+        lit > 6 * 64 * 48 / 10,
+        "the pulse glows in the cells: {lit}"
+    );
+    // The papers' preset has no edge to fit: refused, naming the file and the setting.
+    let o = run(&[
+        "render",
+        &scene("pulse_travelling.toml"),
+        "-o",
+        s,
+        "--sheet",
+        "--fit",
+        "--transparent",
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("pulse_travelling.toml: --fit") && stderr(&o).contains("cutoff"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
+fn an_opaque_exr_keeps_the_blend_above_one_on_both_backends_and_a_png_clamps_it() {
+    let dir = tmpdir("hdr");
+    let preset = scene("rings_and_beam.toml");
+    let size = ["--size", "64x48", "--resolution", "64"];
+    let mut frames = Vec::new();
+    for backend in ["gpu", "cpu"] {
+        let exr = dir.join(format!("{backend}.exr"));
+        let png = dir.join(format!("{backend}.png"));
+        for out in [&exr, &png] {
+            let o = run(&[
+                &[
+                    "render",
+                    &preset,
+                    "-o",
+                    out.to_str().unwrap(),
+                    "--backend",
+                    backend,
+                ][..],
+                &size,
+            ]
+            .concat());
+            assert!(o.status.success(), "{}", stderr(&o));
+        }
+        let hdr = image::open(&exr).unwrap().to_rgba32f();
+        let ldr = image::open(&png).unwrap().to_rgba8();
+        let top = hdr
+            .pixels()
+            .flat_map(|p| p.0[..3].to_vec())
+            .fold(0.0, f32::max);
+        assert!(
+            top > 1.2,
+            "{backend}: the white-hot cores keep their values above 1: {top}"
+        );
+        for (h, l) in hdr.pixels().zip(ldr.pixels()) {
+            assert_eq!(h.0[3], 1.0);
+            for c in 0..3 {
+                assert!(h.0[c] >= 0.0);
+                let want = (h.0[c].clamp(0.0, 1.0) * 255.0).round();
+                assert!(
+                    (l.0[c] as f32 - want).abs() <= 1.0,
+                    "{backend}: {h:?} {l:?}"
+                );
+            }
+        }
+        frames.push(hdr);
+    }
+    // The GPU against its f64 twin, above 1 too.
+    let worst = frames[0]
+        .pixels()
+        .zip(frames[1].pixels())
+        .flat_map(|(g, c)| (0..3).map(move |k| (g.0[k] - c.0[k]).abs() / c.0[k].abs().max(1.0)))
+        .fold(0.0, f32::max);
+    assert!(worst < 4.0 / 255.0, "{worst}");
+    // The header says what was written.
+    let bytes = std::fs::read(dir.join("gpu.exr")).unwrap();
+    let text = String::from_utf8_lossy(&bytes);
+    assert!(
+        text.contains("values above 1 kept"),
+        "the header names the values"
+    );
+}

@@ -108,6 +108,8 @@ pub enum Parameter {
     BackgroundColor,
     /// `colors.energy_intensity`
     EnergyIntensity,
+    /// `colors.cutoff`: the glow's edge
+    Cutoff,
     /// `points[i].color`, ... (any kind): the source's own energy color
     SourceColor(SourceKind, usize),
     /// `points[i].intensity`, ... (any kind): the source's own intensity
@@ -189,6 +191,7 @@ impl Parameter {
             [("colors", None), ("energy", None)] => Parameter::EnergyColor,
             [("colors", None), ("background", None)] => Parameter::BackgroundColor,
             [("colors", None), ("energy_intensity", None)] => Parameter::EnergyIntensity,
+            [("colors", None), ("cutoff", None)] => Parameter::Cutoff,
             [("integration", None), (name, None)] => Parameter::Integration(
                 [
                     IntegrationSetting::DecayLength,
@@ -241,6 +244,7 @@ impl Parameter {
             Parameter::EnergyColor
             | Parameter::BackgroundColor
             | Parameter::EnergyIntensity
+            | Parameter::Cutoff
             | Parameter::Integration(_) => None,
             Parameter::Position(k, i)
             | Parameter::Direction(k, i)
@@ -277,6 +281,7 @@ impl fmt::Display for Parameter {
             Parameter::EnergyColor => write!(f, "colors.energy"),
             Parameter::BackgroundColor => write!(f, "colors.background"),
             Parameter::EnergyIntensity => write!(f, "colors.energy_intensity"),
+            Parameter::Cutoff => write!(f, "colors.cutoff"),
             Parameter::SourceColor(k, i) => write!(f, "{}[{i}].color", k.key()),
             Parameter::Intensity(k, i) => write!(f, "{}[{i}].intensity", k.key()),
             Parameter::Position(k, i) => {

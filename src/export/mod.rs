@@ -8,6 +8,7 @@
 //! cancelled, fails or is interrupted leaves the destination as it found it (an earlier export of the same
 //! names whole).
 
+pub mod fit;
 pub mod progress;
 pub mod sheet;
 mod staged;
@@ -235,6 +236,20 @@ impl Target {
     }
 
     /// True for the targets that hold several frames.
+    /// Whether the frames go to EXR files (which keep values above 1).
+    pub fn is_exr(&self) -> bool {
+        matches!(
+            self,
+            Target::Single {
+                format: Format::Exr,
+                ..
+            } | Target::Sequence {
+                format: Format::Exr,
+                ..
+            }
+        )
+    }
+
     pub fn is_multi_frame(&self) -> bool {
         !matches!(self, Target::Single { .. })
     }

@@ -26,7 +26,7 @@ pub mod gpu_data {
         pub near: f32,                // 128: the projection's depth range (`depth_range`)
         pub far: f32,                 // 132
         pub nu: f32,                  // 136: E = V + nu (S - V) (`geometry::Reach`)
-        pub pad0: f32,                // 140
+        pub cutoff: f32,              // 140: the glow's edge (`scene::edge_fade`), 0 for none
     }
     const _: () = assert!(size_of::<BillboardParams>() == 144);
 }
@@ -59,6 +59,10 @@ pub enum BlendMode {
     Over = 2,
 }
 
+/// Added to an opaque `BlendMode` in the pass's parameters: the blend is not clamped above 1 (below 0 still
+/// is), for an HDR export of the opaque frame.
+pub const UNCLAMPED: u32 = 4;
+
 impl BlendMode {
     /// The transparent export, or the scene's blend.
     pub fn of(transparent: bool, blend: Blend) -> BlendMode {
@@ -79,13 +83,14 @@ pub fn billboard_params(
     aspect: f64,
     mode: BlendMode,
     nu: f64,
+    cutoff: f64,
 ) -> BillboardParams {
     let (near, far) = depth_range(camera, billboard);
     BillboardParams {
         near: near as f32,
         far: far as f32,
         nu: nu as f32,
-        pad0: 0.0,
+        cutoff: cutoff as f32,
         view_proj: view_projection(camera, billboard, aspect)
             .as_mat4()
             .to_cols_array_2d(),

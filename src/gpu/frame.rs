@@ -79,6 +79,8 @@ pub struct SceneRenderer {
     /// The objects hide the glow but are not drawn: the glow alone with them as a holdout, to layer over a
     /// render of the same scene made elsewhere.
     holdout: bool,
+    /// The opaque blends are not clamped above 1 (an HDR export).
+    unclamped: bool,
 }
 
 impl SceneRenderer {
@@ -89,7 +91,14 @@ impl SceneRenderer {
             glare: GlarePass::new(device),
             objects: ObjectPass::new(device),
             holdout: false,
+            unclamped: false,
         }
+    }
+
+    /// Whether an opaque frame keeps the blend's values above 1 (for an HDR export) or clamps them, as the
+    /// display does. A transparent frame is unclamped either way.
+    pub fn set_unclamped(&mut self, unclamped: bool) {
+        self.unclamped = unclamped;
     }
 
     /// Whether the objects are left out of the picture while still hiding the glow (`holdout`).
@@ -245,7 +254,7 @@ impl SceneRenderer {
                 targets.background.size(),
             );
             let reach = scene.ray_reach(&billboard);
-            let params = billboard_params(
+            let mut params = billboard_params(
                 &scene.camera,
                 &billboard,
                 resolution,
@@ -253,7 +262,11 @@ impl SceneRenderer {
                 aspect,
                 BlendMode::of(transparent, scene.colors.blend),
                 reach.nu,
+                scene.colors.cutoff,
             );
+            if self.unclamped {
+                params.mode |= crate::gpu::billboard_pass::UNCLAMPED;
+            }
             // Where objects stand, the billboard reads the clips of the texture it shows (`resolution`).
             let clips = match objects {
                 true => shared_clip_fractions(

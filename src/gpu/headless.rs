@@ -43,6 +43,11 @@ impl HeadlessRenderer {
         self.renderer.field_mut().set_specialise(mode);
     }
 
+    /// Keeps an opaque frame's values above 1 (an HDR export) instead of clamping them as the display does.
+    pub fn set_unclamped(&mut self, unclamped: bool) {
+        self.renderer.set_unclamped(unclamped);
+    }
+
     /// Leaves the objects out of the frames while they still hide the glow (a holdout).
     pub fn set_holdout(&mut self, holdout: bool) {
         self.renderer.set_holdout(holdout);

@@ -21,7 +21,18 @@ pub fn blend(b: f64, energy: [f64; 3], background: [f64; 3]) -> [f64; 3] {
 /// `clamp((1 - B) Cb + G, 0, 1)` per channel, G the glow's colored sum `sum B_i Ce_i` (`B Ce` with one color):
 /// the papers' blend with a color per source.
 pub fn blend_glow(b: f64, glow: [f64; 3], background: [f64; 3]) -> [f64; 3] {
-    std::array::from_fn(|c| ((1.0 - b) * background[c] + glow[c]).clamp(0.0, 1.0))
+    papers_unclamped(b, glow, background).map(|c| c.clamp(0.0, 1.0))
+}
+
+/// `(1 - B) Cb + G` per channel: the papers' blend before its clamp.
+fn papers_unclamped(b: f64, glow: [f64; 3], background: [f64; 3]) -> [f64; 3] {
+    std::array::from_fn(|c| (1.0 - b) * background[c] + glow[c])
+}
+
+/// `max(G, 0) + (1 - clamp(B, 0, 1)) Cb` per channel: "over" before its clamp.
+fn over_unclamped(b: f64, glow: [f64; 3], background: [f64; 3]) -> [f64; 3] {
+    let alpha = b.clamp(0.0, 1.0);
+    std::array::from_fn(|c| glow[c].max(0.0) + (1.0 - alpha) * background[c])
 }
 
 /// `clamp(B Ce + (1 - min(B, 1)) Cb)` per channel, B below 0 taken as 0 (`Blend::Over`): the transparent export
@@ -32,8 +43,7 @@ pub fn blend_over(b: f64, energy: [f64; 3], background: [f64; 3]) -> [f64; 3] {
 
 /// `clamp(max(G, 0) + (1 - clamp(B, 0, 1)) Cb)` per channel: `blend_over` with the colored sum G.
 pub fn blend_over_glow(b: f64, glow: [f64; 3], background: [f64; 3]) -> [f64; 3] {
-    let alpha = b.clamp(0.0, 1.0);
-    std::array::from_fn(|c| (glow[c].max(0.0) + (1.0 - alpha) * background[c]).clamp(0.0, 1.0))
+    over_unclamped(b, glow, background).map(|c| c.clamp(0.0, 1.0))
 }
 
 /// The transparent export of one billboard pixel: associated (premultiplied) color `B Ce`, unclamped, and
@@ -173,8 +183,32 @@ pub fn compose_frame_over(
     scene: &Scene,
     billboard: &Billboard,
     texture: &BrightnessTexture,
+    size: (u32, u32),
+    backdrop: Backdrop,
+) -> Vec<[f64; 4]> {
+    compose(scene, billboard, texture, size, backdrop, 1.0)
+}
+
+/// `compose_frame_over` for an HDR export: the opaque blends not clamped above 1 (below 0 still), as the GPU
+/// renders with `HeadlessRenderer::set_unclamped`. A transparent frame is the same as `compose_frame_over`'s.
+pub fn compose_frame_unclamped(
+    scene: &Scene,
+    billboard: &Billboard,
+    texture: &BrightnessTexture,
+    size: (u32, u32),
+    backdrop: Backdrop,
+) -> Vec<[f64; 4]> {
+    compose(scene, billboard, texture, size, backdrop, f64::INFINITY)
+}
+
+/// The frame, its opaque blends clamped to [0, `top`].
+fn compose(
+    scene: &Scene,
+    billboard: &Billboard,
+    texture: &BrightnessTexture,
     (width, height): (u32, u32),
     backdrop: Backdrop,
+    top: f64,
 ) -> Vec<[f64; 4]> {
     let transparent = backdrop != Backdrop::Opaque;
     let [r, g, b] = scene.colors.background;
@@ -235,6 +269,8 @@ pub fn compose_frame_over(
                             sample_near_clip(texture, clips.as_deref().unwrap_or(&[]), (u, v), clip)
                         }
                     };
+                    let fade = crate::scene::edge_fade(b, scene.colors.cutoff);
+                    let (b, tint) = (b * fade, tint.map(|t| t * fade));
                     let g = glow(b, tint, scene.colors.energy_color());
                     *out = if transparent {
                         // Premultiplied "over" what lies behind (transparent, or an opaque object).
@@ -248,9 +284,10 @@ pub fn compose_frame_over(
                     } else {
                         let cb = [under[0], under[1], under[2]];
                         let [r, g, b] = match scene.colors.blend {
-                            Blend::Papers => blend_glow(b, g, cb),
-                            Blend::Over => blend_over_glow(b, g, cb),
-                        };
+                            Blend::Papers => papers_unclamped(b, g, cb),
+                            Blend::Over => over_unclamped(b, g, cb),
+                        }
+                        .map(|c| c.clamp(0.0, top));
                         [r, g, b, 1.0]
                     };
                 }

@@ -32,5 +32,5 @@ pub mod glare;
 pub mod objects;
 pub mod simpson;
 
-pub use billboard::{Backdrop, compose_frame, compose_frame_over};
+pub use billboard::{Backdrop, compose_frame, compose_frame_over, compose_frame_unclamped};
 pub use field_pass::{BrightnessTexture, brightness, render_brightness, texel_brightness};

@@ -256,6 +256,15 @@ fn check_value(c: &mut Checker<'_, '_>, path: &FieldPath, parameter: &Parameter,
         (Parameter::EnergyIntensity | Parameter::Intensity(..), Value::Number(x)) => {
             c.intensity(path, x);
         }
+        (Parameter::Cutoff, Value::Number(x)) if !(0.0..=crate::scene::MAX_CUTOFF).contains(&x) => {
+            c.fail(
+                path,
+                format!(
+                    "{x} is out of range: the glow's edge is a brightness B in 0..={}",
+                    crate::scene::MAX_CUTOFF
+                ),
+            );
+        }
         (Parameter::Direction(..), Value::Vector(v))
             if glam::DVec3::from_array(v).length() <= 1e-12 =>
         {

@@ -87,6 +87,8 @@ pub(crate) struct ColorsFile {
     pub energy_intensity: Option<f64>,
     pub background: Option<[f64; 3]>,
     pub blend: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cutoff: Option<f64>,
 }
 
 /// `[glare]`: the fog glow (`scene::Glare`).

@@ -18,6 +18,7 @@ impl Parameter {
             Parameter::EnergyColor => Value::Vector(scene.colors.energy),
             Parameter::BackgroundColor => Value::Vector(scene.colors.background),
             Parameter::EnergyIntensity => Value::Number(scene.colors.energy_intensity),
+            Parameter::Cutoff => Value::Number(scene.colors.cutoff),
             // A source without a color of its own shows the scene's: keying it gives it one.
             Parameter::SourceColor(kind, i) => {
                 Value::Vector(scene.look(kind, i)?.color.unwrap_or(scene.colors.energy))
@@ -72,6 +73,9 @@ impl Parameter {
             }
             (Parameter::EnergyIntensity, Value::Number(x)) => {
                 scene.colors.energy_intensity = x.clamp(0.0, MAX_INTENSITY)
+            }
+            (Parameter::Cutoff, Value::Number(x)) => {
+                scene.colors.cutoff = x.clamp(0.0, crate::scene::MAX_CUTOFF)
             }
             (Parameter::SourceColor(kind, i), Value::Vector(c)) => {
                 if let Some(look) = scene.look_mut(*kind, *i) {

@@ -69,6 +69,28 @@ pub struct Colors {
     pub energy_intensity: f64,
     pub background: [f64; 3],
     pub blend: Blend,
+    /// The glow's edge: B at or below it is transparent, and the glow fades in smoothly up to twice it, so a
+    /// transparent export reaches alpha 0 (the 1/d falloff never does); 0 keeps the papers' unbounded glow.
+    /// At least 0 and at most `MAX_CUTOFF`.
+    pub cutoff: f64,
+}
+
+/// The glow's edge of a file without `cutoff`, and of a new scene.
+pub const DEFAULT_CUTOFF: f64 = 0.2;
+
+/// The largest cutoff: B at 1 blows out, so a cutoff at 1 leaves only the fade into the core.
+pub const MAX_CUTOFF: f64 = 1.0;
+
+/// The factor a glow of brightness `b` keeps with the edge at `cutoff`: 0 where |b| is at or below `cutoff`, 1
+/// from twice it, a smoothstep between, so that `b` times it rises from 0 with slope 0 and joins `b` with slope
+/// 1 (no ring at either end); by |b|, so a negative glow (negative coefficients) keeps its sign and has its edge
+/// too. 1 everywhere for a cutoff of 0. The one formula of both renderers (shaders/billboard.wgsl).
+pub fn edge_fade(b: f64, cutoff: f64) -> f64 {
+    if cutoff <= 0.0 {
+        return 1.0;
+    }
+    let x = ((b.abs() - cutoff) / cutoff).clamp(0.0, 1.0);
+    x * x * (3.0 - 2.0 * x)
 }
 
 impl Colors {
@@ -207,6 +229,7 @@ impl Default for Colors {
             energy_intensity: 1.0,
             background: [0.0, 0.0, 0.0],
             blend: Blend::Over,
+            cutoff: DEFAULT_CUTOFF,
         }
     }
 }
@@ -332,6 +355,7 @@ impl Scene {
                     .then_some(self.colors.energy_intensity),
                 background: Some(self.colors.background),
                 blend: Some(self.colors.blend.name().to_owned()),
+                cutoff: Some(self.colors.cutoff),
             }),
             glare: self.glare.map(|g| file::GlareFile {
                 kind: Some("fog".to_owned()),
@@ -911,11 +935,22 @@ fn check_colors(c: &mut Checker<'_, '_>, file: &SceneFile) -> Colors {
             default_colors.blend
         }
     };
+    let cutoff = col.and_then(|x| x.cutoff).map_or(default_colors.cutoff, |x| {
+        let path = col_path.key("cutoff");
+        if c.finite(&path, x) && !(0.0..=MAX_CUTOFF).contains(&x) {
+            c.fail(
+                &path,
+                format!("{x} is out of range: the glow's edge is a brightness B in 0..={MAX_CUTOFF} (0: no edge, the papers' glow)"),
+            );
+        }
+        x
+    });
     Colors {
         energy,
         energy_intensity,
         background,
         blend,
+        cutoff,
     }
 }
 

@@ -119,6 +119,8 @@ impl ExportJob {
             let result = (|| -> Result<Vec<PathBuf>, String> {
                 let mut gpu = HeadlessRenderer::new().map_err(|e| e.to_string())?;
                 gpu.set_holdout(holdout);
+                // An EXR keeps the opaque blend's values above 1.
+                gpu.set_unclamped(target.is_exr());
                 // W follows the export's pixel density unless the scene fixes it.
                 let limit = gpu.ctx.device.limits().max_texture_dimension_2d;
                 let mut scene = scene;

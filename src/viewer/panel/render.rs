@@ -11,7 +11,7 @@ use super::context::{
 use super::fields::{Edits, color_field, number};
 use crate::animation::{IntegrationSetting, Parameter};
 use crate::integrate::{Decay, Integrator};
-use crate::scene::{Blend, Glare, MAX_GLARE_SIZE, MAX_INTENSITY, Scene};
+use crate::scene::{Blend, Glare, MAX_CUTOFF, MAX_GLARE_SIZE, MAX_INTENSITY, Scene};
 
 pub(super) fn render_section(
     ui: &mut Ui,
@@ -231,6 +231,26 @@ pub(super) fn render_section(
                         out.push(Action::Edit(Edit::Blend(blend)));
                     }
                 }
+            });
+            ui.horizontal(|ui| {
+                number(
+                    ui,
+                    out,
+                    "edge cutoff",
+                    Parameter::Cutoff,
+                    scene.colors.cutoff,
+                    |x| {
+                        DragValue::new(x)
+                            .speed(0.005)
+                            .range(0.0..=MAX_CUTOFF)
+                            .max_decimals(3)
+                    },
+                )
+                .on_hover_text(
+                    "The glow's edge: B at or below it is transparent, and the glow fades in smoothly up to twice \
+                     it, so exports end in alpha 0 (sprite sheets without a hard square); 0 is the papers' \
+                     glow, which never ends",
+                );
             });
             if scene.colors.blend == Blend::Papers && papers_blend_darkens(scene) {
                 ui.label(
