@@ -1,5 +1,6 @@
 // The glare pass: a fog glow in the billboard's plane, over a field texture (B, then the tint where the scene
-// has one). Each texel's excess over the threshold, E = max(B - T, 0), in the texel's own color (the tint
+// has one). Each texel's excess over the threshold, compressed, E = e / (1 + e) with e = max(B - T, 0), in the
+// texel's own color (the tint
 // scaled alike, E tint / B), blurred by a separable Gaussian (glare_rows, then glare_columns; edges clamped)
 // and added back strength times. One layer a z. Rust side: src/gpu/glare_pass.rs. CPU twin:
 // src/reference/glare.rs.
@@ -25,7 +26,9 @@ fn excess(p: vec2<i32>, layer: u32) -> f32 {
     if b <= glare.threshold {
         return 0.0;
     }
-    let e = b - glare.threshold;
+    // Compressed, E / (1 + E) (the CPU twin says why).
+    let e0 = b - glare.threshold;
+    let e = e0 / (1.0 + e0);
     if layer == 0u {
         return e;
     }

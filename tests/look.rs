@@ -244,3 +244,39 @@ fn the_default_scene_framed_to_its_edge_ends_in_alpha_zero_all_round_without_a_r
     }
     assert!(steepest < 0.1, "{steepest}");
 }
+
+#[test]
+fn glare_with_its_defaults_shows_on_every_preset_without_blowing_it_out() {
+    use energywave::scene::Glare;
+    let (w, h) = (80, 60);
+    let frame = |s: &Scene| {
+        let bb = s.place_billboard(w as f64 / h as f64);
+        let tex = reference::render_brightness(s, &bb);
+        reference::compose_frame_over(s, &bb, &tex, (w, h), Backdrop::Opaque)
+    };
+    let white = |f: &[[f64; 4]]| {
+        f.iter()
+            .filter(|p| p[..3].iter().all(|&c| c >= 0.99))
+            .count()
+    };
+    for (name, mut scene) in common::shipped() {
+        scene.billboard.resolution = 96;
+        scene.glare = None;
+        let plain = frame(&scene);
+        scene.glare = Some(Glare::default());
+        let glared = frame(&scene);
+        let change = plain
+            .iter()
+            .zip(&glared)
+            .flat_map(|(p, q)| (0..3).map(move |c| q[c] - p[c]))
+            .fold(0.0, f64::max);
+        // Visible: at least 20 8-bit steps somewhere (the old defaults gave the rings preset 1).
+        assert!(change >= 20.0 / 255.0, "{name}: {change}");
+        // Tasteful: it blows out at most a twentieth more of the frame.
+        let (before, after) = (white(&plain), white(&glared));
+        assert!(
+            after <= before + plain.len() / 20,
+            "{name}: {before} -> {after} white pixels"
+        );
+    }
+}

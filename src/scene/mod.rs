@@ -156,10 +156,12 @@ pub struct Glare {
 
 impl Default for Glare {
     fn default() -> Self {
+        // A bloom that shows on every preset, a faint ring's (B near 0.8) as a blinding beam's (the excess is
+        // compressed, `reference::glare`); looked at on each shipped preset.
         Self {
-            threshold: 1.0,
-            size: 0.03,
-            strength: 0.6,
+            threshold: 0.5,
+            size: 0.04,
+            strength: 1.0,
         }
     }
 }
