@@ -14,8 +14,9 @@ struct BillboardParams {
     up: vec3<f32>,
     mode: u32,         // 0: clamp((1 - B) Cb + G); 1: premultiplied G and alpha min(B, 1), unclamped;
                        // 2: clamp(G + (1 - min(B, 1)) Cb) (gpu::billboard_pass::BlendMode); plus 4
-                       // (UNCLAMPED): 0 and 2 clamped below 0 only, for an HDR export
-    energy: vec4<f32>, // Ce in rgb, its intensity applied
+                       // (UNCLAMPED): 0 and 2 clamped below 0 only, for an HDR export; plus 8
+                       // (THRESHOLD_PREVIEW): 0 and 2 with the glow at or below energy.w dimmed
+    energy: vec4<f32>, // Ce in rgb, its intensity applied; w: the previewed glare threshold
     near: f32,         // the projection's depth range (gpu::billboard_pass::depth_range)
     far: f32,
     nu: f32,           // E = V + nu (S - V)
@@ -216,10 +217,15 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
         let a = clamp(b, 0.0, 1.0);
         return vec4<f32>(max(glow, vec3<f32>(0.0)) + (1.0 - a) * cb.rgb, a + (1.0 - a) * cb.a);
     }
+    var color: vec3<f32>;
     if mode == 2u {
         // The transparent export composited over the background, for every B.
-        let over = max(glow, vec3<f32>(0.0)) + (1.0 - clamp(b, 0.0, 1.0)) * cb.rgb;
-        return vec4<f32>(clamp(over, vec3<f32>(0.0), vec3<f32>(top)), cb.a);
+        color = max(glow, vec3<f32>(0.0)) + (1.0 - clamp(b, 0.0, 1.0)) * cb.rgb;
+    } else {
+        color = (1.0 - b) * cb.rgb + glow;
     }
-    return vec4<f32>(clamp((1.0 - b) * cb.rgb + glow, vec3<f32>(0.0), vec3<f32>(top)), cb.a);
+    color = clamp(color, vec3<f32>(0.0), vec3<f32>(top));
+    // The threshold preview: the glow that does not glare dimmed to a quarter.
+    let dim = (params.mode & 8u) != 0u && b <= params.energy.w;
+    return vec4<f32>(select(color, 0.25 * color, dim), cb.a);
 }

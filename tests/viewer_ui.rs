@@ -701,3 +701,44 @@ fn objects_can_be_added_edited_moved_by_their_handle_deleted_and_undone() {
         h.state().report().error
     );
 }
+
+#[test]
+fn hovering_the_glare_threshold_previews_what_glares() {
+    let mut scene = light_scene();
+    // The default scene's B is above 0.5 nearly everywhere in frame: a threshold that leaves the cores.
+    scene.glare = Some(energywave::scene::Glare {
+        threshold: 2.0,
+        ..Default::default()
+    });
+    let mut h = harness(scene);
+    let plain = viewport_pixels(&mut h);
+    h.get_by_role_and_label(Role::SpinButton, "threshold")
+        .hover();
+    h.run();
+    assert!(h.state().view().preview_glare_threshold);
+    let previewed = viewport_pixels(&mut h);
+    // The glow at or below the threshold is dimmed to a quarter; the cores that glare are kept.
+    let luma = |p: &[u8; 4]| (p[0] as u32 + p[1] as u32 + p[2] as u32) / 3;
+    let dimmed = plain
+        .iter()
+        .zip(&previewed)
+        .filter(|(a, b)| luma(a) > 40 && luma(b) * 2 < luma(a))
+        .count();
+    let kept = plain
+        .iter()
+        .zip(&previewed)
+        .filter(|(a, b)| luma(a) > 240 && luma(b) > 240)
+        .count();
+    let glowing = plain.iter().filter(|a| luma(a) > 40).count();
+    assert!(
+        dimmed > glowing / 4,
+        "{dimmed} of {glowing} glowing pixels dimmed"
+    );
+    assert!(kept > 100, "{kept} glaring pixels kept");
+    // Away from it, the picture is the plain one again.
+    h.hover_at(Pos2::new(2.0, 2.0));
+    h.run();
+    assert!(!h.state().view().preview_glare_threshold);
+    let again = viewport_pixels(&mut h);
+    assert!(mean_abs_difference(&plain, &again) < 0.5);
+}

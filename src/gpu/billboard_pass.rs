@@ -63,6 +63,10 @@ pub enum BlendMode {
 /// is), for an HDR export of the opaque frame.
 pub const UNCLAMPED: u32 = 4;
 
+/// Added to an opaque `BlendMode`: the viewer's preview of the glare's threshold, the glow at or below it
+/// (`energy.w`) dimmed to a quarter, so what glares stands out.
+pub const THRESHOLD_PREVIEW: u32 = 8;
+
 impl BlendMode {
     /// The transparent export, or the scene's blend.
     pub fn of(transparent: bool, blend: Blend) -> BlendMode {

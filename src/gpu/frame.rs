@@ -81,6 +81,8 @@ pub struct SceneRenderer {
     holdout: bool,
     /// The opaque blends are not clamped above 1 (an HDR export).
     unclamped: bool,
+    /// The viewer's preview of the glare's threshold: the glow at or below it dimmed.
+    threshold_preview: Option<f64>,
 }
 
 impl SceneRenderer {
@@ -92,7 +94,14 @@ impl SceneRenderer {
             objects: ObjectPass::new(device),
             holdout: false,
             unclamped: false,
+            threshold_preview: None,
         }
+    }
+
+    /// Dims the glow whose B is at or below `threshold` (the glare's, while the viewer's panel edits it), so that
+    /// what glares stands out; `None` draws the frame as it is.
+    pub fn set_threshold_preview(&mut self, threshold: Option<f64>) {
+        self.threshold_preview = threshold;
     }
 
     /// Whether an opaque frame keeps the blend's values above 1 (for an HDR export) or clamps them, as the
@@ -266,6 +275,10 @@ impl SceneRenderer {
             );
             if self.unclamped {
                 params.mode |= crate::gpu::billboard_pass::UNCLAMPED;
+            }
+            if let Some(threshold) = self.threshold_preview.filter(|_| !transparent) {
+                params.mode |= crate::gpu::billboard_pass::THRESHOLD_PREVIEW;
+                params.energy[3] = threshold as f32;
             }
             // Where objects stand, the billboard reads the clips of the texture it shows (`resolution`).
             let clips = match objects {

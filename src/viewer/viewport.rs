@@ -31,6 +31,8 @@ pub struct ViewportView {
     pub progressive: bool,
     /// How the coarse field and the refining bands are chosen (`progressive::Pacing`).
     pub pacing: Pacing,
+    /// While the panel edits the glare's threshold: that threshold, the glow at or below it dimmed.
+    pub threshold_preview: Option<f64>,
 }
 
 /// What the GPU side reports back to the UI.
@@ -147,6 +149,8 @@ impl ViewportGpu {
         };
         self.grid.upload(device, queue, vertices);
         let result = self.integrate(device, queue, encoder, view, targets, progressive);
+        self.scene_renderer
+            .set_threshold_preview(view.threshold_preview);
         let grid = &self.grid;
         let result = result.and_then(|brightness| {
             self.scene_renderer.compose(

@@ -363,6 +363,11 @@ impl ViewerApp {
             average_frames: self.view.average_frames,
             progressive: self.view.progressive,
             pacing: self.view.pacing,
+            threshold_preview: self
+                .view
+                .preview_glare_threshold
+                .then(|| self.scene().glare.map(|g| g.threshold))
+                .flatten(),
         }
     }
 
@@ -373,6 +378,7 @@ impl ViewerApp {
         let mut view = self.viewport_view();
         view.size = view.size.map(|x| x * scale);
         view.progressive = false;
+        view.threshold_preview = None;
         let w = &mut view.scene.billboard.resolution;
         *w = w
             .saturating_mul(scale)

@@ -40,6 +40,9 @@ pub struct ViewSettings {
     pub pacing: crate::viewer::progressive::Pacing,
     /// Screenshot size relative to the viewport: 1, 2 or 4.
     pub screenshot_scale: u32,
+    /// While the glare's threshold is hovered or dragged in the panel: the viewport dims the glow that does
+    /// not glare (never a screenshot or an export).
+    pub preview_glare_threshold: bool,
 }
 
 impl Default for ViewSettings {
@@ -51,6 +54,7 @@ impl Default for ViewSettings {
             progressive: true,
             pacing: Default::default(),
             screenshot_scale: 1,
+            preview_glare_threshold: false,
         }
     }
 }

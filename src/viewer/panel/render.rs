@@ -22,6 +22,8 @@ pub(super) fn render_section(
     let scene = cx.shown;
     let i = &scene.integration;
     let edit = |out: &mut Edits<'_>, e: Edit| out.push(Action::Edit(e));
+    // Set again below while the threshold is hovered or dragged.
+    view.preview_glare_threshold = false;
     egui::CollapsingHeader::new("Rendering")
         .default_open(true)
         .show(ui, |ui| {
@@ -262,12 +264,13 @@ pub(super) fn render_section(
                     .weak(),
                 );
             }
-            glare_editor(ui, scene.glare, out);
+            view.preview_glare_threshold = glare_editor(ui, scene.glare, out);
         });
 }
 
-/// Glare on or off, and its threshold, size and strength.
-fn glare_editor(ui: &mut Ui, glare: Option<Glare>, out: &mut Edits<'_>) {
+/// Glare on or off, and its threshold, size and strength. Whether the threshold is hovered or dragged (the
+/// viewport then previews it).
+fn glare_editor(ui: &mut Ui, glare: Option<Glare>, out: &mut Edits<'_>) -> bool {
     let mut on = glare.is_some();
     if ui
         .checkbox(&mut on, "glare (fog glow)")
@@ -276,10 +279,11 @@ fn glare_editor(ui: &mut Ui, glare: Option<Glare>, out: &mut Edits<'_>) {
     {
         out.push(Action::Edit(Edit::Glare(on.then(Glare::default))));
     }
-    let Some(g) = glare else { return };
+    let Some(g) = glare else { return false };
     let mut next = g;
+    let mut previewed = false;
     ui.horizontal(|ui| {
-        labelled(
+        let threshold = labelled(
             ui,
             "threshold",
             DragValue::new(&mut next.threshold)
@@ -287,7 +291,11 @@ fn glare_editor(ui: &mut Ui, glare: Option<Glare>, out: &mut Edits<'_>) {
                 .speed(0.02)
                 .max_decimals(3),
         )
-        .on_hover_text("B above which the glow glares (1: only what blows out)");
+        .on_hover_text(
+            "B above which the glow glares (1: only what blows out). While this is hovered or dragged the \
+             viewport dims the glow that does not glare",
+        );
+        previewed = threshold.hovered() || threshold.dragged() || threshold.has_focus();
         labelled(
             ui,
             "size",
@@ -309,6 +317,7 @@ fn glare_editor(ui: &mut Ui, glare: Option<Glare>, out: &mut Edits<'_>) {
     if next != g {
         out.push(Action::Edit(Edit::Glare(Some(next))));
     }
+    previewed
 }
 
 /// Fixed or automatic placement of the billboard; a fixed one's center and size.
