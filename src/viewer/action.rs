@@ -37,6 +37,8 @@ pub enum Action {
     Screenshot,
     /// Place the camera to see every source.
     FrameEffect,
+    /// Show or hide the overlays (grid, guides, handles) at once.
+    ToggleOverlays,
     /// The camera as the file had it.
     ResetView,
     /// Render frames of the animation to files beside the UI.

@@ -242,12 +242,16 @@ pub fn drag_in_view_plane(camera: &Camera, height: f32, p: DVec3, delta: Vec2) -
     p + (f.right * delta.x as f64 - f.up * delta.y as f64) * per_point
 }
 
-const CURVE: Color32 = Color32::from_rgba_premultiplied(230, 230, 240, 150);
-const GUIDE: Color32 = Color32::from_rgba_premultiplied(150, 150, 170, 110);
+// Guides are thin and translucent (premultiplied colors), so the glow reads through them: a curve's guide lies
+// on its core.
+const CURVE: Color32 = Color32::from_rgba_premultiplied(60, 60, 64, 64);
+const GUIDE: Color32 = Color32::from_rgba_premultiplied(40, 40, 48, 56);
 const HANDLE: Color32 = Color32::from_rgb(255, 205, 60);
 const ACTIVE: Color32 = Color32::from_rgb(255, 120, 40);
-/// The guides of the selected source.
+/// The selected source's handles' rings.
 const SELECTED: Color32 = Color32::from_rgb(120, 200, 255);
+/// Its guides: the same blue, translucent.
+const SELECTED_GUIDE: Color32 = Color32::from_rgba_premultiplied(52, 86, 110, 110);
 
 /// Draws every source's guides and handles; `highlight` is the hovered or dragged handle, `selected` the
 /// selected source (its guides drawn brighter, its handles ringed).
@@ -270,7 +274,7 @@ pub fn draw(
     };
     let stroke = |kind: SourceKind, i: usize, width: f32, color: Color32| {
         if selected == Some((kind, i)) {
-            Stroke::new(width + 1.0, SELECTED)
+            Stroke::new(width + 0.5, SELECTED_GUIDE)
         } else {
             Stroke::new(width, color)
         }
@@ -307,7 +311,7 @@ pub fn draw(
             .flat_map(|s| (0..24).map(move |k| s.at(k as f64 / 24.0)))
             .chain(c.control_points.last().copied())
             .collect();
-        polyline(&samples, stroke(SourceKind::Curves, i, 1.5, CURVE));
+        polyline(&samples, stroke(SourceKind::Curves, i, 1.0, CURVE));
         polyline(&c.control_points, stroke(SourceKind::Curves, i, 1.0, GUIDE));
     }
     for (id, p) in handles(scene) {

@@ -27,7 +27,7 @@ impl ViewerApp {
         ));
 
         // Handles first: a press on a handle drags it, anywhere else navigates.
-        let show_handles = self.view.show_handles;
+        let show_handles = self.view.show_handles && self.view.show_overlays;
         let pointer = response.hover_pos().or(response.interact_pointer_pos());
         let dragged_handle = match &self.gesture {
             Some(Gesture::Handle { id, .. }) => Some(*id),
@@ -168,6 +168,21 @@ impl ViewerApp {
                 egui::FontId::proportional(13.0),
                 Color32::from_rgb(255, 110, 90),
             );
+        }
+        // Blender's overlays button, in the viewport's top-right corner.
+        let button = egui::Rect::from_min_size(
+            rect.right_top() + egui::vec2(-92.0, 6.0),
+            egui::vec2(86.0, 20.0),
+        );
+        if ui
+            .put(
+                button,
+                egui::Button::selectable(self.view.show_overlays, "Overlays"),
+            )
+            .on_hover_text("Show or hide the grid, guides and handles (Shift+Alt+Z)")
+            .clicked()
+        {
+            out.push(Action::ToggleOverlays);
         }
         out
     }

@@ -139,6 +139,9 @@ const REDO: KeyboardShortcut =
     KeyboardShortcut::new(Modifiers::COMMAND.plus(Modifiers::SHIFT), Key::Z);
 const REDO_Y: KeyboardShortcut = KeyboardShortcut::new(Modifiers::COMMAND, Key::Y);
 const OPEN: KeyboardShortcut = KeyboardShortcut::new(Modifiers::COMMAND, Key::O);
+/// Blender's overlays toggle.
+const OVERLAYS: KeyboardShortcut =
+    KeyboardShortcut::new(Modifiers::SHIFT.plus(Modifiers::ALT), Key::Z);
 const SAVE_AS: KeyboardShortcut =
     KeyboardShortcut::new(Modifiers::COMMAND.plus(Modifiers::SHIFT), Key::S);
 
@@ -359,7 +362,7 @@ impl ViewerApp {
         ViewportView {
             scene: self.frame_scene(),
             size: [self.viewport_px[0].max(1), self.viewport_px[1].max(1)],
-            show_grid: self.view.show_grid,
+            show_grid: self.view.show_grid && self.view.show_overlays,
             average_frames: self.view.average_frames,
             progressive: self.view.progressive,
             pacing: self.view.pacing,
@@ -446,6 +449,7 @@ impl ViewerApp {
                     scale: self.view.screenshot_scale,
                 });
             }
+            Action::ToggleOverlays => self.view.show_overlays = !self.view.show_overlays,
             Action::FrameEffect => {
                 let aspect = self.aspect();
                 let scene = &mut self.doc.scene;
@@ -646,6 +650,9 @@ impl ViewerApp {
         }
         if ctx.input_mut(|i| i.consume_shortcut(&UNDO)) {
             out.push(Action::Undo);
+        }
+        if ctx.input_mut(|i| i.consume_shortcut(&OVERLAYS)) {
+            out.push(Action::ToggleOverlays);
         }
         if ctx.input_mut(|i| i.consume_key(Modifiers::NONE, Key::F12)) {
             out.push(Action::Screenshot);

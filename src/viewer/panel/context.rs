@@ -29,6 +29,9 @@ pub const DEFAULT_AVERAGE_FRAMES: u32 = 64;
 /// part of the document and have no undo).
 #[derive(Clone, Debug, PartialEq)]
 pub struct ViewSettings {
+    /// Everything drawn over the look: the grid, the guides and the handles (Shift+Alt+Z and the viewport's
+    /// "Overlays" button, as Blender's); each also has its own switch.
+    pub show_overlays: bool,
     pub show_grid: bool,
     pub show_handles: bool,
     /// With jitter: how many frames the viewport averages while the view is still (1: none).
@@ -48,6 +51,7 @@ pub struct ViewSettings {
 impl Default for ViewSettings {
     fn default() -> Self {
         Self {
+            show_overlays: true,
             show_grid: true,
             show_handles: true,
             average_frames: DEFAULT_AVERAGE_FRAMES,

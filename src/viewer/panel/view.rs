@@ -16,8 +16,12 @@ pub(super) fn view_section(
 ) {
     egui::CollapsingHeader::new("View").default_open(false).show(ui, |ui| {
         ui.horizontal(|ui| {
-            ui.checkbox(&mut view.show_grid, "grid");
-            ui.checkbox(&mut view.show_handles, "handles");
+            ui.checkbox(&mut view.show_overlays, "overlays")
+                .on_hover_text("The grid, guides and handles at once (Shift+Alt+Z)");
+            ui.add_enabled_ui(view.show_overlays, |ui| {
+                ui.checkbox(&mut view.show_grid, "grid");
+                ui.checkbox(&mut view.show_handles, "handles");
+            });
             ui.checkbox(&mut view.progressive, "fast preview").on_hover_text(
                 "While the view moves, integrate a coarser field that holds the frame rate, and refine \
                  it to the full one once still; off: the full field every frame",
