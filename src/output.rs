@@ -15,7 +15,7 @@ pub enum Format {
 /// Why an image could not be written.
 #[derive(Debug, thiserror::Error)]
 pub enum OutputError {
-    #[error("{}: unknown image extension {ext:?}: use .png or .exr (or .gif for an animation)", path.display())]
+    #[error("{}: unknown image extension {ext:?}: use .png or .exr for an image (name_####.png or name_####.exr for a sequence), or .gif, .mp4 or .webm for an animation", path.display())]
     UnknownExtension { path: PathBuf, ext: String },
     #[error("{}: the directory {} does not exist", path.display(), dir.display())]
     MissingDirectory { path: PathBuf, dir: PathBuf },

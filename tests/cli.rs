@@ -79,7 +79,7 @@ fn bad_input_exits_2_with_a_message_naming_it() {
         ),
         (
             vec!["render", "-o", "x.jpeg2000"],
-            "unknown image extension",
+            "or .gif, .mp4 or .webm for an animation",
         ),
         (
             vec!["render", "-o", "x.png", "--brightness"],

@@ -426,3 +426,30 @@ fn unreadable_inputs_are_named() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn every_unknown_key_is_reported_at_once_with_the_key_it_is_closest_to() {
+    let text = "[camera]\nfov = 30\nyee = [0, 0, 1]\n[colors]\nbackground = [0, 0, 0]\nzzz = 1\n[[points]]\nposition = [0, 0, 0]\ncoeficient = 1.0\n";
+    let (err, msg) = invalid(text);
+    let problems = err.problems();
+    let found: Vec<(&str, Option<(usize, usize)>)> = problems
+        .iter()
+        .map(|p| (p.field.as_str(), p.location))
+        .collect();
+    assert_eq!(
+        found,
+        [
+            ("camera.fov", Some((2, 1))),
+            ("camera.yee", Some((3, 1))),
+            ("colors.zzz", Some((6, 1))),
+            ("points[0].coeficient", Some((9, 1))),
+        ],
+        "{msg}"
+    );
+    assert!(msg.contains("did you mean `fov_y`?"), "{msg}");
+    assert!(msg.contains("did you mean `eye`?"), "{msg}");
+    assert!(msg.contains("did you mean `coefficient`?"), "{msg}");
+    // Nothing close to `zzz`: no guess; and the misspelt coefficient is not reported missing as well.
+    assert!(!msg.contains("zzz`, expected one of `energy`, `energy_intensity`, `background`, `blend`, `cutoff`; did"), "{msg}");
+    assert!(!msg.contains("missing field"), "{msg}");
+}

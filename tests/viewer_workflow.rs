@@ -993,3 +993,126 @@ fn the_decay_is_chosen_in_the_panel_and_is_an_undo_step() {
     h.run();
     assert_eq!(h.state().scene().integration.decay, Decay::Distance);
 }
+
+#[test]
+fn what_is_added_is_selected_and_another_file_starts_with_nothing_selected() {
+    use energywave::animation::SourceKind;
+    let mut h = harness(light_scene());
+    h.get_by_label("+ sphere").scroll_to_me();
+    h.run();
+    h.get_by_label("+ sphere").click();
+    h.run();
+    let objects = h.state().scene().objects.len();
+    assert_eq!(h.state().selected_object(), Some(objects - 1));
+    h.get_by_label("+ point").scroll_to_me();
+    h.run();
+    h.get_by_label("+ point").click();
+    h.run();
+    let points = h.state().scene().sources.points.len();
+    assert_eq!(
+        h.state().selection(),
+        Some((SourceKind::Points, points - 1))
+    );
+    assert_eq!(h.state().selected_object(), None);
+    // Saved, then another file opened: nothing of the first stays selected.
+    let dir = std::env::temp_dir().join(format!("energywave-select-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let saved = dir.join("first.toml");
+    h.state_mut()
+        .apply(energywave::viewer::action::Action::SaveAs(saved.clone()));
+    h.run();
+    let floor = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/floor.toml");
+    h.state_mut()
+        .apply(energywave::viewer::action::Action::Open(floor));
+    h.run();
+    assert_eq!(h.state().selection(), None);
+    assert_eq!(h.state().selected_object(), None);
+    // A saved camera reads as numbers, not float noise, after an orbit.
+    let rect = h.state().viewport_rect();
+    drag(
+        &mut h,
+        Pos2::new(rect.right() - 60.0, rect.bottom() - 60.0),
+        Vec2::new(-97.0, -23.0),
+    );
+    let orbited = dir.join("orbited.toml");
+    h.state_mut()
+        .apply(energywave::viewer::action::Action::SaveAs(orbited.clone()));
+    h.run();
+    let text = std::fs::read_to_string(&orbited).unwrap();
+    let eye = text.lines().find(|l| l.starts_with("eye = ")).unwrap();
+    assert_ne!(eye, "eye = [3.6, 2.4, 6.8]", "the view was orbited");
+    for number in eye
+        .trim_start_matches("eye = [")
+        .trim_end_matches(']')
+        .split(',')
+    {
+        let decimals = number.trim().split('.').nth(1).map_or(0, str::len);
+        assert!(decimals <= 7, "{eye}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_quick_click_on_the_scrubber_seeks_there() {
+    use egui::accesskit::Role;
+    let mut scene = light_scene();
+    scene.animation = Some(energywave::animation::Animation {
+        frames: 61,
+        ..Default::default()
+    });
+    let mut h = harness(scene);
+    let rail = h.get_by_role_and_label(Role::Slider, "frame").rect();
+    // Pressed and released within one frame, three quarters along the rail.
+    let at = Pos2::new(rail.left() + rail.width() * 0.75, rail.center().y);
+    h.drag_at(at);
+    h.drop_at(at);
+    h.run();
+    let frame = h.state().playback().frame;
+    assert!((40..=50).contains(&frame), "{frame}");
+}
+
+#[test]
+fn opening_the_view_section_leaves_the_panel_and_its_buttons_in_place() {
+    let mut h = harness(light_scene());
+    let left = h.state().viewport_rect().left();
+    let undo = h.get_by_label("Undo").rect();
+    let redo = h.get_by_label("Redo").rect();
+    assert_eq!(undo.top(), redo.top(), "Undo and Redo share a row");
+    h.get_by_label("View").click();
+    h.run();
+    assert!(
+        h.query_by_label("Reset view").is_some(),
+        "the section opened"
+    );
+    assert_eq!(
+        h.state().viewport_rect().left(),
+        left,
+        "the panel kept its width"
+    );
+    assert_eq!(h.get_by_label("Undo").rect(), undo);
+    assert_eq!(h.get_by_label("Redo").rect(), redo);
+}
+
+#[test]
+fn an_error_is_shown_whole_and_the_color_pickers_glyphs_exist() {
+    let mut h = harness(light_scene());
+    let long = format!(
+        "/a/long/folder/{}/model.glb: the file is not glTF: it ends before its header says",
+        "deeper/".repeat(12)
+    );
+    h.state_mut()
+        .apply(energywave::viewer::action::Action::Notify {
+            text: long.clone(),
+            is_error: true,
+        });
+    h.run();
+    assert!(
+        h.query_by_label(&long).is_some(),
+        "the whole message is a label"
+    );
+    // The color picker's copy button (egui's) has its glyph in the fonts we ship.
+    let has = h
+        .ctx
+        .fonts_mut(|f| f.has_glyph(&egui::FontId::proportional(14.0), '\u{1f4cb}'));
+    assert!(has);
+}

@@ -288,22 +288,9 @@ impl Scene {
             });
         }
         let locator = Locator::new(text);
-        let file: SceneFile = toml::from_str(text).map_err(|e| {
-            let (location, field) = match e.span() {
-                Some(span) => (
-                    Some(locator.line_column(span.start)),
-                    locator.path_at(span.start),
-                ),
-                None => (None, String::new()),
-            };
-            SceneError::Invalid {
-                path: path.to_owned(),
-                problems: vec![Problem {
-                    location,
-                    field,
-                    message: e.message().trim().to_owned(),
-                }],
-            }
+        let file = deserialize(text, &locator).map_err(|problems| SceneError::Invalid {
+            path: path.to_owned(),
+            problems,
         })?;
         let mut problems = Vec::new();
         let base = path.parent().unwrap_or(Path::new(""));
@@ -1077,4 +1064,100 @@ fn check_sources(c: &mut Checker<'_, '_>, file: &SceneFile) -> Sources {
         });
     }
     sources
+}
+
+/// The scene file's tables, or every problem the deserializer finds: a syntax error or wrong type alone, but
+/// every unknown key at once (each with the closest known one, where one is close), found by setting each
+/// aside in turn and reading the file again.
+fn deserialize(text: &str, locator: &Locator) -> Result<SceneFile, Vec<Problem>> {
+    let mut text = text.to_owned();
+    let mut unknown = Vec::new();
+    loop {
+        let e = match toml::from_str::<SceneFile>(&text) {
+            Ok(file) if unknown.is_empty() => return Ok(file),
+            Ok(_) => return Err(unknown),
+            Err(e) => e,
+        };
+        let (location, field) = match e.span() {
+            Some(span) => (
+                Some(locator.line_column(span.start)),
+                locator.path_at(span.start),
+            ),
+            None => (None, String::new()),
+        };
+        let message = e.message().trim().to_owned();
+        let key_line = e.span().and_then(|span| {
+            let start = text[..span.start].rfind('\n').map_or(0, |k| k + 1);
+            let end = text[span.start..]
+                .find('\n')
+                .map_or(text.len(), |k| span.start + k);
+            let line = &text[start..end];
+            // Set aside only a one-line `key = value` (a value over several lines would leave its rest).
+            let balanced = line.matches('[').count() == line.matches(']').count();
+            (line.contains('=') && balanced).then_some((start, end))
+        });
+        match (message.strip_prefix("unknown field `"), key_line) {
+            (Some(rest), Some((start, end))) if unknown.len() < 64 => {
+                unknown.push(Problem {
+                    location,
+                    field,
+                    message: did_you_mean(rest).unwrap_or_else(|| message.clone()),
+                });
+                let blank = " ".repeat(end - start);
+                text.replace_range(start..end, &blank);
+            }
+            // Another error after unknown keys may come of setting them aside (a misspelt required key is
+            // missing): the unknown keys are what to fix first.
+            _ if !unknown.is_empty() => return Err(unknown),
+            _ => {
+                return Err(vec![Problem {
+                    location,
+                    field,
+                    message,
+                }]);
+            }
+        }
+    }
+}
+
+/// serde's "unknown field `x`, expected one of `a`, `b`" (after its "unknown field `") with the closest known
+/// key named, where one is within a third of its length in edits.
+fn did_you_mean(rest: &str) -> Option<String> {
+    let (name, expected) = rest.split_once('`')?;
+    let known: Vec<&str> = expected.split('`').skip(1).step_by(2).collect();
+    let (best, distance) = known
+        .iter()
+        .map(|k| (*k, edit_distance(name, k)))
+        .min_by_key(|(_, d)| *d)?;
+    let message = format!("unknown field `{name}`{}", expected.trim_end());
+    Some(if distance <= name.len().max(best.len()).div_ceil(3) {
+        format!("{message}; did you mean `{best}`?")
+    } else {
+        message
+    })
+}
+
+/// The edits (insertions, deletions, substitutions and swaps of neighbours) between two keys: the optimal
+/// string alignment distance.
+fn edit_distance(a: &str, b: &str) -> usize {
+    let (a, b): (Vec<char>, Vec<char>) = (a.chars().collect(), b.chars().collect());
+    let mut d = vec![vec![0usize; b.len() + 1]; a.len() + 1];
+    for (i, row) in d.iter_mut().enumerate() {
+        row[0] = i;
+    }
+    for j in 0..=b.len() {
+        d[0][j] = j;
+    }
+    for i in 1..=a.len() {
+        for j in 1..=b.len() {
+            let cost = (a[i - 1] != b[j - 1]) as usize;
+            d[i][j] = (d[i - 1][j] + 1)
+                .min(d[i][j - 1] + 1)
+                .min(d[i - 1][j - 1] + cost);
+            if i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1] {
+                d[i][j] = d[i][j].min(d[i - 2][j - 2] + 1);
+            }
+        }
+    }
+    d[a.len()][b.len()]
 }

@@ -59,6 +59,8 @@ pub enum Action {
     SelectObject(Option<usize>),
     /// Add the glTF mesh at this path (relative to the scene file's folder, or absolute) at a point.
     AddMesh(String, DVec3),
+    /// Choose a glTF file in the file dialog, to add as a mesh object at a point.
+    AddMeshDialog(DVec3),
     /// Tell the user something (an error when `is_error`).
     Notify {
         text: String,
@@ -169,7 +171,7 @@ impl Edit {
                     None => parameter.set(scene, value),
                 }
             }
-            Edit::Camera(camera) => scene.camera = camera,
+            Edit::Camera(camera) => scene.camera = camera.tidied(),
             Edit::Integrator(integrator) => {
                 scene.integration.integrator = integrator;
                 // Jitter belongs to simpson.

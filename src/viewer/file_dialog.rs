@@ -11,6 +11,21 @@ pub enum DialogMode {
     Open,
     /// Pick where to save (a new name or an existing file, replaced after asking).
     SaveAs,
+    /// Pick a glTF file (`.gltf`, `.glb`) to add as a mesh object.
+    Mesh,
+}
+
+impl DialogMode {
+    /// Whether the dialog lists a file of this name.
+    fn lists(self, name: &str) -> bool {
+        let ext = Path::new(name)
+            .extension()
+            .map(|x| x.to_string_lossy().to_ascii_lowercase());
+        match self {
+            DialogMode::Open | DialogMode::SaveAs => ext.as_deref() == Some("toml"),
+            DialogMode::Mesh => matches!(ext.as_deref(), Some("gltf" | "glb")),
+        }
+    }
 }
 
 /// What the user did with the dialog this frame.
@@ -89,7 +104,8 @@ impl FileDialog {
         &self.dir
     }
 
-    /// Reads the folder: subfolders first, then scene files (`.toml`), each in name order; hidden ones left out.
+    /// Reads the folder: subfolders first, then the files of the mode (scene files, `.toml`, or glTF), each in
+    /// name order; hidden ones left out.
     fn list(&mut self) {
         self.entries.clear();
         self.confirm_replace = None;
@@ -99,10 +115,7 @@ impl FileDialog {
                 for e in read.flatten() {
                     let name = e.file_name().to_string_lossy().into_owned();
                     let is_dir = e.path().is_dir();
-                    let scene = Path::new(&name)
-                        .extension()
-                        .is_some_and(|x| x.eq_ignore_ascii_case("toml"));
-                    if !name.starts_with('.') && (is_dir || scene) {
+                    if !name.starts_with('.') && (is_dir || self.mode.lists(&name)) {
                         self.entries.push(Entry { name, is_dir });
                     }
                 }
@@ -146,7 +159,7 @@ impl FileDialog {
             return DialogOutcome::Open;
         }
         match self.mode {
-            DialogMode::Open if !p.is_file() => {
+            DialogMode::Open | DialogMode::Mesh if !p.is_file() => {
                 self.problem = Some(format!("{} does not exist", p.display()));
                 DialogOutcome::Open
             }
@@ -163,10 +176,12 @@ impl FileDialog {
         let title = match self.mode {
             DialogMode::Open => "Open a scene",
             DialogMode::SaveAs => "Save the scene as",
+            DialogMode::Mesh => "Add a glTF mesh",
         };
         let action = match self.mode {
             DialogMode::Open => "Open",
             DialogMode::SaveAs => "Save",
+            DialogMode::Mesh => "Add",
         };
         let mut outcome = DialogOutcome::Open;
         let modal = egui::Modal::new(egui::Id::unique("energywave.file_dialog")).show(ctx, |ui| {
@@ -223,7 +238,10 @@ impl FileDialog {
                 let field = ui
                     .add(
                         egui::TextEdit::singleline(&mut self.name)
-                            .hint_text("scene.toml")
+                            .hint_text(match self.mode {
+                                DialogMode::Mesh => "model.glb",
+                                _ => "scene.toml",
+                            })
                             .desired_width(f32::INFINITY),
                     )
                     .labelled_by(l.id);
@@ -272,12 +290,20 @@ mod tests {
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(dir.join("b_folder")).unwrap();
         std::fs::create_dir_all(dir.join(".hidden")).unwrap();
-        for f in ["z.toml", "a.TOML", "notes.txt"] {
+        for f in ["z.toml", "a.TOML", "notes.txt", "ring.glb", "Tree.GLTF"] {
             std::fs::write(dir.join(f), "").unwrap();
         }
         let d = FileDialog::new(DialogMode::Open, &dir, "");
         let names: Vec<&str> = d.entries.iter().map(|e| e.name.as_str()).collect();
         assert_eq!(names, ["b_folder", "a.TOML", "z.toml"]);
+        // "+ mesh" lists glTF files only, and picks an existing one.
+        let mut m = FileDialog::new(DialogMode::Mesh, &dir, "");
+        let names: Vec<&str> = m.entries.iter().map(|e| e.name.as_str()).collect();
+        assert_eq!(names, ["b_folder", "ring.glb", "Tree.GLTF"]);
+        m.name = "ring.glb".into();
+        assert_eq!(m.accept(), DialogOutcome::Chosen(dir.join("ring.glb")));
+        m.name = "missing.glb".into();
+        assert_eq!(m.accept(), DialogOutcome::Open);
         let mut s = FileDialog::new(DialogMode::SaveAs, &dir, "ring");
         assert_eq!(s.accept(), DialogOutcome::Chosen(dir.join("ring.toml")));
         // An existing file is replaced on the second try only.

@@ -55,6 +55,31 @@ pub fn zoom(camera: &mut Camera, factor: f64, toward: Option<DVec3>) {
     camera.target = pivot + (camera.target - pivot) * factor;
 }
 
+/// The wheel's zoom: `zoom` while the target is farther than `floor`; closer, zooming in dollies the eye and the
+/// target together along the cursor's ray (or the view), by the step `zoom` would take at `floor`, so the
+/// wheel passes through the target and on, as Blender does, instead of slowing to a stop at it.
+pub fn zoom_or_dolly(camera: &mut Camera, factor: f64, toward: Option<DVec3>, floor: f64) {
+    let distance = (camera.target - camera.eye).length();
+    if factor >= 1.0 || distance * factor >= floor {
+        zoom(camera, factor, toward);
+        return;
+    }
+    let forward = camera.frame().forward;
+    let dir = toward
+        .filter(|d| d.dot(forward) > 1e-6)
+        .map_or(forward, |d| d.normalize());
+    let step = distance.max(floor) * (1.0 - factor);
+    camera.eye += dir * step;
+    camera.target += dir * step;
+}
+
+/// The distance under which the wheel dollies (`zoom_or_dolly`): a twentieth of the sources' extent.
+pub fn dolly_floor(sources: &Sources) -> f64 {
+    sources
+        .bounds()
+        .map_or(0.05, |(lo, hi)| ((hi - lo).length() * 0.05).max(1e-3))
+}
+
 /// Frames the sources: looks at the center of their bounds from the current direction, from the distance at
 /// which the bounding sphere (with a margin for the glow) fits the narrower field of view of a frame of
 /// `aspect`.
@@ -127,6 +152,27 @@ mod tests {
         let view_height = 2.0 * (before.target - before.eye).length() * before.tan_half_fov();
         assert!((shift.dot(before.frame().right) + view_height * 0.25).abs() < 1e-9);
         assert!((shift.dot(before.frame().up) + view_height * 0.125).abs() < 1e-9);
+    }
+
+    #[test]
+    fn the_wheel_dollies_through_the_target_when_close() {
+        let mut c = camera();
+        let start = c.clone();
+        let forward = c.frame().forward;
+        let distance = (c.target - c.eye).length();
+        for _ in 0..400 {
+            zoom_or_dolly(&mut c, 0.9, None, 0.5);
+        }
+        // The eye went past where the target was, looking the same way, the target still ahead of it.
+        assert!((c.eye - start.eye).dot(forward) > distance, "{:?}", c.eye);
+        assert!((c.frame().forward - forward).length() < 1e-9);
+        assert!(((c.target - c.eye).length() - 0.5).abs() < 0.06);
+        // Far away, the wheel zooms as before.
+        let mut far = camera();
+        zoom_or_dolly(&mut far, 0.5, None, 0.5);
+        let mut zoomed = camera();
+        zoom(&mut zoomed, 0.5, None);
+        assert_eq!(far, zoomed);
     }
 
     #[test]

@@ -281,7 +281,16 @@ pub fn bar(ui: &mut Ui, playback: &mut Playback, frames: u32, frame_rate: f64, k
                 stroke,
             );
         }
-        if scrub.changed() {
+        // A quick click (pressed and released within a frame) moves no egui slider: it seeks here.
+        if scrub.clicked()
+            && !scrub.changed()
+            && let Some(p) = scrub.interact_pointer_pos()
+            && p.x >= start
+            && p.x <= start + rail
+        {
+            frame = frame_at(span, p.x, last);
+        }
+        if frame != playback.frame {
             playback.seek(frame, frames);
         }
         if scrub.drag_started() {
@@ -289,6 +298,12 @@ pub fn bar(ui: &mut Ui, playback: &mut Playback, frames: u32, frame_rate: f64, k
         }
         ui.monospace(readout);
     });
+}
+
+/// The frame of `0..=last` whose tick lies nearest to `x` along the handle's `span`.
+pub fn frame_at(span: egui::Rangef, x: f32, last: u32) -> u32 {
+    let share = ((x - span.min) / span.span().max(1e-6)).clamp(0.0, 1.0);
+    (share * last as f32).round() as u32
 }
 
 /// The scrubber is never narrower than this, points.

@@ -182,14 +182,35 @@ impl Gfx {
     }
 }
 
+/// The window's first size, logical: 1280 x 800, shrunk to fit a monitor of `monitor` (logical) with 48 points
+/// to spare across and 96 down (a taskbar, a title bar), never below 640 x 400.
+pub fn fit_window(monitor: Option<(f64, f64)>) -> (f64, f64) {
+    let (w, h) = (1280.0f64, 800.0f64);
+    match monitor {
+        Some((mw, mh)) if mw > 0.0 && mh > 0.0 => {
+            (w.min(mw - 48.0).max(640.0), h.min(mh - 96.0).max(400.0))
+        }
+        _ => (w, h),
+    }
+}
+
 impl Handler {
     fn create(&mut self, event_loop: &ActiveEventLoop) -> Result<(), ViewerError> {
         let window = match &self.gfx {
             Some(gfx) => gfx.surface.window.clone(),
             None => {
+                // 1280 x 800, or what fits the monitor with room for its panels and the title bar.
+                let monitor = event_loop
+                    .primary_monitor()
+                    .or_else(|| event_loop.available_monitors().next())
+                    .map(|m| {
+                        let size = m.size().to_logical::<f64>(m.scale_factor());
+                        (size.width, size.height)
+                    });
+                let (w, h) = fit_window(monitor);
                 let attributes = Window::default_attributes()
                     .with_title("energywave")
-                    .with_inner_size(LogicalSize::new(1280.0, 800.0));
+                    .with_inner_size(LogicalSize::new(w, h));
                 Arc::new(
                     event_loop
                         .create_window(attributes)
@@ -422,5 +443,19 @@ impl ApplicationHandler for Handler {
             self.next_frame = now + Duration::from_secs(3600);
         }
         event_loop.set_control_flow(ControlFlow::WaitUntil(self.next_frame.min(self.next_poll)));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::fit_window;
+
+    #[test]
+    fn the_window_fits_the_monitor_with_room_for_its_panels() {
+        assert_eq!(fit_window(None), (1280.0, 800.0));
+        assert_eq!(fit_window(Some((2560.0, 1440.0))), (1280.0, 800.0));
+        // A 1280 x 800 screen keeps the status line in view.
+        assert_eq!(fit_window(Some((1280.0, 800.0))), (1232.0, 704.0));
+        assert_eq!(fit_window(Some((300.0, 200.0))), (640.0, 400.0));
     }
 }

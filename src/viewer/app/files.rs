@@ -43,6 +43,10 @@ impl ViewerApp {
                 self.history.reset(&doc.scene);
                 self.home_camera = doc.scene.camera.clone();
                 self.doc = doc;
+                // Another file: nothing of the old one stays selected, and its panel reads from the top.
+                self.selection = None;
+                self.selected_object = None;
+                self.scroll_panel_to_top = true;
                 self.recent.add(&path);
                 self.path_input = path.display().to_string();
                 self.notify(format!("Opened {}", path.display()), false);
@@ -117,6 +121,20 @@ impl ViewerApp {
                 self.apply(match mode {
                     DialogMode::Open => Action::Open(path),
                     DialogMode::SaveAs => Action::SaveAs(path),
+                    // Written relative to the scene's folder where it lies inside it, so the scene moves with
+                    // its meshes.
+                    DialogMode::Mesh => {
+                        let base =
+                            self.doc.path().and_then(|p| p.parent()).map(|d| {
+                                std::path::absolute(d).unwrap_or_else(|_| d.to_path_buf())
+                            });
+                        let relative =
+                            base.and_then(|b| path.strip_prefix(b).ok().map(Path::to_path_buf));
+                        Action::AddMesh(
+                            relative.unwrap_or(path).display().to_string(),
+                            self.mesh_at,
+                        )
+                    }
                 });
             }
         }

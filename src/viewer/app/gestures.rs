@@ -144,7 +144,13 @@ impl ViewerApp {
             if scroll != 0.0 {
                 let toward = pointer.map(|p| handles::screen_ray(&shown.camera, rect, p));
                 let mut camera = shown.camera.clone();
-                navigation::zoom(&mut camera, (-scroll as f64 * 0.003).exp(), toward);
+                let floor = navigation::dolly_floor(&shown.sources);
+                navigation::zoom_or_dolly(
+                    &mut camera,
+                    (-scroll as f64 * 0.003).exp(),
+                    toward,
+                    floor,
+                );
                 out.push(Action::Edit(Edit::Camera(camera)));
             }
         }

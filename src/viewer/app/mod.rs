@@ -118,6 +118,10 @@ pub struct ViewerApp {
     picked: Option<(HandleId, egui::Pos2)>,
     /// The panel scrolls to the selected source's entry at its next frame (a selection made in the viewport).
     scroll_to_selection: bool,
+    /// The panel scrolls back to its top on the next frame (another file was opened).
+    scroll_panel_to_top: bool,
+    /// Where a mesh chosen in the file dialog goes (the target when "+ mesh" was clicked).
+    mesh_at: DVec3,
     /// The file dialog, while it is open.
     dialog: Option<FileDialog>,
     /// The files opened and saved lately.
@@ -175,6 +179,8 @@ impl ViewerApp {
             selected_object: None,
             picked: None,
             scroll_to_selection: false,
+            scroll_panel_to_top: false,
+            mesh_at: DVec3::ZERO,
             dialog: None,
             recent: RecentFiles::default(),
             frame_times: VecDeque::new(),
@@ -496,10 +502,52 @@ impl ViewerApp {
                 self.picked = None;
             }
             Action::AddMesh(path, at) => self.add_mesh(&path, at),
+            Action::AddMeshDialog(at) => {
+                let start = (self.doc.path().and_then(|p| p.parent()))
+                    .map_or_else(|| ".".to_owned(), |d| d.display().to_string());
+                self.mesh_at = at;
+                self.dialog = Some(FileDialog::new(DialogMode::Mesh, Path::new(&start), ""));
+            }
             Action::Edit(edit) => {
                 self.follow_renumbering(&edit);
+                let added = match edit {
+                    Edit::AddSource(kind, _) => Some(Some(kind)),
+                    Edit::AddObject(..) | Edit::InsertObject(..) => Some(None),
+                    _ => None,
+                };
                 edit.apply(&mut self.doc.scene, self.playback.frame as f64);
+                // What was just added is selected, its entry scrolled to, ready to edit.
+                match added {
+                    Some(Some(kind)) => self.select_last_source(kind),
+                    Some(None) => self.select_last_object(),
+                    None => {}
+                }
             }
+        }
+    }
+
+    /// Selects the last source of `kind` (the one just added).
+    fn select_last_source(&mut self, kind: SourceKind) {
+        let s = &self.doc.scene.sources;
+        let count = match kind {
+            SourceKind::Points => s.points.len(),
+            SourceKind::Lines => s.lines.len(),
+            SourceKind::Tori => s.tori.len(),
+            SourceKind::Curves => s.curves.len(),
+        };
+        if count > 0 {
+            self.selection = Some((kind, count - 1));
+            self.selected_object = None;
+            self.scroll_to_selection = true;
+        }
+    }
+
+    /// Selects the last object (the one just added).
+    fn select_last_object(&mut self) {
+        if let Some(last) = self.doc.scene.objects.len().checked_sub(1) {
+            self.selected_object = Some(last);
+            self.selection = None;
+            self.scroll_to_selection = true;
         }
     }
 
@@ -588,34 +636,36 @@ impl ViewerApp {
             .resizable(true)
             .default_size(340.0)
             .show(ui, |ui| {
-                egui::ScrollArea::vertical()
-                    .show(ui, |ui| {
-                        let cx = panel::Context {
-                            doc: &self.doc,
-                            shown: &shown,
-                            history: &self.history,
-                            max_resolution: self.max_resolution,
-                            aspect: self.aspect(),
-                            frame: self.playback.frame,
-                            selected: self.selection,
-                            selected_object: self.selected_object,
-                            scroll_to_selected: std::mem::take(&mut self.scroll_to_selection),
-                            recent: self.recent.files(),
-                        };
-                        let mut actions =
-                            panel::show(ui, &cx, &mut self.path_input, &mut self.view);
-                        ui.separator();
-                        actions.extend(animation_panel::show(
-                            ui,
-                            &shown,
-                            self.playback.frame,
-                            &mut self.animation_form,
-                            self.export_job.as_ref(),
-                            self.doc.path(),
-                        ));
-                        actions
-                    })
-                    .inner
+                let mut area = egui::ScrollArea::vertical();
+                if std::mem::take(&mut self.scroll_panel_to_top) {
+                    area = area.vertical_scroll_offset(0.0);
+                }
+                area.show(ui, |ui| {
+                    let cx = panel::Context {
+                        doc: &self.doc,
+                        shown: &shown,
+                        history: &self.history,
+                        max_resolution: self.max_resolution,
+                        aspect: self.aspect(),
+                        frame: self.playback.frame,
+                        selected: self.selection,
+                        selected_object: self.selected_object,
+                        scroll_to_selected: std::mem::take(&mut self.scroll_to_selection),
+                        recent: self.recent.files(),
+                    };
+                    let mut actions = panel::show(ui, &cx, &mut self.path_input, &mut self.view);
+                    ui.separator();
+                    actions.extend(animation_panel::show(
+                        ui,
+                        &shown,
+                        self.playback.frame,
+                        &mut self.animation_form,
+                        self.export_job.as_ref(),
+                        self.doc.path(),
+                    ));
+                    actions
+                })
+                .inner
             })
             .inner;
         self.apply_all(actions);

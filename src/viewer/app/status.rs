@@ -3,6 +3,9 @@
 
 use super::*;
 
+/// The color of an error notice.
+const ERROR_NOTICE: Color32 = Color32::from_rgb(255, 110, 90);
+
 impl ViewerApp {
     pub fn notify(&mut self, text: impl Into<String>, is_error: bool) {
         self.notice = Some(Notice {
@@ -50,6 +53,8 @@ impl ViewerApp {
         Some(v[v.len() / 2])
     }
 
+    /// The status line: frame time, adapter, billboard and integrator, the file, and a notice; an error notice
+    /// whole beneath it.
     pub(super) fn status_bar(&mut self, ui: &mut egui::Ui) {
         ui.horizontal(|ui| {
             match self.frame_time() {
@@ -85,15 +90,11 @@ impl ViewerApp {
                 );
             ui.separator();
             ui.label(self.doc.title());
-            if let Some((text, is_error)) = self.notice() {
+            if let Some((text, false)) = self.notice() {
                 ui.separator();
                 // One line, cut to the bar's width; the whole message on hover.
                 let first_line = text.lines().next().unwrap_or_default();
-                let color = if *is_error {
-                    Color32::from_rgb(255, 110, 90)
-                } else {
-                    ui.visuals().weak_text_color()
-                };
+                let color = ui.visuals().weak_text_color();
                 let more = first_line.len() < text.len();
                 let shown = if more {
                     format!("{first_line} \u{2026}")
@@ -104,5 +105,9 @@ impl ViewerApp {
                     .on_hover_text(text.as_str());
             }
         });
+        // An error is read whole: on its own lines under the status line, wrapped, never cut.
+        if let Some((text, true)) = self.notice() {
+            ui.add(egui::Label::new(egui::RichText::new(text.as_str()).color(ERROR_NOTICE)).wrap());
+        }
     }
 }

@@ -69,7 +69,10 @@ pub(super) fn file_section(
                 }
             }
         });
-        ui.separator();
+    });
+    // Undo and Redo on a row of their own: they never wrap away from the file buttons as the panel's width
+    // changes.
+    ui.horizontal(|ui| {
         let undo = ui
             .add_enabled(cx.history.can_undo(), egui::Button::new("Undo"))
             .on_hover_text("Ctrl+Z");

@@ -12,10 +12,10 @@ use super::fields::Edits;
 use super::sources::Entry;
 use crate::objects::{Object, Shape, ShapeKind};
 
-/// The section: adding (the glTF path typed is kept in egui's memory), and every object's entry.
+/// The section: adding (a mesh through the file dialog), and every object's entry.
 pub(super) fn objects_section(ui: &mut Ui, cx: &Context, out: &mut Edits<'_>) {
     let target = cx.shown.camera.target;
-    ui.horizontal(|ui| {
+    ui.horizontal_wrapped(|ui| {
         ui.strong("Objects");
         for (label, kind) in [
             ("+ sphere", ShapeKind::Sphere),
@@ -26,25 +26,12 @@ pub(super) fn objects_section(ui: &mut Ui, cx: &Context, out: &mut Edits<'_>) {
                 out.push(Action::Edit(Edit::AddObject(kind, target)));
             }
         }
-    });
-    ui.horizontal(|ui| {
-        let id = ui.make_persistent_id("energywave.objects.mesh_path");
-        let mut path: String = ui.data_mut(|d| d.get_temp(id).unwrap_or_default());
-        let field = ui.add(
-            egui::TextEdit::singleline(&mut path)
-                .hint_text("model.glb")
-                .desired_width(160.0),
-        );
-        ui.data_mut(|d| d.insert_temp(id, path.clone()));
-        let enter = field.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
-        if (ui
-            .add_enabled(!path.trim().is_empty(), egui::Button::new("+ mesh"))
-            .on_hover_text("A glTF 2.0 file (.gltf or .glb), relative to the scene file's folder")
+        if ui
+            .button("+ mesh\u{2026}")
+            .on_hover_text("Choose a glTF 2.0 file (.gltf or .glb) in the file dialog")
             .clicked()
-            || enter)
-            && !path.trim().is_empty()
         {
-            out.push(Action::AddMesh(path, target));
+            out.push(Action::AddMeshDialog(target));
         }
     });
     if cx.shown.objects.is_empty() {

@@ -15,7 +15,8 @@ pub(super) fn view_section(
     out: &mut Edits<'_>,
 ) {
     egui::CollapsingHeader::new("View").default_open(false).show(ui, |ui| {
-        ui.horizontal(|ui| {
+        // Wrapped, so that opening the section never widens the panel.
+        ui.horizontal_wrapped(|ui| {
             ui.checkbox(&mut view.show_overlays, "overlays")
                 .on_hover_text("The grid, guides and handles at once (Shift+Alt+Z)");
             ui.add_enabled_ui(view.show_overlays, |ui| {
