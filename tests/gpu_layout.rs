@@ -207,7 +207,7 @@ fn rust_mirrors_match_the_wgsl_layouts() {
         &billboard,
         "BillboardParams",
         size_of::<BillboardParams>(),
-        fields!(BillboardParams: view_proj, center, size, right, resolution, up, mode, energy, near, far, nu, pad0),
+        fields!(BillboardParams: view_proj, center, size, right, resolution, up, mode, energy, near, far, nu, cutoff),
     );
     let average = parse_and_validate("average", shaders::AVERAGE_PASS);
     check_struct(

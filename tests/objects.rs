@@ -7,7 +7,7 @@ mod common;
 use std::path::Path;
 use std::sync::{Mutex, MutexGuard, OnceLock};
 
-use energywave::field::{Point, Sources};
+use energywave::field::{Curve, Line, Point, Sources, Torus};
 use energywave::gpu::HeadlessRenderer;
 use energywave::integrate::Integrator;
 use energywave::objects::lighting::{AMBIENT, Lights};
@@ -482,6 +482,195 @@ fn a_point_behind_an_object_is_in_its_shadow() {
             "x = {x} (edge {edge}): {e} against {want}"
         );
     }
+}
+
+/// The share of a straight source through `foot` along `dir` that the floor point `x` sees past a sphere,
+/// written independently of the renderer: the inverse-square weights `1 / (d^2 + s^2)` of the points `s` along
+/// the line, summed by the trapezoid rule over 400 000 steps of `s` out to a thousand times `d` (the tails
+/// beyond, unhidden, in closed form), each point's ray tested against the sphere in closed form.
+fn converged_line_visibility(x: DVec3, foot: DVec3, dir: DVec3, c: DVec3, r: f64) -> f64 {
+    let d = (x - foot).length();
+    let hidden = |p: DVec3| {
+        let (o, v) = (x, p - x);
+        let (a, b, cc) = (
+            v.dot(v),
+            2.0 * v.dot(o - c),
+            (o - c).length_squared() - r * r,
+        );
+        let disc = b * b - 4.0 * a * cc;
+        disc > 0.0 && {
+            let (t0, t1) = (
+                (-b - disc.sqrt()) / (2.0 * a),
+                (-b + disc.sqrt()) / (2.0 * a),
+            );
+            (t0 > 1e-9 && t0 < 1.0) || (t1 > 1e-9 && t1 < 1.0)
+        }
+    };
+    let reach = 1000.0 * d;
+    let steps = 400_000;
+    let h = 2.0 * reach / steps as f64;
+    let (mut seen, mut all) = (0.0, 0.0);
+    for i in 0..=steps {
+        let s = -reach + i as f64 * h;
+        let w = if i == 0 || i == steps { 0.5 } else { 1.0 } * h / (d * d + s * s);
+        all += w;
+        if !hidden(foot + dir * s) {
+            seen += w;
+        }
+    }
+    let tails = 2.0 * (std::f64::consts::FRAC_PI_2 - (reach / d).atan()) / d;
+    (seen + tails) / (all + tails)
+}
+
+#[test]
+fn a_long_source_casts_a_soft_shadow_that_meets_a_converged_area_light_reference() {
+    // A beam along x at height 3 over a floor, a sphere between: under the sphere's middle the beam is mostly
+    // hidden, yet its far ends still light the floor; across z the shadow fades from umbra to full light.
+    let (c, r) = (DVec3::new(0.0, 1.5, 0.0), 0.5);
+    let objects = vec![
+        Object {
+            shape: Shape::Plane {
+                point: DVec3::ZERO,
+                normal: DVec3::Y,
+                size: None,
+            },
+            color: [1.0; 3],
+        },
+        Object {
+            shape: Shape::Sphere {
+                center: c,
+                radius: r,
+            },
+            color: [1.0; 3],
+        },
+    ];
+    let (foot0, dir) = (DVec3::new(0.0, 3.0, 0.0), DVec3::X);
+    let sources = Sources {
+        lines: vec![Line {
+            point: foot0,
+            direction: dir,
+            coefficient: 1.0,
+            look: Default::default(),
+        }],
+        ..Sources::default()
+    };
+    let colors = Colors::default();
+    let lights = Lights::new(&sources, &colors, 0.01);
+    let mut penumbra = 0;
+    let mut worst: f64 = 0.0;
+    for k in 0..=40 {
+        let z = -1.5 + 3.0 * k as f64 / 40.0;
+        for x0 in [0.0, 0.4, 1.3] {
+            let x = DVec3::new(x0, 0.0, z);
+            let foot = foot0 + dir * (x - foot0).dot(dir);
+            let want = converged_line_visibility(x, foot, dir, c, r);
+            let got = lights.visibility(&objects, x, 0, foot);
+            worst = worst.max((got - want).abs());
+            penumbra += (0.1..0.9).contains(&want) as usize;
+        }
+    }
+    // A hard shadow (the nearest point seen or not) is off by the whole penumbra's depth there.
+    assert!(penumbra > 20, "{penumbra} points in the penumbra");
+    assert!(
+        worst < 0.03,
+        "visibility off the converged reference by {worst}"
+    );
+}
+
+#[test]
+fn a_ring_and_a_curve_soften_their_shadows_and_a_point_keeps_it_hard() {
+    let (c, r) = (DVec3::new(0.0, 1.5, 0.0), 0.4);
+    let objects = vec![Object {
+        shape: Shape::Sphere {
+            center: c,
+            radius: r,
+        },
+        color: [1.0; 3],
+    }];
+    let sources = Sources {
+        points: vec![Point {
+            position: DVec3::new(0.0, 3.0, 0.0),
+            coefficient: 1.0,
+            look: Default::default(),
+        }],
+        tori: vec![Torus {
+            center: DVec3::new(0.0, 3.0, 0.0),
+            axis: DVec3::Y,
+            major_radius: 0.6,
+            coefficient: 1.0,
+            look: Default::default(),
+        }],
+        curves: vec![Curve {
+            control_points: vec![
+                DVec3::new(-2.0, 3.0, 0.0),
+                DVec3::new(0.0, 3.5, 0.0),
+                DVec3::new(2.0, 3.0, 0.0),
+            ],
+            coefficient: 1.0,
+            weights: vec![],
+            look: Default::default(),
+            color_series: vec![],
+            w_form: Default::default(),
+        }],
+        ..Sources::default()
+    };
+    let colors = Colors::default();
+    let lights = Lights::new(&sources, &colors, 0.01);
+    let at = |k: usize, x: DVec3| {
+        let nearest = lights.at(x).nth(k).unwrap().from;
+        lights.visibility(&objects, x, k, nearest)
+    };
+    // Under the sphere, off its middle: the point is hidden outright or not at all; the ring and the curve
+    // partly, against a brute-force sum over 20 000 of their points (weights 1 / r^2, the curve's times its
+    // parameter's speed).
+    let x = DVec3::new(0.45, 0.0, 0.1);
+    assert!([0.0, 1.0].contains(&at(0, x)));
+    let hidden_share = |points: &[(DVec3, f64)]| {
+        let total: f64 = points.iter().map(|p| p.1).sum();
+        let seen: f64 = points
+            .iter()
+            .filter(|(p, _)| !energywave::objects::blocked(&objects, x, *p))
+            .map(|p| p.1)
+            .sum();
+        seen / total
+    };
+    let ring: Vec<(DVec3, f64)> = (0..20_000)
+        .map(|j| {
+            let a = (j as f64 + 0.5) * std::f64::consts::TAU / 20_000.0;
+            let p = DVec3::new(0.6 * a.cos(), 3.0, 0.6 * a.sin());
+            (p, 1.0 / (x - p).length_squared())
+        })
+        .collect();
+    let want = hidden_share(&ring);
+    assert!(want > 0.05 && want < 0.95, "{want}");
+    assert!(
+        (at(1, x) - want).abs() < 0.03,
+        "{} against {want}",
+        at(1, x)
+    );
+    let bezier = |t: f64| {
+        let (p0, p1, p2) = (
+            DVec3::new(-2.0, 3.0, 0.0),
+            DVec3::new(0.0, 3.5, 0.0),
+            DVec3::new(2.0, 3.0, 0.0),
+        );
+        p0 * (1.0 - t) * (1.0 - t) + p1 * 2.0 * t * (1.0 - t) + p2 * t * t
+    };
+    let arc: Vec<(DVec3, f64)> = (0..20_000)
+        .map(|j| {
+            let t = (j as f64 + 0.5) / 20_000.0;
+            let speed = (bezier(t + 1e-6) - bezier(t - 1e-6)).length() / 2e-6;
+            let p = bezier(t);
+            (p, speed / (x - p).length_squared())
+        })
+        .collect();
+    let want = hidden_share(&arc);
+    assert!(want > 0.05 && want < 0.95, "{want}");
+    assert!(
+        (at(2, x) - want).abs() < 0.03,
+        "{} against {want}",
+        at(2, x)
+    );
 }
 
 #[test]

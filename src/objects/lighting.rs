@@ -5,11 +5,16 @@
 //! Why that falloff: the method's field is what the artist sees glow; lighting with it makes a surface exactly
 //! as bright as the glow's energy at it (twice the coefficient, twice the light; the same eps keeps a surface
 //! through a source finite), and a long source lights like the line light it is (1 / d) rather than a point
-//! light (1 / d^2) squeezed onto its nearest point. Lambert's cosine with the direction to that point, a hard
-//! shadow where another object crosses the segment to it, and a small ambient term so that unlit sides keep
-//! their shape:
+//! light (1 / d^2) squeezed onto its nearest point. Lambert's cosine with the direction to that point, a
+//! shadow where other objects hide the source, and a small ambient term so that unlit sides keep their shape:
 //!
-//! `L(X) = albedo * (AMBIENT + sum_i Ce_i psi_i(X) max(0, n . l_i) [X sees its point of source i])`.
+//! `L(X) = albedo * (AMBIENT + sum_i Ce_i psi_i(X) max(0, n . l_i) V_i(X))`.
+//!
+//! The shadow is as soft as the source is long. A line's 1 / d is the sum of inverse-square lights along it
+//! (`integral ds / (d^2 + s^2) = pi / d`), so the share of the source that X sees is that sum over the points
+//! X sees: `V_i(X) = integral vis(X, s) w(s) ds / integral w(s) ds`, `w = W(s) / |X - s|^2` (`visibility`).
+//! A point's shadow is hard (V is 0 or 1), a line's, a ring's and a curve's soften with their extent as seen
+//! from X.
 //!
 //! Evaluated in f64 at the vertices of the objects' triangles (`tessellate`) and interpolated across them.
 
@@ -18,7 +23,9 @@ use rayon::prelude::*;
 
 use super::tessellate::Surface;
 use super::{Object, blocked};
-use crate::field::{Sources, brightest, curve};
+use std::f64::consts::{FRAC_PI_2, PI, TAU};
+
+use crate::field::{Sources, brightest, curve, wseries};
 use crate::scene::Colors;
 
 /// The light every surface gets whatever the sources: a share of its albedo.
@@ -109,17 +116,128 @@ impl<'a> Lights<'a> {
             if cosine == 0.0 || light.strength == 0.0 {
                 continue;
             }
-            if blocked(objects, x, light.from) {
-                shadowed |= 1 << (k % 64);
+            let seen = self.visibility(objects, x, k, light.from);
+            if seen < 1.0 {
+                // The shadow's signature: which sources are hidden, and how much, in eighths, so that a
+                // triangle across a penumbra is refined as one across a hard edge.
+                let level = (8.0 * (1.0 - seen)).ceil() as u64;
+                shadowed = shadowed.rotate_left(5) ^ (level << (k % 8 * 4)) ^ (k as u64 + 1);
+            }
+            if seen == 0.0 {
                 continue;
             }
             for (c, e) in e.iter_mut().enumerate() {
-                *e += light.color[c] * light.strength * cosine;
+                *e += light.color[c] * light.strength * cosine * seen;
             }
         }
         (e, shadowed)
     }
+
+    /// The share `V` of term `k`'s source that `x` sees past `objects` (1 unhidden, 0 in full shadow): the
+    /// inverse-square weights of its points that `x` sees over those of all its points (the module's formula),
+    /// by `SOFT_SAMPLES` stratified samples of the source, after `PROBES` of them agree or not. A point is seen
+    /// or not; `nearest` is the light's point for it.
+    pub fn visibility(&self, objects: &[Object], x: DVec3, k: usize, nearest: DVec3) -> f64 {
+        if objects.is_empty() {
+            return 1.0;
+        }
+        let samples = |n: usize| self.extent_samples(x, k, n);
+        let Some(probes) = samples(PROBES) else {
+            return if blocked(objects, x, nearest) {
+                0.0
+            } else {
+                1.0
+            };
+        };
+        let seen = |points: &[(DVec3, f64)]| -> (f64, f64) {
+            points.iter().fold((0.0, 0.0), |(s, t), &(p, w)| {
+                (if blocked(objects, x, p) { s } else { s + w }, t + w)
+            })
+        };
+        let (s, t) = seen(&probes);
+        // All seen or none, and the nearest point alike: no penumbra here (a shadow narrower than the probes'
+        // spacing slips through, as a hard shadow's edge between vertices did).
+        let near_blocked = blocked(objects, x, nearest);
+        if (s == t && !near_blocked) || (s == 0.0 && near_blocked) {
+            return if s == t { 1.0 } else { 0.0 };
+        }
+        let all = samples(SOFT_SAMPLES).expect("an extended source");
+        let (s, t) = seen(&all);
+        if t > 0.0 { s / t } else { 1.0 }
+    }
+
+    /// `n` stratified points of term `k`'s source with their weights `W / |x - p|^2` (times the measure of the
+    /// stratum), or `None` for a point, which has no extent.
+    fn extent_samples(&self, x: DVec3, k: usize, n: usize) -> Option<Vec<(DVec3, f64)>> {
+        let s = self.sources;
+        let mut k = k;
+        if k < s.points.len() {
+            return None;
+        }
+        k -= s.points.len();
+        if let Some(l) = s.lines.get(k) {
+            // s = d tan(theta): the weight ds / (d^2 + s^2) is d theta / d, uniform in theta.
+            let foot = l.point + l.direction * (x - l.point).dot(l.direction);
+            let d = (x - foot).length().max(self.epsilon);
+            return Some(
+                (0..n)
+                    .map(|j| {
+                        let theta = -FRAC_PI_2 + (j as f64 + 0.5) * PI / n as f64;
+                        (foot + l.direction * d * theta.tan(), 1.0)
+                    })
+                    .collect(),
+            );
+        }
+        k -= s.lines.len();
+        if let Some(t) = s.tori.get(k) {
+            let e1 = t.axis.any_orthonormal_vector();
+            let e2 = t.axis.cross(e1);
+            return Some(
+                (0..n)
+                    .map(|j| {
+                        let a = (j as f64 + 0.5) * TAU / n as f64;
+                        let p = t.center + t.major_radius * (a.cos() * e1 + a.sin() * e2);
+                        (
+                            p,
+                            1.0 / (x - p).length_squared().max(self.epsilon * self.epsilon),
+                        )
+                    })
+                    .collect(),
+            );
+        }
+        k -= s.tori.len();
+        let c = s.curves.get(k)?;
+        let h = 0.25 / n as f64;
+        Some(
+            (0..n)
+                .map(|j| {
+                    let t = (j as f64 + 0.5) / n as f64;
+                    let p = curve::chain_frame(&c.control_points, t).0;
+                    let speed = (curve::chain_frame(&c.control_points, t + h).0
+                        - curve::chain_frame(&c.control_points, t - h).0)
+                        .length()
+                        / (2.0 * h);
+                    let w = if c.weights.is_empty() {
+                        1.0
+                    } else {
+                        wseries::evaluate(&c.weights, t).max(0.0)
+                    };
+                    (
+                        p,
+                        w * speed / (x - p).length_squared().max(self.epsilon * self.epsilon),
+                    )
+                })
+                .collect(),
+        )
+    }
 }
+
+/// Samples of an extended source first tried: where they agree with each other and with its nearest point,
+/// the whole source is taken as seen (or hidden).
+const PROBES: usize = 16;
+
+/// Samples of an extended source where the probes disagree (a penumbra): its visibility to about 1/64.
+const SOFT_SAMPLES: usize = 64;
 
 /// How many times a triangle across a shadow's edge is split in four (its vertices' shadows differ): the edge
 /// then runs through triangles an eighth of the tessellation's size.
