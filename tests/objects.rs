@@ -564,7 +564,7 @@ fn a_long_source_casts_a_soft_shadow_that_meets_a_converged_area_light_reference
             let x = DVec3::new(x0, 0.0, z);
             let foot = foot0 + dir * (x - foot0).dot(dir);
             let want = converged_line_visibility(x, foot, dir, c, r);
-            let got = lights.visibility(&objects, x, 0, foot);
+            let got = lights.visibility(&objects, x, DVec3::Y, 0, foot);
             worst = worst.max((got - want).abs());
             penumbra += (0.1..0.9).contains(&want) as usize;
         }
@@ -618,7 +618,7 @@ fn a_ring_and_a_curve_soften_their_shadows_and_a_point_keeps_it_hard() {
     let lights = Lights::new(&sources, &colors, 0.01);
     let at = |k: usize, x: DVec3| {
         let nearest = lights.at(x).nth(k).unwrap().from;
-        lights.visibility(&objects, x, k, nearest)
+        lights.visibility(&objects, x, DVec3::Y, k, nearest)
     };
     // Under the sphere, off its middle: the point is hidden outright or not at all; the ring and the curve
     // partly, against a brute-force sum over 20 000 of their points (weights 1 / r^2, the curve's times its

@@ -116,7 +116,7 @@ impl<'a> Lights<'a> {
             if cosine == 0.0 || light.strength == 0.0 {
                 continue;
             }
-            let seen = self.visibility(objects, x, k, light.from);
+            let seen = self.visibility(objects, x, n, k, light.from);
             if seen < 1.0 {
                 // The shadow's signature: which sources are hidden, and how much, in eighths, so that a
                 // triangle across a penumbra is refined as one across a hard edge.
@@ -133,15 +133,30 @@ impl<'a> Lights<'a> {
         (e, shadowed)
     }
 
-    /// The share `V` of term `k`'s source that `x` sees past `objects` (1 unhidden, 0 in full shadow): the
-    /// inverse-square weights of its points that `x` sees over those of all its points (the module's formula),
-    /// by `SOFT_SAMPLES` stratified samples of the source, after `PROBES` of them agree or not. A point is seen
-    /// or not; `nearest` is the light's point for it.
-    pub fn visibility(&self, objects: &[Object], x: DVec3, k: usize, nearest: DVec3) -> f64 {
+    /// The share `V` of term `k`'s source that `x` (on a surface of normal `n`) sees past `objects` (1 unhidden,
+    /// 0 in full shadow): the inverse-square weights of its points that `x` sees over those of all its points
+    /// above the surface's tangent plane (the module's formula; the cosine with the nearest point accounts for
+    /// the horizon, so a sphere does not shadow itself), by `SOFT_SAMPLES` stratified samples of the source,
+    /// after `PROBES` of them agree or not. A point is seen or not; `nearest` is the light's point for it.
+    pub fn visibility(
+        &self,
+        objects: &[Object],
+        x: DVec3,
+        n: DVec3,
+        k: usize,
+        nearest: DVec3,
+    ) -> f64 {
         if objects.is_empty() {
             return 1.0;
         }
-        let samples = |n: usize| self.extent_samples(x, k, n);
+        let above = |points: Vec<(DVec3, f64)>| -> Vec<(DVec3, f64)> {
+            let kept: Vec<_> = points
+                .into_iter()
+                .filter(|(p, _)| n.dot(*p - x) > 0.0)
+                .collect();
+            kept
+        };
+        let samples = |count: usize| self.extent_samples(x, k, count).map(above);
         let Some(probes) = samples(PROBES) else {
             return if blocked(objects, x, nearest) {
                 0.0
@@ -159,11 +174,15 @@ impl<'a> Lights<'a> {
         // spacing slips through, as a hard shadow's edge between vertices did).
         let near_blocked = blocked(objects, x, nearest);
         if (s == t && !near_blocked) || (s == 0.0 && near_blocked) {
-            return if s == t { 1.0 } else { 0.0 };
+            return if near_blocked { 0.0 } else { 1.0 };
         }
         let all = samples(SOFT_SAMPLES).expect("an extended source");
         let (s, t) = seen(&all);
-        if t > 0.0 { s / t } else { 1.0 }
+        match t > 0.0 {
+            true => s / t,
+            // Nothing of it above the horizon: the nearest point decides (its cosine is about 0 anyway).
+            false => (!near_blocked) as u8 as f64,
+        }
     }
 
     /// `n` stratified points of term `k`'s source with their weights `W / |x - p|^2` (times the measure of the
