@@ -22,7 +22,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use super::tessellate::Surface;
-use super::{Object, blocked};
+use super::{Object, Shape, blocked};
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
 
 use crate::field::{Sources, brightest, curve, wseries};
@@ -46,15 +46,34 @@ pub struct Lights<'a> {
     colors: &'a Colors,
     pieces: Vec<Vec<brightest::Piece>>,
     epsilon: f64,
+    /// A sphere holding each term's source, where it is extended and bounded (a ring, a curve): a surface
+    /// point no object can come between it and sees all of it.
+    bounds: Vec<Option<(DVec3, f64)>>,
 }
 
 impl<'a> Lights<'a> {
     pub fn new(sources: &'a Sources, colors: &'a Colors, epsilon: f64) -> Self {
+        let points = sources.points.iter().map(|_| None);
+        let lines = sources.lines.iter().map(|_| None);
+        let tori = (sources.tori.iter()).map(|t| Some((t.center, t.major_radius)));
+        // A Bezier chain lies in its control points' hull.
+        let curves = sources.curves.iter().map(|c| {
+            let lo = c
+                .control_points
+                .iter()
+                .fold(DVec3::INFINITY, |a, &p| a.min(p));
+            let hi = c
+                .control_points
+                .iter()
+                .fold(DVec3::NEG_INFINITY, |a, &p| a.max(p));
+            Some(((lo + hi) * 0.5, (hi - lo).length() * 0.5))
+        });
         Lights {
             sources,
             colors,
             pieces: sources.curves.iter().map(|c| c.pieces()).collect(),
             epsilon,
+            bounds: points.chain(lines).chain(tori).chain(curves).collect(),
         }
     }
 
@@ -147,6 +166,11 @@ impl<'a> Lights<'a> {
         nearest: DVec3,
     ) -> f64 {
         if objects.is_empty() {
+            return 1.0;
+        }
+        if let Some(Some(bound)) = self.bounds.get(k)
+            && !objects.iter().any(|o| may_come_between(o, x, *bound))
+        {
             return 1.0;
         }
         let above = |points: Vec<(DVec3, f64)>| -> Vec<(DVec3, f64)> {
@@ -251,12 +275,42 @@ impl<'a> Lights<'a> {
     }
 }
 
+/// Whether `object` may cross a segment from `x` to a point of the sphere `(c, r)`: conservatively, by a sphere
+/// holding the object (every such segment lies within `r` of the segment from `x` to `c`), or, for an infinite
+/// plane, whether the sphere reaches the plane's other side from `x` (from a point on the plane, no segment
+/// crosses it). A mesh always may.
+fn may_come_between(object: &Object, x: DVec3, (c, r): (DVec3, f64)) -> bool {
+    let holding = match &object.shape {
+        Shape::Sphere { center, radius } => (*center, *radius),
+        Shape::Box { center, size, .. } => (*center, size.length() * 0.5),
+        Shape::Plane {
+            point,
+            size: Some(side),
+            ..
+        } => (*point, side * std::f64::consts::FRAC_1_SQRT_2),
+        Shape::Plane {
+            point,
+            normal,
+            size: None,
+        } => {
+            let side = normal.dot(x - *point);
+            let scale = 1.0 + x.abs().max_element();
+            return side.abs() > 1e-9 * scale && normal.dot(c - *point) * side.signum() < r;
+        }
+        Shape::Mesh(_) => return true,
+    };
+    let (o, rho) = holding;
+    let along = c - x;
+    let t = ((o - x).dot(along) / along.length_squared().max(1e-300)).clamp(0.0, 1.0);
+    (x + along * t - o).length() <= rho + r
+}
+
 /// Samples of an extended source first tried: where they agree with each other and with its nearest point,
 /// the whole source is taken as seen (or hidden).
-const PROBES: usize = 16;
+const PROBES: usize = 8;
 
-/// Samples of an extended source where the probes disagree (a penumbra): its visibility to about 1/64.
-const SOFT_SAMPLES: usize = 64;
+/// Samples of an extended source where the probes disagree (a penumbra): its visibility to about 1/32.
+const SOFT_SAMPLES: usize = 32;
 
 /// How many times a triangle across a shadow's edge is split in four (its vertices' shadows differ): the edge
 /// then runs through triangles an eighth of the tessellation's size.
