@@ -1150,3 +1150,109 @@ fn the_lit_triangles_follow_a_shadows_edge() {
         "{off} of {total} points off by more than 0.02"
     );
 }
+
+/// Standard base64 of `bytes`, for a glTF's data URI.
+fn base64(bytes: &[u8]) -> String {
+    const B64: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut s = String::new();
+    for c in bytes.chunks(3) {
+        let n = (c[0] as u32) << 16
+            | (*c.get(1).unwrap_or(&0) as u32) << 8
+            | *c.get(2).unwrap_or(&0) as u32;
+        for k in 0..4 {
+            s.push(if k <= c.len() {
+                B64[(n >> (18 - 6 * k) & 63) as usize] as char
+            } else {
+                '='
+            });
+        }
+    }
+    s
+}
+
+#[test]
+fn a_gltf_meshs_normals_shade_it_smoothly_and_its_base_color_is_its_albedo() {
+    // One triangle flat on y = 0 whose file normals lean toward +x at one corner, -x at another, and up at the
+    // third; its material's base color is linear (0.2140, 0.5, 1.0), sRGB (0.5, 0.7354, 1.0).
+    let positions: [[f32; 3]; 3] = [[0.0, 0.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]];
+    let normals: [[f32; 3]; 3] = [[0.6, 0.8, 0.0], [-0.6, 0.8, 0.0], [0.0, 1.0, 0.0]];
+    let mut buffer: Vec<u8> = bytemuck::cast_slice(&positions).to_vec();
+    buffer.extend_from_slice(bytemuck::cast_slice(&normals));
+    let json = format!(
+        r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0}}],
+"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"NORMAL":1}},"material":0}}]}}],
+"materials":[{{"pbrMetallicRoughness":{{"baseColorFactor":[0.21404114,0.5,1.0,1.0]}}}}],
+"buffers":[{{"byteLength":72,"uri":"data:application/octet-stream;base64,{}"}}],
+"bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":36}},{{"buffer":0,"byteOffset":36,"byteLength":36}}],
+"accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,0,1]}},
+{{"bufferView":1,"componentType":5126,"count":3,"type":"VEC3"}}]}}"#,
+        base64(&buffer)
+    );
+    let dir = std::env::temp_dir().join(format!("energywave-gltf-shading-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("leaf.gltf");
+    std::fs::write(&path, json).unwrap();
+    let data = energywave::objects::MeshData::load(&path).unwrap();
+    assert_eq!(data.normals.len(), 1);
+    for (got, want) in data.normals[0].iter().zip(normals) {
+        assert!((*got - DVec3::from_array(want.map(f64::from))).length() < 1e-6);
+    }
+    let base = data.base_colors[0];
+    for (got, want) in base.iter().zip([0.5, 0.735357, 1.0]) {
+        assert!((got - want).abs() < 1e-5, "{base:?}");
+    }
+    // Lit from above by a point: each corner by its own normal's cosine, its albedo the object's color (0.8)
+    // times the base color.
+    let source = DVec3::new(0.3, 2.0, 0.4);
+    let scene = Scene {
+        sources: Sources {
+            points: vec![Point {
+                position: source,
+                coefficient: 1.0,
+                look: Default::default(),
+            }],
+            ..Sources::default()
+        },
+        objects: vec![Object {
+            shape: Shape::Mesh(energywave::objects::MeshObject {
+                path: path.clone(),
+                translation: DVec3::ZERO,
+                rotation: DVec3::ZERO,
+                scale: DVec3::ONE,
+                data: std::sync::Arc::new(data),
+            }),
+            color: [0.8; 3],
+        }],
+        colors: Colors {
+            energy: [1.0; 3],
+            ..Colors::default()
+        },
+        ..Scene::default_scene()
+    };
+    let l = lit(&scene);
+    let eps = scene.integration.epsilon;
+    let mut checked = 0;
+    for (k, p) in l.surface.positions.iter().enumerate() {
+        let Some(c) = positions
+            .iter()
+            .position(|q| (DVec3::from_array(q.map(f64::from)) - *p).length() < 1e-12)
+        else {
+            continue;
+        };
+        let n = DVec3::from_array(normals[c].map(f64::from)).normalize();
+        let to = source - *p;
+        let d = to.length();
+        let e = AMBIENT + 1.0 / d.max(eps) * n.dot(to / d).max(0.0);
+        for ch in 0..3 {
+            let want = 0.8 * base[ch] * e;
+            assert!(
+                (l.colors[k][ch] - want).abs() < 1e-9,
+                "corner {c}: {} against {want}",
+                l.colors[k][ch]
+            );
+        }
+        checked += 1;
+    }
+    assert!(checked >= 3);
+    let _ = std::fs::remove_dir_all(&dir);
+}

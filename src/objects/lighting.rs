@@ -355,6 +355,7 @@ pub fn light_surface(
                     surface.positions.push(position);
                     surface.normals.push(normal);
                     surface.object.push(surface.object[p]);
+                    surface.tint.push(surface.tint[p]);
                     surface.positions.len() as u32 - 1
                 })
             };
@@ -369,7 +370,8 @@ pub fn light_surface(
     }
     (shades.iter().enumerate())
         .map(|(k, (e, _))| {
-            let albedo = objects[surface.object[k] as usize].color;
+            let color = objects[surface.object[k] as usize].color;
+            let albedo: [f64; 3] = std::array::from_fn(|c| color[c] * surface.tint[k][c]);
             [albedo[0] * e[0], albedo[1] * e[1], albedo[2] * e[2]]
         })
         .collect()

@@ -10,6 +10,12 @@ use glam::{DMat4, DVec3};
 #[derive(Clone, Debug, PartialEq)]
 pub struct MeshData {
     pub triangles: Vec<[DVec3; 3]>,
+    /// Each triangle's corner normals from the file (node transforms applied), where it has them: smooth
+    /// shading. Empty, or one entry a triangle.
+    pub normals: Vec<[DVec3; 3]>,
+    /// Each triangle's base color (its material's `baseColorFactor`, as display values: sRGB-encoded like every
+    /// color of a scene), which the object's color multiplies into its albedo. Empty, or one a triangle.
+    pub base_colors: Vec<[f64; 3]>,
     nodes: Vec<Node>,
     /// Triangle indices in the order the leaves list them.
     order: Vec<u32>,
@@ -58,6 +64,8 @@ impl MeshData {
             e => Err(e),
         })?;
         let mut triangles = Vec::new();
+        let mut normals: Vec<Option<[DVec3; 3]>> = Vec::new();
+        let mut base_colors = Vec::new();
         let scene = document
             .default_scene()
             .or_else(|| document.scenes().next());
@@ -69,6 +77,7 @@ impl MeshData {
             let local =
                 DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(f64::from)));
             let world = parent * local;
+            let normal_world = glam::DMat3::from_mat4(world).inverse().transpose();
             if let Some(mesh) = node.mesh() {
                 for primitive in mesh.primitives() {
                     if primitive.mode() != gltf::mesh::Mode::Triangles {
@@ -81,6 +90,16 @@ impl MeshData {
                     let positions: Vec<DVec3> = positions
                         .map(|p| world.transform_point3(DVec3::from_array(p.map(f64::from))))
                         .collect();
+                    let file_normals: Option<Vec<DVec3>> = reader.read_normals().map(|n| {
+                        n.map(|v| normal_world * DVec3::from_array(v.map(f64::from)))
+                            .collect()
+                    });
+                    // glTF's base color factor is linear; a scene's colors are display values.
+                    let base = primitive
+                        .material()
+                        .pbr_metallic_roughness()
+                        .base_color_factor();
+                    let base = [0, 1, 2].map(|c| linear_to_srgb(base[c] as f64));
                     let indices: Vec<u32> = match reader.read_indices() {
                         Some(i) => i.into_u32().collect(),
                         None => (0..positions.len() as u32).collect(),
@@ -89,6 +108,11 @@ impl MeshData {
                         let corner = |k: usize| positions.get(t[k] as usize).copied();
                         if let (Some(a), Some(b), Some(c)) = (corner(0), corner(1), corner(2)) {
                             triangles.push([a, b, c]);
+                            normals.push(file_normals.as_ref().and_then(|n| {
+                                let at = |k: usize| n.get(t[k] as usize).copied();
+                                Some([at(0)?, at(1)?, at(2)?])
+                            }));
+                            base_colors.push(base);
                         }
                     }
                     if triangles.len() > MAX_TRIANGLES {
@@ -104,7 +128,18 @@ impl MeshData {
         if triangles.iter().flatten().any(|p| !p.is_finite()) {
             return Err(MeshError::NotFinite);
         }
-        Ok(MeshData::new(triangles))
+        let mut data = MeshData::new(triangles);
+        // Normals only where every triangle has them (a file mixing primitives with and without gets its faces').
+        if normals
+            .iter()
+            .all(|n| n.is_some_and(|n| n.iter().all(|v| v.is_finite())))
+        {
+            data.normals = normals.into_iter().flatten().collect();
+        }
+        if base_colors.iter().any(|c| *c != [1.0; 3]) {
+            data.base_colors = base_colors;
+        }
+        Ok(data)
     }
 
     /// The mesh of `triangles`, with its hierarchy built.
@@ -116,6 +151,8 @@ impl MeshData {
         }
         MeshData {
             triangles,
+            normals: Vec::new(),
+            base_colors: Vec::new(),
             nodes,
             order,
         }
@@ -300,5 +337,15 @@ mod tests {
             hits += scan.is_some() as usize;
         }
         assert!(hits > 50, "{hits} rays hit");
+    }
+}
+
+/// The sRGB encoding of a linear value in [0, 1] (IEC 61966-2-1).
+fn linear_to_srgb(x: f64) -> f64 {
+    let x = x.clamp(0.0, 1.0);
+    if x <= 0.0031308 {
+        12.92 * x
+    } else {
+        1.055 * x.powf(1.0 / 2.4) - 0.055
     }
 }

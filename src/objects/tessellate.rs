@@ -12,6 +12,8 @@ pub struct Surface {
     pub normals: Vec<DVec3>,
     /// The object each vertex belongs to (its index in the scene), for its albedo.
     pub object: Vec<u32>,
+    /// What each vertex's albedo is, times its object's color: a glTF mesh's base color there, else 1.
+    pub tint: Vec<[f64; 3]>,
     pub indices: Vec<u32>,
 }
 
@@ -30,9 +32,14 @@ const OUTER: f64 = 500.0;
 
 impl Surface {
     fn vertex(&mut self, p: DVec3, n: DVec3, object: u32) -> u32 {
+        self.tinted_vertex(p, n, object, [1.0; 3])
+    }
+
+    fn tinted_vertex(&mut self, p: DVec3, n: DVec3, object: u32, tint: [f64; 3]) -> u32 {
         self.positions.push(p);
         self.normals.push(n);
         self.object.push(object);
+        self.tint.push(tint);
         self.positions.len() as u32 - 1
     }
 
@@ -168,10 +175,21 @@ impl Surface {
             Shape::Mesh(m) => {
                 let (_, forward) = m.inverse();
                 let normal_matrix = forward.inverse().transpose();
-                for t in &m.data.triangles {
+                for (j, t) in m.data.triangles.iter().enumerate() {
                     let p = t.map(|p| forward * p + m.translation);
-                    let n = (normal_matrix * (t[1] - t[0]).cross(t[2] - t[0])).normalize_or_zero();
-                    let i = p.map(|p| self.vertex(p, n, k));
+                    let face =
+                        (normal_matrix * (t[1] - t[0]).cross(t[2] - t[0])).normalize_or_zero();
+                    // The file's normals where it has them (smooth shading), turned as the mesh is; the
+                    // face's where it has none or one is degenerate.
+                    let normals = m.data.normals.get(j).copied();
+                    let tint = m.data.base_colors.get(j).copied().unwrap_or([1.0; 3]);
+                    let i: [u32; 3] = std::array::from_fn(|c| {
+                        let n = normals
+                            .map(|n| (normal_matrix * n[c]).normalize_or_zero())
+                            .filter(|n| *n != DVec3::ZERO)
+                            .unwrap_or(face);
+                        self.tinted_vertex(p[c], n, k, tint)
+                    });
                     self.indices.extend(i);
                 }
             }
