@@ -1256,3 +1256,80 @@ fn a_gltf_meshs_normals_shade_it_smoothly_and_its_base_color_is_its_albedo() {
     assert!(checked >= 3);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn an_objects_place_and_albedo_are_keyed_lit_at_every_frame_and_saved_back() {
+    let text = r#"
+[colors]
+energy = [1.0, 1.0, 1.0]
+
+[[points]]
+position = [0.0, 2.0, 0.0]
+coefficient = 2.0
+
+[[objects]]
+shape = "plane"
+point = [0.0, 0.0, 0.0]
+normal = [0.0, 1.0, 0.0]
+color = [0.5, 0.5, 0.5]
+
+[[objects]]
+shape = "sphere"
+center = [0.0, 1.0, 0.0]
+radius = 0.3
+color = [1.0, 1.0, 1.0]
+
+[animation]
+frames = 11
+
+[[animation.tracks]]
+parameter = "objects[1].center"
+keys = [{ frame = 0, value = [0.0, 1.0, 0.0] }, { frame = 10, value = [4.0, 1.0, 0.0] }]
+
+[[animation.tracks]]
+parameter = "objects[0].color"
+keys = [{ frame = 0, value = [0.5, 0.5, 0.5] }, { frame = 10, value = [1.0, 0.0, 0.0] }]
+"#;
+    let scene = Scene::parse(text, Path::new("keyed.toml")).unwrap();
+    let at = |f: f64| scene.at_frame(f);
+    assert_eq!(at(5.0).objects[1].center(), DVec3::new(2.0, 1.0, 0.0));
+    assert_eq!(at(5.0).objects[0].color, [0.75, 0.25, 0.25]);
+    // The floor under the point: in the sphere's shadow at frame 0, lit once the sphere has moved away, and in
+    // the keyed albedo.
+    let under = |s: &Scene| {
+        let l = lit(s);
+        let k = (0..l.surface.positions.len())
+            .filter(|&k| l.surface.object[k] == 0)
+            .min_by(|&a, &b| {
+                let d = |k: usize| l.surface.positions[k].length();
+                d(a).total_cmp(&d(b))
+            })
+            .unwrap();
+        (l.surface.positions[k], l.colors[k])
+    };
+    let (p0, dark) = under(&at(0.0));
+    let (p10, lit_red) = under(&at(10.0));
+    assert!(p0.length() < 0.2 && p10.length() < 0.2);
+    let open = 2.0 / (DVec3::new(0.0, 2.0, 0.0) - p10).length();
+    assert!((dark[0] - 0.5 * AMBIENT).abs() < 1e-9, "{dark:?}");
+    assert!(
+        lit_red[0] > 0.9 * (AMBIENT + open) && lit_red[1] < 1e-12,
+        "{lit_red:?}"
+    );
+    // Saved and read back: the same tracks, under the general name.
+    let saved = scene.to_toml();
+    assert!(
+        saved.contains("objects[1].position") && saved.contains("objects[0].color"),
+        "{saved}"
+    );
+    assert_eq!(
+        Scene::parse(&saved, Path::new("saved.toml")).unwrap(),
+        scene
+    );
+    // A key on an object that does not exist is refused, located.
+    let bad = text.replace("objects[1].center", "objects[7].center");
+    let e = Scene::parse(&bad, Path::new("bad.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("objects[7]"), "{e}");
+}

@@ -1004,6 +1004,16 @@ fn what_is_added_is_selected_and_another_file_starts_with_nothing_selected() {
     h.run();
     let objects = h.state().scene().objects.len();
     assert_eq!(h.state().selected_object(), Some(objects - 1));
+    // Its place and albedo are keyable from its entry.
+    let last = objects - 1;
+    assert!(
+        h.query_by_label(&format!("key objects[{last}].position"))
+            .is_some()
+    );
+    assert!(
+        h.query_by_label(&format!("key objects[{last}].color"))
+            .is_some()
+    );
     h.get_by_label("+ point").scroll_to_me();
     h.run();
     h.get_by_label("+ point").click();

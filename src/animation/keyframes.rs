@@ -130,6 +130,11 @@ pub enum Parameter {
     Weight(usize, usize),
     /// `integration.decay_length`, `integration.alpha`, `integration.beta`, `integration.epsilon`
     Integration(IntegrationSetting),
+    /// `objects[i].position`: a sphere's or a box's center, a plane's point, a mesh's translation (the file's
+    /// own names, `center`, `point` and `translation`, are read too)
+    ObjectPosition(usize),
+    /// `objects[i].color`: an object's albedo
+    ObjectColor(usize),
 }
 
 /// The integration settings that can be keyed (the division count is an integer and cannot).
@@ -157,7 +162,8 @@ pub const PARAMETER_FORMS: &str = "colors.energy, colors.energy_intensity, color
 points[i].coefficient, lines[i].point, lines[i].direction, lines[i].coefficient, tori[i].center, tori[i].axis, \
 tori[i].major_radius, tori[i].coefficient, curves[i].control_points[j], curves[i].coefficient, curves[i].weights[j], \
 points[i].color and points[i].intensity (any kind of source), curves[i].color_series[j], \
-integration.decay_length, integration.alpha, integration.beta, integration.epsilon";
+integration.decay_length, integration.alpha, integration.beta, integration.epsilon, colors.cutoff, \
+objects[i].position (a sphere's or box's center, a plane's point, a mesh's translation), objects[i].color";
 
 /// Splits `name[3]` into `("name", Some(3))`, `name` into `("name", None)`.
 fn indexed(part: &str) -> Option<(&str, Option<usize>)> {
@@ -192,6 +198,11 @@ impl Parameter {
             [("colors", None), ("background", None)] => Parameter::BackgroundColor,
             [("colors", None), ("energy_intensity", None)] => Parameter::EnergyIntensity,
             [("colors", None), ("cutoff", None)] => Parameter::Cutoff,
+            [
+                ("objects", Some(i)),
+                ("position" | "center" | "point" | "translation", None),
+            ] => Parameter::ObjectPosition(*i),
+            [("objects", Some(i)), ("color", None)] => Parameter::ObjectColor(*i),
             [("integration", None), (name, None)] => Parameter::Integration(
                 [
                     IntegrationSetting::DecayLength,
@@ -235,6 +246,8 @@ impl Parameter {
                 | Parameter::Position(..)
                 | Parameter::Direction(..)
                 | Parameter::ControlPoint(..)
+                | Parameter::ObjectPosition(..)
+                | Parameter::ObjectColor(..)
         )
     }
 
@@ -245,6 +258,8 @@ impl Parameter {
             | Parameter::BackgroundColor
             | Parameter::EnergyIntensity
             | Parameter::Cutoff
+            | Parameter::ObjectPosition(_)
+            | Parameter::ObjectColor(_)
             | Parameter::Integration(_) => None,
             Parameter::Position(k, i)
             | Parameter::Direction(k, i)
@@ -282,6 +297,8 @@ impl fmt::Display for Parameter {
             Parameter::BackgroundColor => write!(f, "colors.background"),
             Parameter::EnergyIntensity => write!(f, "colors.energy_intensity"),
             Parameter::Cutoff => write!(f, "colors.cutoff"),
+            Parameter::ObjectPosition(i) => write!(f, "objects[{i}].position"),
+            Parameter::ObjectColor(i) => write!(f, "objects[{i}].color"),
             Parameter::SourceColor(k, i) => write!(f, "{}[{i}].color", k.key()),
             Parameter::Intensity(k, i) => write!(f, "{}[{i}].intensity", k.key()),
             Parameter::Position(k, i) => {

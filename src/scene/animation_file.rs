@@ -248,7 +248,8 @@ fn check_value(c: &mut Checker<'_, '_>, path: &FieldPath, parameter: &Parameter,
             Parameter::EnergyColor
             | Parameter::BackgroundColor
             | Parameter::SourceColor(..)
-            | Parameter::SeriesColor(..),
+            | Parameter::SeriesColor(..)
+            | Parameter::ObjectColor(..),
             Value::Vector(v),
         ) => {
             c.color(path, v);

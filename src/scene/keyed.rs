@@ -49,6 +49,8 @@ impl Parameter {
             Parameter::ControlPoint(i, j) => v(*s.curves.get(i)?.control_points.get(j)?),
             Parameter::Weight(i, j) => Value::Number(*s.curves.get(i)?.weights.get(j)?),
             Parameter::SeriesColor(i, j) => Value::Vector(*s.curves.get(i)?.color_series.get(j)?),
+            Parameter::ObjectPosition(i) => v(scene.objects.get(i)?.center()),
+            Parameter::ObjectColor(i) => Value::Vector(scene.objects.get(i)?.color),
             Parameter::Integration(k) => Value::Number(match k {
                 IntegrationSetting::DecayLength => scene.integration.decay_length,
                 IntegrationSetting::Alpha => scene.integration.alpha,
@@ -135,6 +137,16 @@ impl Parameter {
                     .and_then(|c| c.control_points.get_mut(*j))
                 {
                     *slot = DVec3::from_array(p);
+                }
+            }
+            (Parameter::ObjectPosition(i), Value::Vector(p)) => {
+                if let Some(o) = scene.objects.get_mut(*i) {
+                    *o = o.moved_to(DVec3::from_array(p));
+                }
+            }
+            (Parameter::ObjectColor(i), Value::Vector(c)) => {
+                if let Some(o) = scene.objects.get_mut(*i) {
+                    o.color = c.map(|x| x.clamp(0.0, 1.0));
                 }
             }
             (Parameter::Integration(k), Value::Number(x)) => {

@@ -6,10 +6,11 @@ use egui::{DragValue, Ui};
 use glam::DVec3;
 
 use super::super::action::{Action, Edit};
-use super::super::widgets::{ERROR_COLOR, color, direction, labelled, vec3};
+use super::super::widgets::{ERROR_COLOR, direction, labelled, vec3};
 use super::context::Context;
-use super::fields::Edits;
+use super::fields::{Edits, color_field, position};
 use super::sources::Entry;
+use crate::animation::Parameter;
 use crate::objects::{Object, Shape, ShapeKind};
 
 /// The section: adding (a mesh through the file dialog), and every object's entry.
@@ -50,9 +51,23 @@ pub(super) fn objects_section(ui: &mut Ui, cx: &Context, out: &mut Edits<'_>) {
             delete: Edit::DeleteObject(i),
         };
         entry.show(ui, out, |ui, out| {
+            // Where it stands and its albedo are keyable, each with its key button.
+            let label = match object.kind() {
+                ShapeKind::Sphere | ShapeKind::Box => "center",
+                ShapeKind::Plane => "point",
+                ShapeKind::Mesh => "translation",
+            };
+            position(
+                ui,
+                out,
+                label,
+                Parameter::ObjectPosition(i),
+                object.center(),
+            );
             if let Some(edited) = editor(ui, object) {
                 out.push(Action::Edit(Edit::SetObject(i, edited)));
             }
+            color_field(ui, out, "albedo", Parameter::ObjectColor(i), object.color);
         });
     }
 }
@@ -72,25 +87,14 @@ fn editor(ui: &mut Ui, object: &Object) -> Option<Object> {
     let mut o = object.clone();
     let mut changed = false;
     match &mut o.shape {
-        Shape::Sphere { center, radius } => {
-            changed |= vec3(ui, "center", center, 0.02).0;
+        Shape::Sphere { radius, .. } => {
             changed |= length(ui, "radius", radius);
         }
-        Shape::Box {
-            center,
-            size,
-            rotation,
-        } => {
-            changed |= vec3(ui, "center", center, 0.02).0;
+        Shape::Box { size, rotation, .. } => {
             changed |= lengths(ui, "size", size);
             changed |= vec3(ui, "rotation", rotation, 0.5).0;
         }
-        Shape::Plane {
-            point,
-            normal,
-            size,
-        } => {
-            changed |= vec3(ui, "point", point, 0.02).0;
+        Shape::Plane { normal, size, .. } => {
             if let (Some(n), _) = direction(ui, "normal", *normal) {
                 *normal = n;
                 changed = true;
@@ -116,14 +120,9 @@ fn editor(ui: &mut Ui, object: &Object) -> Option<Object> {
                 m.path.display(),
                 m.data.triangles.len()
             ));
-            changed |= vec3(ui, "translation", &mut m.translation, 0.02).0;
             changed |= vec3(ui, "rotation", &mut m.rotation, 0.5).0;
             changed |= lengths(ui, "scale", &mut m.scale);
         }
-    }
-    if let (Some(c), _) = color(ui, "albedo", o.color) {
-        o.color = c;
-        changed = true;
     }
     (changed && o != *object).then_some(o)
 }
