@@ -317,6 +317,8 @@ fn single_point(coefficient: f64, background: [f64; 3], energy: [f64; 3]) -> Sce
     s.integration.divisions = 32;
     s.colors.background = background;
     s.colors.energy = energy;
+    // No edge: these checks read B through the blend, down to the faintest glow.
+    s.colors.cutoff = 0.0;
     s.sources = Sources {
         points: vec![Point {
             position: DVec3::ZERO,

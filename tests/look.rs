@@ -131,8 +131,23 @@ fn an_export_takes_the_texels_its_size_needs_unless_the_scene_fixes_them() {
     fixed.billboard.fixed_resolution = true;
     assert_eq!(fixed.resolution_for((1920, 1080), 16384), 256);
     let saved = fixed.to_toml();
-    assert!(saved.contains("resolution = 256"), "{saved}");
-    assert!(!scene.to_toml().contains("resolution"));
+    assert!(saved.contains("fixed_resolution = true"), "{saved}");
+    assert!(scene.to_toml().contains("fixed_resolution = false"));
+    for s in [&scene, &fixed] {
+        assert_eq!(
+            &Scene::parse(&s.to_toml(), Path::new("saved.toml")).unwrap(),
+            s
+        );
+    }
+    let named = Scene::parse(
+        "[billboard]\nresolution = 100\n[[points]]\nposition = [0, 0, 0]\ncoefficient = 1\n",
+        Path::new("w.toml"),
+    )
+    .unwrap();
+    assert!(
+        named.billboard.fixed_resolution,
+        "a resolution in the file fixes W"
+    );
     // Measured on the middle third of the 1920 x 1080 frame: a third of the field of view at 640 x 360, so that
     // the CPU twin stays quick. Its billboard is a third as wide, so 256 / 3 texels there are the full frame's
     // 256, and its own W the full frame's; a thin core beads at the first and is as smooth as at twice W at

@@ -255,9 +255,10 @@ fn dragging_empty_space_orbits_and_the_wheel_zooms() {
     let orbited = h.state().scene().camera.clone();
     assert_ne!(orbited.eye, camera.eye);
     assert_eq!(orbited.target, camera.target);
+    // Kept, to the millionth of it navigation rounds the camera to.
     assert!(
         ((orbited.eye - orbited.target).length() - (camera.eye - camera.target).length()).abs()
-            < 1e-9
+            < 1e-5
     );
     assert!(
         !h.state().history().can_undo(),

@@ -534,8 +534,9 @@ fn clicking_a_handle_selects_its_source_and_shows_its_entry() {
         entry.top() >= 0.0 && entry.bottom() <= 700.0,
         "scrolled to: {entry:?}"
     );
-    // A click on nothing clears it; a click on an entry's name selects that source.
-    click(&mut h, Pos2::new(rect.right() - 10.0, rect.top() + 10.0));
+    // A click on nothing clears it; a click on an entry's name selects that source. (The top-right corner
+    // holds the Overlays button.)
+    click(&mut h, Pos2::new(rect.left() + 10.0, rect.top() + 10.0));
     assert_eq!(h.state().selection(), None);
     h.get_by_label("Torus 1").click();
     h.run();
@@ -722,6 +723,7 @@ fn the_blend_is_chosen_in_the_panel_and_is_an_undo_step() {
     use energywave::scene::Blend;
     let mut scene = light_scene();
     scene.colors.background = [0.0, 0.7, 0.1];
+    scene.colors.blend = Blend::Papers;
     let mut h = harness(scene);
     let papers = viewport_pixels(&mut h);
     h.get_by_label("over").click();

@@ -54,6 +54,8 @@ pub(crate) struct BillboardFile {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub size: Option<f64>,
     pub resolution: Option<u32>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fixed_resolution: Option<bool>,
 }
 
 #[derive(Debug, Default, Deserialize, Serialize)]

@@ -319,10 +319,8 @@ impl Scene {
             billboard: Some(file::BillboardFile {
                 center: self.billboard.center.map(v),
                 size: self.billboard.size,
-                resolution: self
-                    .billboard
-                    .fixed_resolution
-                    .then_some(self.billboard.resolution),
+                resolution: Some(self.billboard.resolution),
+                fixed_resolution: Some(self.billboard.fixed_resolution),
             }),
             integration: Some(file::IntegrationFile {
                 integrator: Some(self.integration.integrator.name().to_owned()),
@@ -764,8 +762,12 @@ fn check_billboard(c: &mut Checker<'_, '_>, file: &SceneFile, eye: DVec3) -> Bil
             );
         }
     }
-    let fixed = bb.and_then(|b| b.resolution);
-    let resolution = fixed.unwrap_or(BillboardSettings::default().resolution);
+    let given = bb.and_then(|b| b.resolution);
+    let resolution = given.unwrap_or(BillboardSettings::default().resolution);
+    // A resolution given fixes W for exports too, unless the file says otherwise.
+    let fixed = bb
+        .and_then(|b| b.fixed_resolution)
+        .unwrap_or(given.is_some());
     if let Err(rule) = limits::resolution(resolution) {
         c.fail(&bb_path.key("resolution"), format!("{resolution}: {rule}"));
     }
@@ -773,7 +775,7 @@ fn check_billboard(c: &mut Checker<'_, '_>, file: &SceneFile, eye: DVec3) -> Bil
         center,
         size,
         resolution,
-        fixed_resolution: fixed.is_some(),
+        fixed_resolution: fixed,
     }
 }
 

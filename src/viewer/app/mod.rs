@@ -516,7 +516,8 @@ impl ViewerApp {
                     _ => None,
                 };
                 edit.apply(&mut self.doc.scene, self.playback.frame as f64);
-                // What was just added is selected, its entry scrolled to, ready to edit.
+                // What was just added is selected (its handle ringed, its entry highlighted); the panel stays
+                // where it is, by the button just clicked.
                 match added {
                     Some(Some(kind)) => self.select_last_source(kind),
                     Some(None) => self.select_last_object(),
@@ -538,7 +539,6 @@ impl ViewerApp {
         if count > 0 {
             self.selection = Some((kind, count - 1));
             self.selected_object = None;
-            self.scroll_to_selection = true;
         }
     }
 
@@ -547,7 +547,6 @@ impl ViewerApp {
         if let Some(last) = self.doc.scene.objects.len().checked_sub(1) {
             self.selected_object = Some(last);
             self.selection = None;
-            self.scroll_to_selection = true;
         }
     }
 

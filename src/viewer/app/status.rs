@@ -105,9 +105,24 @@ impl ViewerApp {
                     .on_hover_text(text.as_str());
             }
         });
-        // An error is read whole: on its own lines under the status line, wrapped, never cut.
+        // An error is read whole: wrapped, in a box over the viewport's bottom right, just above the status
+        // line (nothing moves to make room for it).
         if let Some((text, true)) = self.notice() {
-            ui.add(egui::Label::new(egui::RichText::new(text.as_str()).color(ERROR_NOTICE)).wrap());
+            let above = ui.max_rect().height() + 6.0;
+            egui::Area::new(egui::Id::unique("energywave.error_notice"))
+                .anchor(egui::Align2::RIGHT_BOTTOM, egui::vec2(-8.0, -above))
+                .interactable(false)
+                .show(ui.ctx(), |ui| {
+                    egui::Frame::popup(ui.style()).show(ui, |ui| {
+                        ui.set_max_width(560.0);
+                        ui.add(
+                            egui::Label::new(
+                                egui::RichText::new(text.as_str()).color(ERROR_NOTICE),
+                            )
+                            .wrap(),
+                        );
+                    });
+                });
         }
     }
 }
