@@ -424,14 +424,9 @@ fn a_sphere_under_a_point_source_is_lit_by_lamberts_law_with_the_fields_falloff(
     assert!(lit_count > 100 && lit_count < l.surface.positions.len());
 }
 
-#[test]
-fn a_point_behind_an_object_is_in_its_shadow() {
-    // A floor under a point source, a small sphere between them: the floor right under the sphere gets the
-    // ambient light alone, a point beside the shadow the source's light, and the shadow's edge lies where the
-    // ray to the source grazes the sphere (the cone's half angle asin(r / h)).
-    let source = DVec3::new(0.0, 3.0, 0.0);
-    let (sphere_c, r) = (DVec3::new(0.0, 1.5, 0.0), 0.3);
-    let objects = vec![
+/// A white infinite floor at y = 0 and a white sphere at `center` of `radius`.
+fn floor_and_sphere(center: DVec3, radius: f64) -> Vec<Object> {
+    vec![
         Object {
             shape: Shape::Plane {
                 point: DVec3::ZERO,
@@ -441,13 +436,20 @@ fn a_point_behind_an_object_is_in_its_shadow() {
             color: [1.0; 3],
         },
         Object {
-            shape: Shape::Sphere {
-                center: sphere_c,
-                radius: r,
-            },
+            shape: Shape::Sphere { center, radius },
             color: [1.0; 3],
         },
-    ];
+    ]
+}
+
+#[test]
+fn a_point_behind_an_object_is_in_its_shadow() {
+    // A floor under a point source, a small sphere between them: the floor right under the sphere gets the
+    // ambient light alone, a point beside the shadow the source's light, and the shadow's edge lies where the
+    // ray to the source grazes the sphere (the cone's half angle asin(r / h)).
+    let source = DVec3::new(0.0, 3.0, 0.0);
+    let (sphere_c, r) = (DVec3::new(0.0, 1.5, 0.0), 0.3);
+    let objects = floor_and_sphere(sphere_c, r);
     let sources = Sources {
         points: vec![Point {
             position: source,
@@ -527,23 +529,7 @@ fn a_long_source_casts_a_soft_shadow_that_meets_a_converged_area_light_reference
     // A beam along x at height 3 over a floor, a sphere between: under the sphere's middle the beam is mostly
     // hidden, yet its far ends still light the floor; across z the shadow fades from umbra to full light.
     let (c, r) = (DVec3::new(0.0, 1.5, 0.0), 0.5);
-    let objects = vec![
-        Object {
-            shape: Shape::Plane {
-                point: DVec3::ZERO,
-                normal: DVec3::Y,
-                size: None,
-            },
-            color: [1.0; 3],
-        },
-        Object {
-            shape: Shape::Sphere {
-                center: c,
-                radius: r,
-            },
-            color: [1.0; 3],
-        },
-    ];
+    let objects = floor_and_sphere(c, r);
     let (foot0, dir) = (DVec3::new(0.0, 3.0, 0.0), DVec3::X);
     let sources = Sources {
         lines: vec![Line {
