@@ -124,25 +124,6 @@ fn glare_in_scene_files() {
     );
 }
 
-/// The viewport as the viewer last presented it (RGBA, 0..1), cropped out of its window `width` pixels wide.
-fn shown_viewport(
-    v: &energywave::viewer::offscreen::OffscreenViewer,
-    width: usize,
-) -> Vec<[f32; 4]> {
-    let window = v.frame_image().unwrap();
-    let rect = v.app.viewport_rect();
-    let [vw, vh] = v.app.viewport_px();
-    let (x0, y0) = (rect.left().round() as usize, rect.top().round() as usize);
-    let mut out = Vec::with_capacity((vw * vh) as usize);
-    for y in y0..y0 + vh as usize {
-        for x in x0..x0 + vw as usize {
-            let at = 4 * (y * width + x);
-            out.push(std::array::from_fn(|c| window[at + c] as f32 / 255.0));
-        }
-    }
-    out
-}
-
 #[test]
 fn the_viewers_glare_is_never_a_stale_one() {
     // The viewer reuses its last glare while the field it shows is unchanged. Whatever changed the field (an edit
@@ -183,7 +164,7 @@ fn the_viewers_glare_is_never_a_stale_one() {
         );
         let [vw, vh] = v.app.viewport_px();
         let want = fresh.render(&v.app.frame_scene(), vw, vh, false).unwrap();
-        let shown = shown_viewport(v, 800);
+        let shown = common::viewer::shown_viewport(v, 800);
         // Less the Overlays button in the viewport's top-right corner (egui's, over the picture).
         let button = |k: usize| k % vw as usize >= vw as usize - 100 && k / (vw as usize) < 32;
         let worst = (shown.iter().zip(&want.pixels).enumerate())

@@ -1319,3 +1319,62 @@ keys = [{ frame = 0, value = [0.5, 0.5, 0.5] }, { frame = 10, value = [1.0, 0.0,
         .to_string();
     assert!(e.contains("objects[7]"), "{e}");
 }
+
+#[test]
+fn the_viewport_softens_object_silhouettes_and_copies_everything_else_exactly() {
+    use energywave::viewer::Document;
+    use energywave::viewer::offscreen::OffscreenViewer;
+    let mut scene = common::shipped_scene("floor.toml");
+    scene.billboard.resolution = 64;
+    let mut v = OffscreenViewer::new(Document::new(scene, None), 800, 480).unwrap();
+    v.app.view_mut().show_overlays = false;
+    v.app.view_mut().progressive = false;
+    for _ in 0..10 {
+        v.frame().unwrap();
+        if !v.app.report().wants_frame() {
+            break;
+        }
+    }
+    let [vw, vh] = v.app.viewport_px();
+    let (w, h) = (vw as usize, vh as usize);
+    let want = (gpu()
+        .render(&v.app.frame_scene(), vw, vh, false)
+        .unwrap()
+        .pixels)
+        .iter()
+        .map(|p| p.map(|c| c.clamp(0.0, 1.0)))
+        .collect::<Vec<_>>();
+    let shown = common::viewer::shown_viewport(&v, 800);
+    let (mut softened, mut inside) = (0, 0);
+    for y in 1..h - 1 {
+        for x in 1..w - 1 {
+            // The Overlays button stays in the viewport's top-right corner.
+            if x >= w - 100 && y < 32 {
+                continue;
+            }
+            let (s, q) = (shown[y * w + x], want[y * w + x]);
+            if (0..3).all(|c| (s[c] - q[c]).abs() <= 2.0 / 255.0) {
+                continue;
+            }
+            softened += 1;
+            // A softened pixel is a blend of its neighbourhood in the render: within its range.
+            let near = |c: usize| {
+                let values = (y - 1..=y + 1).flat_map(|j| (x - 1..=x + 1).map(move |i| (i, j)));
+                values
+                    .map(|(i, j)| want[j * w + i][c])
+                    .fold((1.0f32, 0.0f32), |(lo, hi), v| (lo.min(v), hi.max(v)))
+            };
+            inside += (0..3).all(|c| {
+                let (lo, hi) = near(c);
+                s[c] >= lo - 2.0 / 255.0 && s[c] <= hi + 2.0 / 255.0
+            }) as usize;
+        }
+    }
+    // The sphere's outline and the floor's horizon: a few hundred pixels, each a blend; the rest exact.
+    assert!(
+        softened > 100 && softened * 20 < w * h,
+        "{softened} of {} pixels",
+        w * h
+    );
+    assert_eq!(inside, softened);
+}

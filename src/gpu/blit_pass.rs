@@ -1,5 +1,5 @@
 //! The viewer's copy of its offscreen frame into the window's (egui's) render pass, converting to the
-//! window's format (`shaders/blit.wgsl`).
+//! window's format and softening the staircase of the objects' silhouettes (`shaders/blit.wgsl`).
 
 use super::context::{RenderPipelineSpec, pass_layouts, render_pipeline};
 use super::shaders::BLIT_PASS as BLIT_SHADER;
@@ -39,6 +39,16 @@ impl BlitPass {
                     ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
                     count: None,
                 },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 2,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Uint,
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
             ],
         );
         let pipeline = render_pipeline(
@@ -76,8 +86,14 @@ impl BlitPass {
         }
     }
 
-    /// The bind group that copies `source`.
-    pub fn bind_group(&self, device: &wgpu::Device, source: &wgpu::TextureView) -> wgpu::BindGroup {
+    /// The bind group that copies `source`, its objects' silhouettes found in `depth` (the frame's copy of the
+    /// objects' depth, `DEPTH_VALUE_FORMAT`) and softened.
+    pub fn bind_group(
+        &self,
+        device: &wgpu::Device,
+        source: &wgpu::TextureView,
+        depth: &wgpu::TextureView,
+    ) -> wgpu::BindGroup {
         device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("energywave.blit.bind_group"),
             layout: &self.layout,
@@ -89,6 +105,10 @@ impl BlitPass {
                 wgpu::BindGroupEntry {
                     binding: 1,
                     resource: wgpu::BindingResource::Sampler(&self.sampler),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: wgpu::BindingResource::TextureView(depth),
                 },
             ],
         })

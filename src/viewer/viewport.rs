@@ -124,7 +124,9 @@ impl ViewportGpu {
         let size = [view.size[0].max(1), view.size[1].max(1)];
         if self.targets.as_ref().is_none_or(|(t, _)| t.size != size) {
             let targets = FrameTargets::new(device, size);
-            let bind_group = self.blit.bind_group(device, &targets.color_view);
+            let bind_group =
+                self.blit
+                    .bind_group(device, &targets.color_view, &targets.depth_value_view);
             self.targets = Some((targets, bind_group));
         }
         let (targets, bind_group) = self.targets.take().expect("created above");

@@ -95,3 +95,22 @@ pub fn export_and_wait(h: &mut Harness<'static, ViewerApp>, label: &str) -> Opti
     }
     h.state().notice().cloned()
 }
+
+/// The viewport as the viewer last presented it (RGBA, 0..1), cropped out of its window `width` pixels wide.
+pub fn shown_viewport(
+    v: &energywave::viewer::offscreen::OffscreenViewer,
+    width: usize,
+) -> Vec<[f32; 4]> {
+    let window = v.frame_image().unwrap();
+    let rect = v.app.viewport_rect();
+    let [vw, vh] = v.app.viewport_px();
+    let (x0, y0) = (rect.left().round() as usize, rect.top().round() as usize);
+    let mut out = Vec::with_capacity((vw * vh) as usize);
+    for y in y0..y0 + vh as usize {
+        for x in x0..x0 + vw as usize {
+            let at = 4 * (y * width + x);
+            out.push(std::array::from_fn(|c| window[at + c] as f32 / 255.0));
+        }
+    }
+    out
+}
