@@ -3,7 +3,9 @@
 
 use glam::DMat4;
 
-use super::context::{RenderPipelineSpec, pass_layouts, render_pipeline, uniform_buffer};
+use super::context::{
+    RenderPipelineSpec, depth_value_entry, pass_layouts, render_pipeline, uniform_buffer,
+};
 use crate::geometry::{Billboard, Camera};
 use crate::scene::Blend;
 
@@ -153,16 +155,7 @@ impl BillboardRenderer {
                 },
                 texture(1, wgpu::TextureViewDimension::D2Array),
                 texture(2, wgpu::TextureViewDimension::D2),
-                wgpu::BindGroupLayoutEntry {
-                    binding: 3,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Uint,
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
+                depth_value_entry(3),
                 wgpu::BindGroupLayoutEntry {
                     binding: 4,
                     visibility: wgpu::ShaderStages::FRAGMENT,

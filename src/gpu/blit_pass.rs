@@ -1,7 +1,7 @@
 //! The viewer's copy of its offscreen frame into the window's (egui's) render pass, converting to the
 //! window's format and softening the staircase of the objects' silhouettes (`shaders/blit.wgsl`).
 
-use super::context::{RenderPipelineSpec, pass_layouts, render_pipeline};
+use super::context::{RenderPipelineSpec, depth_value_entry, pass_layouts, render_pipeline};
 use super::shaders::BLIT_PASS as BLIT_SHADER;
 
 /// The copy's pipeline for one target format, and what a frame's bind group is made of.
@@ -39,16 +39,7 @@ impl BlitPass {
                     ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
                     count: None,
                 },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 2,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Uint,
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
+                depth_value_entry(2),
             ],
         );
         let pipeline = render_pipeline(

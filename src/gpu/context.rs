@@ -172,6 +172,21 @@ pub fn storage_buffer_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
     }
 }
 
+/// A bind group layout entry for a fragment shader: the objects' depth copy (`object_pass::DEPTH_VALUE_FORMAT`),
+/// read with `textureLoad`.
+pub fn depth_value_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Uint,
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        },
+        count: None,
+    }
+}
+
 /// A bind group layout entry for a compute pass: a field texture (`field_texture`) read with `textureLoad`.
 pub fn loaded_field_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
