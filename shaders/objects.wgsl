@@ -1,24 +1,41 @@
-// The scene's objects: triangles lit at their vertices by the sources (objects::lighting, in f64 on the CPU),
-// drawn with depth behind the billboard, so that the glow blends over them as over the background. Rust side:
-// src/gpu/object_pass.rs (gpu_data::ObjectParams, ObjectVertex; keep in sync). CPU twin:
-// src/reference/objects.rs (the same triangles ray-cast, their vertex colors interpolated).
+// The scene's objects: triangles drawn with depth behind the billboard, so that the glow blends over them as over
+// the background, and lit at every pixel by every source (objects::lighting): the fragment evaluates each source's
+// term of psi at the pixel's surface point and the direction to the point of the source that term reads, with the
+// field's own functions (this file comes after field_common.wgsl and field_pass.wgsl in its module, assembled by
+// src/gpu/shaders.rs::object_module_source, whose bindings 0 to 6 and 9 to 11 it shares), and shades
+// `albedo (AMBIENT + S sum_i Ce_i psi_i max(0, n . l_i))`. The shadow factor S (the share of the direct light the
+// objects' shadows leave) is worked out in f64 at the vertices and interpolated. Rust side: src/gpu/object_pass.rs
+// (gpu_data::ObjectParams, ObjectVertex; keep in sync). CPU twin: src/reference/objects.rs.
 
 struct ObjectParams {
     view_proj: mat4x4<f32>,
+    energy: vec3<f32>, // the scene's Ce, its intensity applied: each term's color is energy + its tint
+    ambient: f32,      // objects::lighting::AMBIENT
 }
 
-@group(0) @binding(0) var<uniform> params: ObjectParams;
+@group(0) @binding(14) var<uniform> object: ObjectParams;
 
 struct VertexOut {
     @builtin(position) position: vec4<f32>,
-    @location(0) color: vec3<f32>,
+    @location(0) world: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) albedo: vec3<f32>,
+    @location(3) shadow: vec3<f32>,
 }
 
 @vertex
-fn vs_main(@location(0) position: vec3<f32>, @location(1) color: vec3<f32>) -> VertexOut {
+fn vs_main(
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) albedo: vec3<f32>,
+    @location(3) shadow: vec3<f32>,
+) -> VertexOut {
     var out: VertexOut;
-    out.position = params.view_proj * vec4<f32>(position, 1.0);
-    out.color = color;
+    out.position = object.view_proj * vec4<f32>(position, 1.0);
+    out.world = position;
+    out.normal = normal;
+    out.albedo = albedo;
+    out.shadow = shadow;
     return out;
 }
 
@@ -32,5 +49,82 @@ struct FragmentOut {
 
 @fragment
 fn fs_main(in: VertexOut) -> FragmentOut {
-    return FragmentOut(vec4<f32>(in.color, 1.0), bitcast<u32>(in.position.z));
+    load_scalars();
+    let l = length(in.normal);
+    let n = select(vec3<f32>(0.0), in.normal / l, l > 0.0);
+    let e = object.ambient + in.shadow * direct_light(in.world, n);
+    return FragmentOut(vec4<f32>(in.albedo * e, 1.0), bitcast<u32>(in.position.z));
+}
+
+// Lambert's cosine at x (normal n) of the light from `source`; 1 at the source itself, where the light comes from
+// every side. Twin of lighting::cosine.
+fn cosine_from(x: vec3<f32>, n: vec3<f32>, source: vec3<f32>) -> f32 {
+    let to = source - x;
+    let d = length(to);
+    if d > 0.0 {
+        return max(0.0, dot(n, to / d));
+    }
+    return 1.0;
+}
+
+// Every source's light at x on a surface of normal n, unshadowed: sum_i Ce_i psi_i max(0, n . l_i), l_i toward
+// the point of source i its term reads (twin of Lights::direct and Lights::at).
+fn direct_light(x: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    var e = vec3<f32>(0.0);
+    var t = 0u;
+    for (var k = 0u; k < point_count(); k++) {
+        let p = points[k];
+        let strength = p.coefficient * falloff(length(x - p.position), EPSILON);
+        e += (object.energy + tints[t].xyz) * strength * cosine_from(x, n, p.position);
+        t++;
+    }
+    for (var k = 0u; k < line_count(); k++) {
+        let l = lines[k];
+        let foot = l.point + l.direction * dot(x - l.point, l.direction);
+        let strength = l.coefficient * falloff(line_distance(x, l.point, l.direction), EPSILON);
+        e += (object.energy + tints[t].xyz) * strength * cosine_from(x, n, foot);
+        t++;
+    }
+    for (var k = 0u; k < torus_count(); k++) {
+        let r = tori[k];
+        let strength = r.coefficient * falloff(torus_distance(x, r.center, r.axis, r.major_radius), EPSILON);
+        e += (object.energy + tints[t].xyz) * strength * cosine_from(x, n, ring_point(r, x));
+        t++;
+    }
+    for (var k = 0u; k < curve_count(); k++) {
+        let c = curves[k];
+        if c.segment_count > 0u {
+            // (t, distance) of the point the term reads; a curve with a color series has the tint -Ce.
+            let seen = curve_point(c, x);
+            let strength = c.coefficient * wseries(c, seen.x) * falloff(seen.y, EPSILON);
+            let color = object.energy + tints[t].xyz + color_series(c, seen.x);
+            e += color * strength * cosine_from(x, n, chain_point(c, seen.x));
+        }
+        t++;
+    }
+    return e;
+}
+
+// The point of a ring nearest x: on the axis, where every point is, the one glam's any_orthonormal_vector picks
+// (as the twin does).
+fn ring_point(r: TorusSource, x: vec3<f32>) -> vec3<f32> {
+    let q = x - r.center;
+    let across = q - r.axis * dot(q, r.axis);
+    let l = length(across);
+    if l > 0.0 {
+        return r.center + across / l * r.major_radius;
+    }
+    let a = r.axis;
+    let s = select(-1.0, 1.0, a.z >= 0.0);
+    let m = -1.0 / (s + a.z);
+    let any = vec3<f32>(a.x * a.y * m, s + a.y * a.y * m, -a.y);
+    return r.center + any * r.major_radius;
+}
+
+// The point of a chain at chain parameter t in [0, 1] (segment j covers [j, j + 1] / k). Twin of
+// curve::chain_frame.
+fn chain_point(c: CurveSource, t: f32) -> vec3<f32> {
+    let x = clamp(t, 0.0, 1.0) * f32(c.segment_count);
+    let j = min(u32(floor(x)), c.segment_count - 1u);
+    return segment_at(segments[c.first_segment + j], x - f32(j));
 }

@@ -79,6 +79,12 @@ fn every_wgsl_module_validates() {
             ],
         );
     }
+    // The object pass as its pipelines are built, the brightest-point search compiled in.
+    parse_and_validate_with(
+        "objects with the search",
+        &shaders::object_module_source(),
+        &[("SEARCH", 1.0)],
+    );
     // Every .wgsl file in shaders/ is part of some module (no file escapes validation).
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders");
     let all: String = shaders::all_modules().into_iter().map(|(_, s)| s).collect();
@@ -195,12 +201,12 @@ fn rust_mirrors_match_the_wgsl_layouts() {
         size_of::<energywave::gpu::grid_pass::gpu_data::GridParams>(),
         fields!(energywave::gpu::grid_pass::gpu_data::GridParams: view_proj),
     );
-    let objects = parse_and_validate("objects", shaders::OBJECT_PASS);
+    let objects = parse_and_validate("objects", &shaders::object_module_source());
     check_struct(
         &objects,
         "ObjectParams",
         size_of::<energywave::gpu::object_pass::gpu_data::ObjectParams>(),
-        fields!(energywave::gpu::object_pass::gpu_data::ObjectParams: view_proj),
+        fields!(energywave::gpu::object_pass::gpu_data::ObjectParams: view_proj, energy, ambient),
     );
     let billboard = parse_and_validate("billboard", shaders::BILLBOARD_PASS);
     check_struct(

@@ -364,41 +364,60 @@ fn v3(v: glam::DVec3) -> [f32; 3] {
 
 fn pack(scene: &Scene, billboard: &Billboard) -> Packed {
     let s = &scene.sources;
-    let tints = scene.tints();
-    let tinted = tints.iter().flatten().any(|&x| x != 0.0);
     let reach = scene.ray_reach(billboard);
     let i = &scene.integration.on_ray(reach.stretch);
+    let mut packed = pack_sources(scene);
+    packed.params = FieldParams {
+        center: v3(billboard.center),
+        size: billboard.size as f32,
+        right: v3(billboard.right),
+        resolution: scene.billboard.resolution,
+        up: v3(billboard.up),
+        divisions: i.divisions,
+        eye: v3(scene.camera.eye),
+        nu: reach.nu as f32,
+        alpha: i.alpha as f32,
+        beta: i.beta as f32,
+        epsilon: i.epsilon as f32,
+        integrator: match i.integrator {
+            Integrator::Simpson => 0,
+            Integrator::Adaptive => 1,
+        },
+        term_tolerance: (i.tolerance / s.len().max(1) as f64) as f32,
+        jitter: i.jitter.is_some() as u32,
+        seed: i.jitter.unwrap_or(0),
+        gauss_order: crate::integrate::adaptive::kronrod_order(i.tolerance),
+        decay: match i.decay {
+            Decay::Distance => 0,
+            Decay::Rms => RMS,
+        },
+        stretch: i.stretch as f32,
+        ..packed.params
+    };
+    let eye = scene.camera.eye;
+    let w = scene.billboard.resolution;
+    if let Some(clips) = shared_clip_fractions(&scene.objects, eye, billboard, reach, w) {
+        packed.clips = clips;
+        packed.params.clipped = 1;
+    }
+    packed.chunks = plan_chunks(&packed);
+    packed
+}
+
+/// The sources as the field's shaders read them, with their counts, the layers and the search flag in params
+/// (the scene's own epsilon there; nothing of the billboard, the rays or the integrator).
+fn pack_sources(scene: &Scene) -> Packed {
+    let s = &scene.sources;
+    let tints = scene.tints();
+    let tinted = tints.iter().flatten().any(|&x| x != 0.0);
     let mut packed = Packed {
         params: FieldParams {
-            center: v3(billboard.center),
-            size: billboard.size as f32,
-            right: v3(billboard.right),
-            resolution: scene.billboard.resolution,
-            up: v3(billboard.up),
-            divisions: i.divisions,
-            eye: v3(scene.camera.eye),
-            nu: reach.nu as f32,
-            alpha: i.alpha as f32,
-            beta: i.beta as f32,
-            epsilon: i.epsilon as f32,
+            epsilon: scene.integration.epsilon as f32,
             point_count: s.points.len() as u32,
             line_count: s.lines.len() as u32,
             torus_count: s.tori.len() as u32,
             curve_count: s.curves.len() as u32,
-            integrator: match i.integrator {
-                Integrator::Simpson => 0,
-                Integrator::Adaptive => 1,
-            },
-            term_tolerance: (i.tolerance / s.len().max(1) as f64) as f32,
-            jitter: i.jitter.is_some() as u32,
-            seed: i.jitter.unwrap_or(0),
-            gauss_order: crate::integrate::adaptive::kronrod_order(i.tolerance),
             layers: if tinted { FIELD_LAYERS } else { 1 },
-            decay: match i.decay {
-                Decay::Distance => 0,
-                Decay::Rms => RMS,
-            },
-            stretch: i.stretch as f32,
             ..FieldParams::default()
         },
         points: (s.points.iter())
@@ -478,14 +497,44 @@ fn pack(scene: &Scene, billboard: &Billboard) -> Packed {
         });
     }
     packed.params.search = packed.curves.iter().any(|c| c.piece_count > 0) as u32;
-    let eye = scene.camera.eye;
-    let w = scene.billboard.resolution;
-    if let Some(clips) = shared_clip_fractions(&scene.objects, eye, billboard, reach, w) {
-        packed.clips = clips;
-        packed.params.clipped = 1;
-    }
-    packed.chunks = plan_chunks(&packed);
     packed
+}
+
+/// The bindings of `shaders/field_pass.wgsl` that hold the sources, beside params at 0: points, lines, tori,
+/// curves, segments, weights, tints, color series and pieces (`source_bindings`).
+pub(crate) const SOURCE_BINDINGS: [u32; 9] = [1, 2, 3, 4, 5, 6, 9, 10, 11];
+
+/// What a pass that evaluates the field's terms at points of its own reads (`gpu::object_pass`): params with the
+/// source counts, `scene.integration.epsilon` and the search flag, and the contents of `SOURCE_BINDINGS`.
+pub(crate) fn source_bindings(scene: &Scene) -> (FieldParams, [Vec<u8>; 9]) {
+    let p = pack_sources(scene);
+    let bytes = [
+        bytemuck::cast_slice(&p.points).to_vec(),
+        bytemuck::cast_slice(&p.lines).to_vec(),
+        bytemuck::cast_slice(&p.tori).to_vec(),
+        bytemuck::cast_slice(&p.curves).to_vec(),
+        bytemuck::cast_slice(&p.segments).to_vec(),
+        bytemuck::cast_slice(&p.weights).to_vec(),
+        bytemuck::cast_slice(&p.tints).to_vec(),
+        bytemuck::cast_slice(&p.colors).to_vec(),
+        bytemuck::cast_slice(&p.pieces).to_vec(),
+    ];
+    (p.params, bytes)
+}
+
+/// A storage buffer holding `bytes` (never empty: WebGPU refuses zero-sized bindings, so an empty list still
+/// binds one zeroed element of the largest struct, CurvePiece's 80 bytes).
+pub(crate) fn storage_buffer_init(
+    device: &wgpu::Device,
+    label: &str,
+    bytes: &[u8],
+) -> wgpu::Buffer {
+    let zeros = [0u8; 80];
+    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some(label),
+        contents: if bytes.is_empty() { &zeros } else { bytes },
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+    })
 }
 
 /// A storage buffer for `count` chunks, `stride` bytes apart.
@@ -506,19 +555,9 @@ struct StorageBuffer {
 
 impl StorageBuffer {
     fn new(device: &wgpu::Device, label: &'static str, bytes: &[u8]) -> Self {
-        // An empty list still binds one zeroed element of the largest struct (CurvePiece, 80 bytes).
-        let contents: Vec<u8> = if bytes.is_empty() {
-            vec![0; 80]
-        } else {
-            bytes.to_vec()
-        };
         Self {
             label,
-            buffer: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents: &contents,
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-            }),
+            buffer: storage_buffer_init(device, label, bytes),
         }
     }
 

@@ -1,12 +1,15 @@
-//! The scene's objects on the GPU: their triangles with the colors `objects::lighting` lit their vertices with,
-//! drawn with depth into what lies behind the billboard (`shaders/objects.wgsl`). Lit again only when the
-//! objects, the sources or their colors change: orbiting draws the same buffers.
+//! The scene's objects on the GPU: their triangles, with the albedo and shadow factor `objects::lighting` gave
+//! their vertices, drawn with depth into what lies behind the billboard and shaded at every pixel by the sources,
+//! which it holds as the field pass does (`shaders/objects.wgsl`). Lit again only when the objects, the sources
+//! or their colors change: orbiting draws the same buffers.
 
 use wgpu::util::DeviceExt;
 
 use super::context::{RenderPipelineSpec, pass_layouts, render_pipeline, uniform_buffer};
+use super::field_pass::{SOURCE_BINDINGS, source_bindings, storage_buffer_init};
 use super::frame::FRAME_FORMAT;
-use super::shaders::OBJECT_PASS;
+use super::shaders::object_module_source;
+use crate::objects::lighting::AMBIENT;
 use crate::objects::{Lit, LitKey, lit};
 use crate::scene::Scene;
 
@@ -36,63 +39,79 @@ pub mod gpu_data {
     #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
     pub struct ObjectParams {
         pub view_proj: [[f32; 4]; 4], // 0
+        pub energy: [f32; 3],         // 64
+        pub ambient: f32,             // 76
     }
-    const _: () = assert!(size_of::<ObjectParams>() == 64);
+    const _: () = assert!(size_of::<ObjectParams>() == 80);
 
-    /// One vertex (attributes 0 and 1 of `vs_main`): world position and lit color.
+    /// One vertex (attributes 0 to 3 of `vs_main`): world position, normal, albedo and shadow factor.
     #[repr(C)]
     #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
     pub struct ObjectVertex {
         pub position: [f32; 3], // 0
-        pub color: [f32; 3],    // 12
+        pub normal: [f32; 3],   // 12
+        pub albedo: [f32; 3],   // 24
+        pub shadow: [f32; 3],   // 36
     }
-    const _: () = assert!(size_of::<ObjectVertex>() == 24);
+    const _: () = assert!(size_of::<ObjectVertex>() == 48);
 }
 
 use gpu_data::{ObjectParams, ObjectVertex};
 
-/// The objects' pipeline and the buffers of the last scene's lit triangles.
+/// The objects' pipeline and the buffers of the last scene's lit triangles and sources.
 pub struct ObjectPass {
     /// Color and depth; depth alone (a holdout). Each writes the depth's copy too.
     pipelines: [wgpu::RenderPipeline; 2],
+    layout: wgpu::BindGroupLayout,
     params: wgpu::Buffer,
-    bind_group: wgpu::BindGroup,
+    /// The sources (`FieldParams`, then `SOURCE_BINDINGS`) and `params`, bound together.
+    bind_group: Option<wgpu::BindGroup>,
     vertices: Option<wgpu::Buffer>,
     indices: Option<wgpu::Buffer>,
     count: u32,
+    /// The scene's energy color Ce, its intensity applied.
+    energy: [f32; 3],
     /// What the buffers were lit from.
     key: Option<LitKey>,
 }
+
+/// A read-only storage buffer the fragment shader reads.
+fn fragment_storage(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only: true },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+/// `ObjectParams`' binding, after the field's.
+const PARAMS_BINDING: u32 = 14;
 
 impl ObjectPass {
     pub fn new(device: &wgpu::Device) -> Self {
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("energywave.objects.shader"),
-            source: wgpu::ShaderSource::Wgsl(OBJECT_PASS.into()),
+            source: wgpu::ShaderSource::Wgsl(object_module_source().into()),
         });
-        let (layout, pipeline_layout) = pass_layouts(
-            device,
-            "objects",
-            &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::VERTEX,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: wgpu::BufferSize::new(size_of::<ObjectParams>() as u64),
-                },
-                count: None,
-            }],
-        );
+        let mut entries = vec![wgpu::BindGroupLayoutEntry {
+            binding: PARAMS_BINDING,
+            visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: false,
+                min_binding_size: wgpu::BufferSize::new(size_of::<ObjectParams>() as u64),
+            },
+            count: None,
+        }];
+        entries.push(fragment_storage(0));
+        entries.extend(SOURCE_BINDINGS.map(fragment_storage));
+        let (layout, pipeline_layout) = pass_layouts(device, "objects", &entries);
         let params = uniform_buffer::<ObjectParams>(device, "energywave.objects.params");
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("energywave.objects.bind_group"),
-            layout: &layout,
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: params.as_entire_binding(),
-            }],
-        });
         let pipelines = [wgpu::ColorWrites::ALL, wgpu::ColorWrites::empty()].map(|write_mask| {
             render_pipeline(
                 device,
@@ -103,11 +122,14 @@ impl ObjectPass {
                     vertex_buffers: &[Some(wgpu::VertexBufferLayout {
                         array_stride: size_of::<ObjectVertex>() as u64,
                         step_mode: wgpu::VertexStepMode::Vertex,
-                        attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3],
+                        attributes: &wgpu::vertex_attr_array![
+                            0 => Float32x3, 1 => Float32x3, 2 => Float32x3, 3 => Float32x3
+                        ],
                     })],
                     topology: wgpu::PrimitiveTopology::TriangleList,
                     fragment_entry: "fs_main",
-                    constants: &[],
+                    // The brightest-point search compiled in: a curve takes it where it has pieces.
+                    constants: &[("SEARCH", 1.0)],
                     targets: &[
                         Some(wgpu::ColorTargetState {
                             format: FRAME_FORMAT,
@@ -132,16 +154,18 @@ impl ObjectPass {
         });
         Self {
             pipelines,
+            layout,
             params,
-            bind_group,
+            bind_group: None,
             vertices: None,
             indices: None,
             count: 0,
+            energy: [0.0; 3],
             key: None,
         }
     }
 
-    /// Lights and uploads `scene`'s objects where they, the sources or their colors changed since the last
+    /// Lights and uploads `scene`'s objects and sources where they or their colors changed since the last
     /// call. Returns whether there is anything to draw.
     pub fn prepare(&mut self, device: &wgpu::Device, scene: &Scene) -> bool {
         if scene.objects.is_empty() {
@@ -152,11 +176,14 @@ impl ObjectPass {
         if self.key.as_ref().is_some_and(|k| k.matches(scene)) {
             return self.count > 0;
         }
-        let Lit { surface, colors } = lit(scene);
-        let vertices: Vec<ObjectVertex> = (surface.positions.iter().zip(&colors))
-            .map(|(p, c)| ObjectVertex {
-                position: p.as_vec3().to_array(),
-                color: c.map(|x| x as f32),
+        let Lit { surface, light } = lit(scene);
+        let f = |v: [f64; 3]| v.map(|x| x as f32);
+        let vertices: Vec<ObjectVertex> = (0..surface.positions.len())
+            .map(|k| ObjectVertex {
+                position: surface.positions[k].as_vec3().to_array(),
+                normal: surface.normals[k].as_vec3().to_array(),
+                albedo: f(light.albedo[k]),
+                shadow: f(light.shadow[k]),
             })
             .collect();
         self.vertices = Some(
@@ -173,6 +200,36 @@ impl ObjectPass {
                 usage: wgpu::BufferUsages::INDEX,
             }),
         );
+        let (field_params, lists) = source_bindings(scene);
+        let field_params = storage_buffer_init(
+            device,
+            "energywave.objects.field_params",
+            bytemuck::bytes_of(&field_params),
+        );
+        let lists =
+            lists.map(|bytes| storage_buffer_init(device, "energywave.objects.sources", &bytes));
+        let mut entries = vec![
+            wgpu::BindGroupEntry {
+                binding: PARAMS_BINDING,
+                resource: self.params.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: field_params.as_entire_binding(),
+            },
+        ];
+        entries.extend((SOURCE_BINDINGS.iter().zip(&lists)).map(|(&binding, b)| {
+            wgpu::BindGroupEntry {
+                binding,
+                resource: b.as_entire_binding(),
+            }
+        }));
+        self.bind_group = Some(device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("energywave.objects.bind_group"),
+            layout: &self.layout,
+            entries: &entries,
+        }));
+        self.energy = f(scene.colors.energy_color());
         self.count = surface.indices.len() as u32;
         self.key = Some(LitKey::of(scene));
         self.count > 0
@@ -189,7 +246,9 @@ impl ObjectPass {
         view_proj: [[f32; 4]; 4],
         color: bool,
     ) {
-        let (Some(vertices), Some(indices)) = (&self.vertices, &self.indices) else {
+        let (Some(vertices), Some(indices), Some(bind_group)) =
+            (&self.vertices, &self.indices, &self.bind_group)
+        else {
             return;
         };
         if self.count == 0 {
@@ -198,10 +257,14 @@ impl ObjectPass {
         queue.write_buffer(
             &self.params,
             0,
-            bytemuck::bytes_of(&ObjectParams { view_proj }),
+            bytemuck::bytes_of(&ObjectParams {
+                view_proj,
+                energy: self.energy,
+                ambient: AMBIENT as f32,
+            }),
         );
         pass.set_pipeline(&self.pipelines[!color as usize]);
-        pass.set_bind_group(0, &self.bind_group, &[]);
+        pass.set_bind_group(0, bind_group, &[]);
         pass.set_vertex_buffer(0, vertices.slice(..));
         pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
         pass.draw_indexed(0..self.count, 0, 0..1);

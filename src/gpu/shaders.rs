@@ -54,8 +54,17 @@ pub const AVERAGE_PASS: &str = include_str!("../../shaders/average.wgsl");
 
 /// The viewer's ground grid.
 pub const GRID_PASS: &str = include_str!("../../shaders/grid.wgsl");
-/// The scene's objects, lit at their vertices.
+/// The scene's objects, lit at every pixel (`object_module_source` is its module).
 pub const OBJECT_PASS: &str = include_str!("../../shaders/objects.wgsl");
+
+/// The object pass's module: the field's shared parts, as a field pass has them (its fragment shader evaluates
+/// every source's term at the pixel's surface point with the field's own functions), then `objects.wgsl`.
+pub fn object_module_source() -> String {
+    format!(
+        "{}\n{FIELD_COMMON}\n{FIELD_PASS}\n{OBJECT_PASS}",
+        shared_constants()
+    )
+}
 /// The viewer's copy of its offscreen viewport into egui's frame.
 pub const BLIT_PASS: &str = include_str!("../../shaders/blit.wgsl");
 
@@ -183,7 +192,10 @@ pub fn all_modules() -> Vec<(&'static str, String)> {
         ("average.wgsl", AVERAGE_PASS.to_string()),
         ("upsample.wgsl", UPSAMPLE_PASS.to_string()),
         ("grid.wgsl", GRID_PASS.to_string()),
-        ("objects.wgsl", OBJECT_PASS.to_string()),
+        (
+            "objects.wgsl (with field_common.wgsl and field_pass.wgsl)",
+            object_module_source(),
+        ),
         ("blit.wgsl", BLIT_PASS.to_string()),
     ]
 }

@@ -16,7 +16,12 @@
 //! A point's shadow is hard (V is 0 or 1), a line's, a ring's and a curve's soften with their extent as seen
 //! from X.
 //!
-//! Evaluated in f64 at the vertices of the objects' triangles (`tessellate`) and interpolated across them.
+//! Shading is per pixel. The shadows, which need rays against every object, are worked out in f64 at the
+//! vertices of the objects' triangles (`tessellate`, split where a shadow's edge crosses them) as the share
+//! `S = sum_i Ce_i psi_i cos_i V_i / sum_i Ce_i psi_i cos_i` of the direct light they leave (`Shade::shadow`),
+//! and interpolated; the direct light itself, which peaks sharply under a source, is evaluated at every
+//! pixel's own point with its interpolated normal (`Lights::direct`; on the GPU by the field's functions in
+//! `shaders/objects.wgsl`): `L(X) = albedo (AMBIENT + S direct(X))` (`shaded`), exact wherever no shadow falls.
 
 use glam::DVec3;
 use rayon::prelude::*;
@@ -40,10 +45,48 @@ pub struct LightSample {
     pub color: [f64; 3],
 }
 
+/// The sources' light at a surface point (`Lights::shade`), before the albedo and the ambient term.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Shade {
+    /// Every source's light, unshadowed: `sum_i Ce_i psi_i max(0, n . l_i)` (`Lights::direct`).
+    pub direct: [f64; 3],
+    /// What of it the objects' shadows leave: each term times its source's visibility `V_i`.
+    pub seen: [f64; 3],
+    /// Which sources are hidden there, and how much: where the masks of neighbouring vertices differ, a
+    /// shadow's edge crosses between them.
+    pub mask: u64,
+}
+
+impl Shade {
+    /// The share of the direct light that the shadows leave, channel by channel (1 where there is no direct
+    /// light): what the vertices carry, interpolated and multiplied by the direct light at every pixel.
+    pub fn shadow(&self) -> [f64; 3] {
+        std::array::from_fn(|c| match self.direct[c] > 0.0 {
+            true => (self.seen[c] / self.direct[c]).clamp(0.0, 1.0),
+            false => 1.0,
+        })
+    }
+}
+
+/// The lit color of a surface point of `albedo`, shadow factor `shadow` (`Shade::shadow`) and direct light
+/// `direct` (`Lights::direct`): `albedo (AMBIENT + shadow direct)`, unclamped (an HDR export keeps it, the
+/// display clamps it). `shaders/objects.wgsl` shades every pixel by the same formula.
+pub fn shaded(albedo: [f64; 3], shadow: [f64; 3], direct: [f64; 3]) -> [f64; 3] {
+    std::array::from_fn(|c| albedo[c] * (AMBIENT + shadow[c] * direct[c]))
+}
+
+/// Lambert's cosine at `x` (normal `n`) of the light from `from`; 1 at the source itself, where the light
+/// comes from every side.
+fn cosine(x: DVec3, n: DVec3, from: DVec3) -> f64 {
+    let to = from - x;
+    let d = to.length();
+    if d > 0.0 { n.dot(to / d).max(0.0) } else { 1.0 }
+}
+
 /// Every source as a light, prepared once for many surface points.
-pub struct Lights<'a> {
-    sources: &'a Sources,
-    colors: &'a Colors,
+pub struct Lights {
+    sources: Sources,
+    colors: Colors,
     pieces: Vec<Vec<brightest::Piece>>,
     epsilon: f64,
     /// A sphere holding each term's source, where it is extended and bounded (a ring, a curve): a surface
@@ -51,8 +94,8 @@ pub struct Lights<'a> {
     bounds: Vec<Option<(DVec3, f64)>>,
 }
 
-impl<'a> Lights<'a> {
-    pub fn new(sources: &'a Sources, colors: &'a Colors, epsilon: f64) -> Self {
+impl Lights {
+    pub fn new(sources: &Sources, colors: &Colors, epsilon: f64) -> Self {
         let points = sources.points.iter().map(|_| None);
         let lines = sources.lines.iter().map(|_| None);
         let tori = (sources.tori.iter()).map(|t| Some((t.center, t.major_radius)));
@@ -69,8 +112,8 @@ impl<'a> Lights<'a> {
             Some(((lo + hi) * 0.5, (hi - lo).length() * 0.5))
         });
         Lights {
-            sources,
-            colors,
+            sources: sources.clone(),
+            colors: colors.clone(),
             pieces: sources.curves.iter().map(|c| c.pieces()).collect(),
             epsilon,
             bounds: points.chain(lines).chain(tori).chain(curves).collect(),
@@ -79,9 +122,9 @@ impl<'a> Lights<'a> {
 
     /// Every source's light at `x`, in the order of the field's terms.
     pub fn at(&self, x: DVec3) -> impl Iterator<Item = LightSample> + '_ {
-        let s = self.sources;
+        let s = &self.sources;
         let eps = self.epsilon;
-        let c = self.colors;
+        let c = &self.colors;
         let points = s.points.iter().map(move |p| LightSample {
             from: p.position,
             strength: p.field(x, eps),
@@ -116,23 +159,36 @@ impl<'a> Lights<'a> {
         points.chain(lines).chain(tori).chain(curves)
     }
 
-    /// The light reaching the surface point `x` of normal `n` (unit), shadows by `objects`, before the albedo.
+    /// The light reaching the surface point `x` of normal `n` (unit), shadows by `objects`, before the albedo:
+    /// `AMBIENT + sum_i Ce_i psi_i max(0, n . l_i) V_i`.
     pub fn irradiance(&self, objects: &[Object], x: DVec3, n: DVec3) -> [f64; 3] {
-        self.shade(objects, x, n).0
+        self.shade(objects, x, n).seen.map(|e| AMBIENT + e)
     }
 
-    /// `irradiance`, and which sources an object shadows there (bit `k % 64` for term k, where the source
-    /// faces the surface): where the shadows of neighbouring vertices differ, a shadow's edge crosses between
-    /// them.
-    pub fn shade(&self, objects: &[Object], x: DVec3, n: DVec3) -> ([f64; 3], u64) {
-        let mut e = [AMBIENT; 3];
-        let mut shadowed = 0u64;
+    /// Every source's direct light at `x` on a surface of normal `n` (unit, or zero for none), no shadows, no
+    /// ambient: `sum_i Ce_i psi_i max(0, n . l_i)`, what the object pass evaluates at every pixel.
+    pub fn direct(&self, x: DVec3, n: DVec3) -> [f64; 3] {
+        let mut e = [0.0; 3];
+        for light in self.at(x) {
+            let lambert = light.strength * cosine(x, n, light.from);
+            for (c, e) in e.iter_mut().enumerate() {
+                *e += light.color[c] * lambert;
+            }
+        }
+        e
+    }
+
+    /// The direct light at `x` (normal `n`) with and without the shadows of `objects`, and which sources they
+    /// hide there.
+    pub fn shade(&self, objects: &[Object], x: DVec3, n: DVec3) -> Shade {
+        let mut out = Shade {
+            direct: [0.0; 3],
+            seen: [0.0; 3],
+            mask: 0,
+        };
         for (k, light) in self.at(x).enumerate() {
-            let to = light.from - x;
-            let d = to.length();
-            // At the source itself the light comes from every side: full strength.
-            let cosine = if d > 0.0 { n.dot(to / d).max(0.0) } else { 1.0 };
-            if cosine == 0.0 || light.strength == 0.0 {
+            let lambert = light.strength * cosine(x, n, light.from);
+            if lambert == 0.0 {
                 continue;
             }
             let seen = self.visibility(objects, x, n, k, light.from);
@@ -140,16 +196,14 @@ impl<'a> Lights<'a> {
                 // The shadow's signature: which sources are hidden, and how much, in eighths, so that a
                 // triangle across a penumbra is refined as one across a hard edge.
                 let level = (8.0 * (1.0 - seen)).ceil() as u64;
-                shadowed = shadowed.rotate_left(5) ^ (level << (k % 8 * 4)) ^ (k as u64 + 1);
+                out.mask = out.mask.rotate_left(5) ^ (level << (k % 8 * 4)) ^ (k as u64 + 1);
             }
-            if seen == 0.0 {
-                continue;
-            }
-            for (c, e) in e.iter_mut().enumerate() {
-                *e += light.color[c] * light.strength * cosine * seen;
+            for c in 0..3 {
+                out.direct[c] += light.color[c] * lambert;
+                out.seen[c] += light.color[c] * lambert * seen;
             }
         }
-        (e, shadowed)
+        out
     }
 
     /// The share `V` of term `k`'s source that `x` (on a surface of normal `n`) sees past `objects` (1 unhidden,
@@ -212,7 +266,7 @@ impl<'a> Lights<'a> {
     /// `n` stratified points of term `k`'s source with their weights `W / |x - p|^2` (times the measure of the
     /// stratum), or `None` for a point, which has no extent.
     fn extent_samples(&self, x: DVec3, k: usize, n: usize) -> Option<Vec<(DVec3, f64)>> {
-        let s = self.sources;
+        let s = &self.sources;
         let mut k = k;
         if k < s.points.len() {
             return None;
@@ -316,18 +370,28 @@ const SOFT_SAMPLES: usize = 32;
 /// then runs through triangles an eighth of the tessellation's size.
 const SHADOW_REFINEMENTS: u32 = 3;
 
+/// Each vertex's light (`light_surface`).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct VertexLights {
+    /// The albedo: its object's color times its tint.
+    pub albedo: Vec<[f64; 3]>,
+    /// The share of the direct light the shadows leave (`Shade::shadow`).
+    pub shadow: Vec<[f64; 3]>,
+    /// The lit color there (`shaded`): what the per-pixel shading gives at the vertex itself.
+    pub colors: Vec<[f64; 3]>,
+}
+
 /// Lights every vertex of `surface`, splitting the triangles a shadow's edge crosses (`SHADOW_REFINEMENTS`
-/// times; their edges' midpoints become vertices, lit in turn): the lit color of every vertex, the albedo of its
-/// object times its irradiance (unclamped: an HDR export keeps it, the display clamps it).
+/// times; their edges' midpoints become vertices, lit in turn).
 pub fn light_surface(
     surface: &mut Surface,
     objects: &[Object],
     sources: &Sources,
     colors: &Colors,
     epsilon: f64,
-) -> Vec<[f64; 3]> {
+) -> VertexLights {
     let lights = Lights::new(sources, colors, epsilon);
-    let shade = |s: &Surface, range: std::ops::Range<usize>| -> Vec<([f64; 3], u64)> {
+    let shade = |s: &Surface, range: std::ops::Range<usize>| -> Vec<Shade> {
         range
             .into_par_iter()
             .map(|k| lights.shade(objects, s.positions[k], s.normals[k]))
@@ -341,7 +405,7 @@ pub fn light_surface(
         let old = std::mem::take(&mut surface.indices);
         for t in old.chunks_exact(3) {
             let (a, b, c) = (t[0], t[1], t[2]);
-            let mask = |v: u32| shades[v as usize].1;
+            let mask = |v: u32| shades[v as usize].mask;
             if mask(a) == mask(b) && mask(b) == mask(c) {
                 indices.extend_from_slice(t);
                 continue;
@@ -368,11 +432,19 @@ pub fn light_surface(
         }
         shades.extend(shade(surface, first_new..surface.positions.len()));
     }
-    (shades.iter().enumerate())
-        .map(|(k, (e, _))| {
+    let albedo: Vec<[f64; 3]> = (0..shades.len())
+        .map(|k| {
             let color = objects[surface.object[k] as usize].color;
-            let albedo: [f64; 3] = std::array::from_fn(|c| color[c] * surface.tint[k][c]);
-            [albedo[0] * e[0], albedo[1] * e[1], albedo[2] * e[2]]
+            std::array::from_fn(|c| color[c] * surface.tint[k][c])
         })
-        .collect()
+        .collect();
+    let shadow: Vec<[f64; 3]> = shades.iter().map(Shade::shadow).collect();
+    let colors = (albedo.iter().zip(&shadow).zip(&shades))
+        .map(|((a, s), shade)| shaded(*a, *s, shade.direct))
+        .collect();
+    VertexLights {
+        albedo,
+        shadow,
+        colors,
+    }
 }

@@ -3,8 +3,9 @@
 //!
 //! - every texel's integral runs from S only to the first surface its ray meets (`clip`): the exact,
 //!   closed-form hit of each shape (a mesh's triangles through a bounding-volume hierarchy, `mesh`);
-//! - objects are drawn as triangles (`tessellate`), lit at their vertices by every source (`lighting`), in f64
-//!   on the CPU: lighting does not depend on the camera, so orbiting never lights again;
+//! - objects are drawn as triangles (`tessellate`) and lit at every pixel by every source (`lighting`): the
+//!   shadows are worked out at the vertices in f64 on the CPU, where they do not depend on the camera (orbiting
+//!   never casts them again), and the direct light at every pixel, by the field's own functions;
 //! - the GPU draws them with depth behind the billboard (`gpu::object_pass`), the CPU twin ray-casts the same
 //!   triangles (`reference::objects`).
 
@@ -290,11 +291,12 @@ pub fn blocked(objects: &[Object], from: DVec3, to: DVec3) -> bool {
         .any(|o| o.hit(from, d, skip, 1.0 - skip).is_some())
 }
 
-/// The objects' triangles with their lit vertex colors: what the GPU draws and the CPU twin ray-casts.
+/// The objects' triangles with their vertices' light (albedo, shadow factor and lit color): what the GPU draws
+/// and the CPU twin ray-casts, both shading every pixel from them (`lighting::shaded`).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Lit {
     pub surface: tessellate::Surface,
-    pub colors: Vec<[f64; 3]>,
+    pub light: lighting::VertexLights,
 }
 
 /// What the objects' look depends on: they are lit again only when one of these changes (not as the camera
@@ -339,12 +341,12 @@ pub fn focus(sources: &crate::field::Sources) -> (DVec3, f64) {
 pub fn lit(scene: &crate::scene::Scene) -> Lit {
     let (center, extent) = focus(&scene.sources);
     let mut surface = tessellate::Surface::of(&scene.objects, center, extent);
-    let colors = lighting::light_surface(
+    let light = lighting::light_surface(
         &mut surface,
         &scene.objects,
         &scene.sources,
         &scene.colors,
         scene.integration.epsilon,
     );
-    Lit { surface, colors }
+    Lit { surface, light }
 }

@@ -1,17 +1,21 @@
 //! The object pass's f64 twin (`shaders/objects.wgsl`): the objects' lit triangles (`objects::lit`) ray-cast
-//! from the eye, the vertex colors interpolated at the hit as the rasterizer interpolates them (perspective-
-//! correct interpolation is the barycentric weights of the point the pixel's ray meets).
+//! from the eye and shaded at the hit as the fragment shader shades a pixel: the vertices' albedo, shadow
+//! factor and normal interpolated as the rasterizer interpolates them (perspective-correct interpolation is the
+//! barycentric weights of the point the pixel's ray meets), the direct light evaluated at the hit itself
+//! (`objects::lighting::shaded`).
 
 use glam::DVec3;
 
+use crate::objects::lighting::{Lights, shaded};
 use crate::objects::mesh::{MeshData, triangle_barycentric};
 use crate::objects::{Lit, lit};
 use crate::scene::Scene;
 
-/// The lit triangles of a scene, with a hierarchy for the pixels' rays.
+/// The lit triangles of a scene, with a hierarchy for the pixels' rays and the sources that light them.
 pub struct ObjectImage {
     lit: Lit,
     mesh: MeshData,
+    lights: Lights,
 }
 
 impl ObjectImage {
@@ -28,6 +32,7 @@ impl ObjectImage {
         Some(ObjectImage {
             mesh: MeshData::new(triangles),
             lit,
+            lights: Lights::new(&scene.sources, &scene.colors, scene.integration.epsilon),
         })
     }
 
@@ -36,10 +41,17 @@ impl ObjectImage {
         let (t, k) = self.mesh.hit_triangle(eye, dir, 0.0, f64::INFINITY)?;
         let corners = &self.lit.surface.indices[3 * k..3 * k + 3];
         let (_, w) = triangle_barycentric(&self.mesh.triangles[k], eye, dir)?;
-        let c = |i: usize| self.lit.colors[corners[i] as usize];
-        Some((
-            t,
-            std::array::from_fn(|ch| w[0] * c(0)[ch] + w[1] * c(1)[ch] + w[2] * c(2)[ch]),
-        ))
+        let mix = |values: &[[f64; 3]]| -> [f64; 3] {
+            let v = |i: usize| values[corners[i] as usize];
+            std::array::from_fn(|c| w[0] * v(0)[c] + w[1] * v(1)[c] + w[2] * v(2)[c])
+        };
+        let normals = &self.lit.surface.normals;
+        let n = (0..3)
+            .map(|i| normals[corners[i] as usize] * w[i])
+            .sum::<DVec3>()
+            .normalize_or_zero();
+        let light = &self.lit.light;
+        let direct = self.lights.direct(eye + dir * t, n);
+        Some((t, shaded(mix(&light.albedo), mix(&light.shadow), direct)))
     }
 }
