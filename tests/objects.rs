@@ -1464,3 +1464,45 @@ fn objects_are_shaded_at_every_pixel_by_the_exact_light_there() {
     let top = (cpu.iter()).map(|p| p[0].min(1.0)).fold(0.0, f64::max);
     assert!(top > 0.9, "{top}");
 }
+
+#[test]
+fn the_lit_surface_has_no_cracks_where_shadows_split_it() {
+    // Splitting the triangles a shadow's edge crosses puts vertices on their neighbours' edges: unless those are
+    // split there too, each is a T-junction, which the rasterizer shows as a crack of background pixels (dark
+    // dots on the floor preset's lit floor). Every edge of its lit surface, by the places of its ends, is
+    // shared by two triangles, but the floor disc's rim.
+    let scene = common::shipped_scene("floor.toml");
+    let l = lit(&scene);
+    let (center, extent) = energywave::objects::focus(&scene.sources);
+    let unsplit = energywave::objects::tessellate::Surface::of(&scene.objects, center, extent);
+    assert!(l.surface.positions.len() > unsplit.positions.len() + 1000);
+    let p = &l.surface.positions;
+    let place = |v: u32| (p[v as usize] * 1e9).round().to_array().map(|x| x as i64);
+    let rim = p.iter().map(|q| q.length()).fold(0.0, f64::max);
+    let mut uses = std::collections::HashMap::new();
+    for t in l.surface.indices.chunks_exact(3) {
+        // The degenerate triangles at the sphere's poles and the disc's center (two corners at one place).
+        if (0..3).any(|k| place(t[k]) == place(t[(k + 1) % 3])) {
+            continue;
+        }
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            let (pa, pb) = (place(a), place(b));
+            if p[a as usize].length().min(p[b as usize].length()) > 0.999 * rim {
+                continue;
+            }
+            uses.entry(if pa < pb { (pa, pb) } else { (pb, pa) })
+                .or_insert((0, a, b))
+                .0 += 1;
+        }
+    }
+    let open: Vec<_> = uses.values().filter(|(n, _, _)| *n != 2).collect();
+    assert!(
+        open.is_empty(),
+        "{} of {} edges are not shared by two triangles, the first from {} to {}",
+        open.len(),
+        uses.len(),
+        p[open[0].1 as usize],
+        p[open[0].2 as usize]
+    );
+}

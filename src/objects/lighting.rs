@@ -400,36 +400,53 @@ pub fn light_surface(
     let mut shades = shade(surface, 0..surface.positions.len());
     for _ in 0..SHADOW_REFINEMENTS {
         let first_new = surface.positions.len();
-        let mut midpoints = std::collections::HashMap::new();
-        let mut indices = Vec::with_capacity(surface.indices.len());
         let old = std::mem::take(&mut surface.indices);
+        // The edges of the triangles a shadow's edge crosses (their vertices' masks differ), by place: every
+        // triangle that has one is split there too (in two or three where it has one or two), so that no vertex
+        // lies on another triangle's edge, a T-junction, which the rasterizer shows as a crack of background.
+        let mask = |v: u32| shades[v as usize].mask;
+        let mut split = std::collections::HashSet::new();
         for t in old.chunks_exact(3) {
-            let (a, b, c) = (t[0], t[1], t[2]);
-            let mask = |v: u32| shades[v as usize].mask;
-            if mask(a) == mask(b) && mask(b) == mask(c) {
-                indices.extend_from_slice(t);
-                continue;
+            if mask(t[0]) != mask(t[1]) || mask(t[1]) != mask(t[2]) {
+                for k in 0..3 {
+                    split.insert(edge_key(&surface.positions, t[k], t[(k + 1) % 3]));
+                }
             }
-            let mut mid = |p: u32, q: u32| -> u32 {
-                *midpoints.entry((p.min(q), p.max(q))).or_insert_with(|| {
-                    let (p, q) = (p as usize, q as usize);
-                    let position = (surface.positions[p] + surface.positions[q]) * 0.5;
-                    let normal =
-                        (surface.normals[p] + surface.normals[q]).normalize_or(surface.normals[p]);
-                    surface.positions.push(position);
-                    surface.normals.push(normal);
-                    surface.object.push(surface.object[p]);
-                    surface.tint.push(surface.tint[p]);
-                    surface.positions.len() as u32 - 1
-                })
-            };
-            let (ab, bc, ca) = (mid(a, b), mid(b, c), mid(c, a));
-            indices.extend_from_slice(&[a, ab, ca, ab, b, bc, ca, bc, c, ab, bc, ca]);
         }
-        surface.indices = indices;
-        if surface.positions.len() == first_new {
+        if split.is_empty() {
+            surface.indices = old;
             break;
         }
+        let mut midpoints = std::collections::HashMap::new();
+        let mut indices = Vec::with_capacity(old.len() * 2);
+        for t in old.chunks_exact(3) {
+            let cut: [bool; 3] = std::array::from_fn(|k| {
+                split.contains(&edge_key(&surface.positions, t[k], t[(k + 1) % 3]))
+            });
+            let mut mid = |p: u32, q: u32| midpoint(surface, &mut midpoints, p, q);
+            // The triangle turned so that its corners start at `r`: the winding kept.
+            let turned = |r: usize| (t[r], t[(r + 1) % 3], t[(r + 2) % 3]);
+            match cut.iter().filter(|&&c| c).count() {
+                0 => indices.extend_from_slice(t),
+                1 => {
+                    let (a, b, c) = turned(cut.iter().position(|&c| c).unwrap());
+                    let m = mid(a, b);
+                    indices.extend_from_slice(&[a, m, c, m, b, c]);
+                }
+                2 => {
+                    // The uncut edge last, from c to a.
+                    let (a, b, c) = turned((cut.iter().position(|&c| !c).unwrap() + 1) % 3);
+                    let (ab, bc) = (mid(a, b), mid(b, c));
+                    indices.extend_from_slice(&[ab, b, bc, a, ab, bc, a, bc, c]);
+                }
+                _ => {
+                    let (a, b, c) = turned(0);
+                    let (ab, bc, ca) = (mid(a, b), mid(b, c), mid(c, a));
+                    indices.extend_from_slice(&[a, ab, ca, ab, b, bc, ca, bc, c, ab, bc, ca]);
+                }
+            }
+        }
+        surface.indices = indices;
         shades.extend(shade(surface, first_new..surface.positions.len()));
     }
     let albedo: Vec<[f64; 3]> = (0..shades.len())
@@ -447,4 +464,36 @@ pub fn light_surface(
         shadow,
         colors,
     }
+}
+
+/// An edge by the places of its ends (to 1e-9, in either order): where two grids meet (a box's faces, a
+/// sphere's seam) their edges are one, though their vertices are not.
+fn edge_key(positions: &[DVec3], p: u32, q: u32) -> ([i64; 3], [i64; 3]) {
+    let place = |v: u32| {
+        (positions[v as usize] * 1e9)
+            .round()
+            .to_array()
+            .map(|x| x as i64)
+    };
+    let (a, b) = (place(p), place(q));
+    if a <= b { (a, b) } else { (b, a) }
+}
+
+/// The vertex halfway along the edge `p`-`q` of `surface` (made once an edge, lit in turn).
+fn midpoint(
+    surface: &mut Surface,
+    midpoints: &mut std::collections::HashMap<(u32, u32), u32>,
+    p: u32,
+    q: u32,
+) -> u32 {
+    *midpoints.entry((p.min(q), p.max(q))).or_insert_with(|| {
+        let (p, q) = (p as usize, q as usize);
+        let position = (surface.positions[p] + surface.positions[q]) * 0.5;
+        let normal = (surface.normals[p] + surface.normals[q]).normalize_or(surface.normals[p]);
+        surface.positions.push(position);
+        surface.normals.push(normal);
+        surface.object.push(surface.object[p]);
+        surface.tint.push(surface.tint[p]);
+        surface.positions.len() as u32 - 1
+    })
 }

@@ -88,7 +88,8 @@ impl Surface {
         match &object.shape {
             Shape::Sphere { center, radius } => {
                 let dir = |i: u32, j: u32| {
-                    let phi = TAU * i as f64 / SPHERE_SLICES as f64;
+                    // The seam's two columns at one place (sin(2 pi) is not 0).
+                    let phi = TAU * (i % SPHERE_SLICES) as f64 / SPHERE_SLICES as f64;
                     let theta = PI * j as f64 / SPHERE_STACKS as f64;
                     // From the north pole (+y) down, counter-clockwise seen from outside.
                     DVec3::new(
@@ -161,7 +162,7 @@ impl Surface {
                             }
                         };
                         let at = |i: u32, j: u32| {
-                            let a = TAU * i as f64 / PLANE_SEGMENTS as f64;
+                            let a = TAU * (i % PLANE_SEGMENTS) as f64 / PLANE_SEGMENTS as f64;
                             foot + (u * a.cos() + v * a.sin()) * radius(j)
                         };
                         // Rings outward: u x v is the normal, so (i, j) runs counter-clockwise seen from it
