@@ -430,6 +430,68 @@ fn the_holdout_checkbox_leaves_the_objects_out_of_an_export() {
 }
 
 #[test]
+fn the_fit_checkbox_frames_the_whole_glow_in_an_export() {
+    // A point's glow seen through a narrow field of view fills the frame: exported transparent as it is, the
+    // border is glow; with "fit" ticked the field of view widens for the export alone, the border is alpha 0
+    // all round and the glow is whole in the middle, and the scene's own camera is untouched.
+    let dir = std::env::temp_dir().join(format!("energywave-ui-fit-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = energywave::scene::Scene::parse(
+        "[camera]\neye = [0.0, 0.0, 8.0]\ntarget = [0.0, 0.0, 0.0]\nfov_y = 8.0\n\
+         [billboard]\nresolution = 32\n[integration]\nintegrator = \"simpson\"\ndivisions = 32\n\
+         [animation]\nframes = 2\n[[points]]\nposition = [0.0, 0.0, 0.0]\ncoefficient = 1.5\n",
+        std::path::Path::new("point.toml"),
+    )
+    .unwrap();
+    let mut h = harness(scene);
+    h.get_by_label("Export").click_accesskit();
+    h.run();
+    let (w, ht) = (64u32, 48u32);
+    let export = |h: &mut egui_kittest::Harness<'static, energywave::viewer::ViewerApp>,
+                  name: &str| {
+        {
+            let form = h.state_mut().animation_form_mut();
+            form.export_path = dir.join(format!("{name}_##.png")).display().to_string();
+            form.size = [w, ht];
+        }
+        h.run();
+        let notice = export_and_wait(h, "Export 2 frames");
+        assert!(
+            notice
+                .as_ref()
+                .is_some_and(|(t, e)| !e && t.starts_with("Exported")),
+            "{notice:?}"
+        );
+        image::open(dir.join(format!("{name}_01.png")))
+            .unwrap()
+            .to_rgba8()
+    };
+    let border = |image: &image::RgbaImage| -> u8 {
+        (image.enumerate_pixels())
+            .filter(|(x, y, _)| *x == 0 || *y == 0 || *x == w - 1 || *y == ht - 1)
+            .map(|(_, _, p)| p[3])
+            .max()
+            .unwrap()
+    };
+    h.get_by_label("transparent").click_accesskit();
+    h.run();
+    let narrow = export(&mut h, "narrow");
+    assert!(border(&narrow) > 100, "the glow fills the narrow frame");
+    h.get_by_label("fit").click_accesskit();
+    h.run();
+    assert!(h.state_mut().animation_form_mut().fit, "ticked");
+    let fitted = export(&mut h, "fitted");
+    assert_eq!(border(&fitted), 0, "the fitted frame ends in alpha 0");
+    assert!(
+        fitted.get_pixel(w / 2, ht / 2)[3] > 200,
+        "the glow in the middle"
+    );
+    assert_eq!(h.state().document().scene.camera.fov_y_degrees, 8.0);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
 fn a_save_keeps_the_files_comments_and_layout() {
     use egui::accesskit::Role;
     use egui_kittest::kittest::NodeT;

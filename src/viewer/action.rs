@@ -49,6 +49,8 @@ pub enum Action {
         transparent: bool,
         /// With `transparent`: the objects left out, still hiding the glow.
         holdout: bool,
+        /// The field of view set to frame the glow of every frame (`export::fit`).
+        fit: bool,
         description: String,
     },
     /// Stop the export running (what it wrote is removed).

@@ -34,6 +34,9 @@ pub struct AnimationForm {
     pub transparent: bool,
     /// With `transparent`: the objects left out, still hiding the glow (a holdout).
     pub holdout: bool,
+    /// The field of view set, for the export alone, so that every frame holds the whole glow down to its edge
+    /// (`export::fit`, as `render --fit`).
+    pub fit: bool,
     /// Width and height of exported frames, pixels.
     pub size: [u32; 2],
     /// A sheet's padding and power-of-two sides (its columns are as square as they get).
@@ -48,6 +51,7 @@ impl Default for AnimationForm {
             export_kind: ExportKind::Sequence,
             transparent: false,
             holdout: false,
+            fit: false,
             size: [256, 256],
             sheet: crate::export::SheetOptions::default(),
         }
@@ -426,6 +430,14 @@ fn export_section(
                          of the same scene made elsewhere",
                     );
                 }
+                ui.add_enabled(
+                    shown.colors.cutoff > 0.0,
+                    egui::Checkbox::new(&mut form.fit, "fit"),
+                )
+                .on_hover_text(
+                    "The field of view set for the export so that every frame holds the whole glow, down to \
+                     its edge, and ends in alpha 0 all round (the eye and target kept; needs an edge cutoff)",
+                );
             });
             if form.export_kind == ExportKind::Sheet {
                 ui.horizontal(|ui| {
@@ -522,6 +534,7 @@ fn export_section(
                             size: (form.size[0], form.size[1]),
                             transparent,
                             holdout: transparent && form.holdout,
+                            fit: form.fit && shown.colors.cutoff > 0.0,
                             description: path.display().to_string(),
                         });
                         if let Some(w) = warning {

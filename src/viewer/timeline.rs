@@ -97,13 +97,13 @@ pub struct ExportJob {
 
 impl ExportJob {
     /// Starts exporting `frames` of `scene` to `target` at `size` pixels, transparent or not, its objects held
-    /// out or not.
+    /// out or not, its field of view fitted to the glow (`export::fit`) or not.
     pub fn start(
         scene: Scene,
         target: Target,
         frames: Range<u32>,
         size: (u32, u32),
-        (transparent, holdout): (bool, bool),
+        (transparent, holdout, fit): (bool, bool, bool),
         description: String,
     ) -> Self {
         let status = Arc::new(Mutex::new(ExportStatus {
@@ -124,6 +124,11 @@ impl ExportJob {
                 // W follows the export's pixel density unless the scene fixes it.
                 let limit = gpu.ctx.device.limits().max_texture_dimension_2d;
                 let mut scene = scene;
+                if fit {
+                    scene.camera.fov_y_degrees =
+                        export::fit::fit_field_of_view(&scene, frames.clone(), size)
+                            .map_err(|e| format!("fit: {e}"))?;
+                }
                 scene.billboard.resolution = scene
                     .at_frame(frames.start as f64)
                     .resolution_for(size, limit);

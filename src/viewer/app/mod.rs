@@ -468,6 +468,7 @@ impl ViewerApp {
                 size,
                 transparent,
                 holdout,
+                fit,
                 description,
             } => {
                 if self.export_job.is_none() {
@@ -476,7 +477,7 @@ impl ViewerApp {
                         target,
                         frames,
                         size,
-                        (transparent, holdout),
+                        (transparent, holdout, fit),
                         description,
                     ));
                 }
