@@ -5,7 +5,8 @@ use glam::DVec3;
 
 use super::{Object, Shape, plane_axes, rotation_matrix};
 
-/// Triangles sharing vertices: what lighting evaluates (once a vertex) and what is drawn.
+/// Triangles sharing vertices: what is drawn, and where the shadows are worked out (once a vertex; the light
+/// itself is evaluated at every pixel).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Surface {
     pub positions: Vec<DVec3>,
@@ -20,13 +21,16 @@ pub struct Surface {
 /// Quads a side of a sphere's longitude and latitude: its outline within 0.1 % of its radius (1 - cos(pi / 64)).
 const SPHERE_SLICES: u32 = 64;
 const SPHERE_STACKS: u32 = 32;
-/// Cells along each edge of a box's face and of a finite plane: lighting is read at their corners.
+/// Cells along each edge of a box's face and of a finite plane: the shadows are read at their corners (and
+/// where a shadow's edge crosses, finer). The light is shaded at every pixel, so the cells need not follow it:
+/// halving the planes' cells and rings (from 96, 96 x 256) lit the floor preset in 43 ms instead of 122 ms
+/// with its picture within 10/255 (78 pixels of 960 x 600 off by more than 3/255, along the shadow).
 const BOX_CELLS: u32 = 16;
-const PLANE_CELLS: u32 = 96;
+const PLANE_CELLS: u32 = 48;
 /// An infinite plane is drawn as a disc of rings around the effect's foot on it, from `INNER` to `OUTER` times
-/// the effect's size, spaced geometrically (fine near the effect, where the light changes, coarse far away).
-const PLANE_RINGS: u32 = 96;
-const PLANE_SEGMENTS: u32 = 256;
+/// the effect's size, spaced geometrically (fine near the effect, where shadows fall, coarse far away).
+const PLANE_RINGS: u32 = 48;
+const PLANE_SEGMENTS: u32 = 128;
 const INNER: f64 = 0.02;
 const OUTER: f64 = 500.0;
 
