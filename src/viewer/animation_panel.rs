@@ -413,6 +413,9 @@ fn export_section(
                         .suffix(" px"),
                 )
                 .labelled_by(name);
+            });
+            // Beside the size they overflowed the panel: a row of their own.
+            ui.horizontal(|ui| {
                 ui.add_enabled(
                     form.export_kind != ExportKind::Gif,
                     egui::Checkbox::new(&mut form.transparent, "transparent"),
