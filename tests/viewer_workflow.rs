@@ -1078,6 +1078,25 @@ fn what_is_added_is_selected_and_another_file_starts_with_nothing_selected() {
         h.query_by_label(&format!("key objects[{last}].color"))
             .is_some()
     );
+    // And its radius: keyed at this frame with the value shown.
+    h.get_by_label(&format!("key objects[{last}].radius"))
+        .click_accesskit();
+    h.run();
+    let keyed = (h.state().document().scene.animation.as_ref())
+        .and_then(|a| {
+            a.tracks.iter().find(|t| {
+                t.parameter
+                    == energywave::animation::Parameter::ObjectShape(
+                        last,
+                        energywave::animation::ShapeField::Radius,
+                    )
+            })
+        })
+        .map(|t| t.keys.clone());
+    assert_eq!(
+        keyed.map(|k| k.iter().map(|k| k.value).collect::<Vec<_>>()),
+        Some(vec![energywave::animation::Value::Number(0.5)])
+    );
     h.get_by_label("+ point").scroll_to_me();
     h.run();
     h.get_by_label("+ point").click();

@@ -135,6 +135,56 @@ pub enum Parameter {
     ObjectPosition(usize),
     /// `objects[i].color`: an object's albedo
     ObjectColor(usize),
+    /// `objects[i].rotation`, `.radius`, `.size`, `.scale`, `.normal`: the rest of an object's transform, where
+    /// its shape has it
+    ObjectShape(usize, ShapeField),
+}
+
+/// The fields of an object's shape that can be keyed besides its position: each belongs to some shapes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ShapeField {
+    /// A box's or a mesh's rotation, degrees about x, then y, then z.
+    Rotation,
+    /// A sphere's radius.
+    Radius,
+    /// A box's side lengths.
+    Size,
+    /// A mesh's scale along x, y and z.
+    Scale,
+    /// A plane's normal (normalised after interpolation).
+    Normal,
+}
+
+impl ShapeField {
+    pub const ALL: [ShapeField; 5] = [
+        ShapeField::Rotation,
+        ShapeField::Radius,
+        ShapeField::Size,
+        ShapeField::Scale,
+        ShapeField::Normal,
+    ];
+
+    /// Its name in a scene file.
+    pub fn key(self) -> &'static str {
+        match self {
+            ShapeField::Rotation => "rotation",
+            ShapeField::Radius => "radius",
+            ShapeField::Size => "size",
+            ShapeField::Scale => "scale",
+            ShapeField::Normal => "normal",
+        }
+    }
+
+    /// The shapes that have it, for messages.
+    pub fn shapes(self) -> &'static str {
+        match self {
+            ShapeField::Rotation => "a box or a mesh",
+            ShapeField::Radius => "a sphere",
+            ShapeField::Size => "a box",
+            ShapeField::Scale => "a mesh",
+            ShapeField::Normal => "a plane",
+        }
+    }
 }
 
 /// The integration settings that can be keyed (the division count is an integer and cannot).
@@ -163,7 +213,9 @@ points[i].coefficient, lines[i].point, lines[i].direction, lines[i].coefficient,
 tori[i].major_radius, tori[i].coefficient, curves[i].control_points[j], curves[i].coefficient, curves[i].weights[j], \
 points[i].color and points[i].intensity (any kind of source), curves[i].color_series[j], \
 integration.decay_length, integration.alpha, integration.beta, integration.epsilon, colors.cutoff, \
-objects[i].position (a sphere's or box's center, a plane's point, a mesh's translation), objects[i].color";
+objects[i].position (a sphere's or box's center, a plane's point, a mesh's translation), objects[i].color, \
+objects[i].rotation (a box or a mesh), objects[i].radius (a sphere), objects[i].size (a box), \
+objects[i].scale (a mesh), objects[i].normal (a plane)";
 
 /// Splits `name[3]` into `("name", Some(3))`, `name` into `("name", None)`.
 fn indexed(part: &str) -> Option<(&str, Option<usize>)> {
@@ -203,6 +255,12 @@ impl Parameter {
                 ("position" | "center" | "point" | "translation", None),
             ] => Parameter::ObjectPosition(*i),
             [("objects", Some(i)), ("color", None)] => Parameter::ObjectColor(*i),
+            [("objects", Some(i)), (name, None)] => Parameter::ObjectShape(
+                *i,
+                (ShapeField::ALL.into_iter())
+                    .find(|f| f.key() == *name)
+                    .ok_or_else(err)?,
+            ),
             [("integration", None), (name, None)] => Parameter::Integration(
                 [
                     IntegrationSetting::DecayLength,
@@ -248,7 +306,7 @@ impl Parameter {
                 | Parameter::ControlPoint(..)
                 | Parameter::ObjectPosition(..)
                 | Parameter::ObjectColor(..)
-        )
+        ) || matches!(self, Parameter::ObjectShape(_, f) if *f != ShapeField::Radius)
     }
 
     /// The source this parameter belongs to, if any.
@@ -260,6 +318,7 @@ impl Parameter {
             | Parameter::Cutoff
             | Parameter::ObjectPosition(_)
             | Parameter::ObjectColor(_)
+            | Parameter::ObjectShape(..)
             | Parameter::Integration(_) => None,
             Parameter::Position(k, i)
             | Parameter::Direction(k, i)
@@ -299,6 +358,7 @@ impl fmt::Display for Parameter {
             Parameter::Cutoff => write!(f, "colors.cutoff"),
             Parameter::ObjectPosition(i) => write!(f, "objects[{i}].position"),
             Parameter::ObjectColor(i) => write!(f, "objects[{i}].color"),
+            Parameter::ObjectShape(i, field) => write!(f, "objects[{i}].{}", field.key()),
             Parameter::SourceColor(k, i) => write!(f, "{}[{i}].color", k.key()),
             Parameter::Intensity(k, i) => write!(f, "{}[{i}].intensity", k.key()),
             Parameter::Position(k, i) => {

@@ -10,7 +10,7 @@ pub mod keyframes;
 pub mod pulse;
 
 pub use keyframes::{
-    IntegrationSetting, Key, PARAMETER_FORMS, Parameter, SourceKind, Track, Value,
+    IntegrationSetting, Key, PARAMETER_FORMS, Parameter, ShapeField, SourceKind, Track, Value,
 };
 pub use pulse::Pulse;
 

@@ -5,7 +5,8 @@
 use super::file::{self, FieldPath, Locator, SceneFile};
 use super::{Checker, Scene};
 use crate::animation::{
-    Animation, CurvePulse, DEFAULT_FRAME_RATE, Key, MAX_FRAMES, Parameter, Pulse, Track, Value,
+    Animation, CurvePulse, DEFAULT_FRAME_RATE, Key, MAX_FRAMES, Parameter, Pulse, ShapeField,
+    Track, Value,
 };
 use crate::scene::Problem;
 
@@ -129,6 +130,14 @@ pub(super) fn validate(
             let why = match parameter {
                 Parameter::Weight(..) => {
                     "the curve, or that weight of its W series, does not exist (key weights only of a curve with `weights`)"
+                }
+                Parameter::ObjectShape(_, field) => &*format!(
+                    "names an object the scene does not have, or one that is not {} (the shapes with a {})",
+                    field.shapes(),
+                    field.key()
+                ),
+                Parameter::ObjectPosition(_) | Parameter::ObjectColor(_) => {
+                    "names an object the scene does not have"
                 }
                 _ => "names a source or control point the scene does not have",
             };
@@ -270,6 +279,22 @@ fn check_value(c: &mut Checker<'_, '_>, path: &FieldPath, parameter: &Parameter,
             if glam::DVec3::from_array(v).length() <= 1e-12 =>
         {
             c.fail(path, "a direction must not be the zero vector");
+        }
+        (Parameter::ObjectShape(_, ShapeField::Radius), Value::Number(x)) if x <= 0.0 => {
+            c.fail(path, format!("{x}: a sphere's radius must be positive"));
+        }
+        (Parameter::ObjectShape(_, ShapeField::Size), Value::Vector(v))
+            if v.iter().any(|&x| x <= 0.0) =>
+        {
+            c.fail(path, "a box's side lengths must be positive");
+        }
+        (Parameter::ObjectShape(_, ShapeField::Scale), Value::Vector(v)) if v.contains(&0.0) => {
+            c.fail(path, "a mesh's scale must not be 0 along any axis");
+        }
+        (Parameter::ObjectShape(_, ShapeField::Normal), Value::Vector(v))
+            if glam::DVec3::from_array(v).length() <= 1e-12 =>
+        {
+            c.fail(path, "a plane's normal must not be the zero vector");
         }
         (Parameter::MajorRadius(_), Value::Number(x)) if x <= 0.0 => {
             c.fail(path, format!("{x}: the major radius R must be positive"));

@@ -51,6 +51,19 @@ impl Parameter {
             Parameter::SeriesColor(i, j) => Value::Vector(*s.curves.get(i)?.color_series.get(j)?),
             Parameter::ObjectPosition(i) => v(scene.objects.get(i)?.center()),
             Parameter::ObjectColor(i) => Value::Vector(scene.objects.get(i)?.color),
+            Parameter::ObjectShape(i, field) => {
+                use crate::animation::keyframes::ShapeField as F;
+                use crate::objects::Shape;
+                match (&scene.objects.get(i)?.shape, field) {
+                    (Shape::Box { rotation, .. }, F::Rotation) => v(*rotation),
+                    (Shape::Mesh(m), F::Rotation) => v(m.rotation),
+                    (Shape::Sphere { radius, .. }, F::Radius) => Value::Number(*radius),
+                    (Shape::Box { size, .. }, F::Size) => v(*size),
+                    (Shape::Mesh(m), F::Scale) => v(m.scale),
+                    (Shape::Plane { normal, .. }, F::Normal) => v(*normal),
+                    _ => return None,
+                }
+            }
             Parameter::Integration(k) => Value::Number(match k {
                 IntegrationSetting::DecayLength => scene.integration.decay_length,
                 IntegrationSetting::Alpha => scene.integration.alpha,
@@ -147,6 +160,40 @@ impl Parameter {
             (Parameter::ObjectColor(i), Value::Vector(c)) => {
                 if let Some(o) = scene.objects.get_mut(*i) {
                     o.color = c.map(|x| x.clamp(0.0, 1.0));
+                }
+            }
+            (Parameter::ObjectShape(i, field), value) => {
+                use crate::animation::keyframes::ShapeField as F;
+                use crate::objects::Shape;
+                let Some(o) = scene.objects.get_mut(*i) else {
+                    return;
+                };
+                // What the file requires holds between valid keys too; only a value set from outside may break
+                // it, and is kept valid (a size or scale at least 1e-9 across, a normal of unit length).
+                let tiny = |x: f64| match x.abs() < 1e-9 {
+                    true => 1e-9_f64.copysign(x),
+                    false => x,
+                };
+                match (&mut o.shape, field, value) {
+                    (Shape::Box { rotation, .. }, F::Rotation, Value::Vector(r)) => {
+                        *rotation = DVec3::from_array(r)
+                    }
+                    (Shape::Mesh(m), F::Rotation, Value::Vector(r)) => {
+                        m.rotation = DVec3::from_array(r)
+                    }
+                    (Shape::Sphere { radius, .. }, F::Radius, Value::Number(x)) => {
+                        *radius = x.max(1e-9)
+                    }
+                    (Shape::Box { size, .. }, F::Size, Value::Vector(s)) => {
+                        *size = DVec3::from_array(s.map(|x| x.max(1e-9)))
+                    }
+                    (Shape::Mesh(m), F::Scale, Value::Vector(s)) => {
+                        m.scale = DVec3::from_array(s.map(tiny))
+                    }
+                    (Shape::Plane { normal, .. }, F::Normal, Value::Vector(n)) => {
+                        *normal = DVec3::from_array(n).normalize_or(*normal)
+                    }
+                    _ => {}
                 }
             }
             (Parameter::Integration(k), Value::Number(x)) => {

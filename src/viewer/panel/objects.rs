@@ -1,14 +1,15 @@
 //! The Objects section: spheres, boxes, planes and glTF meshes standing around the effect, each with its
-//! editors, Duplicate and Delete, and selection. Objects are not animated: an edit replaces the object whole
+//! editors, Duplicate and Delete, and selection. Where an object stands, its albedo and the rest of its
+//! transform are keyable, each with its key button; a plane's extent replaces the object whole
 //! (`Edit::SetObject`), one undo step a settled edit like every other.
 
 use egui::{DragValue, Ui};
 use glam::DVec3;
 
 use super::super::action::{Action, Edit};
-use super::super::widgets::{ERROR_COLOR, direction, labelled, vec3};
+use super::super::widgets::{ERROR_COLOR, labelled, vec3};
 use super::context::Context;
-use super::fields::{Edits, color_field, position};
+use super::fields::{Edits, axis, color_field, position};
 use super::sources::Entry;
 use crate::animation::Parameter;
 use crate::objects::{Object, Shape, ShapeKind};
@@ -64,9 +65,7 @@ pub(super) fn objects_section(ui: &mut Ui, cx: &Context, out: &mut Edits<'_>) {
                 Parameter::ObjectPosition(i),
                 object.center(),
             );
-            if let Some(edited) = editor(ui, object) {
-                out.push(Action::Edit(Edit::SetObject(i, edited)));
-            }
+            shape_editor(ui, out, i, object);
             color_field(ui, out, "albedo", Parameter::ObjectColor(i), object.color);
         });
     }
@@ -82,24 +81,63 @@ fn title(object: &Object, i: usize) -> String {
     format!("{kind} {}", i + 1)
 }
 
-/// The editors of one object; the object as edited when the user changed something.
-fn editor(ui: &mut Ui, object: &Object) -> Option<Object> {
-    let mut o = object.clone();
-    let mut changed = false;
-    match &mut o.shape {
-        Shape::Sphere { radius, .. } => {
-            changed |= length(ui, "radius", radius);
-        }
-        Shape::Box { size, rotation, .. } => {
-            changed |= lengths(ui, "size", size);
-            changed |= vec3(ui, "rotation", rotation, 0.5).0;
-        }
-        Shape::Plane { normal, size, .. } => {
-            if let (Some(n), _) = direction(ui, "normal", *normal) {
-                *normal = n;
-                changed = true;
+/// The editors of an object's shape: the keyable fields (`Parameter::ObjectShape`) each with its key button, as
+/// `Edit::Set` (a key at this frame where the field is keyed); a plane's extent, which is not keyable, as the
+/// object replaced (`Edit::SetObject`).
+fn shape_editor(ui: &mut Ui, out: &mut Edits<'_>, i: usize, object: &Object) {
+    use crate::animation::{ShapeField, Value};
+    let key = |field| Parameter::ObjectShape(i, field);
+    // A vector field and its key button on one row, `edit` giving the new value if the user changed it.
+    let vector = |ui: &mut Ui,
+                  out: &mut Edits<'_>,
+                  field: ShapeField,
+                  v: DVec3,
+                  edit: &dyn Fn(&mut Ui, &mut DVec3) -> (bool, egui::Rect)| {
+        ui.horizontal(|ui| {
+            let mut edited = v;
+            let (changed, row) = edit(ui, &mut edited);
+            if changed && edited != v {
+                out.push(Action::set_vector(key(field), edited));
             }
+            out.key_button(ui, key(field), Value::Vector(v.to_array()), row);
+        });
+    };
+    let rotation = |ui: &mut Ui, v: &mut DVec3| vec3(ui, "rotation", v, 0.5);
+    match &object.shape {
+        Shape::Sphere { radius, .. } => {
             ui.horizontal(|ui| {
+                let mut r = *radius;
+                let response = labelled(
+                    ui,
+                    "radius",
+                    DragValue::new(&mut r)
+                        .range(1e-3..=1e6)
+                        .speed(0.01)
+                        .max_decimals(4),
+                );
+                if response.changed() && r != *radius {
+                    out.push(Action::set_number(key(ShapeField::Radius), r));
+                }
+                let rect = response.rect;
+                out.key_button(ui, key(ShapeField::Radius), Value::Number(*radius), rect);
+            });
+        }
+        Shape::Box {
+            size, rotation: r, ..
+        } => {
+            vector(ui, out, ShapeField::Size, *size, &|ui, v| {
+                lengths(ui, "size", v)
+            });
+            vector(ui, out, ShapeField::Rotation, *r, &rotation);
+        }
+        Shape::Plane { normal, .. } => {
+            axis(ui, out, "normal", key(ShapeField::Normal), *normal);
+            let mut o = object.clone();
+            let mut changed = false;
+            ui.horizontal(|ui| {
+                let Shape::Plane { size, .. } = &mut o.shape else {
+                    return;
+                };
                 let mut finite = size.is_some();
                 if ui
                     .checkbox(&mut finite, "finite")
@@ -113,6 +151,9 @@ fn editor(ui: &mut Ui, object: &Object) -> Option<Object> {
                     changed |= length(ui, "side", side);
                 }
             });
+            if changed && o.shape != object.shape {
+                out.push(Action::Edit(Edit::SetObject(i, o)));
+            }
         }
         Shape::Mesh(m) => {
             ui.label(format!(
@@ -120,11 +161,12 @@ fn editor(ui: &mut Ui, object: &Object) -> Option<Object> {
                 m.path.display(),
                 m.data.triangles.len()
             ));
-            changed |= vec3(ui, "rotation", &mut m.rotation, 0.5).0;
-            changed |= lengths(ui, "scale", &mut m.scale);
+            vector(ui, out, ShapeField::Rotation, m.rotation, &rotation);
+            vector(ui, out, ShapeField::Scale, m.scale, &|ui, v| {
+                lengths(ui, "scale", v)
+            });
         }
     }
-    (changed && o != *object).then_some(o)
 }
 
 /// A positive length.
@@ -144,17 +186,18 @@ fn length(ui: &mut Ui, label: &str, x: &mut f64) -> bool {
 }
 
 /// Three positive lengths (a box's sides, a mesh's scale); a zero or negative one is refused, and said so.
-fn lengths(ui: &mut Ui, label: &str, v: &mut DVec3) -> bool {
+/// Whether they changed, and the row's rectangle.
+fn lengths(ui: &mut Ui, label: &str, v: &mut DVec3) -> (bool, egui::Rect) {
     let mut edited = *v;
-    let (changed, _) = vec3(ui, label, &mut edited, 0.01);
+    let (changed, row) = vec3(ui, label, &mut edited, 0.01);
     if !changed {
-        return false;
+        return (false, row);
     }
     if edited.min_element() > 0.0 {
         *v = edited;
-        true
+        (true, row)
     } else {
         ui.colored_label(ERROR_COLOR, format!("{label} must be positive"));
-        false
+        (false, row)
     }
 }
