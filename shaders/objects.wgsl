@@ -3,7 +3,8 @@
 // term of psi at the pixel's surface point and the direction to the point of the source that term reads, with the
 // field's own functions (this file comes after field_common.wgsl and field_pass.wgsl in its module, assembled by
 // src/gpu/shaders.rs::object_module_source, whose bindings 0 to 6 and 9 to 11 it shares), and shades
-// `albedo (AMBIENT + S sum_i Ce_i psi_i max(0, n . l_i))`. The shadow factor S (the share of the direct light the
+// `albedo (AMBIENT + S sum_i Ce_i psi_i max(0, n . l_i))`, the light of negative sources (which darken) apart, with
+// a factor of its own. The shadow factor S (the share of the direct light the
 // objects' shadows leave) is worked out in f64 at the vertices and interpolated. Rust side: src/gpu/object_pass.rs
 // (gpu_data::ObjectParams, ObjectVertex; keep in sync). CPU twin: src/reference/objects.rs.
 
@@ -21,6 +22,7 @@ struct VertexOut {
     @location(1) normal: vec3<f32>,
     @location(2) albedo: vec3<f32>,
     @location(3) shadow: vec3<f32>,
+    @location(4) shadow_dark: vec3<f32>,
 }
 
 @vertex
@@ -29,6 +31,7 @@ fn vs_main(
     @location(1) normal: vec3<f32>,
     @location(2) albedo: vec3<f32>,
     @location(3) shadow: vec3<f32>,
+    @location(4) shadow_dark: vec3<f32>,
 ) -> VertexOut {
     var out: VertexOut;
     out.position = object.view_proj * vec4<f32>(position, 1.0);
@@ -36,6 +39,7 @@ fn vs_main(
     out.normal = normal;
     out.albedo = albedo;
     out.shadow = shadow;
+    out.shadow_dark = shadow_dark;
     return out;
 }
 
@@ -52,7 +56,8 @@ fn fs_main(in: VertexOut) -> FragmentOut {
     load_scalars();
     let l = length(in.normal);
     let n = select(vec3<f32>(0.0), in.normal / l, l > 0.0);
-    let e = object.ambient + in.shadow * direct_light(in.world, n);
+    let d = direct_light(in.world, n);
+    let e = object.ambient + in.shadow * d.bright + in.shadow_dark * d.dark;
     return FragmentOut(vec4<f32>(in.albedo * e, 1.0), bitcast<u32>(in.position.z));
 }
 
@@ -67,28 +72,43 @@ fn cosine_from(x: vec3<f32>, n: vec3<f32>, source: vec3<f32>) -> f32 {
     return 1.0;
 }
 
+// The direct light of the sources of positive coefficient, and of those of negative (which darken), each with a
+// shadow factor of its own.
+struct Direct {
+    bright: vec3<f32>,
+    dark: vec3<f32>,
+}
+
+// A term's light added to the part of its sign.
+fn add_light(e: Direct, light: vec3<f32>, lambert: f32) -> Direct {
+    if lambert < 0.0 {
+        return Direct(e.bright, e.dark + light * lambert);
+    }
+    return Direct(e.bright + light * lambert, e.dark);
+}
+
 // Every source's light at x on a surface of normal n, unshadowed: sum_i Ce_i psi_i max(0, n . l_i), l_i toward
 // the point of source i its term reads (twin of Lights::direct and Lights::at).
-fn direct_light(x: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
-    var e = vec3<f32>(0.0);
+fn direct_light(x: vec3<f32>, n: vec3<f32>) -> Direct {
+    var e = Direct(vec3<f32>(0.0), vec3<f32>(0.0));
     var t = 0u;
     for (var k = 0u; k < point_count(); k++) {
         let p = points[k];
         let strength = p.coefficient * falloff(length(x - p.position), EPSILON);
-        e += (object.energy + tints[t].xyz) * strength * cosine_from(x, n, p.position);
+        e = add_light(e, object.energy + tints[t].xyz, strength * cosine_from(x, n, p.position));
         t++;
     }
     for (var k = 0u; k < line_count(); k++) {
         let l = lines[k];
         let foot = l.point + l.direction * dot(x - l.point, l.direction);
         let strength = l.coefficient * falloff(line_distance(x, l.point, l.direction), EPSILON);
-        e += (object.energy + tints[t].xyz) * strength * cosine_from(x, n, foot);
+        e = add_light(e, object.energy + tints[t].xyz, strength * cosine_from(x, n, foot));
         t++;
     }
     for (var k = 0u; k < torus_count(); k++) {
         let r = tori[k];
         let strength = r.coefficient * falloff(torus_distance(x, r.center, r.axis, r.major_radius), EPSILON);
-        e += (object.energy + tints[t].xyz) * strength * cosine_from(x, n, ring_point(r, x));
+        e = add_light(e, object.energy + tints[t].xyz, strength * cosine_from(x, n, ring_point(r, x)));
         t++;
     }
     for (var k = 0u; k < curve_count(); k++) {
@@ -98,7 +118,7 @@ fn direct_light(x: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
             let seen = curve_point(c, x);
             let strength = c.coefficient * wseries(c, seen.x) * falloff(seen.y, EPSILON);
             let color = object.energy + tints[t].xyz + color_series(c, seen.x);
-            e += color * strength * cosine_from(x, n, chain_point(c, seen.x));
+            e = add_light(e, color, strength * cosine_from(x, n, chain_point(c, seen.x)));
         }
         t++;
     }

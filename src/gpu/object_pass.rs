@@ -44,16 +44,18 @@ pub mod gpu_data {
     }
     const _: () = assert!(size_of::<ObjectParams>() == 80);
 
-    /// One vertex (attributes 0 to 3 of `vs_main`): world position, normal, albedo and shadow factor.
+    /// One vertex (attributes 0 to 4 of `vs_main`): world position, normal, albedo and the shadow factors of
+    /// the light of positive and of negative sources (`objects::lighting::Shade::shadow`).
     #[repr(C)]
     #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
     pub struct ObjectVertex {
-        pub position: [f32; 3], // 0
-        pub normal: [f32; 3],   // 12
-        pub albedo: [f32; 3],   // 24
-        pub shadow: [f32; 3],   // 36
+        pub position: [f32; 3],    // 0
+        pub normal: [f32; 3],      // 12
+        pub albedo: [f32; 3],      // 24
+        pub shadow: [f32; 3],      // 36
+        pub shadow_dark: [f32; 3], // 48
     }
-    const _: () = assert!(size_of::<ObjectVertex>() == 48);
+    const _: () = assert!(size_of::<ObjectVertex>() == 60);
 }
 
 use gpu_data::{ObjectParams, ObjectVertex};
@@ -196,7 +198,8 @@ impl ObjectPass {
                         array_stride: size_of::<ObjectVertex>() as u64,
                         step_mode: wgpu::VertexStepMode::Vertex,
                         attributes: &wgpu::vertex_attr_array![
-                            0 => Float32x3, 1 => Float32x3, 2 => Float32x3, 3 => Float32x3
+                            0 => Float32x3, 1 => Float32x3, 2 => Float32x3, 3 => Float32x3,
+                            4 => Float32x3
                         ],
                     })],
                     topology: wgpu::PrimitiveTopology::TriangleList,
@@ -249,7 +252,8 @@ impl ObjectPass {
                 position: surface.positions[k].as_vec3().to_array(),
                 normal: surface.normals[k].as_vec3().to_array(),
                 albedo: f(light.albedo[k]),
-                shadow: f(light.shadow[k]),
+                shadow: f(light.shadow[k][0]),
+                shadow_dark: f(light.shadow[k][1]),
             })
             .collect();
         self.vertices = Some(

@@ -22,6 +22,8 @@
 //! and interpolated; the direct light itself, which peaks sharply under a source, is evaluated at every
 //! pixel's own point with its interpolated normal (`Lights::direct`; on the GPU by the field's functions in
 //! `shaders/objects.wgsl`): `L(X) = albedo (AMBIENT + S direct(X))` (`shaded`), exact wherever no shadow falls.
+//! Sources of negative coefficient darken what they light; their light is summed apart, with a factor of its
+//! own, so that each factor is a share in 0..1 and every vertex is exact whatever the signs.
 
 use glam::DVec3;
 use rayon::prelude::*;
@@ -48,31 +50,41 @@ pub struct LightSample {
 /// The sources' light at a surface point (`Lights::shade`), before the albedo and the ambient term.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Shade {
-    /// Every source's light, unshadowed: `sum_i Ce_i psi_i max(0, n . l_i)` (`Lights::direct`).
-    pub direct: [f64; 3],
+    /// Every source's light, unshadowed: `sum_i Ce_i psi_i max(0, n . l_i)` (`Lights::direct`), the sources of
+    /// positive coefficient's, then the negative's.
+    pub direct: Split,
     /// What of it the objects' shadows leave: each term times its source's visibility `V_i`.
-    pub seen: [f64; 3],
+    pub seen: Split,
     /// Which sources are hidden there, and how much: where the masks of neighbouring vertices differ, a
     /// shadow's edge crosses between them.
     pub mask: u64,
 }
 
+/// A light in rgb split by the sign of the sources' coefficients: the positive's (`[0]`), then the
+/// negative's (`[1]`, which darken).
+pub type Split = [[f64; 3]; 2];
+
 impl Shade {
-    /// The share of the direct light that the shadows leave, channel by channel (1 where there is no direct
-    /// light): what the vertices carry, interpolated and multiplied by the direct light at every pixel.
-    pub fn shadow(&self) -> [f64; 3] {
-        std::array::from_fn(|c| match self.direct[c] > 0.0 {
-            true => (self.seen[c] / self.direct[c]).clamp(0.0, 1.0),
-            false => 1.0,
+    /// The share of the direct light that the shadows leave, channel by channel, of each sign (1 where there is
+    /// no such light): what the vertices carry, interpolated and multiplied by the direct light at every pixel.
+    pub fn shadow(&self) -> Split {
+        std::array::from_fn(|s| {
+            std::array::from_fn(|c| match self.direct[s][c] != 0.0 {
+                true => (self.seen[s][c] / self.direct[s][c]).clamp(0.0, 1.0),
+                false => 1.0,
+            })
         })
     }
 }
 
-/// The lit color of a surface point of `albedo`, shadow factor `shadow` (`Shade::shadow`) and direct light
-/// `direct` (`Lights::direct`): `albedo (AMBIENT + shadow direct)`, unclamped (an HDR export keeps it, the
-/// display clamps it). `shaders/objects.wgsl` shades every pixel by the same formula.
-pub fn shaded(albedo: [f64; 3], shadow: [f64; 3], direct: [f64; 3]) -> [f64; 3] {
-    std::array::from_fn(|c| albedo[c] * (AMBIENT + shadow[c] * direct[c]))
+/// The lit color of a surface point of `albedo`, shadow factors `shadow` (`Shade::shadow`) and direct light
+/// `direct` (`Lights::direct`): `albedo (AMBIENT + shadow direct)`, each sign's part by its factor, unclamped
+/// (an HDR export keeps it, the display clamps it). `shaders/objects.wgsl` shades every pixel by the same
+/// formula.
+pub fn shaded(albedo: [f64; 3], shadow: Split, direct: Split) -> [f64; 3] {
+    std::array::from_fn(|c| {
+        albedo[c] * (AMBIENT + shadow[0][c] * direct[0][c] + shadow[1][c] * direct[1][c])
+    })
 }
 
 /// Lambert's cosine at `x` (normal `n`) of the light from `from`; 1 at the source itself, where the light
@@ -162,15 +174,18 @@ impl Lights {
     /// The light reaching the surface point `x` of normal `n` (unit), shadows by `objects`, before the albedo:
     /// `AMBIENT + sum_i Ce_i psi_i max(0, n . l_i) V_i`.
     pub fn irradiance(&self, objects: &[Object], x: DVec3, n: DVec3) -> [f64; 3] {
-        self.shade(objects, x, n).seen.map(|e| AMBIENT + e)
+        let seen = self.shade(objects, x, n).seen;
+        std::array::from_fn(|c| AMBIENT + seen[0][c] + seen[1][c])
     }
 
     /// Every source's direct light at `x` on a surface of normal `n` (unit, or zero for none), no shadows, no
-    /// ambient: `sum_i Ce_i psi_i max(0, n . l_i)`, what the object pass evaluates at every pixel.
-    pub fn direct(&self, x: DVec3, n: DVec3) -> [f64; 3] {
-        let mut e = [0.0; 3];
+    /// ambient: `sum_i Ce_i psi_i max(0, n . l_i)`, what the object pass evaluates at every pixel; the sources
+    /// of positive coefficient apart from the negative's.
+    pub fn direct(&self, x: DVec3, n: DVec3) -> Split {
+        let mut e = [[0.0; 3]; 2];
         for light in self.at(x) {
             let lambert = light.strength * cosine(x, n, light.from);
+            let e = &mut e[(lambert < 0.0) as usize];
             for (c, e) in e.iter_mut().enumerate() {
                 *e += light.color[c] * lambert;
             }
@@ -182,8 +197,8 @@ impl Lights {
     /// hide there.
     pub fn shade(&self, objects: &[Object], x: DVec3, n: DVec3) -> Shade {
         let mut out = Shade {
-            direct: [0.0; 3],
-            seen: [0.0; 3],
+            direct: [[0.0; 3]; 2],
+            seen: [[0.0; 3]; 2],
             mask: 0,
         };
         for (k, light) in self.at(x).enumerate() {
@@ -198,9 +213,10 @@ impl Lights {
                 let level = (8.0 * (1.0 - seen)).ceil() as u64;
                 out.mask = out.mask.rotate_left(5) ^ (level << (k % 8 * 4)) ^ (k as u64 + 1);
             }
+            let sign = (lambert < 0.0) as usize;
             for c in 0..3 {
-                out.direct[c] += light.color[c] * lambert;
-                out.seen[c] += light.color[c] * lambert * seen;
+                out.direct[sign][c] += light.color[c] * lambert;
+                out.seen[sign][c] += light.color[c] * lambert * seen;
             }
         }
         out
@@ -375,8 +391,8 @@ const SHADOW_REFINEMENTS: u32 = 3;
 pub struct VertexLights {
     /// The albedo: its object's color times its tint.
     pub albedo: Vec<[f64; 3]>,
-    /// The share of the direct light the shadows leave (`Shade::shadow`).
-    pub shadow: Vec<[f64; 3]>,
+    /// The share of the direct light the shadows leave, of either sign (`Shade::shadow`).
+    pub shadow: Vec<Split>,
     /// The lit color there (`shaded`): what the per-pixel shading gives at the vertex itself.
     pub colors: Vec<[f64; 3]>,
 }
@@ -455,7 +471,7 @@ pub fn light_surface(
             std::array::from_fn(|c| color[c] * surface.tint[k][c])
         })
         .collect();
-    let shadow: Vec<[f64; 3]> = shades.iter().map(Shade::shadow).collect();
+    let shadow: Vec<Split> = shades.iter().map(Shade::shadow).collect();
     let colors = (albedo.iter().zip(&shadow).zip(&shades))
         .map(|((a, s), shade)| shaded(*a, *s, shade.direct))
         .collect();

@@ -41,8 +41,8 @@ impl ObjectImage {
         let (t, k) = self.mesh.hit_triangle(eye, dir, 0.0, f64::INFINITY)?;
         let corners = &self.lit.surface.indices[3 * k..3 * k + 3];
         let (_, w) = triangle_barycentric(&self.mesh.triangles[k], eye, dir)?;
-        let mix = |values: &[[f64; 3]]| -> [f64; 3] {
-            let v = |i: usize| values[corners[i] as usize];
+        let mix = |value: &dyn Fn(usize) -> [f64; 3]| -> [f64; 3] {
+            let v = |i: usize| value(corners[i] as usize);
             std::array::from_fn(|c| w[0] * v(0)[c] + w[1] * v(1)[c] + w[2] * v(2)[c])
         };
         let normals = &self.lit.surface.normals;
@@ -52,6 +52,7 @@ impl ObjectImage {
             .normalize_or_zero();
         let light = &self.lit.light;
         let direct = self.lights.direct(eye + dir * t, n);
-        Some((t, shaded(mix(&light.albedo), mix(&light.shadow), direct)))
+        let shadow = [0, 1].map(|s| mix(&|k| light.shadow[k][s]));
+        Some((t, shaded(mix(&|k| light.albedo[k]), shadow, direct)))
     }
 }
