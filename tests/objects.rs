@@ -1410,6 +1410,28 @@ fn close_light_on_a_coarse_face(every_kind: bool) -> Scene {
     scene
 }
 
+/// `scene`'s opaque frame at 128 x 96 on the GPU against the CPU twin's: no more than one pixel in 200 off by
+/// more than 3/255 in a channel (after the display's clamp). The twin's frame.
+fn gpu_frame_matches_the_twins(scene: &Scene) -> Vec<[f64; 4]> {
+    let (w, h) = (128, 96);
+    let bb = scene.place_billboard(w as f64 / h as f64);
+    let tex = reference::render_brightness(scene, &bb);
+    let cpu = reference::compose_frame_over(scene, &bb, &tex, (w, h), Backdrop::Opaque);
+    let frame = gpu().render(scene, w, h, false).unwrap();
+    let off = (cpu.iter().zip(&frame.pixels))
+        .filter(|(c, p)| {
+            (0..3)
+                .any(|k| (c[k].clamp(0.0, 1.0) - (p[k] as f64).clamp(0.0, 1.0)).abs() > 3.0 / 255.0)
+        })
+        .count();
+    assert!(
+        off * 200 <= cpu.len(),
+        "{off} of {} pixels differ",
+        cpu.len()
+    );
+    cpu
+}
+
 #[test]
 fn objects_are_shaded_at_every_pixel_by_the_exact_light_there() {
     // The point source 0.15 above the face: its light peaks within a cell (psi ~ 1 / d, times the cosine h / d),
@@ -1444,22 +1466,7 @@ fn objects_are_shaded_at_every_pixel_by_the_exact_light_there() {
     // The GPU shades its pixels alike, under every kind of source (a curve's brightest point and color series
     // included): its frame against the twin's, composed with the glow.
     let scene = close_light_on_a_coarse_face(true);
-    let (w, h) = (128, 96);
-    let bb = scene.place_billboard(w as f64 / h as f64);
-    let tex = reference::render_brightness(&scene, &bb);
-    let cpu = reference::compose_frame_over(&scene, &bb, &tex, (w, h), Backdrop::Opaque);
-    let frame = gpu().render(&scene, w, h, false).unwrap();
-    let off = (cpu.iter().zip(&frame.pixels))
-        .filter(|(c, p)| {
-            (0..3)
-                .any(|k| (c[k].clamp(0.0, 1.0) - (p[k] as f64).clamp(0.0, 1.0)).abs() > 3.0 / 255.0)
-        })
-        .count();
-    assert!(
-        off * 200 <= cpu.len(),
-        "{off} of {} pixels differ",
-        cpu.len()
-    );
+    let cpu = gpu_frame_matches_the_twins(&scene);
     // And the face is lit: its brightest pixel is well above its ambient light.
     let top = (cpu.iter()).map(|p| p[0].min(1.0)).fold(0.0, f64::max);
     assert!(top > 0.9, "{top}");
@@ -1687,20 +1694,5 @@ fn a_negative_source_darkens_what_it_lights_with_its_own_shadows_alike_on_both_t
     );
     // One ratio of all the light, clamped to 0..1, was off by 0.024 there (measured).
     assert!(worst < 1e-12, "off by {worst}");
-    let (w, h) = (128, 96);
-    let bb = scene.place_billboard(w as f64 / h as f64);
-    let tex = reference::render_brightness(&scene, &bb);
-    let cpu = reference::compose_frame_over(&scene, &bb, &tex, (w, h), Backdrop::Opaque);
-    let frame = gpu().render(&scene, w, h, false).unwrap();
-    let off = (cpu.iter().zip(&frame.pixels))
-        .filter(|(c, p)| {
-            (0..3)
-                .any(|k| (c[k].clamp(0.0, 1.0) - (p[k] as f64).clamp(0.0, 1.0)).abs() > 3.0 / 255.0)
-        })
-        .count();
-    assert!(
-        off * 200 <= cpu.len(),
-        "{off} of {} pixels differ",
-        cpu.len()
-    );
+    gpu_frame_matches_the_twins(&scene);
 }

@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::viewer::{export_and_wait, harness, light_scene};
+use common::viewer::{export_and_wait, export_sequence, harness, light_scene};
 use egui::{Pos2, Vec2};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
@@ -386,22 +386,7 @@ fn the_holdout_checkbox_leaves_the_objects_out_of_an_export() {
     let (w, ht) = (64u32, 48u32);
     let export = |h: &mut egui_kittest::Harness<'static, energywave::viewer::ViewerApp>,
                   name: &str| {
-        {
-            let form = h.state_mut().animation_form_mut();
-            form.export_path = dir.join(format!("{name}_##.png")).display().to_string();
-            form.size = [w, ht];
-        }
-        h.run();
-        let notice = export_and_wait(h, "Export 2 frames");
-        assert!(
-            notice
-                .as_ref()
-                .is_some_and(|(t, e)| !e && t.starts_with("Exported")),
-            "{notice:?}"
-        );
-        image::open(dir.join(format!("{name}_00.png")))
-            .unwrap()
-            .to_rgba8()
+        export_sequence(h, (&dir, name), [w, ht], "Export 2 frames", 0)
     };
     h.get_by_label("transparent").click_accesskit();
     h.run();
@@ -450,22 +435,7 @@ fn the_fit_checkbox_frames_the_whole_glow_in_an_export() {
     let (w, ht) = (64u32, 48u32);
     let export = |h: &mut egui_kittest::Harness<'static, energywave::viewer::ViewerApp>,
                   name: &str| {
-        {
-            let form = h.state_mut().animation_form_mut();
-            form.export_path = dir.join(format!("{name}_##.png")).display().to_string();
-            form.size = [w, ht];
-        }
-        h.run();
-        let notice = export_and_wait(h, "Export 2 frames");
-        assert!(
-            notice
-                .as_ref()
-                .is_some_and(|(t, e)| !e && t.starts_with("Exported")),
-            "{notice:?}"
-        );
-        image::open(dir.join(format!("{name}_01.png")))
-            .unwrap()
-            .to_rgba8()
+        export_sequence(h, (&dir, name), [w, ht], "Export 2 frames", 1)
     };
     let border = |image: &image::RgbaImage| -> u8 {
         (image.enumerate_pixels())

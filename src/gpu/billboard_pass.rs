@@ -4,7 +4,8 @@
 use glam::DMat4;
 
 use super::context::{
-    RenderPipelineSpec, depth_value_entry, pass_layouts, render_pipeline, uniform_buffer,
+    RenderPipelineSpec, depth_value_entry, fragment_storage_entry, pass_layouts, render_pipeline,
+    uniform_buffer,
 };
 use crate::geometry::{Billboard, Camera};
 use crate::scene::Blend;
@@ -156,16 +157,7 @@ impl BillboardRenderer {
                 texture(1, wgpu::TextureViewDimension::D2Array),
                 texture(2, wgpu::TextureViewDimension::D2),
                 depth_value_entry(3),
-                wgpu::BindGroupLayoutEntry {
-                    binding: 4,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Storage { read_only: true },
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
+                fragment_storage_entry(4),
             ],
         );
         // Two pipelines, B alone and B with the tint (the shader's TINTED): a branch on a uniform around the

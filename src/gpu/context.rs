@@ -160,9 +160,18 @@ pub fn compute_pass(
 
 /// A bind group layout entry for a compute pass: a read-only storage buffer.
 pub fn storage_buffer_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    read_only_storage(binding, wgpu::ShaderStages::COMPUTE)
+}
+
+/// A bind group layout entry for a fragment shader: a read-only storage buffer.
+pub fn fragment_storage_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    read_only_storage(binding, wgpu::ShaderStages::FRAGMENT)
+}
+
+fn read_only_storage(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
+        visibility,
         ty: wgpu::BindingType::Buffer {
             ty: wgpu::BufferBindingType::Storage { read_only: true },
             has_dynamic_offset: false,

@@ -5,7 +5,9 @@
 
 use wgpu::util::DeviceExt;
 
-use super::context::{RenderPipelineSpec, pass_layouts, render_pipeline, uniform_buffer};
+use super::context::{
+    RenderPipelineSpec, fragment_storage_entry, pass_layouts, render_pipeline, uniform_buffer,
+};
 use super::field_pass::{SOURCE_BINDINGS, source_bindings, storage_buffer_init};
 use super::frame::FRAME_FORMAT;
 use super::shaders::object_module_source;
@@ -124,20 +126,6 @@ pub struct ObjectPass {
     key: Option<LitKey>,
 }
 
-/// A read-only storage buffer the fragment shader reads.
-fn fragment_storage(binding: u32) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::FRAGMENT,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only: true },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }
-}
-
 /// `ObjectParams`' binding, after the field's.
 const PARAMS_BINDING: u32 = 14;
 
@@ -158,8 +146,8 @@ impl ObjectPass {
             },
             count: None,
         }];
-        entries.push(fragment_storage(0));
-        entries.extend(SOURCE_BINDINGS.map(fragment_storage));
+        entries.push(fragment_storage_entry(0));
+        entries.extend(SOURCE_BINDINGS.map(fragment_storage_entry));
         let (layout, pipeline_layout) = pass_layouts(device, "objects", &entries);
         let params = uniform_buffer::<ObjectParams>(device, "energywave.objects.params");
         Self {

@@ -96,6 +96,33 @@ pub fn export_and_wait(h: &mut Harness<'static, ViewerApp>, label: &str) -> Opti
     h.state().notice().cloned()
 }
 
+/// Exports through the panel (its Export section open) as a PNG sequence `dir/name_##.png` of `width` x
+/// `height` by clicking `button`; checks that the notice says it was exported, and reads frame `frame` back.
+pub fn export_sequence(
+    h: &mut Harness<'static, ViewerApp>,
+    (dir, name): (&std::path::Path, &str),
+    [width, height]: [u32; 2],
+    button: &str,
+    frame: u32,
+) -> image::RgbaImage {
+    {
+        let form = h.state_mut().animation_form_mut();
+        form.export_path = dir.join(format!("{name}_##.png")).display().to_string();
+        form.size = [width, height];
+    }
+    h.run();
+    let notice = export_and_wait(h, button);
+    assert!(
+        notice
+            .as_ref()
+            .is_some_and(|(t, e)| !e && t.starts_with("Exported")),
+        "{notice:?}"
+    );
+    image::open(dir.join(format!("{name}_{frame:02}.png")))
+        .unwrap()
+        .to_rgba8()
+}
+
 /// The viewport as the viewer last presented it (RGBA, 0..1), cropped out of its window `width` pixels wide.
 pub fn shown_viewport(
     v: &energywave::viewer::offscreen::OffscreenViewer,
