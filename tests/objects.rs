@@ -1696,3 +1696,28 @@ fn a_negative_source_darkens_what_it_lights_with_its_own_shadows_alike_on_both_t
     assert!(worst < 1e-12, "off by {worst}");
     gpu_frame_matches_the_twins(&scene);
 }
+
+#[test]
+fn more_sources_of_a_kind_than_the_object_pass_unrolls_light_alike() {
+    // Ten points over the coarse face: past the eight terms a kind's loop is unrolled for, the object pass reads
+    // the count from the sources; its frame is still the twin's.
+    let mut scene = close_light_on_a_coarse_face(false);
+    for k in 0..9 {
+        let a = k as f64 * 0.7;
+        scene.sources.points.push(Point {
+            position: DVec3::new(1.3 * a.cos(), 0.45 + 0.05 * k as f64, 1.3 * a.sin()),
+            coefficient: 0.05,
+            look: Default::default(),
+        });
+    }
+    let more = gpu_frame_matches_the_twins(&scene);
+    // And the nine added points light the face: the frame is brighter than with the first alone.
+    let one = gpu_frame_matches_the_twins(&close_light_on_a_coarse_face(false));
+    let mean = |f: &[[f64; 4]]| f.iter().map(|p| p[1].min(1.0)).sum::<f64>() / f.len() as f64;
+    assert!(
+        mean(&more) > mean(&one) + 0.02,
+        "{} against {}",
+        mean(&more),
+        mean(&one)
+    );
+}

@@ -62,43 +62,49 @@ pub mod gpu_data {
 
 use gpu_data::{ObjectParams, ObjectVertex};
 
-/// The kinds of source a scene has: what the object pipelines are specialised to. The fragment shader loops over
-/// the sources of every kind; the code of a kind the scene lacks is compiled away (the count 0), and the
-/// brightest-point search compiled in only where some curve reads it. Measured on lavapipe, the viewer's frame on
-/// the floor preset (one ring) took 253 ms with every kind's code in, 132 ms without the curves', 112 ms
-/// without lighting at all: the mere presence of the curves' search cost more than the shading.
+/// How many sources of each kind a scene has: what the object pipelines are specialised to. The fragment shader
+/// loops over the sources of every kind; the code of a kind the scene lacks is compiled away (the count 0), a
+/// kind's loop of up to `UNROLLED` terms is unrolled (its count a constant), and the brightest-point search is
+/// compiled in only where some curve reads it. Measured on lavapipe at 1280 x 720 on the floor preset (one
+/// ring): the viewer's frame took 253 ms idle with every kind's code in, 123 ms without the code of the kinds
+/// absent (112 ms without lighting at all); orbiting took 125 to 130 ms so, 104 to 112 ms with the ring's count
+/// a constant too (80 to 87 ms when the objects were lit at their vertices). A new structure compiles its
+/// pipelines when first drawn (55 to 90 ms there), then stays.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-struct Kinds {
-    points: bool,
-    lines: bool,
-    tori: bool,
-    curves: bool,
+struct Structure {
+    points: u32,
+    lines: u32,
+    tori: u32,
+    curves: u32,
     search: bool,
 }
 
-impl Kinds {
-    fn of(scene: &Scene) -> Kinds {
+/// The most terms of a kind whose loop is unrolled; past it the count is read from the sources' params.
+const UNROLLED: u32 = 8;
+
+impl Structure {
+    fn of(scene: &Scene) -> Structure {
         let s = &scene.sources;
-        Kinds {
-            points: !s.points.is_empty(),
-            lines: !s.lines.is_empty(),
-            tori: !s.tori.is_empty(),
-            curves: !s.curves.is_empty(),
+        Structure {
+            points: s.points.len() as u32,
+            lines: s.lines.len() as u32,
+            tori: s.tori.len() as u32,
+            curves: s.curves.len() as u32,
             search: s.curves.iter().any(|c| c.searches()),
         }
     }
 
-    /// The values of `shaders/field_pass.wgsl`'s overridable constants: 0 for the kinds absent (the others
-    /// keep their default, which reads the count from the sources' params).
+    /// The values of `shaders/field_pass.wgsl`'s overridable constants: each kind's count up to `UNROLLED`
+    /// (past it the default, which reads the count from the sources' params), the search.
     fn constants(self) -> Vec<(&'static str, f64)> {
-        let absent = [
+        let counts = [
             ("POINT_COUNT", self.points),
             ("LINE_COUNT", self.lines),
             ("TORUS_COUNT", self.tori),
             ("CURVE_COUNT", self.curves),
         ];
-        (absent.into_iter().filter(|(_, present)| !present))
-            .map(|(name, _)| (name, 0.0))
+        (counts.into_iter().filter(|&(_, n)| n <= UNROLLED))
+            .map(|(name, n)| (name, n as f64))
             .chain([("SEARCH", self.search as u8 as f64)])
             .collect()
     }
@@ -108,11 +114,11 @@ impl Kinds {
 pub struct ObjectPass {
     module: wgpu::ShaderModule,
     pipeline_layout: wgpu::PipelineLayout,
-    /// For each kinds of source met so far, color and depth; depth alone (a holdout). Each writes the depth's
-    /// copy too.
-    pipelines: std::collections::HashMap<Kinds, [wgpu::RenderPipeline; 2]>,
-    /// The kinds of the scene last prepared.
-    kinds: Kinds,
+    /// For each structure met so far, color and depth; depth alone (a holdout). Each writes the depth's copy
+    /// too.
+    pipelines: std::collections::HashMap<Structure, [wgpu::RenderPipeline; 2]>,
+    /// The structure of the scene last prepared.
+    structure: Structure,
     layout: wgpu::BindGroupLayout,
     params: wgpu::Buffer,
     /// The sources (`FieldParams`, then `SOURCE_BINDINGS`) and `params`, bound together.
@@ -130,7 +136,7 @@ pub struct ObjectPass {
 const PARAMS_BINDING: u32 = 14;
 
 impl ObjectPass {
-    /// Builds the module and layouts; a pipeline is built when a scene first needs its kinds of source.
+    /// Builds the module and layouts; a pipeline is built when a scene first needs its structure.
     pub fn new(device: &wgpu::Device) -> Self {
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("energywave.objects.shader"),
@@ -154,11 +160,11 @@ impl ObjectPass {
             module,
             pipeline_layout,
             pipelines: Default::default(),
-            kinds: Kinds {
-                points: false,
-                lines: false,
-                tori: false,
-                curves: false,
+            structure: Structure {
+                points: 0,
+                lines: 0,
+                tori: 0,
+                curves: 0,
                 search: false,
             },
             layout,
@@ -172,9 +178,13 @@ impl ObjectPass {
         }
     }
 
-    /// The pipelines for `kinds`: color and depth, depth alone.
-    fn build_pipelines(&self, device: &wgpu::Device, kinds: Kinds) -> [wgpu::RenderPipeline; 2] {
-        let constants = kinds.constants();
+    /// The pipelines for `structure`: color and depth, depth alone.
+    fn build_pipelines(
+        &self,
+        device: &wgpu::Device,
+        structure: Structure,
+    ) -> [wgpu::RenderPipeline; 2] {
+        let constants = structure.constants();
         [wgpu::ColorWrites::ALL, wgpu::ColorWrites::empty()].map(|write_mask| {
             render_pipeline(
                 device,
@@ -228,10 +238,10 @@ impl ObjectPass {
         if self.key.as_ref().is_some_and(|k| k.matches(scene)) {
             return self.count > 0;
         }
-        self.kinds = Kinds::of(scene);
-        if !self.pipelines.contains_key(&self.kinds) {
-            let built = self.build_pipelines(device, self.kinds);
-            self.pipelines.insert(self.kinds, built);
+        self.structure = Structure::of(scene);
+        if !self.pipelines.contains_key(&self.structure) {
+            let built = self.build_pipelines(device, self.structure);
+            self.pipelines.insert(self.structure, built);
         }
         let Lit { surface, light } = lit(scene);
         let f = |v: [f64; 3]| v.map(|x| x as f32);
@@ -308,7 +318,7 @@ impl ObjectPass {
             &self.vertices,
             &self.indices,
             &self.bind_group,
-            self.pipelines.get(&self.kinds),
+            self.pipelines.get(&self.structure),
         ) else {
             return;
         };
