@@ -526,11 +526,9 @@ fn render(args: &RenderArgs) -> Result<(), CliError> {
     }
     let mut scene = scene.at_frame(frames.start as f64);
     let (width, height) = args.size;
-    let mut gpu = match args.backend {
-        Backend::Gpu => Some(HeadlessRenderer::new()?),
-        Backend::Cpu => None,
-    };
-    follow_pixel_density(&mut scene, frames.start, args, gpu.as_ref());
+    let hdr = target.is_exr();
+    let mut renderer = Renderer::new(args, hdr)?;
+    follow_pixel_density(&mut scene, frames.start, args, &renderer);
     let billboard = scene.place_billboard(width as f64 / height as f64);
     let name = args
         .scene
@@ -552,59 +550,26 @@ fn render(args: &RenderArgs) -> Result<(), CliError> {
             args.backend,
         );
     }
+    if let Renderer::Gpu(gpu) = &renderer {
+        if args.verbose {
+            eprintln!("adapter: {}", gpu.ctx.adapter_summary());
+        }
+        check_device_limits(gpu, args, &scene, &name)?;
+    }
     let start = Instant::now();
-    match args.backend {
-        Backend::Cpu => {
-            let texture = reference::render_brightness(&scene, &billboard);
-            if args.verbose {
-                eprintln!(
-                    "brightness (cpu): {:.1} ms",
-                    start.elapsed().as_secs_f64() * 1e3
-                );
-            }
-            if args.brightness {
-                output::write_brightness_exr(&args.output, texture.resolution, &texture.values)?;
-            } else {
-                let compose = match format {
-                    // An EXR keeps the opaque blend's values above 1.
-                    Format::Exr => reference::compose_frame_unclamped,
-                    Format::Png => reference::compose_frame_over,
-                };
-                let pixels = compose(
-                    &scene,
-                    &billboard,
-                    &texture,
-                    (width, height),
-                    backdrop(args),
-                );
-                output::write_rgba(&args.output, width, height, &pixels, alpha)?;
-            }
-        }
-        Backend::Gpu => {
-            let gpu = gpu.as_mut().expect("made above for the gpu backend");
-            gpu.set_holdout(args.holdout);
-            gpu.set_unclamped(target.is_exr());
-            if args.verbose {
-                eprintln!("adapter: {}", gpu.ctx.adapter_summary());
-            }
-            check_device_limits(gpu, args, &scene, &name)?;
-            if args.brightness {
-                let values = gpu.brightness(&scene, &billboard)?;
-                let values: Vec<f64> = values.iter().map(|&b| b as f64).collect();
-                output::write_brightness_exr(&args.output, scene.billboard.resolution, &values)?;
-            } else {
-                let frame = gpu.render(&scene, width, height, args.transparent)?;
-                let pixels: Vec<[f64; 4]> =
-                    frame.pixels.iter().map(|p| p.map(|c| c as f64)).collect();
-                output::write_rgba(&args.output, width, height, &pixels, alpha)?;
-            }
-            if args.verbose {
-                eprintln!(
-                    "gpu render and readback: {:.1} ms",
-                    start.elapsed().as_secs_f64() * 1e3
-                );
-            }
-        }
+    if args.brightness {
+        let values = renderer.brightness(&scene, &billboard)?;
+        output::write_brightness_exr(&args.output, scene.billboard.resolution, &values)?;
+    } else {
+        let pixels = renderer.compose(&scene, (width, height), backdrop(args), hdr)?;
+        output::write_rgba(&args.output, width, height, &pixels, alpha)?;
+    }
+    if args.verbose {
+        eprintln!(
+            "{} and readback: {:.1} ms",
+            renderer.name(),
+            start.elapsed().as_secs_f64() * 1e3
+        );
     }
     if args.verbose {
         eprintln!("wrote {}", args.output.display());
@@ -615,21 +580,92 @@ fn render(args: &RenderArgs) -> Result<(), CliError> {
 /// Unless `--resolution` or the scene fixes W, the billboard takes the texels the frame's size needs
 /// (`Scene::resolution_for`, within the device's limit), from the frame the export starts at; a B-only EXR
 /// (`--brightness`, W x W whatever the size) keeps the scene's.
-fn follow_pixel_density(
-    scene: &mut Scene,
-    start: u32,
-    args: &RenderArgs,
-    gpu: Option<&HeadlessRenderer>,
-) {
+fn follow_pixel_density(scene: &mut Scene, start: u32, args: &RenderArgs, renderer: &Renderer) {
     if args.resolution.is_some() || args.brightness {
         return;
     }
-    let limit = gpu.map_or(crate::scene::MAX_AUTO_RESOLUTION, |g| {
-        g.ctx.device.limits().max_texture_dimension_2d
-    });
     scene.billboard.resolution = scene
         .at_frame(start as f64)
-        .resolution_for(args.size, limit);
+        .resolution_for(args.size, renderer.texture_limit());
+}
+
+/// Where the command's pictures are made, chosen once from `--backend`: the GPU, set up for the command's
+/// holdout and HDR, or the CPU twin.
+enum Renderer {
+    Gpu(Box<HeadlessRenderer>),
+    Cpu,
+}
+
+impl Renderer {
+    /// The renderer `--backend` names; `hdr` (an EXR) keeps the opaque blend's values above 1.
+    fn new(args: &RenderArgs, hdr: bool) -> Result<Renderer, CliError> {
+        Ok(match args.backend {
+            Backend::Gpu => {
+                let mut gpu = HeadlessRenderer::new()?;
+                gpu.set_holdout(args.holdout);
+                gpu.set_unclamped(hdr);
+                Renderer::Gpu(Box::new(gpu))
+            }
+            Backend::Cpu => Renderer::Cpu,
+        })
+    }
+
+    /// What its timings are called.
+    fn name(&self) -> &'static str {
+        match self {
+            Renderer::Gpu(_) => "gpu render",
+            Renderer::Cpu => "cpu render",
+        }
+    }
+
+    /// The largest texture side it makes: the device's limit, or what the CPU twin allows W.
+    fn texture_limit(&self) -> u32 {
+        match self {
+            Renderer::Gpu(gpu) => gpu.ctx.device.limits().max_texture_dimension_2d,
+            Renderer::Cpu => crate::scene::MAX_AUTO_RESOLUTION,
+        }
+    }
+
+    /// B over the billboard's W x W texels, rows from the top, before the blend.
+    fn brightness(
+        &mut self,
+        scene: &Scene,
+        billboard: &crate::geometry::Billboard,
+    ) -> Result<Vec<f64>, CliError> {
+        Ok(match self {
+            Renderer::Gpu(gpu) => (gpu.brightness(scene, billboard)?.iter())
+                .map(|&b| b as f64)
+                .collect(),
+            Renderer::Cpu => reference::render_brightness(scene, billboard).values,
+        })
+    }
+
+    /// The composed frame of `scene` (RGBA display values, rows from the top); with `hdr` (an EXR) the opaque
+    /// blend is not clamped above 1 (the GPU was set up for it).
+    fn compose(
+        &mut self,
+        scene: &Scene,
+        (width, height): (u32, u32),
+        backdrop: reference::Backdrop,
+        hdr: bool,
+    ) -> Result<Vec<[f64; 4]>, CliError> {
+        let transparent = backdrop != reference::Backdrop::Opaque;
+        Ok(match self {
+            Renderer::Gpu(gpu) => {
+                let frame = gpu.render(scene, width, height, transparent)?;
+                frame.pixels.iter().map(|p| p.map(|c| c as f64)).collect()
+            }
+            Renderer::Cpu => {
+                let billboard = scene.place_billboard(width as f64 / height as f64);
+                let texture = reference::render_brightness(scene, &billboard);
+                let compose = match hdr {
+                    true => reference::compose_frame_unclamped,
+                    false => reference::compose_frame_over,
+                };
+                compose(scene, &billboard, &texture, (width, height), backdrop)
+            }
+        })
+    }
 }
 
 /// Renders `frames` of the scene's animation into a sequence, a GIF or a sprite sheet, one renderer for all of
@@ -654,26 +690,18 @@ fn render_frames(
             eprintln!("warning: {}: {warning}", path.display());
         }
     }
-    let mut gpu = match args.backend {
-        Backend::Gpu => {
-            let mut gpu = HeadlessRenderer::new()?;
-            gpu.set_holdout(args.holdout);
-            gpu.set_unclamped(hdr);
-            Some(gpu)
-        }
-        Backend::Cpu => None,
-    };
+    let mut renderer = Renderer::new(args, hdr)?;
     let mut scene = scene.clone();
-    follow_pixel_density(&mut scene, frames.start, args, gpu.as_ref());
+    follow_pixel_density(&mut scene, frames.start, args, &renderer);
     let scene = &scene;
     // Many frames of one structure: its specialised pipelines pay for their compile after a few.
-    if let Some(gpu) = &mut gpu
+    if let Renderer::Gpu(gpu) = &mut renderer
         && frames.len() > 4
     {
         gpu.set_specialise(crate::gpu::Specialise::Blocking);
     }
     if args.verbose {
-        if let Some(gpu) = &gpu {
+        if let Renderer::Gpu(gpu) = &renderer {
             eprintln!("adapter: {}", gpu.ctx.adapter_summary());
         }
         eprintln!(
@@ -700,12 +728,7 @@ fn render_frames(
         for frame in frames.clone() {
             let at = scene.at_frame(frame as f64);
             let billboard = at.place_billboard(width as f64 / height as f64);
-            let values: Vec<f64> = match &mut gpu {
-                Some(gpu) => (gpu.brightness(&at, &billboard)?.iter())
-                    .map(|&b| b as f64)
-                    .collect(),
-                None => reference::render_brightness(&at, &billboard).values,
-            };
+            let values = renderer.brightness(&at, &billboard)?;
             let path = export::frame_path(pattern, frame);
             output::write_brightness_exr(&path, at.billboard.resolution, &values)?;
             written.push(path);
@@ -719,7 +742,7 @@ fn render_frames(
             frames.clone(),
             (width, height),
             output::Alpha::of(args.transparent, args.premultiplied),
-            |at| compose(at, gpu.as_mut(), (width, height), backdrop(args), hdr),
+            |at| renderer.compose(at, (width, height), backdrop(args), hdr),
             |_, frame| {
                 progress.frame_done(frame);
                 std::ops::ControlFlow::Continue(())
@@ -741,35 +764,6 @@ fn render_frames(
         }
     }
     Ok(())
-}
-
-/// The composed frame of `scene` (RGBA display values, rows from the top), on the GPU when given one, else
-/// on the CPU reference.
-/// One frame, by the GPU (set up for `hdr` already) or the CPU twin; with `hdr` (an EXR) the opaque blend is
-/// not clamped above 1.
-fn compose(
-    scene: &Scene,
-    gpu: Option<&mut HeadlessRenderer>,
-    (width, height): (u32, u32),
-    backdrop: reference::Backdrop,
-    hdr: bool,
-) -> Result<Vec<[f64; 4]>, CliError> {
-    let transparent = backdrop != reference::Backdrop::Opaque;
-    Ok(match gpu {
-        Some(gpu) => {
-            let frame = gpu.render(scene, width, height, transparent)?;
-            frame.pixels.iter().map(|p| p.map(|c| c as f64)).collect()
-        }
-        None => {
-            let billboard = scene.place_billboard(width as f64 / height as f64);
-            let texture = reference::render_brightness(scene, &billboard);
-            let compose = match hdr {
-                true => reference::compose_frame_unclamped,
-                false => reference::compose_frame_over,
-            };
-            compose(scene, &billboard, &texture, (width, height), backdrop)
-        }
-    })
 }
 
 /// What lies behind the glow in the command's pictures.
