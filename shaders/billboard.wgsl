@@ -37,7 +37,7 @@ override OBJECTS: bool = false;
 @group(0) @binding(1) var field: texture_2d_array<f32>;
 @group(0) @binding(2) var background: texture_2d<f32>;
 // The objects' depth in the frame's projection (cleared to 1 where none is drawn), read where OBJECTS: the bits
-// of the depth the objects pass writes beside its color (gpu::object_pass::DEPTH_VALUE_FORMAT: GL reads no depth
+// of the depth the objects pass writes beside its color (gpu::formats::DEPTH_VALUE_FORMAT: GL reads no depth
 // texture).
 @group(0) @binding(3) var depth: texture_2d<u32>;
 // Each texel's share c of its ray S -> E before the first surface (objects::clip), rows from the top, read where

@@ -8,7 +8,7 @@
 
 @group(0) @binding(0) var viewport_color: texture_2d<f32>;
 @group(0) @binding(1) var viewport_sampler: sampler;
-// The bits of the objects' depth in the frame (gpu::object_pass::DEPTH_VALUE_FORMAT), 1 where none is drawn.
+// The bits of the objects' depth in the frame (gpu::formats::DEPTH_VALUE_FORMAT), 1 where none is drawn.
 @group(0) @binding(2) var viewport_depth: texture_2d<u32>;
 
 // The jump between neighbours that marks a silhouette, as a share of the distance: in a perspective depth d,

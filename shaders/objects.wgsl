@@ -47,7 +47,7 @@ struct FragmentOut {
     // The lit color, unclamped (an HDR export keeps it; the display clamps), opaque.
     @location(0) color: vec4<f32>,
     // The bits of the fragment's depth, a copy of what the depth test keeps, for the billboard to read (a depth
-    // texture cannot be read on GL, nor r32float rendered there: gpu::object_pass::DEPTH_VALUE_FORMAT).
+    // texture cannot be read on GL, nor r32float rendered there: gpu::formats::DEPTH_VALUE_FORMAT).
     @location(1) depth: u32,
 }
 

@@ -4,15 +4,18 @@
 //! - [`integrate`]: how a scene integrates along a texel's ray: the integrator, its settings, the decay zeta;
 //! - [`geometry`]: the camera, the billboard and its rays;
 //! - [`objects`]: spheres, boxes, planes and glTF meshes that hide the glow and are lit by it;
+//! - [`animation`]: time in scenes: the travelling pulse (thesis eq. 5.1) and keyframes;
+//! - [`scene`]: TOML scene files, validated field by field;
 //! - [`reference`]: the f64 CPU renderer, one module for each GPU pass it twins, named alike;
 //! - [`gpu`]: the same on the GPU: WGSL compute and render passes, headless or in the viewer;
-//! - [`scene`]: TOML scene files, validated field by field;
-//! - [`animation`]: time in scenes: the travelling pulse (thesis eq. 5.1) and keyframes;
+//! - [`output`]: PNG and EXR files, written atomically;
 //! - [`export`]: frame sequences, GIFs and sprite sheets of an animation, with a progress bar;
 //! - [`viewer`]: the interactive viewer (winit, egui, the same GPU passes);
-//! - [`output`]: PNG and EXR files, written atomically;
 //! - [`bench`]: the papers' speed grid and other benchmarks;
 //! - [`cli`]: the `energywave` command line.
+//!
+//! Each module uses only those listed before it, and within a module its files call one another without a
+//! circle (tests/module_graph.rs checks both): a new module goes after what it uses.
 
 pub mod animation;
 pub mod bench;

@@ -405,7 +405,7 @@ fn a_sphere_under_a_point_source_is_lit_by_lamberts_law_with_the_fields_falloff(
         ..Sources::default()
     };
     scene.colors.energy = ce;
-    let l = lit(&scene);
+    let l = lit(scene.lit_inputs());
     let mut lit_count = 0;
     for (k, p) in l.surface.positions.iter().enumerate() {
         let cos_theta = p.y / r;
@@ -462,7 +462,7 @@ fn a_point_behind_an_object_is_in_its_shadow() {
         energy: [1.0; 3],
         ..Colors::default()
     };
-    let lights = Lights::new(&sources, &colors, 0.01);
+    let lights = Lights::new(&sources, colors.palette(), 0.01);
     let half_angle = (r / 1.5f64).asin();
     let edge = 3.0 * half_angle.tan();
     for x in [
@@ -541,7 +541,7 @@ fn a_long_source_casts_a_soft_shadow_that_meets_a_converged_area_light_reference
         ..Sources::default()
     };
     let colors = Colors::default();
-    let lights = Lights::new(&sources, &colors, 0.01);
+    let lights = Lights::new(&sources, colors.palette(), 0.01);
     let mut penumbra = 0;
     let mut worst: f64 = 0.0;
     for k in 0..=40 {
@@ -601,7 +601,7 @@ fn a_ring_and_a_curve_soften_their_shadows_and_a_point_keeps_it_hard() {
         ..Sources::default()
     };
     let colors = Colors::default();
-    let lights = Lights::new(&sources, &colors, 0.01);
+    let lights = Lights::new(&sources, colors.palette(), 0.01);
     let at = |k: usize, x: DVec3| {
         let nearest = lights.at(x).nth(k).unwrap().from;
         lights.visibility(&objects, x, DVec3::Y, k, nearest)
@@ -934,7 +934,7 @@ fn a_gltf_mesh_loads_hits_and_saves_back_losslessly() {
         let back = Scene::parse(&saved, &scene_path).unwrap();
         assert_eq!(back, scene, "{file}");
         // Lit and drawn: its vertices lie on the placed triangles.
-        let l = lit(&scene);
+        let l = lit(scene.lit_inputs());
         assert_eq!(l.surface.positions.len(), 12);
     }
     std::fs::remove_dir_all(&dir).unwrap();
@@ -1068,7 +1068,7 @@ fn a_travelling_pulse_lights_the_floor_where_it_passes() {
     let light_at = |frame: f64, p: DVec3| {
         let at = scene.at_frame(frame);
         let colors = at.colors.clone();
-        Lights::new(&at.sources, &colors, at.integration.epsilon).irradiance(
+        Lights::new(&at.sources, colors.palette(), at.integration.epsilon).irradiance(
             &at.objects,
             p,
             DVec3::Y,
@@ -1094,7 +1094,10 @@ fn a_travelling_pulse_lights_the_floor_where_it_passes() {
     assert!(light_at(at_start, start) > 2.0 * light_at(at_end, start));
     assert!(light_at(at_end, end) > 2.0 * light_at(at_start, end));
     // The lit vertices follow: the floor's lit colors change from frame to frame.
-    let (a, b) = (lit(&scene.at_frame(at_start)), lit(&scene.at_frame(at_end)));
+    let (a, b) = (
+        lit(scene.at_frame(at_start).lit_inputs()),
+        lit(scene.at_frame(at_end).lit_inputs()),
+    );
     assert_ne!(a.light.colors, b.light.colors);
 }
 
@@ -1106,7 +1109,11 @@ fn the_lit_triangles_follow_a_shadows_edge() {
     let scene = common::shipped_scene("floor.toml");
     let image = energywave::reference::objects::ObjectImage::of(&scene).unwrap();
     let floor = scene.objects[0].clone();
-    let lights = Lights::new(&scene.sources, &scene.colors, scene.integration.epsilon);
+    let lights = Lights::new(
+        &scene.sources,
+        scene.colors.palette(),
+        scene.integration.epsilon,
+    );
     let (mut off, mut shadowed, mut total) = (0, 0, 0);
     for i in 0..200 {
         for j in 0..200 {
@@ -1215,7 +1222,7 @@ fn a_gltf_meshs_normals_shade_it_smoothly_and_its_base_color_is_its_albedo() {
         },
         ..Scene::default_scene()
     };
-    let l = lit(&scene);
+    let l = lit(scene.lit_inputs());
     let eps = scene.integration.epsilon;
     let mut checked = 0;
     for (k, p) in l.surface.positions.iter().enumerate() {
@@ -1283,7 +1290,7 @@ keys = [{ frame = 0, value = [0.5, 0.5, 0.5] }, { frame = 10, value = [1.0, 0.0,
     // The floor under the point: in the sphere's shadow at frame 0, lit once the sphere has moved away, and in
     // the keyed albedo.
     let under = |s: &Scene| {
-        let l = lit(s);
+        let l = lit(s.lit_inputs());
         let k = (0..l.surface.positions.len())
             .filter(|&k| l.surface.object[k] == 0)
             .min_by(|&a, &b| {
@@ -1479,7 +1486,7 @@ fn the_lit_surface_has_no_cracks_where_shadows_split_it() {
     // dots on the floor preset's lit floor). Every edge of its lit surface, by the places of its ends, is
     // shared by two triangles, but the floor disc's rim.
     let scene = common::shipped_scene("floor.toml");
-    let l = lit(&scene);
+    let l = lit(scene.lit_inputs());
     let (center, extent) = energywave::objects::focus(&scene.sources);
     let unsplit = energywave::objects::tessellate::Surface::of(&scene.objects, center, extent);
     assert!(l.surface.positions.len() > unsplit.positions.len() + 1000);
@@ -1608,8 +1615,8 @@ keys = [{ frame = 0, value = [1.0, 1.0, 1.0] }, { frame = 10, value = [3.0, 1.0,
     assert!((side(10.0) - 9.0).abs() < 1e-9, "{}", side(10.0));
     // Lit again at every frame: the floor under the growing sphere darkens.
     assert_ne!(
-        lit(&scene.at_frame(0.0)).light.colors,
-        lit(&scene.at_frame(10.0)).light.colors
+        lit(scene.at_frame(0.0).lit_inputs()).light.colors,
+        lit(scene.at_frame(10.0).lit_inputs()).light.colors
     );
     // Saved and read back alike.
     let saved = scene.to_toml();
@@ -1666,7 +1673,7 @@ fn a_negative_source_darkens_what_it_lights_with_its_own_shadows_alike_on_both_t
         },
         color: [0.9; 3],
     });
-    let l = lit(&scene);
+    let l = lit(scene.lit_inputs());
     let (albedo, ce) = (scene.objects[0].color, scene.colors.energy);
     let (mut checked, mut dark_only, mut worst) = (0, 0, 0.0f64);
     for (k, p) in l.surface.positions.iter().enumerate() {

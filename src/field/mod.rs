@@ -25,6 +25,32 @@ pub struct Look {
     pub intensity: Option<f64>,
 }
 
+/// The scene's energy color and intensity, which a source without its own look takes: what a source's energy
+/// color Ce_i is made of besides its look (`scene::Colors::palette`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Palette {
+    pub energy: [f64; 3],
+    pub energy_intensity: f64,
+}
+
+impl Palette {
+    /// A source's energy color Ce_i: its own color and intensity, each the scene's where it has none.
+    pub fn color_of(&self, look: &Look) -> [f64; 3] {
+        let intensity = look.intensity.unwrap_or(self.energy_intensity);
+        look.color.unwrap_or(self.energy).map(|c| c * intensity)
+    }
+
+    /// A curve's energy color at chain parameter `t`: its color series there times its intensity, or its one
+    /// color (`color_of`) without a series.
+    pub fn color_along(&self, curve: &Curve, t: f64) -> [f64; 3] {
+        if curve.color_series.is_empty() {
+            return self.color_of(&curve.look);
+        }
+        let intensity = curve.look.intensity.unwrap_or(self.energy_intensity);
+        wseries::evaluate_colors(&curve.color_series, t).map(|c| c * intensity)
+    }
+}
+
 /// A point source (thesis 3.2): `S(P) = 1 / max(eps, |P - M|)`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Point {

@@ -181,7 +181,7 @@ fn read_only_storage(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::Bind
     }
 }
 
-/// A bind group layout entry for a fragment shader: the objects' depth copy (`object_pass::DEPTH_VALUE_FORMAT`),
+/// A bind group layout entry for a fragment shader: the objects' depth copy (`formats::DEPTH_VALUE_FORMAT`),
 /// read with `textureLoad`.
 pub fn depth_value_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {

@@ -5,14 +5,11 @@
 use super::billboard_pass::{BillboardRenderer, BlendMode, billboard_params, view_projection};
 use super::context::{GpuError, checked, read_texture, texture_2d};
 use super::field_pass::FieldRenderer;
+use super::formats::{DEPTH_FORMAT, DEPTH_VALUE_CLEAR, DEPTH_VALUE_FORMAT, FRAME_FORMAT};
 use super::glare_pass::GlarePass;
-use super::object_pass::{DEPTH_FORMAT, DEPTH_VALUE_CLEAR, DEPTH_VALUE_FORMAT, ObjectPass};
+use super::object_pass::ObjectPass;
 use crate::objects::clip::shared_clip_fractions;
 use crate::scene::Scene;
-
-/// Format of composed frames: half floats (renderable on every backend, unlike Rgba32Float on GL), 11 bits of
-/// mantissa, ample for colors in [0, 1] headed for 8-bit PNG or a float EXR.
-pub const FRAME_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 
 /// The two textures of a composed frame: what lies behind the billboard, and the result.
 pub struct FrameTargets {

@@ -4,7 +4,7 @@
 use wgpu::util::DeviceExt;
 
 use super::context::{RenderPipelineSpec, pass_layouts, render_pipeline, uniform_buffer};
-use super::frame::FRAME_FORMAT;
+use super::formats::FRAME_FORMAT;
 use super::shaders::GRID_PASS as GRID_SHADER;
 
 /// Rust mirrors of `shaders/grid.wgsl` (keep in sync; `tests/gpu_layout.rs` checks them).

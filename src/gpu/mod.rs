@@ -6,6 +6,7 @@ mod billboard_pass;
 mod blit_pass;
 mod context;
 mod field_pass;
+mod formats;
 mod frame;
 mod frame_average;
 pub mod glare_pass;
@@ -22,7 +23,8 @@ pub use context::{
     field_texture_layers, map_read, read_texture, read_texture_layer, texture_2d, uniform_buffer,
 };
 pub use field_pass::{FieldInputs, FieldRenderer, Specialise, Structure, layers_of};
-pub use frame::{FRAME_FORMAT, FrameTargets, SceneRenderer, f16_to_f32, read_frame};
+pub use formats::FRAME_FORMAT;
+pub use frame::{FrameTargets, SceneRenderer, f16_to_f32, read_frame};
 pub use grid_pass::GridPass;
 pub use headless::{Frame, HeadlessRenderer};
 pub use upsample::Upsample;

@@ -9,28 +9,11 @@ use super::context::{
     RenderPipelineSpec, fragment_storage_entry, pass_layouts, render_pipeline, uniform_buffer,
 };
 use super::field_pass::{SOURCE_BINDINGS, source_bindings, storage_buffer_init};
-use super::frame::FRAME_FORMAT;
+use super::formats::{DEPTH_FORMAT, DEPTH_VALUE_FORMAT, FRAME_FORMAT};
 use super::shaders::object_module_source;
 use crate::objects::lighting::AMBIENT;
 use crate::objects::{Lit, LitKey, lit};
 use crate::scene::Scene;
-
-/// The depth buffer's format.
-pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
-
-/// The format of the copy of the objects' depth the billboard reads, written beside their color by the same
-/// draw: the bits of the fragment's depth, exactly what the depth buffer holds. A depth texture cannot be read
-/// by `textureLoad` on GL (naga writes no GLSL for it), and GL without `EXT_color_buffer_float` (llvmpipe)
-/// cannot render into `r32float`; every backend renders into `r32uint` and reads it back.
-pub const DEPTH_VALUE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
-
-/// The clear value of the depth's copy: the bits of the far plane's depth, 1.0 (as the depth buffer is cleared).
-pub const DEPTH_VALUE_CLEAR: wgpu::Color = wgpu::Color {
-    r: 0x3f80_0000 as f64,
-    g: 0.0,
-    b: 0.0,
-    a: 0.0,
-};
 
 /// Rust mirrors of `shaders/objects.wgsl` (keep in sync; `tests/gpu_layout.rs` checks them).
 pub mod gpu_data {
@@ -235,7 +218,11 @@ impl ObjectPass {
             self.key = None;
             return false;
         }
-        if self.key.as_ref().is_some_and(|k| k.matches(scene)) {
+        if self
+            .key
+            .as_ref()
+            .is_some_and(|k| k.matches(scene.lit_inputs()))
+        {
             return self.count > 0;
         }
         self.structure = Structure::of(scene);
@@ -243,7 +230,7 @@ impl ObjectPass {
             let built = self.build_pipelines(device, self.structure);
             self.pipelines.insert(self.structure, built);
         }
-        let Lit { surface, light } = lit(scene);
+        let Lit { surface, light } = lit(scene.lit_inputs());
         let f = |v: [f64; 3]| v.map(|x| x as f32);
         let vertices: Vec<ObjectVertex> = (0..surface.positions.len())
             .map(|k| ObjectVertex {
@@ -299,7 +286,7 @@ impl ObjectPass {
         }));
         self.energy = f(scene.colors.energy_color());
         self.count = surface.indices.len() as u32;
-        self.key = Some(LitKey::of(scene));
+        self.key = Some(LitKey::of(scene.lit_inputs()));
         self.count > 0
     }
 

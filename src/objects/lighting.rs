@@ -32,8 +32,7 @@ use super::tessellate::Surface;
 use super::{Object, Shape, blocked};
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
 
-use crate::field::{Sources, brightest, curve, wseries};
-use crate::scene::Colors;
+use crate::field::{Palette, Sources, brightest, curve, wseries};
 
 /// The light every surface gets whatever the sources: a share of its albedo.
 pub const AMBIENT: f64 = 0.06;
@@ -98,7 +97,7 @@ fn cosine(x: DVec3, n: DVec3, from: DVec3) -> f64 {
 /// Every source as a light, prepared once for many surface points.
 pub struct Lights {
     sources: Sources,
-    colors: Colors,
+    palette: Palette,
     pieces: Vec<Vec<brightest::Piece>>,
     epsilon: f64,
     /// A sphere holding each term's source, where it is extended and bounded (a ring, a curve): a surface
@@ -107,7 +106,7 @@ pub struct Lights {
 }
 
 impl Lights {
-    pub fn new(sources: &Sources, colors: &Colors, epsilon: f64) -> Self {
+    pub fn new(sources: &Sources, palette: Palette, epsilon: f64) -> Self {
         let points = sources.points.iter().map(|_| None);
         let lines = sources.lines.iter().map(|_| None);
         let tori = (sources.tori.iter()).map(|t| Some((t.center, t.major_radius)));
@@ -125,7 +124,7 @@ impl Lights {
         });
         Lights {
             sources: sources.clone(),
-            colors: colors.clone(),
+            palette,
             pieces: sources.curves.iter().map(|c| c.pieces()).collect(),
             epsilon,
             bounds: points.chain(lines).chain(tori).chain(curves).collect(),
@@ -136,7 +135,7 @@ impl Lights {
     pub fn at(&self, x: DVec3) -> impl Iterator<Item = LightSample> + '_ {
         let s = &self.sources;
         let eps = self.epsilon;
-        let c = &self.colors;
+        let c = &self.palette;
         let points = s.points.iter().map(move |p| LightSample {
             from: p.position,
             strength: p.field(x, eps),
@@ -403,10 +402,10 @@ pub fn light_surface(
     surface: &mut Surface,
     objects: &[Object],
     sources: &Sources,
-    colors: &Colors,
+    palette: Palette,
     epsilon: f64,
 ) -> VertexLights {
-    let lights = Lights::new(sources, colors, epsilon);
+    let lights = Lights::new(sources, palette, epsilon);
     let shade = |s: &Surface, range: std::ops::Range<usize>| -> Vec<Shade> {
         range
             .into_par_iter()

@@ -299,32 +299,42 @@ pub struct Lit {
     pub light: lighting::VertexLights,
 }
 
+/// What lights a scene's objects: they, the sources, the colors those take and the field's eps
+/// (`scene::Scene::lit_inputs`).
+#[derive(Clone, Copy, Debug)]
+pub struct LitInputs<'a> {
+    pub objects: &'a [Object],
+    pub sources: &'a crate::field::Sources,
+    pub palette: crate::field::Palette,
+    pub epsilon: f64,
+}
+
 /// What the objects' look depends on: they are lit again only when one of these changes (not as the camera
 /// moves).
 #[derive(Clone, Debug, PartialEq)]
 pub struct LitKey {
     objects: Vec<Object>,
     sources: crate::field::Sources,
-    colors: crate::scene::Colors,
+    palette: crate::field::Palette,
     epsilon: f64,
 }
 
 impl LitKey {
-    pub fn of(scene: &crate::scene::Scene) -> LitKey {
+    pub fn of(inputs: LitInputs<'_>) -> LitKey {
         LitKey {
-            objects: scene.objects.clone(),
-            sources: scene.sources.clone(),
-            colors: scene.colors.clone(),
-            epsilon: scene.integration.epsilon,
+            objects: inputs.objects.to_vec(),
+            sources: inputs.sources.clone(),
+            palette: inputs.palette,
+            epsilon: inputs.epsilon,
         }
     }
 
-    /// Whether `scene` would be lit the same, without cloning it.
-    pub fn matches(&self, scene: &crate::scene::Scene) -> bool {
-        self.objects == scene.objects
-            && self.sources == scene.sources
-            && self.colors == scene.colors
-            && self.epsilon == scene.integration.epsilon
+    /// Whether `inputs` would light the objects the same, without cloning them.
+    pub fn matches(&self, inputs: LitInputs<'_>) -> bool {
+        self.objects == inputs.objects
+            && self.sources == *inputs.sources
+            && self.palette == inputs.palette
+            && self.epsilon == inputs.epsilon
     }
 }
 
@@ -337,16 +347,16 @@ pub fn focus(sources: &crate::field::Sources) -> (DVec3, f64) {
     }
 }
 
-/// The scene's objects tessellated and lit, finer where a shadow's edge crosses them.
-pub fn lit(scene: &crate::scene::Scene) -> Lit {
-    let (center, extent) = focus(&scene.sources);
-    let mut surface = tessellate::Surface::of(&scene.objects, center, extent);
+/// The objects tessellated and lit, finer where a shadow's edge crosses them.
+pub fn lit(inputs: LitInputs<'_>) -> Lit {
+    let (center, extent) = focus(inputs.sources);
+    let mut surface = tessellate::Surface::of(inputs.objects, center, extent);
     let light = lighting::light_surface(
         &mut surface,
-        &scene.objects,
-        &scene.sources,
-        &scene.colors,
-        scene.integration.epsilon,
+        inputs.objects,
+        inputs.sources,
+        inputs.palette,
+        inputs.epsilon,
     );
     Lit { surface, light }
 }

@@ -24,7 +24,7 @@ impl ObjectImage {
         if scene.objects.is_empty() {
             return None;
         }
-        let lit = lit(scene);
+        let lit = lit(scene.lit_inputs());
         let p = &lit.surface.positions;
         let triangles = (lit.surface.indices.chunks_exact(3))
             .map(|t| [p[t[0] as usize], p[t[1] as usize], p[t[2] as usize]])
@@ -32,7 +32,11 @@ impl ObjectImage {
         Some(ObjectImage {
             mesh: MeshData::new(triangles),
             lit,
-            lights: Lights::new(&scene.sources, &scene.colors, scene.integration.epsilon),
+            lights: Lights::new(
+                &scene.sources,
+                scene.colors.palette(),
+                scene.integration.epsilon,
+            ),
         })
     }
 

@@ -99,20 +99,22 @@ impl Colors {
         self.energy.map(|c| c * self.energy_intensity)
     }
 
-    /// A source's energy color Ce_i: its own color and intensity, each the scene's where it has none.
-    pub fn color_of(&self, look: &Look) -> [f64; 3] {
-        let intensity = look.intensity.unwrap_or(self.energy_intensity);
-        look.color.unwrap_or(self.energy).map(|c| c * intensity)
+    /// The scene's energy color and intensity, which the sources' colors are made from.
+    pub fn palette(&self) -> crate::field::Palette {
+        crate::field::Palette {
+            energy: self.energy,
+            energy_intensity: self.energy_intensity,
+        }
     }
 
-    /// A curve's energy color at chain parameter `t`: its color series there times its intensity, or its one
-    /// color (`color_of`) without a series.
+    /// A source's energy color Ce_i (`Palette::color_of`).
+    pub fn color_of(&self, look: &Look) -> [f64; 3] {
+        self.palette().color_of(look)
+    }
+
+    /// A curve's energy color at chain parameter `t` (`Palette::color_along`).
     pub fn color_along(&self, curve: &Curve, t: f64) -> [f64; 3] {
-        if curve.color_series.is_empty() {
-            return self.color_of(&curve.look);
-        }
-        let intensity = curve.look.intensity.unwrap_or(self.energy_intensity);
-        crate::field::wseries::evaluate_colors(&curve.color_series, t).map(|c| c * intensity)
+        self.palette().color_along(curve, t)
     }
 }
 
@@ -422,6 +424,16 @@ impl Scene {
         let first = s.points.len() + s.lines.len() + s.tori.len();
         let c = s.curves.get(k.checked_sub(first)?)?;
         (!c.color_series.is_empty()).then_some(c)
+    }
+
+    /// What lights the scene's objects (`objects::lit`).
+    pub fn lit_inputs(&self) -> crate::objects::LitInputs<'_> {
+        crate::objects::LitInputs {
+            objects: &self.objects,
+            sources: &self.sources,
+            palette: self.colors.palette(),
+            epsilon: self.integration.epsilon,
+        }
     }
 
     /// True when some source's color differs from the scene's (`tints` is not all zero), or varies along it.
