@@ -1,6 +1,8 @@
 //! The `energywave` command line: exit statuses, messages, outputs, and pictures checked against the camera
 //! math and the CPU reference.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -23,10 +25,7 @@ fn stderr(o: &Output) -> String {
 }
 
 fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("energywave-cli-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    common::tmpdir("cli", name)
 }
 
 fn scene(name: &str) -> String {

@@ -490,27 +490,7 @@ fn color_series_on_degenerate_chains_meet_the_converged_integral_on_the_cpu_and_
     use energywave::integrate::zeta;
     use energywave::reference::simpson::simpson_refined;
     use glam::DVec3;
-    let (a, c) = ([-2.0, -1.0, 0.0], [2.0, 1.0, 0.5]);
-    let chains: Vec<(&str, Vec<[f64; 3]>)> = vec![
-        ("first two points coincide", vec![a, a, c]),
-        ("last two points coincide", vec![a, c, c]),
-        (
-            "a segment starting at rest at a joint",
-            vec![[-3.0, -1.0, 0.0], [-1.0, 1.0, 0.0], [0.0; 3], [0.0; 3], c],
-        ),
-        (
-            "a segment of zero length inside the chain",
-            vec![
-                [-3.0, -1.0, 0.0],
-                [-1.0, 1.0, 0.0],
-                [0.0; 3],
-                [0.0; 3],
-                [0.0; 3],
-                [1.0, -1.0, 0.0],
-                c,
-            ],
-        ),
-    ];
+    let chains = common::degenerate_chains();
     let series = vec![[1.0, 1.0, 1.0], [0.9, 0.3, 0.1], [0.2, 0.45, 1.0]];
     let mut g = gpu();
     for (name, points) in chains {

@@ -1,5 +1,7 @@
 //! The nearest point on quadratic Bezier curves and chains, and Cardano's roots, against brute force.
 
+mod common;
+
 use energywave::field::cubic::{solve_cubic, solve_monic_cubic};
 use energywave::field::curve::{Segment, nearest_on_chain};
 use glam::DVec3;
@@ -18,21 +20,11 @@ fn brute_nearest(seg: &Segment, p: DVec3) -> (f64, f64) {
             best = (t, d);
         }
     }
-    let (mut lo, mut hi) = (
+    let around = (
         (best.0 - 1.0 / SAMPLES as f64).max(0.0),
         (best.0 + 1.0 / SAMPLES as f64).min(1.0),
     );
-    let g = (5f64.sqrt() - 1.0) / 2.0;
-    for _ in 0..100 {
-        let a = hi - g * (hi - lo);
-        let b = lo + g * (hi - lo);
-        if dist(a) < dist(b) {
-            hi = b;
-        } else {
-            lo = a;
-        }
-    }
-    let t = 0.5 * (lo + hi);
+    let t = common::golden_section_min(dist, around, 100);
     if dist(t) < best.1 { (t, dist(t)) } else { best }
 }
 

@@ -8,6 +8,8 @@
 //! Also a closed form with the decay zeta at work (alpha = beta = 1, nu = 2): a line through the eye along the
 //! view axis, for which every texel's B is known exactly, on the CPU and the GPU and with both integrators.
 
+mod common;
+
 use energywave::field::{Curve, Line, Sources};
 use energywave::geometry::Camera;
 use energywave::gpu::HeadlessRenderer;
@@ -48,31 +50,6 @@ fn curve_scene(control_points: &[[f64; 3]], weights: &[f64], w: u32) -> Scene {
     scene
 }
 
-/// The degenerate but valid curves: a name, the control points.
-fn degenerate_curves() -> Vec<(&'static str, Vec<[f64; 3]>)> {
-    let (a, c) = ([-2.0, -1.0, 0.0], [2.0, 1.0, 0.5]);
-    vec![
-        ("first two points coincide", vec![a, a, c]),
-        ("last two points coincide", vec![a, c, c]),
-        (
-            "a segment starting at rest at a joint",
-            vec![[-3.0, -1.0, 0.0], [-1.0, 1.0, 0.0], [0.0; 3], [0.0; 3], c],
-        ),
-        (
-            "a segment of zero length inside the chain",
-            vec![
-                [-3.0, -1.0, 0.0],
-                [-1.0, 1.0, 0.0],
-                [0.0; 3],
-                [0.0; 3],
-                [0.0; 3],
-                [1.0, -1.0, 0.0],
-                c,
-            ],
-        ),
-    ]
-}
-
 const WEIGHTS: [f64; 5] = [0.2, 1.0, 0.4, 0.9, 0.3];
 
 /// The largest error of `got` against `want` and the texel where it is.
@@ -91,7 +68,7 @@ fn worst(got: &[f64], want: &[f64], w: u32) -> (f64, u32, u32) {
 
 #[test]
 fn degenerate_curves_are_within_the_tolerance_of_the_converged_reference_on_the_cpu() {
-    for (name, points) in degenerate_curves() {
+    for (name, points) in common::degenerate_chains() {
         for weights in [&WEIGHTS[..], &[]] {
             let mut scene = curve_scene(&points, weights, 24);
             let want = converged_reference(&scene, 1).0;
@@ -167,7 +144,7 @@ fn every_shipped_scene_is_within_the_tolerance_of_the_converged_reference_on_the
 #[test]
 fn degenerate_curves_on_the_gpu_are_within_the_tolerance_of_the_converged_reference() {
     let mut gpu = HeadlessRenderer::new().expect("a GPU adapter (lavapipe in CI)");
-    for (name, points) in degenerate_curves() {
+    for (name, points) in common::degenerate_chains() {
         let scene = curve_scene(&points, &WEIGHTS, 24);
         let want = converged_reference(&scene, 1).0;
         let bb = scene.place_billboard(1.0);

@@ -5,6 +5,8 @@
 //! Frames are small (48 x 40 pixels, a 40-texel billboard, n = 40) so that the whole file runs in seconds on
 //! a software GPU.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -18,10 +20,7 @@ fn preset() -> String {
 }
 
 fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("energywave-export-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    common::tmpdir("export", name)
 }
 
 /// `render` of `scene` at test size with `args`.

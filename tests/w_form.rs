@@ -31,23 +31,13 @@ fn brute_brightest(cps: &[DVec3], weights: &[f64], p: DVec3, eps: f64) -> f64 {
         .collect();
     maxima.sort_by(|&a, &b| values[b].total_cmp(&values[a]));
     let mut best = values.iter().copied().fold(f64::MIN, f64::max);
-    let ratio = (5f64.sqrt() - 1.0) / 2.0;
     for &k in maxima.iter().take(6) {
         let step = 1.0 / SAMPLES as f64;
-        let (mut lo, mut hi) = (
+        let around = (
             (k as f64 * step - step).max(0.0),
             (k as f64 * step + step).min(1.0),
         );
-        for _ in 0..200 {
-            let a = hi - ratio * (hi - lo);
-            let b = lo + ratio * (hi - lo);
-            if g(a) > g(b) {
-                hi = b;
-            } else {
-                lo = a;
-            }
-        }
-        best = best.max(g(0.5 * (lo + hi)));
+        best = best.max(g(common::golden_section_min(|t| -g(t), around, 200)));
     }
     best
 }
@@ -342,24 +332,17 @@ fn brute_point(cps: &[DVec3], weights: &[f64], p: DVec3, eps: f64) -> (f64, f64)
         })
         .collect();
     maxima.sort_by(|&a, &b| values[b].total_cmp(&values[a]));
-    let ratio = (5f64.sqrt() - 1.0) / 2.0;
     let mut best = (f64::MIN, 0.0);
     for &k in maxima.iter().take(3) {
         let step = 1.0 / SAMPLES as f64;
-        let (mut lo, mut hi) = (
+        let around = (
             (k as f64 * step - step).max(0.0),
             (k as f64 * step + step).min(1.0),
         );
-        for _ in 0..80 {
-            let a = hi - ratio * (hi - lo);
-            let b = lo + ratio * (hi - lo);
-            if g(a) > g(b) {
-                hi = b;
-            } else {
-                lo = a;
-            }
-        }
-        for t in [k as f64 * step, 0.5 * (lo + hi)] {
+        for t in [
+            k as f64 * step,
+            common::golden_section_min(|t| -g(t), around, 80),
+        ] {
             if g(t) > best.0 {
                 best = (g(t), t);
             }

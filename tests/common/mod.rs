@@ -33,6 +33,57 @@ impl Lcg {
     }
 }
 
+/// Where `f` is least on `[lo, hi]`, by `steps` steps of golden-section search (for an `f` with one minimum
+/// there: the middle of the last bracket, about 0.618^steps of the width from it).
+pub fn golden_section_min(f: impl Fn(f64) -> f64, (lo, hi): (f64, f64), steps: u32) -> f64 {
+    let ratio = (5f64.sqrt() - 1.0) / 2.0;
+    let (mut lo, mut hi) = (lo, hi);
+    for _ in 0..steps {
+        let a = hi - ratio * (hi - lo);
+        let b = lo + ratio * (hi - lo);
+        if f(a) < f(b) {
+            hi = b;
+        } else {
+            lo = a;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// A fresh empty folder in the temporary directory for `name`, unique to this process (`prefix` names the
+/// test file).
+pub fn tmpdir(prefix: &str, name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("energywave-{prefix}-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Degenerate but valid Bezier chains, where a segment's speed vanishes: a name, the control points.
+pub fn degenerate_chains() -> Vec<(&'static str, Vec<[f64; 3]>)> {
+    let (a, c) = ([-2.0, -1.0, 0.0], [2.0, 1.0, 0.5]);
+    vec![
+        ("first two points coincide", vec![a, a, c]),
+        ("last two points coincide", vec![a, c, c]),
+        (
+            "a segment starting at rest at a joint",
+            vec![[-3.0, -1.0, 0.0], [-1.0, 1.0, 0.0], [0.0; 3], [0.0; 3], c],
+        ),
+        (
+            "a segment of zero length inside the chain",
+            vec![
+                [-3.0, -1.0, 0.0],
+                [-1.0, 1.0, 0.0],
+                [0.0; 3],
+                [0.0; 3],
+                [0.0; 3],
+                [1.0, -1.0, 0.0],
+                c,
+            ],
+        ),
+    ]
+}
+
 /// `assets/scenes`.
 pub fn scenes_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes")
