@@ -1,5 +1,5 @@
 // Shared by every pass that evaluates the energy field (prepended to them by src/gpu/shaders.rs):
-// the source structs, mirrored in src/gpu/field_pass.rs (module gpu_data, keep in sync), and the f32 twins of
+// the source structs, mirrored in src/gpu/field_pass/gpu_data.rs (keep in sync), and the f32 twins of
 // the f64 reference in src/field/: distance functions, Cardano's formula, the nearest point on a quadratic
 // Bezier segment, and the W series basis. METHOD.md sections 1-2.
 

@@ -3,7 +3,7 @@
 // the sources' colors: memory is the texture alone, O(W^2). The passes (one WGSL file each: simpson.wgsl, adaptive_smooth.wgsl, adaptive_curves.wgsl, the
 // last two after adaptive.wgsl) are each assembled into a module of their own by src/gpu/shaders.rs: the
 // constants generated from the f64 twin, field_common.wgsl, this file, then the pass. Rust side:
-// src/gpu/field_pass.rs (gpu_data holds the mirror of FieldParams; a test checks the layout). CPU twin:
+// src/gpu/field_pass/ (gpu_data.rs holds the mirror of FieldParams; a test checks the layout). CPU twin:
 // src/reference/field_pass.rs.
 
 struct FieldParams {

@@ -1,0 +1,240 @@
+//! The field pass's storage buffers and pipelines: the generic ones, and those specialised to a scene's
+//! structure, compiled on a thread of their own.
+
+use super::super::shaders;
+use crate::geometry::Billboard;
+use crate::scene::Scene;
+
+use super::gpu_data::*;
+use super::pack::*;
+
+/// A storage buffer that grows as needed (never empty: WebGPU refuses zero-sized bindings).
+pub(super) struct StorageBuffer {
+    pub(super) label: &'static str,
+    pub(super) buffer: wgpu::Buffer,
+}
+
+impl StorageBuffer {
+    pub(super) fn new(device: &wgpu::Device, label: &'static str, bytes: &[u8]) -> Self {
+        Self {
+            label,
+            buffer: storage_buffer_init(device, label, bytes),
+        }
+    }
+
+    /// Writes `bytes`; returns true when the buffer had to be replaced (the bind group must be rebuilt).
+    pub(super) fn write(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        bytes: &[u8],
+    ) -> bool {
+        if bytes.len() as u64 > self.buffer.size() {
+            *self = Self::new(device, self.label, bytes);
+            true
+        } else {
+            if !bytes.is_empty() {
+                queue.write_buffer(&self.buffer, 0, bytes);
+            }
+            false
+        }
+    }
+}
+
+/// The scene's structure a specialised pipeline is compiled for: the values of `shaders/field_pass.wgsl`'s
+/// pipeline-overridable constants (source counts per kind, the Gauss-Kronrod order, jitter). Values (positions,
+/// coefficients, the camera) stay in storage buffers, so editing them never compiles anything.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Structure {
+    /// `FieldParams::integrator`: 0 simpson (whose structure has no Gauss order), 1 adaptive (no jitter).
+    pub integrator: u32,
+    pub points: u32,
+    pub lines: u32,
+    pub tori: u32,
+    pub curves: u32,
+    pub gauss_order: u32,
+    pub jitter: u32,
+    /// Whether some curve's term reads its brightest point (`FieldParams::search`).
+    pub search: u32,
+}
+
+impl Structure {
+    pub(super) fn of(params: &FieldParams) -> Self {
+        let simpson = params.integrator == 0;
+        Self {
+            integrator: params.integrator,
+            points: params.point_count,
+            lines: params.line_count,
+            tori: params.torus_count,
+            curves: params.curve_count,
+            gauss_order: if simpson { 0 } else { params.gauss_order },
+            jitter: if simpson { params.jitter } else { 0 },
+            search: params.search,
+        }
+    }
+
+    /// The entry points this structure's integrator dispatches (indices of `Pipelines`).
+    pub(super) fn entries(&self) -> &'static [usize] {
+        if self.integrator == 0 { &[0] } else { &[1, 2] }
+    }
+
+    /// The structure of `scene` seen through `billboard`.
+    pub fn of_scene(scene: &Scene, billboard: &Billboard) -> Self {
+        Self::of(&pack(scene, billboard).params)
+    }
+
+    pub(super) fn constants(&self) -> [(&'static str, f64); 7] {
+        [
+            ("POINT_COUNT", self.points as f64),
+            ("LINE_COUNT", self.lines as f64),
+            ("TORUS_COUNT", self.tori as f64),
+            ("CURVE_COUNT", self.curves as f64),
+            ("GAUSS_ORDER", self.gauss_order as f64),
+            ("JITTER", self.jitter as f64),
+            ("SEARCH", self.search as f64),
+        ]
+    }
+}
+
+/// When the field pass uses pipelines specialised to the scene's structure.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Specialise {
+    /// Never: the generic pipelines only (the default: a single still render would spend more on the compile,
+    /// about 0.3 s on lavapipe, than it saves).
+    #[default]
+    Off,
+    /// Compile a structure's pipelines on a thread of their own the first time it is drawn, and use the generic
+    /// ones until they are ready: no frame waits on a compile.
+    Background,
+    /// Use a structure's pipelines if they are ready, and compile only when asked (`compile_in_background`):
+    /// the viewer compiles while it is idle, so that a compile never takes a core from its frames.
+    IfReady,
+    /// Compile them before the first dispatch that needs them (renders and exports of many frames).
+    Blocking,
+}
+
+/// The three passes' modules (simpson, adaptive smooth sources, adaptive curves: `shaders::FIELD_PASSES`),
+/// indexed by `Chunk::pipeline`; each holds its one entry point.
+pub(super) type Modules = [wgpu::ShaderModule; 3];
+pub(super) type Pipelines = [wgpu::ComputePipeline; 3];
+/// A structure's specialised pipelines: only its integrator's entry points.
+pub(super) type SpecialisedSet = [Option<wgpu::ComputePipeline>; 3];
+
+pub(super) fn build_pipeline(
+    device: &wgpu::Device,
+    module: &wgpu::ShaderModule,
+    layout: &wgpu::PipelineLayout,
+    entry: &str,
+    constants: &[(&str, f64)],
+) -> wgpu::ComputePipeline {
+    let specialised = match constants {
+        [] => "",
+        [("SEARCH", _)] => ".search",
+        _ => ".specialised",
+    };
+    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(&format!("energywave.field.{entry}{specialised}")),
+        layout: Some(layout),
+        module,
+        entry_point: Some(entry),
+        compilation_options: wgpu::PipelineCompilationOptions {
+            constants,
+            ..Default::default()
+        },
+        cache: None,
+    })
+}
+
+/// The generic pipelines of every entry point: without the search for the brightest point of a curve (`search`
+/// false: scenes without the continuous W form compile none of it), or with it.
+pub(super) fn build_pipelines(
+    device: &wgpu::Device,
+    modules: &Modules,
+    layout: &wgpu::PipelineLayout,
+    search: bool,
+) -> Pipelines {
+    let constants: &[(&str, f64)] = if search { &[("SEARCH", 1.0)] } else { &[] };
+    std::array::from_fn(|k| {
+        build_pipeline(
+            device,
+            &modules[k],
+            layout,
+            shaders::FIELD_PASSES[k].0,
+            constants,
+        )
+    })
+}
+
+/// The pipelines of `structure`'s entry points, specialised to it.
+pub(super) fn build_specialised(
+    device: &wgpu::Device,
+    modules: &Modules,
+    layout: &wgpu::PipelineLayout,
+    structure: Structure,
+) -> SpecialisedSet {
+    let constants = structure.constants();
+    let mut set: SpecialisedSet = Default::default();
+    for &k in structure.entries() {
+        set[k] = Some(build_pipeline(
+            device,
+            &modules[k],
+            layout,
+            shaders::FIELD_PASSES[k].0,
+            &constants,
+        ));
+    }
+    set
+}
+
+/// Where a compile's thread leaves its pipelines and how long they took (milliseconds).
+pub(super) type CompileSlot = std::sync::Arc<std::sync::Mutex<Option<(SpecialisedSet, f64)>>>;
+
+/// Most structures whose specialised pipelines are kept (the least recently drawn go first): a compiled
+/// structure holds about 20 MB of the driver's memory on lavapipe, and an editing session may pass through
+/// many structures.
+pub(super) const KEPT_STRUCTURES: usize = 4;
+
+/// The specialised pipelines: those ready (most recently drawn first), and the one compile under way.
+#[derive(Default)]
+pub(super) struct SpecialisedPipelines {
+    pub(super) ready: Vec<(Structure, std::sync::Arc<SpecialisedSet>)>,
+    /// One compile at a time, on its own thread: a burst of structure changes compiles only what is still
+    /// drawn when the compile before it has finished.
+    pub(super) compiling: Option<(Structure, CompileSlot)>,
+    /// Milliseconds each structure took to compile, in the order they finished.
+    pub(super) compile_ms: Vec<(Structure, f64)>,
+}
+
+impl SpecialisedPipelines {
+    /// The pipelines of `structure` if ready, marked as the most recently drawn.
+    pub(super) fn take(&mut self, structure: &Structure) -> Option<std::sync::Arc<SpecialisedSet>> {
+        let k = self.ready.iter().position(|(s, _)| s == structure)?;
+        let entry = self.ready.remove(k);
+        let p = entry.1.clone();
+        self.ready.insert(0, entry);
+        Some(p)
+    }
+
+    pub(super) fn keep(
+        &mut self,
+        structure: Structure,
+        set: SpecialisedSet,
+        ms: f64,
+    ) -> std::sync::Arc<SpecialisedSet> {
+        let p = std::sync::Arc::new(set);
+        self.ready.insert(0, (structure, p.clone()));
+        self.ready.truncate(KEPT_STRUCTURES);
+        self.compile_ms.push((structure, ms));
+        p
+    }
+
+    /// Collects the compile under way if it has finished.
+    pub(super) fn collect(&mut self) {
+        let done = (self.compiling.as_ref())
+            .and_then(|(_, slot)| slot.lock().ok().and_then(|mut slot| slot.take()));
+        if let Some((set, ms)) = done {
+            let (structure, _) = self.compiling.take().expect("a compile was under way");
+            self.keep(structure, set, ms);
+        }
+    }
+}
