@@ -6,6 +6,7 @@
 //! - [`objects`]: spheres, boxes, planes and glTF meshes that hide the glow and are lit by it;
 //! - [`animation`]: time in scenes: the travelling pulse (thesis eq. 5.1) and keyframes;
 //! - [`scene`]: TOML scene files, validated field by field;
+//! - [`frame`]: a frame's resolved setup (billboard, reach, terms, clips), worked out once for every renderer;
 //! - [`reference`]: the f64 CPU renderer, one module for each GPU pass it twins, named alike;
 //! - [`gpu`]: the same on the GPU: WGSL compute and render passes, headless or in the viewer;
 //! - [`output`]: PNG and EXR files, written atomically;
@@ -22,6 +23,7 @@ pub mod bench;
 pub mod cli;
 pub mod export;
 pub mod field;
+pub mod frame;
 pub mod geometry;
 pub mod gpu;
 pub mod integrate;

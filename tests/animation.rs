@@ -5,6 +5,7 @@ use std::f64::consts::PI;
 use std::path::Path;
 
 use energywave::animation::{Parameter, Pulse, SourceKind, Value};
+use energywave::frame::FrameSetup;
 use energywave::scene::Scene;
 
 /// Thesis eq. (5.1), as printed (min and max, not a clamp): frame t, weight index i.
@@ -447,7 +448,7 @@ fn every_shipped_scene_shows_its_effect_on_its_first_frame() {
         let mut scene = Scene::load(&path).unwrap().at_frame(0.0);
         scene.billboard.resolution = 16;
         let bb = scene.place_billboard(1.0);
-        let b = energywave::reference::render_brightness(&scene, &bb).values;
+        let b = energywave::reference::render_brightness(&FrameSetup::new(&scene, bb)).values;
         let lit = b.iter().filter(|&&v| v > 0.2).count();
         assert!(
             lit >= 8,

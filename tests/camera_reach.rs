@@ -10,6 +10,7 @@
 
 use std::path::Path;
 
+use energywave::frame::FrameSetup;
 use energywave::geometry::ray_end;
 use energywave::gpu::HeadlessRenderer;
 use energywave::integrate::Integrator;
@@ -75,7 +76,7 @@ fn every_ray_reaches_past_every_source_close_up_inside_and_orbiting() {
     }
     for (name, scene) in &cameras {
         let bb = scene.place_billboard(1.0);
-        let reach = scene.ray_reach(&bb);
+        let reach = FrameSetup::new(&scene, bb).reach;
         let eye = scene.camera.eye;
         let inward = -bb.normal;
         let deepest = deepest_source(scene, eye, inward);
@@ -109,8 +110,8 @@ fn the_default_scene_close_up_and_from_inside_is_within_tolerance_of_the_converg
         scene.integration.integrator = Integrator::Adaptive;
         let want = converged_reference(&scene, 1).0;
         let bb = scene.place_billboard(1.0);
-        let cpu = reference::render_brightness(&scene, &bb).values;
-        let gpu_b = gpu.brightness(&scene, &bb).unwrap();
+        let cpu = reference::render_brightness(&FrameSetup::new(&scene, bb)).values;
+        let gpu_b = gpu.brightness(&FrameSetup::new(&scene, bb)).unwrap();
         let tolerance = scene.integration.tolerance;
         for (k, &r) in want.iter().enumerate() {
             let (i, j) = (k as u32 % w, k as u32 / w);
@@ -149,7 +150,7 @@ fn zooming_in_keeps_the_look_on_the_view_axis() {
         let mid = bb.texel_center(12, 12, 25);
         let to_target = (s.camera.target - s.camera.eye).normalize();
         assert!((mid - s.camera.eye).normalize().dot(to_target) > 1.0 - 1e-12);
-        reference::texel_brightness(&s, &bb, 12, 12)
+        reference::texel_brightness(&FrameSetup::new(&s, bb), 12, 12)
     };
     let far = axis(1.0);
     assert!(far > 1.0, "the view axis crosses the effect: B = {far}");

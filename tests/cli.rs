@@ -6,6 +6,7 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+use energywave::frame::FrameSetup;
 use energywave::reference;
 use energywave::scene::Scene;
 use glam::DVec3;
@@ -151,8 +152,8 @@ fn render_writes_the_composed_frame() {
     s.billboard.resolution = 48;
     s.integration.divisions = 64;
     let bb = s.place_billboard(96.0 / 64.0);
-    let tex = reference::render_brightness(&s, &bb);
-    let frame = reference::compose_frame(&s, &bb, &tex, 96, 64, false);
+    let tex = reference::render_brightness(&FrameSetup::new(&s, bb));
+    let frame = reference::compose_frame(&FrameSetup::new(&s, bb), &tex, 96, 64, false);
     for (px, want) in img.pixels().zip(&frame) {
         for c in 0..3 {
             assert!((px[c] as f64 - want[c] * 255.0).abs() <= 0.5 + 1e-9);
@@ -204,7 +205,7 @@ fn brightness_writes_b_itself_as_float_exr() {
     let mut above_one = 0;
     for j in 0..24 {
         for i in 0..24 {
-            let want = reference::texel_brightness(&s, &bb, i, j);
+            let want = reference::texel_brightness(&FrameSetup::new(&s, bb), i, j);
             let got = img.get_pixel(i, j).0;
             assert!(
                 got.iter()

@@ -6,6 +6,7 @@
 use std::path::Path;
 use std::sync::{Mutex, MutexGuard, OnceLock};
 
+use energywave::frame::FrameSetup;
 use energywave::gpu::HeadlessRenderer;
 use energywave::integrate::Integrator;
 use energywave::reference;
@@ -54,14 +55,14 @@ fn the_colored_sum_is_each_source_rendered_alone_and_summed() {
     for integrator in [Integrator::Simpson, Integrator::Adaptive] {
         let scene = rings(20, integrator);
         let bb = scene.place_billboard(1.0);
-        let whole = reference::render_brightness(&scene, &bb);
+        let whole = reference::render_brightness(&FrameSetup::new(&scene, bb));
         let looks: Vec<_> = scene.sources.looks().copied().collect();
         assert_eq!(looks.len(), 3);
         let ce = scene.colors.energy_color();
         let mut b_sum = vec![0.0; whole.values.len()];
         let mut g_sum = vec![[0.0; 3]; whole.values.len()];
         for (k, look) in looks.iter().enumerate() {
-            let one = reference::render_brightness(&alone(&scene, k), &bb);
+            let one = reference::render_brightness(&FrameSetup::new(&alone(&scene, k), bb));
             // Alone, a source in one color has the tint B_k (Ce_k - Ce); the beam's color varies along it
             // (its series is checked against a direct evaluation below).
             let series = scene.series_curve(k).is_some();
@@ -111,9 +112,9 @@ fn sources_in_the_scene_color_render_as_the_scene_did_to_the_bit() {
     let mut scene = shipped_scene("mixed.toml");
     scene.billboard.resolution = 24;
     let bb = scene.place_billboard(1.0);
-    let plain = reference::render_brightness(&scene, &bb);
+    let plain = reference::render_brightness(&FrameSetup::new(&scene, bb));
     assert!(plain.tint.iter().all(|t| *t == [0.0; 3]));
-    let frame = reference::compose_frame(&scene, &bb, &plain, 40, 40, false);
+    let frame = reference::compose_frame(&FrameSetup::new(&scene, bb), &plain, 40, 40, false);
     // Every source given the scene's color and intensity explicitly: nothing changes.
     let mut explicit = scene.clone();
     let (energy, intensity) = (scene.colors.energy, scene.colors.energy_intensity);
@@ -122,10 +123,10 @@ fn sources_in_the_scene_color_render_as_the_scene_did_to_the_bit() {
         look.intensity = Some(intensity);
     }
     assert!(!explicit.tinted());
-    let texture = reference::render_brightness(&explicit, &bb);
+    let texture = reference::render_brightness(&FrameSetup::new(&explicit, bb));
     assert_eq!(texture, plain);
     assert_eq!(
-        reference::compose_frame(&explicit, &bb, &texture, 40, 40, false),
+        reference::compose_frame(&FrameSetup::new(&explicit, bb), &texture, 40, 40, false),
         frame
     );
     let mut g = gpu();
@@ -144,14 +145,13 @@ fn sources_in_the_scene_color_render_as_the_scene_did_to_the_bit() {
     let mut orange_scene = scene.clone();
     orange_scene.colors.energy = orange;
     let a = reference::compose_frame(
-        &recolored,
-        &bb,
-        &reference::render_brightness(&recolored, &bb),
+        &FrameSetup::new(&recolored, bb),
+        &reference::render_brightness(&FrameSetup::new(&recolored, bb)),
         40,
         40,
         false,
     );
-    let b = reference::compose_frame(&orange_scene, &bb, &plain, 40, 40, false);
+    let b = reference::compose_frame(&FrameSetup::new(&orange_scene, bb), &plain, 40, 40, false);
     for (p, q) in a.iter().zip(&b) {
         assert!((0..4).all(|c| (p[c] - q[c]).abs() < 1e-12), "{p:?} {q:?}");
     }
@@ -171,9 +171,9 @@ fn the_gpu_tint_matches_the_cpu_twin() {
     for integrator in [Integrator::Simpson, Integrator::Adaptive] {
         let scene = rings(40, integrator);
         let bb = scene.place_billboard(1.0);
-        let cpu = reference::render_brightness(&scene, &bb);
+        let cpu = reference::render_brightness(&FrameSetup::new(&scene, bb));
         let mut g = gpu();
-        let b = g.brightness(&scene, &bb).unwrap();
+        let b = g.brightness(&FrameSetup::new(&scene, bb)).unwrap();
         let tint = g.tint().unwrap();
         let largest = scene
             .tints()
@@ -210,9 +210,10 @@ fn colored_frames_match_the_cpu_in_every_blend_and_the_transparent_export() {
         let mut scene = rings(48, Integrator::Adaptive);
         scene.colors.blend = blend;
         let bb = scene.place_billboard(w as f64 / h as f64);
-        let texture = reference::render_brightness(&scene, &bb);
+        let texture = reference::render_brightness(&FrameSetup::new(&scene, bb));
         for transparent in [false, true] {
-            let cpu = reference::compose_frame(&scene, &bb, &texture, w, h, transparent);
+            let cpu =
+                reference::compose_frame(&FrameSetup::new(&scene, bb), &texture, w, h, transparent);
             let frame = gpu().render(&scene, w, h, transparent).unwrap();
             let mut red = 0;
             for (p, q) in frame.pixels.iter().zip(&cpu) {
@@ -237,15 +238,15 @@ fn intensities_above_one_stay_unclamped_in_the_transparent_export() {
     let mut scene = shipped_scene("mixed.toml");
     scene.billboard.resolution = 32;
     let bb = scene.place_billboard(1.0);
-    let texture = reference::render_brightness(&scene, &bb);
-    let base = reference::compose_frame(&scene, &bb, &texture, 32, 32, true);
+    let texture = reference::render_brightness(&FrameSetup::new(&scene, bb));
+    let base = reference::compose_frame(&FrameSetup::new(&scene, bb), &texture, 32, 32, true);
     // The point four times as intense as its color; the scene twice.
     scene.sources.points[0].look.intensity = Some(4.0);
     scene.colors.energy_intensity = 2.0;
-    let hot = reference::render_brightness(&scene, &bb);
+    let hot = reference::render_brightness(&FrameSetup::new(&scene, bb));
     // B does not change: intensity is color, not energy.
     assert_eq!(hot.values, texture.values);
-    let frame = reference::compose_frame(&scene, &bb, &hot, 32, 32, true);
+    let frame = reference::compose_frame(&FrameSetup::new(&scene, bb), &hot, 32, 32, true);
     let brightest = frame.iter().map(|p| p[2]).fold(0.0, f64::max);
     assert!(brightest > 2.0, "HDR values survive unclamped: {brightest}");
     // Where the point contributes nothing the glow is twice the base; everywhere it is at least that.
@@ -269,7 +270,7 @@ fn intensities_above_one_stay_unclamped_in_the_transparent_export() {
     assert!(opaque.pixels.iter().all(|p| p.iter().all(|&c| c <= 1.0)));
     // One texel of the tint by hand: the point's B_0 times (4 Ce_0 - 2 Ce), Ce_0 = Ce.
     let t = 16 * 32 + 16;
-    let b0 = reference::render_brightness(&alone(&scene, 0), &bb).values[t];
+    let b0 = reference::render_brightness(&FrameSetup::new(&alone(&scene, 0), bb)).values[t];
     let ce = scene.colors.energy;
     for (tint, ce) in hot.tint[t].iter().zip(ce) {
         assert!((tint - b0 * (4.0 - 2.0) * ce).abs() < 1e-9);
@@ -351,9 +352,9 @@ fn a_curve_s_color_series_is_its_b_spline_along_the_nearest_point() {
         scene.sources.curves[0].look.intensity = Some(1.7);
         let scene = alone(&scene, beam);
         let bb = scene.place_billboard(1.0);
-        let texture = reference::render_brightness(&scene, &bb);
+        let texture = reference::render_brightness(&FrameSetup::new(&scene, bb));
         let (ce, curve) = (scene.colors.energy_color(), &scene.sources.curves[0]);
-        let reach = scene.ray_reach(&bb);
+        let reach = FrameSetup::new(&scene, bb).reach;
         let settings = scene.integration.on_ray(reach.stretch);
         for (i, j) in [(8, 8), (3, 8), (12, 7), (8, 2), (15, 15)] {
             let s = bb.texel_center(i, j, 16);
@@ -387,10 +388,10 @@ fn a_series_of_one_color_is_that_color() {
     let mut scene = rings(16, Integrator::Adaptive);
     let bb = scene.place_billboard(1.0);
     scene.sources.curves[0].color_series = vec![[0.9, 0.2, 0.6]];
-    let series = reference::render_brightness(&scene, &bb);
+    let series = reference::render_brightness(&FrameSetup::new(&scene, bb));
     scene.sources.curves[0].color_series.clear();
     scene.sources.curves[0].look.color = Some([0.9, 0.2, 0.6]);
-    let one = reference::render_brightness(&scene, &bb);
+    let one = reference::render_brightness(&FrameSetup::new(&scene, bb));
     assert_eq!(series.values, one.values);
     for (a, b) in series.tint.iter().zip(&one.tint) {
         for c in 0..3 {
@@ -509,8 +510,8 @@ fn color_series_on_degenerate_chains_meet_the_converged_integral_on_the_cpu_and_
             ..Sources::default()
         };
         let bb = scene.place_billboard(1.0);
-        let cpu = reference::render_brightness(&scene, &bb);
-        g.brightness(&scene, &bb).unwrap();
+        let cpu = reference::render_brightness(&FrameSetup::new(&scene, bb));
+        g.brightness(&FrameSetup::new(&scene, bb)).unwrap();
         let gpu_tint = g.tint().unwrap();
         // Each within the tolerance of the converged value (|Cs - Ce| <= 1 here), so within twice of each other:
         // the adaptive integrator's promise, which on these chains is not a relative one.
@@ -525,7 +526,7 @@ fn color_series_on_degenerate_chains_meet_the_converged_integral_on_the_cpu_and_
             }
         }
         let (ce, curve) = (scene.colors.energy_color(), &scene.sources.curves[0]);
-        let reach = scene.ray_reach(&bb);
+        let reach = FrameSetup::new(&scene, bb).reach;
         let settings = scene.integration.on_ray(reach.stretch);
         for (i, j) in [(8, 8), (4, 9), (11, 6), (2, 13)] {
             let s = bb.texel_center(i, j, 16);

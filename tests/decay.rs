@@ -11,6 +11,7 @@ use std::path::Path;
 use std::sync::{Mutex, MutexGuard, OnceLock};
 
 use energywave::field::{Line, Point, Sources};
+use energywave::frame::FrameSetup;
 use energywave::geometry::ray_end;
 use energywave::gpu::HeadlessRenderer;
 use energywave::integrate::{Decay, Integration, Integrator};
@@ -117,7 +118,7 @@ fn point_scene(position: DVec3, coefficient: f64, eye: DVec3, integrator: Integr
 /// Every texel's ray of `scene` with the settings on it.
 fn rays(scene: &Scene) -> Vec<((DVec3, DVec3), Integration)> {
     let bb = scene.place_billboard(1.0);
-    let reach = scene.ray_reach(&bb);
+    let reach = FrameSetup::new(&scene, bb).reach;
     let w = scene.billboard.resolution;
     (0..w * w)
         .map(|k| {
@@ -188,8 +189,8 @@ fn both_integrators_meet_the_closed_form_on_a_point_source_on_the_cpu_and_the_gp
         ] {
             let scene = point_scene(position, coefficient, eye, integrator);
             let bb = scene.place_billboard(1.0);
-            let cpu = reference::render_brightness(&scene, &bb).values;
-            let gpu_b = g.brightness(&scene, &bb).unwrap();
+            let cpu = reference::render_brightness(&FrameSetup::new(&scene, bb)).values;
+            let gpu_b = g.brightness(&FrameSetup::new(&scene, bb)).unwrap();
             // The adaptive integrator within its tolerance (and f32's rounding on the GPU); Simpson with n = 4000
             // within 2e-4 of B where the peak is resolved.
             let (tolerance, relative) = match integrator {
@@ -342,8 +343,8 @@ fn negative_sources_subtract_under_rms_as_the_definition_says_with_their_colors(
     for integrator in [Integrator::Adaptive, Integrator::Simpson] {
         let scene = signed_scene(integrator);
         let bb = scene.place_billboard(1.0);
-        let cpu = reference::render_brightness(&scene, &bb);
-        let gpu_b = g.brightness(&scene, &bb).unwrap();
+        let cpu = reference::render_brightness(&FrameSetup::new(&scene, bb));
+        let gpu_b = g.brightness(&FrameSetup::new(&scene, bb)).unwrap();
         let gpu_tint = g.tint().unwrap();
         let ce = scene.colors.energy_color();
         let tolerance = scene.integration.tolerance;
@@ -400,8 +401,8 @@ fn the_adaptive_integrator_meets_its_tolerance_with_the_rms_decay_on_every_shipp
         scene.integration.decay = Decay::Rms;
         let want = converged_reference(&scene, 1).0;
         let bb = scene.place_billboard(1.0);
-        let cpu = reference::render_brightness(&scene, &bb).values;
-        let gpu_b = g.brightness(&scene, &bb).unwrap();
+        let cpu = reference::render_brightness(&FrameSetup::new(&scene, bb)).values;
+        let gpu_b = g.brightness(&FrameSetup::new(&scene, bb)).unwrap();
         let tolerance = scene.integration.tolerance;
         for (k, &r) in want.iter().enumerate() {
             assert!(
@@ -430,8 +431,8 @@ fn simpson_with_the_rms_decay_splits_a_long_term_over_dispatches_and_sums_the_te
     scene.integration.decay = Decay::Rms;
     let bb = scene.place_billboard(1.0);
     let mut g = gpu();
-    let gpu_b = g.brightness(&scene, &bb).unwrap();
-    let cpu = reference::render_brightness(&scene, &bb).values;
+    let gpu_b = g.brightness(&FrameSetup::new(&scene, bb)).unwrap();
+    let cpu = reference::render_brightness(&FrameSetup::new(&scene, bb)).values;
     for (k, (&x, &y)) in gpu_b.iter().zip(&cpu).enumerate() {
         assert!(
             (x as f64 - y).abs() <= 1.5e-4 * y.abs().max(0.01),
@@ -466,7 +467,7 @@ fn simpson_with_the_rms_decay_splits_a_long_term_over_dispatches_and_sums_the_te
             .curves
             .iter_mut()
             .for_each(|x| keep(&mut x.coefficient));
-        let one = g.brightness(&s, &bb).unwrap();
+        let one = g.brightness(&FrameSetup::new(&s, bb)).unwrap();
         alone_sum
             .iter_mut()
             .zip(&one)
@@ -642,7 +643,7 @@ fn the_decay_in_scene_files_and_on_the_command_line() {
     want.billboard.resolution = 16;
     want.integration.decay = Decay::Rms;
     let bb = want.place_billboard(1.0);
-    let b = reference::render_brightness(&want, &bb).values;
+    let b = reference::render_brightness(&FrameSetup::new(&want, bb)).values;
     let rms = read("rms.exr");
     assert!(
         b.iter()

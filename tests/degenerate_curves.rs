@@ -11,6 +11,7 @@
 mod common;
 
 use energywave::field::{Curve, Line, Sources};
+use energywave::frame::FrameSetup;
 use energywave::geometry::Camera;
 use energywave::gpu::HeadlessRenderer;
 use energywave::integrate::{Integration, Integrator};
@@ -76,7 +77,7 @@ fn degenerate_curves_are_within_the_tolerance_of_the_converged_reference_on_the_
             for tolerance in [1e-4, 1e-6] {
                 scene.integration.tolerance = tolerance;
                 let bb = scene.place_billboard(1.0);
-                let got = reference::render_brightness(&scene, &bb).values;
+                let got = reference::render_brightness(&FrameSetup::new(&scene, bb)).values;
                 // The reference itself is good to about 1e-7.
                 let (e, i, j) = worst(&got, &want, 24);
                 assert!(
@@ -102,7 +103,7 @@ fn the_papers_w_series_is_within_the_tolerance_of_the_converged_reference_on_the
         for tolerance in [1e-4, 1e-6] {
             scene.integration.tolerance = tolerance;
             let bb = scene.place_billboard(1.0);
-            let got = reference::render_brightness(&scene, &bb).values;
+            let got = reference::render_brightness(&FrameSetup::new(&scene, bb)).values;
             let (e, i, j) = worst(&got, &want, 32);
             assert!(
                 e <= tolerance + 2e-7,
@@ -128,7 +129,7 @@ fn every_shipped_scene_is_within_the_tolerance_of_the_converged_reference_on_the
         scene.integration.jitter = None;
         let want = converged_reference(&scene, 1).0;
         let bb = scene.place_billboard(1.0);
-        let got = reference::render_brightness(&scene, &bb).values;
+        let got = reference::render_brightness(&FrameSetup::new(&scene, bb)).values;
         let (e, i, j) = worst(&got, &want, 24);
         let tolerance = scene.integration.tolerance;
         assert!(
@@ -149,7 +150,7 @@ fn degenerate_curves_on_the_gpu_are_within_the_tolerance_of_the_converged_refere
         let want = converged_reference(&scene, 1).0;
         let bb = scene.place_billboard(1.0);
         let got: Vec<f64> = gpu
-            .brightness(&scene, &bb)
+            .brightness(&FrameSetup::new(&scene, bb))
             .unwrap()
             .iter()
             .map(|&b| b as f64)
@@ -213,8 +214,8 @@ fn a_line_along_the_view_axis_gives_the_closed_form_with_zeta_at_work() {
     for integrator in [Integrator::Adaptive, Integrator::Simpson] {
         scene.integration.integrator = integrator;
         scene.integration.divisions = 2000;
-        let cpu = reference::render_brightness(&scene, &bb).values;
-        let gpu_b = gpu.brightness(&scene, &bb).unwrap();
+        let cpu = reference::render_brightness(&FrameSetup::new(&scene, bb)).values;
+        let gpu_b = gpu.brightness(&FrameSetup::new(&scene, bb)).unwrap();
         let mut inside_eps = 0;
         for j in 0..w {
             for i in 0..w {

@@ -7,6 +7,7 @@
 
 use std::path::Path;
 
+use energywave::frame::FrameSetup;
 use energywave::geometry::ray_end;
 use energywave::gpu::HeadlessRenderer;
 use energywave::integrate::Integrator;
@@ -37,8 +38,8 @@ fn meets_the_reference(name: &str, scene: &Scene, gpu: &mut HeadlessRenderer) ->
         let mut scene = scene.clone();
         scene.integration.integrator = integrator;
         scene.integration.divisions = 4000;
-        let cpu = reference::render_brightness(&scene, &bb).values;
-        let gpu_b = gpu.brightness(&scene, &bb).unwrap();
+        let cpu = reference::render_brightness(&FrameSetup::new(&scene, bb)).values;
+        let gpu_b = gpu.brightness(&FrameSetup::new(&scene, bb)).unwrap();
         let tolerance = scene.integration.tolerance;
         for (k, &r) in want.iter().enumerate() {
             let (cpu_allowed, gpu_allowed) = match integrator {
@@ -91,7 +92,7 @@ fn a_line_through_the_eye_along_the_view_axis_is_its_closed_form() {
     let want = meets_the_reference("a line through the eye", &scene, &mut gpu);
     // And every texel against the closed form of the whole ray (which the reference also meets).
     let bb = scene.place_billboard(1.0);
-    let reach = scene.ray_reach(&bb);
+    let reach = FrameSetup::new(&scene, bb).reach;
     let decay = scene.integration.decay_length;
     assert!(
         (decay - 4.0).abs() < 1e-12,
@@ -176,7 +177,7 @@ fn rays_through_along_and_in_the_plane_of_sources_meet_the_converged_reference()
         15,
     );
     let bb = s.place_billboard(1.0);
-    let reach = s.ray_reach(&bb);
+    let reach = FrameSetup::new(&s, bb).reach;
     let middle = bb.texel_center(7, 7, 15);
     let end = ray_end(middle, s.camera.eye, reach.nu);
     assert!(

@@ -4,6 +4,7 @@
 
 use std::path::Path;
 
+use energywave::frame::FrameSetup;
 use energywave::gpu::HeadlessRenderer;
 use energywave::reference;
 use energywave::scene::{Blend, Glare, Scene, SceneError};
@@ -19,8 +20,8 @@ fn the_gpu_glare_matches_the_cpu_twin_in_every_blend() {
         let mut scene = shipped_scene(name);
         scene.billboard.resolution = 64;
         let bb = scene.place_billboard(w as f64 / h as f64);
-        let texture = reference::render_brightness(&scene, &bb);
-        let plain = reference::compose_frame(&scene, &bb, &texture, w, h, false);
+        let texture = reference::render_brightness(&FrameSetup::new(&scene, bb));
+        let plain = reference::compose_frame(&FrameSetup::new(&scene, bb), &texture, w, h, false);
         scene.glare = Some(Glare {
             threshold,
             size: 0.04,
@@ -29,7 +30,13 @@ fn the_gpu_glare_matches_the_cpu_twin_in_every_blend() {
         for blend in [Blend::Papers, Blend::Over] {
             scene.colors.blend = blend;
             for transparent in [false, true] {
-                let cpu = reference::compose_frame(&scene, &bb, &texture, w, h, transparent);
+                let cpu = reference::compose_frame(
+                    &FrameSetup::new(&scene, bb),
+                    &texture,
+                    w,
+                    h,
+                    transparent,
+                );
                 let frame = gpu.render(&scene, w, h, transparent).unwrap();
                 for (p, q) in frame.pixels.iter().zip(&cpu) {
                     for c in 0..4 {
@@ -43,7 +50,7 @@ fn the_gpu_glare_matches_the_cpu_twin_in_every_blend() {
         }
         // The glare shows: brighter around the cores, never darker.
         scene.colors.blend = Blend::Papers;
-        let glared = reference::compose_frame(&scene, &bb, &texture, w, h, false);
+        let glared = reference::compose_frame(&FrameSetup::new(&scene, bb), &texture, w, h, false);
         let mut lifted = 0;
         for (p, q) in glared.iter().zip(&plain) {
             assert!((0..3).all(|c| p[c] >= q[c] - 1e-12), "{p:?} {q:?}");
@@ -59,15 +66,15 @@ fn without_glare_nothing_changes_and_a_glare_below_every_b_does_nothing() {
     scene.billboard.resolution = 32;
     assert_eq!(scene.glare, None);
     let bb = scene.place_billboard(1.0);
-    let texture = reference::render_brightness(&scene, &bb);
-    let plain = reference::compose_frame(&scene, &bb, &texture, 40, 40, false);
+    let texture = reference::render_brightness(&FrameSetup::new(&scene, bb));
+    let plain = reference::compose_frame(&FrameSetup::new(&scene, bb), &texture, 40, 40, false);
     let top = texture.values.iter().copied().fold(0.0, f64::max);
     scene.glare = Some(Glare {
         threshold: top,
         ..Glare::default()
     });
     assert_eq!(
-        reference::compose_frame(&scene, &bb, &texture, 40, 40, false),
+        reference::compose_frame(&FrameSetup::new(&scene, bb), &texture, 40, 40, false),
         plain
     );
 }

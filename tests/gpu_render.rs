@@ -15,6 +15,7 @@ use std::path::{Path, PathBuf};
 use std::sync::{Mutex, MutexGuard, OnceLock};
 
 use energywave::field::{Curve, Line, Point, Sources, Torus};
+use energywave::frame::FrameSetup;
 use energywave::geometry::{Camera, ray_end};
 use energywave::gpu::{GpuError, HeadlessRenderer, field_texture_bytes, field_texture_layers};
 use energywave::integrate::Integrator;
@@ -39,9 +40,9 @@ fn gpu() -> MutexGuard<'static, HeadlessRenderer> {
 fn compare_brightness(name: &str, scene: &Scene, aspect: f64) -> f64 {
     let bb = scene.place_billboard(aspect);
     let g = gpu()
-        .brightness(scene, &bb)
+        .brightness(&FrameSetup::new(scene, bb))
         .unwrap_or_else(|e| panic!("{name}: {e}"));
-    let c = reference::render_brightness(scene, &bb);
+    let c = reference::render_brightness(&FrameSetup::new(scene, bb));
     assert_eq!(g.len(), c.values.len());
     let mut worst: f64 = 0.0;
     for (k, (&gv, &cv)) in g.iter().zip(&c.values).enumerate() {
@@ -97,7 +98,7 @@ fn gpu_matches_the_cpu_reference_on_grazing_rays() {
     // A decay length well past the sources placed below, so that the rays span exactly one (`Reach`)
     // whatever their bounds: the samples stay where they are aimed.
     scene.integration.decay_length = 60.0;
-    let reach = scene.ray_reach(&bb);
+    let reach = FrameSetup::new(&scene, bb).reach;
     assert_eq!(reach.stretch, 1.0);
     let n = scene.integration.divisions as f64;
     let ray = |i: u32, j: u32, s: f64| {
@@ -163,7 +164,7 @@ fn gpu_matches_the_cpu_reference_on_grazing_rays() {
         ],
     };
     assert_eq!(
-        scene.ray_reach(&bb),
+        FrameSetup::new(&scene, bb).reach,
         reach,
         "the sources moved the rays' end"
     );
@@ -173,7 +174,7 @@ fn gpu_matches_the_cpu_reference_on_grazing_rays() {
     // The aimed texels really graze: their B towers over the typical texel's. (The point between two samples,
     // texel (11, 3), is compared but does not tower: uniform Simpson steps over it, the papers' unevenness.)
     let bb = scene.place_billboard(1.0);
-    let cpu = reference::render_brightness(&scene, &bb);
+    let cpu = reference::render_brightness(&FrameSetup::new(&scene, bb));
     let mut sorted = cpu.values.clone();
     sorted.sort_by(f64::total_cmp);
     let median = sorted[sorted.len() / 2];
@@ -191,11 +192,11 @@ fn gpu_matches_the_cpu_reference_on_grazing_rays() {
     scene.integration.integrator = Integrator::Adaptive;
     let worst = compare_brightness("grazing, adaptive", &scene, 1.0);
     eprintln!("grazing, adaptive: worst relative error {worst:.2e}");
-    let adaptive = reference::texel_brightness(&scene, &bb, 11, 3);
+    let adaptive = reference::texel_brightness(&FrameSetup::new(&scene, bb), 11, 3);
     let mut converged = scene.clone();
     converged.integration.integrator = Integrator::Simpson;
     converged.integration.divisions = 1 << 20;
-    let converged = reference::texel_brightness(&converged, &bb, 11, 3);
+    let converged = reference::texel_brightness(&FrameSetup::new(&converged, bb), 11, 3);
     let simpson = cpu.values[(3 * w + 11) as usize];
     assert!(
         (adaptive - converged).abs() < 1e-3 * converged
@@ -273,8 +274,8 @@ fn composed_frames_match_the_golden_images() {
         // The goldens hold the compositing pipeline still; the integrators have tests/integrators.rs.
         scene.integration.integrator = Integrator::Simpson;
         let bb = scene.place_billboard(w as f64 / h as f64);
-        let tex = reference::render_brightness(&scene, &bb);
-        let cpu = reference::compose_frame(&scene, &bb, &tex, w, h, false);
+        let tex = reference::render_brightness(&FrameSetup::new(&scene, bb));
+        let cpu = reference::compose_frame(&FrameSetup::new(&scene, bb), &tex, w, h, false);
         let cpu = to_rgb8(cpu.iter().map(|p| [p[0], p[1], p[2]]), w, h);
         let path = golden_dir().join(format!("{name}.png"));
         if bless {
@@ -416,9 +417,8 @@ fn transparent_frames_match_the_cpu_reference() {
     let (w, h) = (48, 40);
     let bb = scene.place_billboard(w as f64 / h as f64);
     let cpu = reference::compose_frame(
-        &scene,
-        &bb,
-        &reference::render_brightness(&scene, &bb),
+        &FrameSetup::new(&scene, bb),
+        &reference::render_brightness(&FrameSetup::new(&scene, bb)),
         w,
         h,
         true,
@@ -446,9 +446,8 @@ fn the_over_blend_matches_the_cpu_and_is_the_transparent_frame_composited() {
     let (w, h) = (64, 48);
     let bb = scene.place_billboard(w as f64 / h as f64);
     let cpu = reference::compose_frame(
-        &scene,
-        &bb,
-        &reference::render_brightness(&scene, &bb),
+        &FrameSetup::new(&scene, bb),
+        &reference::render_brightness(&FrameSetup::new(&scene, bb)),
         w,
         h,
         false,
@@ -488,9 +487,9 @@ fn the_texture_is_rendered_again_only_when_something_changed() {
     let mut g = gpu();
     let mut scene = single_point(2.0, [0.0; 3], [1.0; 3]);
     let bb = scene.place_billboard(1.0);
-    g.brightness(&scene, &bb).unwrap();
+    g.brightness(&FrameSetup::new(&scene, bb)).unwrap();
     let before = g.field().dispatch_count();
-    g.brightness(&scene, &bb).unwrap();
+    g.brightness(&FrameSetup::new(&scene, bb)).unwrap();
     g.render(&scene, 32, 32, false).unwrap();
     assert_eq!(
         g.field().dispatch_count(),
@@ -565,7 +564,7 @@ fn field_memory_is_w_squared() {
     scene.billboard.resolution = 48;
     scene.integration.divisions = 400;
     let bb = scene.place_billboard(1.0);
-    g.brightness(&scene, &bb).unwrap();
+    g.brightness(&FrameSetup::new(&scene, bb)).unwrap();
     let t = g.field().texture().unwrap();
     let gl = g.ctx.adapter.get_info().backend == wgpu::Backend::Gl;
     assert_eq!(
@@ -583,7 +582,7 @@ fn field_memory_is_w_squared() {
     );
     // A source in a color of its own: the texture takes the tint's layers.
     scene.sources.points[0].look.color = Some([1.0, 0.0, 0.0]);
-    g.brightness(&scene, &bb).unwrap();
+    g.brightness(&FrameSetup::new(&scene, bb)).unwrap();
     let t = g.field().texture().unwrap();
     assert_eq!((t.width(), t.depth_or_array_layers()), (48, 4));
 }
@@ -621,8 +620,8 @@ fn a_point_source_shines_where_a_hand_projection_puts_it() {
         ((k as u32 % w) as f64 + 0.5, (k as u32 / w) as f64 + 0.5)
     };
     let bb = scene.place_billboard(w as f64 / h as f64);
-    let texture = reference::render_brightness(&scene, &bb);
-    let cpu = reference::compose_frame(&scene, &bb, &texture, w, h, false);
+    let texture = reference::render_brightness(&FrameSetup::new(&scene, bb));
+    let cpu = reference::compose_frame(&FrameSetup::new(&scene, bb), &texture, w, h, false);
     let gpu_frame = gpu().render(&scene, w, h, false).unwrap();
     for (who, at) in [
         ("CPU", brightest(&|k| cpu[k][..3].iter().sum::<f64>())),

@@ -8,6 +8,7 @@
 
 use energywave::bench::RenderError;
 use energywave::field::{Line, Point, Sources};
+use energywave::frame::FrameSetup;
 use energywave::gpu::HeadlessRenderer;
 use energywave::integrate::{Integration, Integrator, zeta};
 use energywave::reference;
@@ -28,8 +29,8 @@ const TWIN_TOLERANCE: f64 = 1.5e-4;
 /// max(|B|, 0.01): held to `TWIN_TOLERANCE`.
 fn worst_against_twin(gpu: &mut HeadlessRenderer, scene: &Scene) -> f64 {
     let bb = scene.place_billboard(1.0);
-    let g = gpu.brightness(scene, &bb).unwrap();
-    let c = reference::render_brightness(scene, &bb).values;
+    let g = gpu.brightness(&FrameSetup::new(scene, bb)).unwrap();
+    let c = reference::render_brightness(&FrameSetup::new(scene, bb)).values;
     g.iter()
         .zip(&c)
         .map(|(&gv, &cv)| (gv as f64 - cv).abs() / cv.abs().max(0.01))
@@ -59,7 +60,7 @@ fn the_adaptive_integrator_on_the_gpu_matches_the_converged_reference_on_every_s
         scene.integration.jitter = None;
         let reference = converged(&scene);
         let bb = scene.place_billboard(1.0);
-        let adaptive = gpu.brightness(&scene, &bb).unwrap();
+        let adaptive = gpu.brightness(&FrameSetup::new(&scene, bb)).unwrap();
         let error = RenderError::of(&adaptive, 40, 1, &reference);
         // At the default tolerance (1e-4 on B), nothing visible: no texel off by 1/255.
         assert!(
@@ -135,8 +136,8 @@ fn points_and_lines_in_closed_form_match_the_converged_reference_from_every_side
         let reference = converged(&scene);
         let bb = scene.place_billboard(1.0);
         let tolerance = scene.integration.tolerance;
-        let cpu = reference::render_brightness(&scene, &bb).values;
-        let on_gpu = gpu.brightness(&scene, &bb).unwrap();
+        let cpu = reference::render_brightness(&FrameSetup::new(&scene, bb)).values;
+        let on_gpu = gpu.brightness(&FrameSetup::new(&scene, bb)).unwrap();
         for (k, ((&g, &c), &r)) in on_gpu.iter().zip(&cpu).zip(&reference).enumerate() {
             let at = (k % 40, k / 40);
             assert!(
@@ -262,14 +263,17 @@ fn jittered_renders_are_the_same_on_the_gpu_and_converge_to_the_reference() {
     let mut sum = vec![0.0f64; (w * w) as usize];
     for seed in 0..seeds {
         scene.integration.jitter = Some(seed);
-        for (acc, v) in sum.iter_mut().zip(gpu.brightness(&scene, &bb).unwrap()) {
+        for (acc, v) in sum
+            .iter_mut()
+            .zip(gpu.brightness(&FrameSetup::new(&scene, bb)).unwrap())
+        {
             *acc += v as f64;
         }
     }
     let mean: Vec<f64> = sum.iter().map(|s| s / seeds as f64).collect();
     scene.integration.jitter = None;
     let fixed: Vec<f64> = gpu
-        .brightness(&scene, &bb)
+        .brightness(&FrameSetup::new(&scene, bb))
         .unwrap()
         .iter()
         .map(|&v| v as f64)
@@ -301,16 +305,16 @@ fn averaged_frames_are_the_mean_of_their_seeds_and_their_noise_falls() {
         s.integration.jitter = Some(5 + k);
         for (acc, v) in cpu_mean
             .iter_mut()
-            .zip(reference::render_brightness(&s, &bb).values)
+            .zip(reference::render_brightness(&FrameSetup::new(&s, bb)).values)
         {
             *acc += v / frames as f64;
         }
     }
     gpu.set_average_frames(frames);
-    let first = gpu.brightness(&scene, &bb).unwrap();
+    let first = gpu.brightness(&FrameSetup::new(&scene, bb)).unwrap();
     let mut last = first.clone();
     for _ in 1..frames {
-        last = gpu.brightness(&scene, &bb).unwrap();
+        last = gpu.brightness(&FrameSetup::new(&scene, bb)).unwrap();
     }
     let worst = last
         .iter()
@@ -323,21 +327,24 @@ fn averaged_frames_are_the_mean_of_their_seeds_and_their_noise_falls() {
     );
     // Full: the scene is not rendered again, and the picture stays.
     let renders = gpu.field().dispatch_count();
-    assert_eq!(gpu.brightness(&scene, &bb).unwrap(), last);
+    assert_eq!(gpu.brightness(&FrameSetup::new(&scene, bb)).unwrap(), last);
     assert_eq!(gpu.field().dispatch_count(), renders);
 
     // A change starts a new mean, from the first seed again.
     scene.integration.alpha *= 1.5;
-    let changed = gpu.brightness(&scene, &bb).unwrap();
+    let changed = gpu.brightness(&FrameSetup::new(&scene, bb)).unwrap();
     gpu.set_average_frames(1);
-    assert_eq!(gpu.brightness(&scene, &bb).unwrap(), changed);
+    assert_eq!(
+        gpu.brightness(&FrameSetup::new(&scene, bb)).unwrap(),
+        changed
+    );
     scene.integration.alpha /= 1.5;
 
     // Unbiased, so the mean's error is noise, falling as 1/sqrt(frames): 32 frames, about 1/5.7 of one's.
     gpu.set_average_frames(32);
     let mut mean = Vec::new();
     for _ in 0..32 {
-        mean = gpu.brightness(&scene, &bb).unwrap();
+        mean = gpu.brightness(&FrameSetup::new(&scene, bb)).unwrap();
     }
     let (one, many) = (
         mean_abs_error(&first, &reference),

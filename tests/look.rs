@@ -5,6 +5,7 @@ mod common;
 
 use std::path::Path;
 
+use energywave::frame::FrameSetup;
 use energywave::reference::{self, Backdrop, BrightnessTexture};
 use energywave::scene::{Blend, Scene};
 use energywave::viewer::navigation::orbit;
@@ -15,7 +16,7 @@ use glam::DVec3;
 fn frames(scene: &Scene) -> (Vec<[f64; 4]>, Vec<[f64; 4]>) {
     let (w, h) = (64, 48);
     let bb = scene.place_billboard(w as f64 / h as f64);
-    let glow = reference::render_brightness(scene, &bb);
+    let glow = reference::render_brightness(&FrameSetup::new(scene, bb));
     let n = glow.values.len();
     let none = BrightnessTexture {
         resolution: glow.resolution,
@@ -23,8 +24,8 @@ fn frames(scene: &Scene) -> (Vec<[f64; 4]>, Vec<[f64; 4]>) {
         tint: vec![[0.0; 3]; n],
     };
     (
-        reference::compose_frame_over(scene, &bb, &glow, (w, h), Backdrop::Opaque),
-        reference::compose_frame_over(scene, &bb, &none, (w, h), Backdrop::Opaque),
+        reference::compose_frame_over(&FrameSetup::new(scene, bb), &glow, (w, h), Backdrop::Opaque),
+        reference::compose_frame_over(&FrameSetup::new(scene, bb), &none, (w, h), Backdrop::Opaque),
     )
 }
 
@@ -103,8 +104,8 @@ fn beading(scene: &Scene, (w, h): (u32, u32), texels: u32, reference: u32) -> f6
         let mut s = scene.clone();
         s.billboard.resolution = texels;
         let bb = s.place_billboard(w as f64 / h as f64);
-        let tex = reference::render_brightness(&s, &bb);
-        reference::compose_frame_over(&s, &bb, &tex, (w, h), Backdrop::Opaque)
+        let tex = reference::render_brightness(&FrameSetup::new(&s, bb));
+        reference::compose_frame_over(&FrameSetup::new(&s, bb), &tex, (w, h), Backdrop::Opaque)
     };
     let (a, b) = (frame(texels), frame(reference));
     a.iter()
@@ -203,11 +204,16 @@ fn the_edge_fades_b_to_zero_with_a_smooth_knee_by_its_magnitude() {
 /// The transparent frame's alpha, CPU twin.
 fn alpha(scene: &Scene, (w, h): (u32, u32)) -> Vec<f64> {
     let bb = scene.place_billboard(w as f64 / h as f64);
-    let tex = reference::render_brightness(scene, &bb);
-    reference::compose_frame_over(scene, &bb, &tex, (w, h), Backdrop::Transparent)
-        .iter()
-        .map(|p| p[3])
-        .collect()
+    let tex = reference::render_brightness(&FrameSetup::new(scene, bb));
+    reference::compose_frame_over(
+        &FrameSetup::new(scene, bb),
+        &tex,
+        (w, h),
+        Backdrop::Transparent,
+    )
+    .iter()
+    .map(|p| p[3])
+    .collect()
 }
 
 #[test]
@@ -266,8 +272,8 @@ fn glare_with_its_defaults_shows_on_every_preset_without_blowing_it_out() {
     let (w, h) = (80, 60);
     let frame = |s: &Scene| {
         let bb = s.place_billboard(w as f64 / h as f64);
-        let tex = reference::render_brightness(s, &bb);
-        reference::compose_frame_over(s, &bb, &tex, (w, h), Backdrop::Opaque)
+        let tex = reference::render_brightness(&FrameSetup::new(s, bb));
+        reference::compose_frame_over(&FrameSetup::new(s, bb), &tex, (w, h), Backdrop::Opaque)
     };
     let white = |f: &[[f64; 4]]| {
         f.iter()

@@ -8,6 +8,7 @@ use std::path::Path;
 use std::sync::{Mutex, MutexGuard, OnceLock};
 
 use energywave::field::{Curve, Line, Point, Sources, Torus};
+use energywave::frame::FrameSetup;
 use energywave::gpu::HeadlessRenderer;
 use energywave::integrate::Integrator;
 use energywave::objects::lighting::{AMBIENT, Lights};
@@ -285,7 +286,7 @@ fn the_clipped_integral_is_the_integral_up_to_the_first_surface() {
         let mut scene = point_scene(blockers(), integrator);
         scene.integration.divisions = 4000;
         let bb = scene.place_billboard(1.0);
-        let reach = scene.ray_reach(&bb);
+        let reach = FrameSetup::new(&scene, bb).reach;
         let settings = scene.integration.on_ray(reach.stretch);
         let w = scene.billboard.resolution;
         let (mut hidden, mut cut, mut whole) = (0, 0, 0);
@@ -309,7 +310,7 @@ fn the_clipped_integral_is_the_integral_up_to_the_first_surface() {
                     // Over [0, c] as u = c v.
                     simpson_refined(|v| c * f(c * v), 2000, 1e-10, 30).0
                 };
-                let got = reference::texel_brightness(&scene, &bb, i, j);
+                let got = reference::texel_brightness(&FrameSetup::new(&scene, bb), i, j);
                 let allowed = match integrator {
                     Integrator::Adaptive => scene.integration.tolerance,
                     Integrator::Simpson => 1e-6 * want.abs().max(1.0),
@@ -347,8 +348,8 @@ fn the_gpu_clips_as_its_f64_twin_and_both_meet_the_converged_reference() {
         for integrator in [Integrator::Simpson, Integrator::Adaptive] {
             scene.integration.integrator = integrator;
             let bb = scene.place_billboard(1.0);
-            let cpu = reference::render_brightness(&scene, &bb).values;
-            let gpu_b = g.brightness(&scene, &bb).unwrap();
+            let cpu = reference::render_brightness(&FrameSetup::new(&scene, bb)).values;
+            let gpu_b = g.brightness(&FrameSetup::new(&scene, bb)).unwrap();
             let want = converged_reference(&scene, 1).0;
             let tolerance = match integrator {
                 Integrator::Adaptive => scene.integration.tolerance,
@@ -665,14 +666,15 @@ fn the_floor_preset_composes_alike_on_the_gpu_and_the_cpu_opaque_transparent_and
     scene.billboard.resolution = 64;
     let (w, h) = (96, 72);
     let bb = scene.place_billboard(w as f64 / h as f64);
-    let tex = reference::render_brightness(&scene, &bb);
+    let tex = reference::render_brightness(&FrameSetup::new(&scene, bb));
     let mut g = gpu();
     for (backdrop, transparent, holdout) in [
         (Backdrop::Opaque, false, false),
         (Backdrop::Transparent, true, false),
         (Backdrop::Holdout, true, true),
     ] {
-        let cpu = reference::compose_frame_over(&scene, &bb, &tex, (w, h), backdrop);
+        let cpu =
+            reference::compose_frame_over(&FrameSetup::new(&scene, bb), &tex, (w, h), backdrop);
         g.set_holdout(holdout);
         let frame = g.render(&scene, w, h, transparent).unwrap();
         g.set_holdout(false);
@@ -750,11 +752,11 @@ fn on_the_gpu_an_object_before_the_glow_shows_lit_and_unglowing_and_a_holdout_le
     let scene = sphere_before_the_glow();
     let (w, h) = (80, 60);
     let bb = scene.place_billboard(w as f64 / h as f64);
-    let tex = reference::render_brightness(&scene, &bb);
+    let tex = reference::render_brightness(&FrameSetup::new(&scene, bb));
     // The glow the sphere hides: the same scene without it (the field pass clips the hidden texels to 0).
     let mut bare = scene.clone();
     bare.objects.clear();
-    let hidden = reference::render_brightness(&bare, &bb);
+    let hidden = reference::render_brightness(&FrameSetup::new(&bare, bb));
     let place = against_the_sphere(&scene, (w, h));
     let image = reference::objects::ObjectImage::of(&scene).unwrap();
     let eye = scene.camera.eye;
@@ -768,7 +770,8 @@ fn on_the_gpu_an_object_before_the_glow_shows_lit_and_unglowing_and_a_holdout_le
         g.set_holdout(holdout);
         let frame = g.render(&scene, w, h, transparent).unwrap();
         g.set_holdout(false);
-        let cpu = reference::compose_frame_over(&scene, &bb, &tex, (w, h), backdrop);
+        let cpu =
+            reference::compose_frame_over(&FrameSetup::new(&scene, bb), &tex, (w, h), backdrop);
         for (k, (&place, p)) in place.iter().zip(&frame.pixels).enumerate() {
             let (x, y) = ((k as u32 % w) as f64 + 0.5, (k as u32 / w) as f64 + 0.5);
             let dir = scene.camera.pixel_ray(x, y, w, h);
@@ -1422,8 +1425,9 @@ fn close_light_on_a_coarse_face(every_kind: bool) -> Scene {
 fn gpu_frame_matches_the_twins(scene: &Scene) -> Vec<[f64; 4]> {
     let (w, h) = (128, 96);
     let bb = scene.place_billboard(w as f64 / h as f64);
-    let tex = reference::render_brightness(scene, &bb);
-    let cpu = reference::compose_frame_over(scene, &bb, &tex, (w, h), Backdrop::Opaque);
+    let tex = reference::render_brightness(&FrameSetup::new(scene, bb));
+    let cpu =
+        reference::compose_frame_over(&FrameSetup::new(scene, bb), &tex, (w, h), Backdrop::Opaque);
     let frame = gpu().render(scene, w, h, false).unwrap();
     let off = (cpu.iter().zip(&frame.pixels))
         .filter(|(c, p)| {

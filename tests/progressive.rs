@@ -2,7 +2,10 @@
 //! in bands once it holds still, ending on exactly the texture a still render gives; screenshots at full
 //! quality whatever the screen shows.
 
-use energywave::gpu::{FieldRenderer, GpuContext, HeadlessRenderer, Upsample, field_texture};
+use energywave::frame::FrameSetup;
+use energywave::gpu::{
+    FieldInputs, FieldRenderer, GpuContext, HeadlessRenderer, Upsample, field_texture,
+};
 use energywave::scene::Scene;
 use energywave::viewer::document::Document;
 use energywave::viewer::navigation;
@@ -92,7 +95,11 @@ fn integrate(ctx: &GpuContext, scene: &Scene, band_rows: u32) -> (Vec<f32>, u32)
     let mut field = FieldRenderer::new(device);
     field.set_band_rows(band_rows);
     let bb = scene.place_billboard(1.0);
-    assert!(field.prepare(device, queue, scene, &bb).unwrap());
+    assert!(
+        field
+            .prepare(device, queue, &FieldInputs::of(&FrameSetup::new(scene, bb)))
+            .unwrap()
+    );
     let mut frames = 0;
     loop {
         let mut encoder = device.create_command_encoder(&Default::default());
@@ -185,5 +192,8 @@ fn the_viewer_previews_while_orbiting_and_ends_on_the_still_picture() {
     let shown = v.field_values().unwrap();
     let mut headless = HeadlessRenderer::new().unwrap();
     let bb = moving.place_billboard(v.app.viewport_px()[0] as f64 / v.app.viewport_px()[1] as f64);
-    assert_eq!(shown, headless.brightness(&moving, &bb).unwrap());
+    assert_eq!(
+        shown,
+        headless.brightness(&FrameSetup::new(&moving, bb)).unwrap()
+    );
 }

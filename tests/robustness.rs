@@ -4,6 +4,7 @@
 use std::sync::{Mutex, MutexGuard, OnceLock};
 
 use energywave::field::{Curve, Line, Point, Sources, Torus};
+use energywave::frame::FrameSetup;
 use energywave::geometry::Camera;
 use energywave::gpu::HeadlessRenderer;
 use energywave::integrate::Integrator;
@@ -57,9 +58,9 @@ fn finite_on_both(name: &str, scene: &Scene) -> f64 {
         bb.center.is_finite() && bb.size.is_finite() && bb.size > 0.0,
         "{name}: billboard {bb:?}"
     );
-    let cpu = reference::render_brightness(scene, &bb);
+    let cpu = reference::render_brightness(&FrameSetup::new(scene, bb));
     let g = gpu()
-        .brightness(scene, &bb)
+        .brightness(&FrameSetup::new(scene, bb))
         .unwrap_or_else(|e| panic!("{name}: {e}"));
     let mut worst: f64 = 0.0;
     for (k, (&c, &g)) in cpu.values.iter().zip(&g).enumerate() {
@@ -284,7 +285,7 @@ fn huge_and_tiny_scales_give_the_same_picture() {
     // distance): 1e-3 and 1e3 world units must give the picture of scale 1, on the CPU and on the GPU.
     let reference_b = {
         let s = scaled(1.0);
-        reference::render_brightness(&s, &s.place_billboard(1.0)).values
+        reference::render_brightness(&FrameSetup::placed(&s, 1.0)).values
     };
     for k in [1e-3, 1e3] {
         let s = scaled(k);
@@ -294,7 +295,7 @@ fn huge_and_tiny_scales_give_the_same_picture() {
             worst <= 1e-3,
             "scale {k}: GPU and CPU differ by {worst:.2e}"
         );
-        let cpu = reference::render_brightness(&s, &s.place_billboard(1.0)).values;
+        let cpu = reference::render_brightness(&FrameSetup::placed(&s, 1.0)).values;
         for (x, y) in cpu.iter().zip(&reference_b) {
             assert!(
                 (x - y).abs() <= 1e-9 * y.abs().max(1.0),
@@ -430,9 +431,9 @@ proptest! {
             prop_assert_eq!(&loaded, &s, "the scene changed in a save and load:\n{}", text);
             let bb = loaded.place_billboard(1.3);
             prop_assert!(bb.center.is_finite() && bb.size.is_finite() && bb.size > 0.0);
-            let b = reference::render_brightness(&loaded, &bb);
+            let b = reference::render_brightness(&FrameSetup::new(&loaded, bb));
             prop_assert!(b.values.iter().all(|x| x.is_finite()), "{:?} CPU: {:?}", integrator, b.values);
-            let g = gpu().brightness(&loaded, &bb).map_err(|e| TestCaseError::fail(e.to_string()))?;
+            let g = gpu().brightness(&FrameSetup::new(&loaded, bb)).map_err(|e| TestCaseError::fail(e.to_string()))?;
             prop_assert!(g.iter().all(|x| x.is_finite()), "{:?} GPU: {:?}", integrator, g);
         }
     }
@@ -588,8 +589,8 @@ proptest! {
         // The adaptive integrator against the converged reference, on both twins.
         s.integration.integrator = Integrator::Adaptive;
         let want = converged_reference(&s, 1).0;
-        let cpu = reference::render_brightness(&s, &bb).values;
-        let gpu_b = g.brightness(&s, &bb).map_err(|e| TestCaseError::fail(e.to_string()))?;
+        let cpu = reference::render_brightness(&FrameSetup::new(&s, bb)).values;
+        let gpu_b = g.brightness(&FrameSetup::new(&s, bb)).map_err(|e| TestCaseError::fail(e.to_string()))?;
         let tolerance = s.integration.tolerance;
         for (k, &r) in want.iter().enumerate() {
             prop_assert!((cpu[k] - r).abs() <= tolerance, "texel {}: CPU {} against {}\n{}", k, cpu[k], r, text);
@@ -599,17 +600,17 @@ proptest! {
         // Simpson: the GPU against its twin.
         s.integration.integrator = Integrator::Simpson;
         s.integration.divisions = 64;
-        let cpu = reference::render_brightness(&s, &bb);
-        let gpu_b = g.brightness(&s, &bb).map_err(|e| TestCaseError::fail(e.to_string()))?;
+        let cpu = reference::render_brightness(&FrameSetup::new(&s, bb));
+        let gpu_b = g.brightness(&FrameSetup::new(&s, bb)).map_err(|e| TestCaseError::fail(e.to_string()))?;
         for (k, (&x, &y)) in gpu_b.iter().zip(&cpu.values).enumerate() {
             prop_assert!((x as f64 - y).abs() <= 1.5e-4 * y.abs().max(0.01), "simpson texel {}: GPU {} CPU {}\n{}", k, x, y, text);
         }
         // The composed frames: off by more than a few 8-bit steps only where a pixel lies on an object's edge.
         let (w, h) = (48, 36);
         let bb = s.place_billboard(w as f64 / h as f64);
-        let texture = reference::render_brightness(&s, &bb);
+        let texture = reference::render_brightness(&FrameSetup::new(&s, bb));
         for transparent in [false, true] {
-            let want = reference::compose_frame(&s, &bb, &texture, w, h, transparent);
+            let want = reference::compose_frame(&FrameSetup::new(&s, bb), &texture, w, h, transparent);
             let frame = g.render(&s, w, h, transparent).map_err(|e| TestCaseError::fail(e.to_string()))?;
             let off = (want.iter().zip(&frame.pixels))
                 .filter(|(c, p)| (0..4).any(|k| (c[k].clamp(0.0, 1.0) - (p[k] as f64).clamp(0.0, 1.0)).abs() > 4.0 / 255.0))

@@ -3,7 +3,10 @@
 //! on every shipped scene (a color per source, a color series, objects' clips) with every integrator and both
 //! decays; and a structure compiled in the background is used once ready, never waited for.
 
-use energywave::gpu::{FieldRenderer, GpuContext, Specialise, Structure, read_texture_layer};
+use energywave::frame::FrameSetup;
+use energywave::gpu::{
+    FieldInputs, FieldRenderer, GpuContext, Specialise, Structure, read_texture_layer,
+};
 use energywave::integrate::{Decay, Integrator};
 use energywave::scene::Scene;
 
@@ -15,7 +18,11 @@ fn field_of(ctx: &GpuContext, field: &mut FieldRenderer, scene: &Scene) -> Vec<f
     let (device, queue) = (&ctx.device, &ctx.queue);
     field.invalidate();
     field
-        .prepare(device, queue, scene, &scene.place_billboard(1.0))
+        .prepare(
+            device,
+            queue,
+            &FieldInputs::of(&FrameSetup::placed(scene, 1.0)),
+        )
         .unwrap();
     let mut encoder = device.create_command_encoder(&Default::default());
     field.encode(&mut encoder);
@@ -67,7 +74,7 @@ fn the_specialised_field_pass_gives_the_generic_texture() {
             assert_eq!(a.len(), (24 * 24 * layers) as usize);
             tinted += usize::from(layers > 1);
             clipped += usize::from(!scene.objects.is_empty());
-            let structure = Structure::of_scene(&scene, &scene.place_billboard(1.0));
+            let structure = Structure::of_frame(&FrameSetup::placed(&scene, 1.0));
             assert!(
                 specialised.specialised_ready(&structure),
                 "{name}: compiled"
@@ -105,7 +112,7 @@ fn a_structure_compiles_in_the_background_and_is_used_once_ready() {
     field.set_specialise(Specialise::Background);
     let mut scene = Scene::default_scene();
     scene.billboard.resolution = 16;
-    let structure = Structure::of_scene(&scene, &scene.place_billboard(1.0));
+    let structure = Structure::of_frame(&FrameSetup::placed(&scene, 1.0));
     let first = field_of(&ctx, &mut field, &scene);
     if ctx.adapter.get_info().backend == wgpu::Backend::Gl {
         // GL compiles on no thread of its own (it would hold the one GL context every frame waits on): the
@@ -158,7 +165,7 @@ fn only_the_latest_structures_keep_their_pipelines() {
             look: Default::default(),
         });
         field_of(&ctx, &mut field, &scene);
-        structures.push(Structure::of_scene(&scene, &scene.place_billboard(1.0)));
+        structures.push(Structure::of_frame(&FrameSetup::placed(&scene, 1.0)));
     }
     let kept = structures
         .iter()

@@ -7,6 +7,7 @@ mod common;
 
 use energywave::field::curve::chain_frame;
 use energywave::field::{Curve, Look, Sources, WForm, brightest, wseries};
+use energywave::frame::FrameSetup;
 use glam::DVec3;
 
 use common::Lcg;
@@ -238,8 +239,8 @@ fn the_gpu_matches_its_f64_twin_on_the_continuous_form_with_both_integrators() {
             scene.integration.integrator = integrator;
             scene.integration.jitter = None;
             let bb = scene.place_billboard(1.0);
-            let gpu_b = g.brightness(&scene, &bb).unwrap();
-            let cpu_b = reference::render_brightness(&scene, &bb).values;
+            let gpu_b = g.brightness(&FrameSetup::new(&scene, bb)).unwrap();
+            let cpu_b = reference::render_brightness(&FrameSetup::new(&scene, bb)).values;
             let worst = (gpu_b.iter().zip(&cpu_b))
                 .map(|(&x, &y)| (x as f64 - y).abs() / y.abs().max(0.01))
                 .fold(0.0, f64::max);
@@ -271,8 +272,8 @@ fn the_gpu_meets_a_tight_tolerance_on_the_continuous_form_within_its_loop_budget
         scene.integration.jitter = None;
         scene.integration.tolerance = 1e-6;
         let bb = scene.place_billboard(1.0);
-        let gpu_b = g.brightness(&scene, &bb).unwrap();
-        let cpu_b = reference::render_brightness(&scene, &bb).values;
+        let gpu_b = g.brightness(&FrameSetup::new(&scene, bb)).unwrap();
+        let cpu_b = reference::render_brightness(&FrameSetup::new(&scene, bb)).values;
         let worst = (gpu_b.iter().zip(&cpu_b))
             .map(|(&x, &y)| (x as f64 - y).abs() / (2e-6 + 4e-6 * y.abs()))
             .fold(0.0, f64::max);
@@ -291,7 +292,7 @@ fn the_adaptive_integrator_meets_its_tolerance_on_the_continuous_form() {
         scene.billboard.resolution = 24;
         scene.integration.integrator = Integrator::Adaptive;
         let bb = scene.place_billboard(1.0);
-        let reach = scene.ray_reach(&bb);
+        let reach = FrameSetup::new(&scene, bb).reach;
         for tolerance in [1e-3, 1e-4, 1e-5, 1e-6] {
             scene.integration.tolerance = tolerance;
             let settings = scene.integration.on_ray(reach.stretch);
@@ -412,15 +413,15 @@ fn a_color_series_in_the_continuous_form_is_the_converged_integral_at_the_bright
         scene.integration.integrator = integrator;
         scene.integration.divisions = 2000;
         let bb = scene.place_billboard(1.0);
-        let cpu = reference::render_brightness(&scene, &bb);
-        g.brightness(&scene, &bb).unwrap();
+        let cpu = reference::render_brightness(&FrameSetup::new(&scene, bb));
+        g.brightness(&FrameSetup::new(&scene, bb)).unwrap();
         let gpu_tint = g.tint().unwrap();
         let (ce, curve) = (scene.colors.energy_color(), &scene.sources.curves[0]);
         let intensity = curve
             .look
             .intensity
             .unwrap_or(scene.colors.energy_intensity);
-        let reach = scene.ray_reach(&bb);
+        let reach = FrameSetup::new(&scene, bb).reach;
         let settings = scene.integration.on_ray(reach.stretch);
         // Simpson with n = 2000 is within this of the converged integral here; the adaptive within its tolerance.
         let tolerance = match integrator {

@@ -12,7 +12,8 @@ use std::time::Instant;
 use glam::DVec3;
 use serde::Serialize;
 
-use crate::gpu::{FieldRenderer, GpuContext, GpuError, Specialise, map_read};
+use crate::frame::FrameSetup;
+use crate::gpu::{FieldInputs, FieldRenderer, GpuContext, GpuError, Specialise, map_read};
 use crate::integrate::Integrator;
 use crate::scene::Scene;
 

@@ -97,8 +97,8 @@ impl FieldBench {
         let (device, queue) = (&self.ctx.device, &self.ctx.queue);
         let start = Instant::now();
         self.field.invalidate();
-        let billboard = scene.place_billboard(1.0);
-        self.field.prepare(device, queue, scene, &billboard)?;
+        let inputs = FieldInputs::of(&FrameSetup::placed(scene, 1.0));
+        self.field.prepare(device, queue, &inputs)?;
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("energywave.bench.encoder"),
         });

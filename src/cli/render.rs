@@ -5,6 +5,7 @@ use std::time::Instant;
 
 use super::{Backend, CliError, RenderArgs, load_scene};
 use crate::export::{self, Progress, Target};
+use crate::frame::FrameSetup;
 use crate::gpu::HeadlessRenderer;
 use crate::integrate::Integrator;
 use crate::output::{self, Format};
@@ -146,7 +147,8 @@ pub(super) fn render(args: &RenderArgs) -> Result<(), CliError> {
     let hdr = target.is_exr();
     let mut renderer = Renderer::new(args, hdr)?;
     follow_pixel_density(&mut scene, frames.start, args, &renderer);
-    let billboard = scene.place_billboard(width as f64 / height as f64);
+    let setup = FrameSetup::placed(&scene, width as f64 / height as f64);
+    let billboard = setup.billboard;
     let name = args
         .scene
         .as_ref()
@@ -163,7 +165,7 @@ pub(super) fn render(args: &RenderArgs) -> Result<(), CliError> {
             scene.integration.divisions,
             scene.integration.tolerance,
             scene.integration.decay_length,
-            scene.ray_reach(&billboard).stretch,
+            setup.reach.stretch,
             args.backend,
         );
     }
@@ -175,7 +177,7 @@ pub(super) fn render(args: &RenderArgs) -> Result<(), CliError> {
     }
     let start = Instant::now();
     if args.brightness {
-        let values = renderer.brightness(&scene, &billboard)?;
+        let values = renderer.brightness(&setup)?;
         output::write_brightness_exr(&args.output, scene.billboard.resolution, &values)?;
     } else {
         let pixels = renderer.compose(&scene, (width, height), backdrop(args), hdr)?;
@@ -243,17 +245,11 @@ impl Renderer {
         }
     }
 
-    /// B over the billboard's W x W texels, rows from the top, before the blend.
-    fn brightness(
-        &mut self,
-        scene: &Scene,
-        billboard: &crate::geometry::Billboard,
-    ) -> Result<Vec<f64>, CliError> {
+    /// B over the frame's W x W texels, rows from the top, before the blend.
+    fn brightness(&mut self, setup: &FrameSetup) -> Result<Vec<f64>, CliError> {
         Ok(match self {
-            Renderer::Gpu(gpu) => (gpu.brightness(scene, billboard)?.iter())
-                .map(|&b| b as f64)
-                .collect(),
-            Renderer::Cpu => reference::render_brightness(scene, billboard).values,
+            Renderer::Gpu(gpu) => (gpu.brightness(setup)?.iter()).map(|&b| b as f64).collect(),
+            Renderer::Cpu => reference::render_brightness(setup).values,
         })
     }
 
@@ -273,13 +269,13 @@ impl Renderer {
                 frame.pixels.iter().map(|p| p.map(|c| c as f64)).collect()
             }
             Renderer::Cpu => {
-                let billboard = scene.place_billboard(width as f64 / height as f64);
-                let texture = reference::render_brightness(scene, &billboard);
+                let setup = FrameSetup::placed(scene, width as f64 / height as f64);
+                let texture = reference::render_brightness(&setup);
                 let compose = match hdr {
                     true => reference::compose_frame_unclamped,
                     false => reference::compose_frame_over,
                 };
-                compose(scene, &billboard, &texture, (width, height), backdrop)
+                compose(&setup, &texture, (width, height), backdrop)
             }
         })
     }
@@ -344,8 +340,8 @@ fn render_frames(
         let mut written = Vec::new();
         for frame in frames.clone() {
             let at = scene.at_frame(frame as f64);
-            let billboard = at.place_billboard(width as f64 / height as f64);
-            let values = renderer.brightness(&at, &billboard)?;
+            let values =
+                renderer.brightness(&FrameSetup::placed(&at, width as f64 / height as f64))?;
             let path = export::frame_path(pattern, frame);
             output::write_brightness_exr(&path, at.billboard.resolution, &values)?;
             written.push(path);

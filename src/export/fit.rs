@@ -4,6 +4,7 @@
 
 use std::ops::Range;
 
+use crate::frame::FrameSetup;
 use crate::reference::{self, Backdrop};
 use crate::scene::Scene;
 
@@ -70,9 +71,9 @@ pub fn fit_field_of_view(
         let mut tan_half = at.camera.tan_half_fov() * 2.0;
         loop {
             at.camera.fov_y_degrees = 2.0 * tan_half.atan().to_degrees();
-            let bb = at.place_billboard(pw as f64 / ph as f64);
-            let tex = reference::render_brightness(&at, &bb);
-            let pixels = reference::compose_frame_over(&at, &bb, &tex, (pw, ph), Backdrop::Holdout);
+            let view = FrameSetup::placed(&at, pw as f64 / ph as f64);
+            let tex = reference::render_brightness(&view);
+            let pixels = reference::compose_frame_over(&view, &tex, (pw, ph), Backdrop::Holdout);
             let (mut reach_x, mut reach_y, mut edge) = (None::<f64>, None::<f64>, false);
             for (k, p) in pixels.iter().enumerate() {
                 if p[3] < VISIBLE_ALPHA {

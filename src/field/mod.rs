@@ -36,8 +36,13 @@ pub struct Palette {
 impl Palette {
     /// A source's energy color Ce_i: its own color and intensity, each the scene's where it has none.
     pub fn color_of(&self, look: &Look) -> [f64; 3] {
-        let intensity = look.intensity.unwrap_or(self.energy_intensity);
+        let intensity = self.intensity_of(look);
         look.color.unwrap_or(self.energy).map(|c| c * intensity)
+    }
+
+    /// The intensity a source's color (or color series) is multiplied by: its own, or the scene's without one.
+    pub fn intensity_of(&self, look: &Look) -> f64 {
+        look.intensity.unwrap_or(self.energy_intensity)
     }
 
     /// A curve's energy color at chain parameter `t`: its color series there times its intensity, or its one
@@ -46,7 +51,7 @@ impl Palette {
         if curve.color_series.is_empty() {
             return self.color_of(&curve.look);
         }
-        let intensity = curve.look.intensity.unwrap_or(self.energy_intensity);
+        let intensity = self.intensity_of(&curve.look);
         wseries::evaluate_colors(&curve.color_series, t).map(|c| c * intensity)
     }
 }
@@ -221,7 +226,7 @@ impl Field<'_> {
     /// Term `k` of psi(P) alone, in the order of `Sources::looks`; 0 past the last.
     pub fn term(&self, k: usize, p: DVec3, eps: f64) -> f64 {
         let s = self.sources;
-        let smooth = s.points.len() + s.lines.len() + s.tori.len();
+        let smooth = s.first_curve();
         if k < smooth {
             s.term(k, p, eps)
         } else if k - smooth < s.curves.len() {
@@ -287,6 +292,12 @@ impl Sources {
                 .get(k - n_p - n_l - n_t)
                 .map_or(0.0, |c| c.coefficient)
         }
+    }
+
+    /// The index of the first curve's term, in the order of `looks`: the number of points, lines and tori,
+    /// whose terms come first.
+    pub fn first_curve(&self) -> usize {
+        self.points.len() + self.lines.len() + self.tori.len()
     }
 
     /// Total number of sources.

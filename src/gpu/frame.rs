@@ -4,12 +4,11 @@
 
 use super::billboard_pass::{BillboardRenderer, BlendMode, billboard_params, view_projection};
 use super::context::{GpuError, checked, read_texture, texture_2d};
-use super::field_pass::FieldRenderer;
+use super::field_pass::{FieldInputs, FieldRenderer};
 use super::formats::{DEPTH_FORMAT, DEPTH_VALUE_CLEAR, DEPTH_VALUE_FORMAT, FRAME_FORMAT};
 use super::glare_pass::GlarePass;
 use super::object_pass::ObjectPass;
-use crate::objects::clip::shared_clip_fractions;
-use crate::scene::Scene;
+use crate::frame::FrameSetup;
 
 /// The two textures of a composed frame: what lies behind the billboard, and the result.
 pub struct FrameTargets {
@@ -121,9 +120,10 @@ impl SceneRenderer {
         &mut self.field
     }
 
-    /// Records one frame of `scene` into `targets.color`: the field pass when something it depends on changed,
-    /// the background (the scene's color, or transparent) with whatever `behind` draws over it (given the
-    /// view-projection matrix), then the billboard blended over a copy of that.
+    /// Records one frame (`setup`, its billboard placed for `targets`' aspect) into `targets.color`: the field
+    /// pass when something it depends on changed, the background (the scene's color, or transparent) with
+    /// whatever `behind` draws over it (given the view-projection matrix), then the billboard blended over a copy
+    /// of that.
     // The GPU handles, the frame's inputs and its hook are all distinct; a struct would only rename them.
     #[allow(clippy::too_many_arguments)]
     pub fn record(
@@ -131,24 +131,22 @@ impl SceneRenderer {
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         encoder: &mut wgpu::CommandEncoder,
-        scene: &Scene,
+        setup: &FrameSetup,
         targets: &FrameTargets,
         transparent: bool,
         behind: impl FnOnce(&mut wgpu::RenderPass<'_>, [[f32; 4]; 4]),
     ) -> Result<(), GpuError> {
-        let [w, h] = targets.size;
-        let billboard = scene.place_billboard(w as f64 / h as f64);
-        self.field.prepare(device, queue, scene, &billboard)?;
+        self.field.prepare(device, queue, &FieldInputs::of(setup))?;
         checked(device, || self.field.encode(encoder))?;
         let brightness = self.field.view().expect("prepared above").clone();
         self.compose(
             device,
             queue,
             encoder,
-            scene,
+            setup,
             targets,
             transparent,
-            (&brightness, scene.billboard.resolution, true),
+            (&brightness, setup.resolution, true),
             behind,
         )
     }
@@ -163,7 +161,7 @@ impl SceneRenderer {
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         encoder: &mut wgpu::CommandEncoder,
-        scene: &Scene,
+        setup: &FrameSetup,
         targets: &FrameTargets,
         transparent: bool,
         (brightness, resolution, fresh): (&wgpu::TextureView, u32, bool),
@@ -171,7 +169,7 @@ impl SceneRenderer {
     ) -> Result<(), GpuError> {
         let [w, h] = targets.size;
         let aspect = w as f64 / h as f64;
-        let billboard = scene.place_billboard(aspect);
+        let (scene, billboard) = (setup.scene, setup.billboard);
         let layers = crate::gpu::field_pass::layers_of(scene);
         checked(device, || {
             // The glare, where the scene has one, adds to the field before the blend.
@@ -213,7 +211,7 @@ impl SceneRenderer {
             }
             // The objects with depth (a holdout: their depth alone), which the billboard reads to hide the glow
             // in front of them pixel by pixel.
-            let objects = self.objects.prepare(device, scene);
+            let objects = self.objects.prepare(device, setup);
             if objects {
                 let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                     label: Some("energywave.frame.objects"),
@@ -259,7 +257,6 @@ impl SceneRenderer {
                 targets.color.as_image_copy(),
                 targets.background.size(),
             );
-            let reach = scene.ray_reach(&billboard);
             let mut params = billboard_params(
                 &scene.camera,
                 &billboard,
@@ -267,7 +264,7 @@ impl SceneRenderer {
                 scene.colors.energy_color(),
                 aspect,
                 BlendMode::of(transparent, scene.colors.blend),
-                reach.nu,
+                setup.reach.nu,
                 scene.colors.cutoff,
             );
             if self.unclamped {
@@ -279,13 +276,7 @@ impl SceneRenderer {
             }
             // Where objects stand, the billboard reads the clips of the texture it shows (`resolution`).
             let clips = match objects {
-                true => shared_clip_fractions(
-                    &scene.objects,
-                    scene.camera.eye,
-                    &billboard,
-                    reach,
-                    resolution,
-                ),
+                true => setup.clips_at(resolution),
                 false => None,
             };
             self.billboard.draw(

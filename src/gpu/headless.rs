@@ -2,9 +2,9 @@
 //! alone, or the composed frame in an offscreen texture, read back to the CPU.
 
 use super::context::{GpuContext, GpuError};
-use super::field_pass::FieldRenderer;
+use super::field_pass::{FieldInputs, FieldRenderer};
 use super::frame::{FrameTargets, SceneRenderer, read_frame};
-use crate::geometry::Billboard;
+use crate::frame::FrameSetup;
 use crate::scene::Scene;
 
 /// A composed frame read back from the GPU: RGBA in [0, 1], rows from the top.
@@ -59,16 +59,12 @@ impl HeadlessRenderer {
         self.renderer.field_mut().set_average_frames(frames);
     }
 
-    /// B for every texel of `billboard` (W x W, rows from the top), rendered again only if the scene or the
-    /// billboard changed since the last call.
-    pub fn brightness(
-        &mut self,
-        scene: &Scene,
-        billboard: &Billboard,
-    ) -> Result<Vec<f32>, GpuError> {
+    /// B for every texel of the frame's billboard (W x W, rows from the top), rendered again only if the frame's
+    /// field inputs changed since the last call.
+    pub fn brightness(&mut self, setup: &FrameSetup) -> Result<Vec<f32>, GpuError> {
         let (device, queue) = (&self.ctx.device, &self.ctx.queue);
         let field = self.renderer.field_mut();
-        field.prepare(device, queue, scene, billboard)?;
+        field.prepare(device, queue, &FieldInputs::of(setup))?;
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("energywave.field.encoder"),
         });
@@ -125,11 +121,12 @@ impl HeadlessRenderer {
             label: Some("energywave.headless.encoder"),
         });
         // Nothing lies behind the billboard here but the background and the objects (the viewer draws more).
+        let setup = FrameSetup::placed(scene, width as f64 / height as f64);
         self.renderer.record(
             device,
             queue,
             &mut encoder,
-            scene,
+            &setup,
             &targets,
             transparent,
             |_, _| {},

@@ -11,6 +11,7 @@ use super::context::{
 use super::field_pass::{SOURCE_BINDINGS, source_bindings, storage_buffer_init};
 use super::formats::{DEPTH_FORMAT, DEPTH_VALUE_FORMAT, FRAME_FORMAT};
 use super::shaders::object_module_source;
+use crate::frame::FrameSetup;
 use crate::objects::lighting::AMBIENT;
 use crate::objects::{Lit, LitKey, lit};
 use crate::scene::Scene;
@@ -212,7 +213,8 @@ impl ObjectPass {
 
     /// Lights and uploads `scene`'s objects and sources where they or their colors changed since the last
     /// call. Returns whether there is anything to draw.
-    pub fn prepare(&mut self, device: &wgpu::Device, scene: &Scene) -> bool {
+    pub fn prepare(&mut self, device: &wgpu::Device, setup: &FrameSetup) -> bool {
+        let scene = setup.scene;
         if scene.objects.is_empty() {
             self.count = 0;
             self.key = None;
@@ -255,7 +257,7 @@ impl ObjectPass {
                 usage: wgpu::BufferUsages::INDEX,
             }),
         );
-        let (field_params, lists) = source_bindings(scene);
+        let (field_params, lists) = source_bindings(setup);
         let field_params = storage_buffer_init(
             device,
             "energywave.objects.field_params",

@@ -126,6 +126,12 @@ impl Integration {
         }
     }
 
+    /// Each term's share of the tolerance, of a scene of `terms` sources: the integrators hold every term to
+    /// it, so that B, their sum, is within the tolerance.
+    pub fn term_tolerance(&self, terms: usize) -> f64 {
+        self.tolerance / terms.max(1) as f64
+    }
+
     /// The power the decay raises each term's weighed energy `psi_i zeta` to before integrating it.
     pub fn power(&self) -> i32 {
         match self.decay {

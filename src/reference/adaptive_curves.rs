@@ -867,7 +867,7 @@ fn integrate_weighted(
 /// The curves' part of the brightness B of the segment `s -> e`, each chain within an equal share of the
 /// tolerance among all the scene's sources (the points', lines' and tori's are `adaptive_smooth::brightness`).
 pub fn brightness(sources: &Sources, settings: &Integration, s: DVec3, e: DVec3) -> f64 {
-    let share = settings.tolerance / sources.len().max(1) as f64;
+    let share = settings.term_tolerance(sources.len());
     sources
         .curves
         .iter()
@@ -885,7 +885,7 @@ pub fn term_weighted(
     weight: &dyn Fn(f64) -> f64,
     scale: f64,
 ) -> f64 {
-    let share = settings.tolerance / sources.len().max(1) as f64 * scale;
+    let share = settings.term_tolerance(sources.len()) * scale;
     (sources.curves.get(k)).map_or(0.0, |c| {
         integrate_weighted(c, s, e, settings, share, weight)
     })
@@ -899,7 +899,7 @@ pub fn term_brightness(
     s: DVec3,
     e: DVec3,
 ) -> f64 {
-    let share = settings.tolerance / sources.len().max(1) as f64;
+    let share = settings.term_tolerance(sources.len());
     (sources.curves.get(k)).map_or(0.0, |c| integrate_term(c, s, e, settings, share))
 }
 

@@ -353,7 +353,7 @@ fn integrate_term(term: Smooth, s: DVec3, e: DVec3, settings: &Integration, tole
 /// The points', lines' and tori's part of the brightness B of the segment `s -> e`, each term within an equal
 /// share of the tolerance among all the scene's sources (the curves' are `adaptive_curves::brightness`).
 pub fn brightness(sources: &Sources, settings: &Integration, s: DVec3, e: DVec3) -> f64 {
-    let share = settings.tolerance / sources.len().max(1) as f64;
+    let share = settings.term_tolerance(sources.len());
     terms(sources)
         .map(|t| integrate_term(t, s, e, settings, share))
         .sum()
@@ -367,7 +367,7 @@ pub fn term_brightness(
     s: DVec3,
     e: DVec3,
 ) -> f64 {
-    let share = settings.tolerance / sources.len().max(1) as f64;
+    let share = settings.term_tolerance(sources.len());
     terms(sources)
         .nth(k)
         .map_or(0.0, |t| integrate_term(t, s, e, settings, share))

@@ -9,9 +9,10 @@ use rayon::prelude::*;
 
 use super::field_pass::BrightnessTexture;
 use super::objects::ObjectImage;
+use crate::frame::FrameSetup;
 use crate::geometry::Billboard;
 use crate::objects::clip::clip_fractions;
-use crate::scene::{Blend, Scene};
+use crate::scene::Blend;
 
 /// `clamp((1 - B) Cb + B Ce, 0, 1)` per channel.
 pub fn blend(b: f64, energy: [f64; 3], background: [f64; 3]) -> [f64; 3] {
@@ -161,8 +162,7 @@ pub enum Backdrop {
 /// does) by the scene's blend, alpha 1. With `transparent`, the background is transparent and the billboard
 /// carries associated (premultiplied) color G with alpha = min(B, 1) (`blend_transparent_glow`).
 pub fn compose_frame(
-    scene: &Scene,
-    billboard: &Billboard,
+    setup: &FrameSetup,
     texture: &BrightnessTexture,
     width: u32,
     height: u32,
@@ -173,43 +173,41 @@ pub fn compose_frame(
     } else {
         Backdrop::Opaque
     };
-    compose_frame_over(scene, billboard, texture, (width, height), backdrop)
+    compose_frame_over(setup, texture, (width, height), backdrop)
 }
 
 /// `compose_frame` over `backdrop`: the scene's objects (`super::objects`) drawn behind the glow as the
 /// background is, each pixel's lit color where its ray meets one (the glow itself already ends there, the field
 /// pass clips each texel's ray), then the billboard blended over that as over the background color.
 pub fn compose_frame_over(
-    scene: &Scene,
-    billboard: &Billboard,
+    setup: &FrameSetup,
     texture: &BrightnessTexture,
     size: (u32, u32),
     backdrop: Backdrop,
 ) -> Vec<[f64; 4]> {
-    compose(scene, billboard, texture, size, backdrop, 1.0)
+    compose(setup, texture, size, backdrop, 1.0)
 }
 
 /// `compose_frame_over` for an HDR export: the opaque blends not clamped above 1 (below 0 still), as the GPU
 /// renders with `HeadlessRenderer::set_unclamped`. A transparent frame is the same as `compose_frame_over`'s.
 pub fn compose_frame_unclamped(
-    scene: &Scene,
-    billboard: &Billboard,
+    setup: &FrameSetup,
     texture: &BrightnessTexture,
     size: (u32, u32),
     backdrop: Backdrop,
 ) -> Vec<[f64; 4]> {
-    compose(scene, billboard, texture, size, backdrop, f64::INFINITY)
+    compose(setup, texture, size, backdrop, f64::INFINITY)
 }
 
 /// The frame, its opaque blends clamped to [0, `top`].
 fn compose(
-    scene: &Scene,
-    billboard: &Billboard,
+    setup: &FrameSetup,
     texture: &BrightnessTexture,
     (width, height): (u32, u32),
     backdrop: Backdrop,
     top: f64,
 ) -> Vec<[f64; 4]> {
+    let (scene, billboard, reach) = (setup.scene, &setup.billboard, setup.reach);
     let transparent = backdrop != Backdrop::Opaque;
     let [r, g, b] = scene.colors.background;
     let clear = if transparent {
@@ -219,7 +217,6 @@ fn compose(
     };
     // Held out, the objects are not drawn but still hide the glow in front of them.
     let objects = ObjectImage::of(scene);
-    let reach = scene.ray_reach(billboard);
     let clips = clip_fractions(
         &scene.objects,
         scene.camera.eye,

@@ -8,6 +8,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::simpson::{simpson, simpson_refined};
+use crate::frame::FrameSetup;
 use crate::integrate::{Decay, zeta};
 use crate::objects::first_hit;
 use crate::scene::Scene;
@@ -25,8 +26,8 @@ pub const REFERENCE_MAX_DEPTH: u32 = 28;
 pub fn converged_reference(scene: &Scene, stride: u32) -> (Vec<f64>, ReferenceStats) {
     let s = scene;
     let w = s.billboard.resolution;
-    let billboard = s.place_billboard(1.0);
-    let reach = s.ray_reach(&billboard);
+    let setup = FrameSetup::placed(s, 1.0);
+    let (billboard, reach) = (setup.billboard, setup.reach);
     let plane = (billboard.center - s.camera.eye).dot(-billboard.normal);
     let texels: Vec<(u32, u32)> = (0..w)
         .step_by(stride as usize)

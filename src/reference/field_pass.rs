@@ -8,10 +8,10 @@ use rayon::prelude::*;
 use super::simpson::jitter_offset;
 use super::{adaptive_curves, adaptive_smooth, simpson};
 use crate::field::{Sources, wseries};
-use crate::geometry::{Billboard, Reach, ray_end};
+use crate::frame::FrameSetup;
+use crate::geometry::ray_end;
 use crate::integrate::{Decay, Integration, Integrator};
 use crate::objects::clip::clip_fraction;
-use crate::scene::Scene;
 
 /// The brightness B of the segment from `s` to `e` (3.30): the integral over [0, 1] of
 /// `psi((1 - t) S + t E) zeta(t)`, by the scene's integrator. `xi` is the texel's jitter offset (used by the
@@ -39,7 +39,7 @@ pub fn term_brightness(
     e: DVec3,
     xi: f64,
 ) -> f64 {
-    let smooth = sources.points.len() + sources.lines.len() + sources.tori.len();
+    let smooth = sources.first_curve();
     match settings.integrator {
         Integrator::Simpson => simpson::term_brightness(sources, k, settings, s, e, xi),
         Integrator::Adaptive if k < smooth => {
@@ -51,37 +51,34 @@ pub fn term_brightness(
     }
 }
 
-/// The tint of the segment from `s` to `e`: `sum B_i (Ce_i - Ce)` over the terms, `tints` their `Ce_i - Ce`
-/// (`Scene::tints`); what the field pass integrates beside B, so that the colored sum `sum B_i Ce_i` is
-/// `B Ce + tint`. Terms in the scene's color add nothing and are not integrated. A curve with a color series
-/// adds, beside its B_i times `-Ce`, its term with the series in the place of the constant color, channel by
-/// channel, each within the term's share of the tolerance times the channel's largest value.
+/// The tint of the segment from `s` to `e`: `sum B_i (Ce_i - Ce)` over the frame's terms (`Term::tint`); what
+/// the field pass integrates beside B, so that the colored sum `sum B_i Ce_i` is `B Ce + tint`. Terms in the
+/// scene's color add nothing and are not integrated. A curve with a color series adds, beside its B_i times
+/// `-Ce`, its term with the series in the place of the constant color, channel by channel, each within the term's
+/// share of the tolerance times the channel's largest value.
 pub fn tint_of(
-    scene: &Scene,
-    tints: &[[f64; 3]],
+    setup: &FrameSetup,
     settings: &Integration,
     (s, e): (DVec3, DVec3),
     xi: f64,
 ) -> [f64; 3] {
-    let sources = &scene.sources;
+    let sources = &setup.scene.sources;
+    let colors = &setup.scene.colors;
     let mut sum = [0.0; 3];
-    for (k, t) in tints.iter().enumerate() {
+    for (k, term) in setup.terms.iter().enumerate() {
+        let t = term.tint;
         if t.iter().any(|&x| x != 0.0) {
             let b = term_brightness(sources, k, settings, s, e, xi);
             (0..3).for_each(|c| sum[c] += b * t[c]);
         }
-        let Some(curve) = scene.series_curve(k) else {
+        let Some(curve) = setup.series_curve(k) else {
             continue;
         };
-        let index = k - (sources.points.len() + sources.lines.len() + sources.tori.len());
+        let index = k - setup.first_curve();
         for (c, out) in sum.iter_mut().enumerate() {
-            let color = |t: f64| scene.colors.color_along(curve, t)[c];
+            let color = |t: f64| colors.color_along(curve, t)[c];
             let largest = (curve.color_series.iter()).fold(0.0f64, |m, x| m.max(x[c]));
-            let scale = largest
-                * curve
-                    .look
-                    .intensity
-                    .unwrap_or(scene.colors.energy_intensity);
+            let scale = largest * term.intensity;
             if scale == 0.0 {
                 continue;
             }
@@ -121,11 +118,9 @@ pub struct BrightnessTexture {
     pub tint: Vec<[f64; 3]>,
 }
 
-/// Integrates B and the tint for every texel of `billboard` (METHOD.md section 3).
-pub fn render_brightness(scene: &Scene, billboard: &Billboard) -> BrightnessTexture {
-    let w = scene.billboard.resolution;
-    let reach = scene.ray_reach(billboard);
-    let tints = scene.tints();
+/// Integrates B and the tint for every texel of the frame's billboard (METHOD.md section 3).
+pub fn render_brightness(setup: &FrameSetup) -> BrightnessTexture {
+    let w = setup.resolution;
     let n = (w as usize) * (w as usize);
     let mut values = vec![0.0; n];
     let mut tint = vec![[0.0; 3]; n];
@@ -135,12 +130,12 @@ pub fn render_brightness(scene: &Scene, billboard: &Billboard) -> BrightnessText
         .enumerate()
         .for_each(|(j, (row, tint_row))| {
             for (i, (out, tint_out)) in row.iter_mut().zip(tint_row).enumerate() {
-                let ray = texel_ray(scene, billboard, reach, i as u32, j as u32);
+                let ray = texel_ray(setup, i as u32, j as u32);
                 if ray.hidden {
                     continue;
                 }
-                *out = brightness(&scene.sources, &ray.settings, ray.s, ray.e, ray.xi);
-                *tint_out = tint_of(scene, &tints, &ray.settings, (ray.s, ray.e), ray.xi);
+                *out = brightness(&setup.scene.sources, &ray.settings, ray.s, ray.e, ray.xi);
+                *tint_out = tint_of(setup, &ray.settings, (ray.s, ray.e), ray.xi);
             }
         });
     BrightnessTexture {
@@ -151,12 +146,12 @@ pub fn render_brightness(scene: &Scene, billboard: &Billboard) -> BrightnessText
 }
 
 /// B of a single texel, for tests that probe one ray.
-pub fn texel_brightness(scene: &Scene, billboard: &Billboard, i: u32, j: u32) -> f64 {
-    let ray = texel_ray(scene, billboard, scene.ray_reach(billboard), i, j);
+pub fn texel_brightness(setup: &FrameSetup, i: u32, j: u32) -> f64 {
+    let ray = texel_ray(setup, i, j);
     if ray.hidden {
         return 0.0;
     }
-    brightness(&scene.sources, &ray.settings, ray.s, ray.e, ray.xi)
+    brightness(&setup.scene.sources, &ray.settings, ray.s, ray.e, ray.xi)
 }
 
 /// A texel's ray and what its integral needs.
@@ -169,18 +164,15 @@ struct TexelRay {
     hidden: bool,
 }
 
-/// The ray of texel `(i, j)` with the frame's `reach` already known, up to the first surface of the scene's
-/// objects (`objects::clip`): the shortened ray with the decay mapped onto it.
-fn texel_ray(scene: &Scene, billboard: &Billboard, reach: Reach, i: u32, j: u32) -> TexelRay {
-    let w = scene.billboard.resolution;
-    let s: DVec3 = billboard.texel_center(i, j, w);
-    let e = ray_end(s, scene.camera.eye, reach.nu);
-    let xi = scene
-        .integration
-        .jitter
-        .map_or(0.5, |seed| jitter_offset(seed, i, j, w));
-    let settings = scene.integration.on_ray(reach.stretch);
-    let c = clip_fraction(&scene.objects, scene.camera.eye, s, reach.nu);
+/// The ray of texel `(i, j)` of the frame, up to the first surface of the scene's objects (`objects::clip`, in
+/// f64 at the texel itself): the shortened ray with the decay mapped onto it.
+fn texel_ray(setup: &FrameSetup, i: u32, j: u32) -> TexelRay {
+    let (w, eye, reach) = (setup.resolution, setup.eye(), setup.reach);
+    let s: DVec3 = setup.billboard.texel_center(i, j, w);
+    let e = ray_end(s, eye, reach.nu);
+    let xi = (setup.integration.jitter).map_or(0.5, |seed| jitter_offset(seed, i, j, w));
+    let settings = setup.integration.clone();
+    let c = clip_fraction(&setup.scene.objects, eye, s, reach.nu);
     if c < 1.0 && c > 0.0 {
         return TexelRay {
             s,

@@ -23,9 +23,9 @@ impl Parameter {
             Parameter::SourceColor(kind, i) => {
                 Value::Vector(scene.look(kind, i)?.color.unwrap_or(scene.colors.energy))
             }
-            Parameter::Intensity(kind, i) => Value::Number(
-                (scene.look(kind, i)?.intensity).unwrap_or(scene.colors.energy_intensity),
-            ),
+            Parameter::Intensity(kind, i) => {
+                Value::Number(scene.colors.intensity_of(scene.look(kind, i)?))
+            }
             Parameter::Position(SourceKind::Points, i) => v(s.points.get(i)?.position),
             Parameter::Position(SourceKind::Lines, i) => v(s.lines.get(i)?.point),
             Parameter::Position(SourceKind::Tori, i) => v(s.tori.get(i)?.center),

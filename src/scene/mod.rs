@@ -112,6 +112,11 @@ impl Colors {
         self.palette().color_of(look)
     }
 
+    /// The intensity a source's color is multiplied by (`Palette::intensity_of`).
+    pub fn intensity_of(&self, look: &Look) -> f64 {
+        self.palette().intensity_of(look)
+    }
+
     /// A curve's energy color at chain parameter `t` (`Palette::color_along`).
     pub fn color_along(&self, curve: &Curve, t: f64) -> [f64; 3] {
         self.palette().color_along(curve, t)
@@ -421,8 +426,7 @@ impl Scene {
     /// Term `k` (points, lines, tori, curves) when it is a curve with a color series.
     pub fn series_curve(&self, k: usize) -> Option<&Curve> {
         let s = &self.sources;
-        let first = s.points.len() + s.lines.len() + s.tori.len();
-        let c = s.curves.get(k.checked_sub(first)?)?;
+        let c = s.curves.get(k.checked_sub(s.first_curve())?)?;
         (!c.color_series.is_empty()).then_some(c)
     }
 
@@ -489,16 +493,6 @@ impl Scene {
             .div_ceil(8)
             .saturating_mul(8)
             .clamp(own, top)
-    }
-
-    /// How far the rays through `billboard` reach, with the decay fixed in scene units (`geometry::Reach`).
-    pub fn ray_reach(&self, billboard: &Billboard) -> geometry::Reach {
-        geometry::ray_reach(
-            &self.camera,
-            &self.sources,
-            billboard,
-            self.integration.decay_length,
-        )
     }
 }
 

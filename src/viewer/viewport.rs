@@ -6,6 +6,7 @@ use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use super::progressive::{FrameBudget, PREVIEW_TOLERANCE, Pacing, Plan, Work};
+use crate::frame::FrameSetup;
 use crate::gpu::{
     BlitPass, FieldInputs, FieldRenderer, FrameTargets, GpuError, GridPass, SceneRenderer,
     Specialise, Upsample, checked, read_frame,
@@ -150,7 +151,9 @@ impl ViewportGpu {
             Vec::new()
         };
         self.grid.upload(device, queue, vertices);
-        let result = self.integrate(device, queue, encoder, view, targets, progressive);
+        let [width, height] = targets.size;
+        let setup = FrameSetup::placed(&view.scene, width as f64 / height as f64);
+        let result = self.integrate(device, queue, encoder, view, &setup, progressive);
         self.scene_renderer
             .set_threshold_preview(view.threshold_preview);
         let grid = &self.grid;
@@ -159,7 +162,7 @@ impl ViewportGpu {
                 device,
                 queue,
                 encoder,
-                &view.scene,
+                &setup,
                 targets,
                 false,
                 (&brightness.0, brightness.1, brightness.2),
@@ -188,13 +191,11 @@ impl ViewportGpu {
         queue: &wgpu::Queue,
         encoder: &mut wgpu::CommandEncoder,
         view: &ViewportView,
-        targets: &FrameTargets,
+        setup: &FrameSetup,
         progressive: bool,
     ) -> Result<(wgpu::TextureView, u32, bool), GpuError> {
-        let scene = &view.scene;
-        let [width, height] = targets.size;
-        let billboard = scene.place_billboard(width as f64 / height as f64);
-        let inputs = FieldInputs::of(scene, &billboard);
+        let scene = setup.scene;
+        let inputs = FieldInputs::of(setup);
         let moved = self.last_inputs.as_ref() != Some(&inputs);
         self.last_inputs = Some(inputs.clone());
         let now = Instant::now();
@@ -222,7 +223,7 @@ impl ViewportGpu {
         match plan {
             Plan::Full => {
                 main.set_band_rows(0);
-                main.prepare(device, queue, scene, &billboard)?;
+                main.prepare(device, queue, &inputs)?;
                 if checked(device, || main.encode_timed(encoder, None))? {
                     work = Work::Full { texels };
                 }
@@ -235,7 +236,8 @@ impl ViewportGpu {
                 coarse.billboard.resolution = resolution;
                 let i = &mut coarse.integration;
                 i.tolerance = i.tolerance.max(PREVIEW_TOLERANCE);
-                self.preview.prepare(device, queue, &coarse, &billboard)?;
+                let coarse = FieldInputs::of(&FrameSetup::new(&coarse, setup.billboard));
+                self.preview.prepare(device, queue, &coarse)?;
                 checked(device, || {
                     self.preview.encode(encoder);
                     let (texture, view) = (self.preview.texture(), self.preview.view());
@@ -252,7 +254,7 @@ impl ViewportGpu {
             Plan::Refine { band_rows, bands } => {
                 if !main.holds(&inputs) {
                     main.set_band_rows(band_rows);
-                    main.prepare(device, queue, scene, &billboard)?;
+                    main.prepare(device, queue, &inputs)?;
                 }
                 let (_, height) = main.band_layout();
                 let complete = checked(device, || main.encode_bands(encoder, bands, None))?;

@@ -9,8 +9,6 @@ use super::context::{
 };
 use super::frame_average::FrameAverage;
 use super::shaders;
-use crate::geometry::Billboard;
-use crate::scene::Scene;
 
 pub mod gpu_data;
 
@@ -201,15 +199,15 @@ impl FieldRenderer {
         );
     }
 
-    /// Uploads what the texture depends on. Returns true when it changed (the next `encode` re-renders).
+    /// Uploads what the texture depends on: a frame's inputs (`FieldInputs::of`, packed once a frame). Returns
+    /// true when they changed (the next `encode` re-renders).
     pub fn prepare(
         &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
-        scene: &Scene,
-        billboard: &Billboard,
+        inputs: &FieldInputs,
     ) -> Result<bool, GpuError> {
-        let w = scene.billboard.resolution;
+        let w = inputs.resolution();
         let limit = device.limits().max_texture_dimension_2d;
         if w > limit {
             return Err(GpuError::ResolutionTooLarge {
@@ -217,8 +215,8 @@ impl FieldRenderer {
                 limit,
             });
         }
-        let packed = pack(scene, billboard);
-        if self.uploaded.as_ref() == Some(&packed) {
+        let packed = &inputs.0;
+        if self.uploaded.as_ref() == Some(packed) {
             if !self.averaging() || self.averaged >= self.average_frames {
                 return Ok(false);
             }
@@ -288,7 +286,7 @@ impl FieldRenderer {
                 self.bind_group = Some(self.make_bind_group(device));
             }
         })?;
-        self.uploaded = Some(packed);
+        self.uploaded = Some(packed.clone());
         self.averaged = 0;
         if self.averaging() {
             checked(device, || self.prepare_average_frame(device, queue))?;

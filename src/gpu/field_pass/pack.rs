@@ -6,9 +6,8 @@ use wgpu::util::DeviceExt;
 use super::super::context::FIELD_LAYERS;
 use super::super::shaders;
 use crate::field::curve::segments;
-use crate::geometry::Billboard;
+use crate::frame::{FrameSetup, Term};
 use crate::integrate::{Decay, Integrator};
-use crate::objects::clip::shared_clip_fractions;
 use crate::scene::Scene;
 
 use super::gpu_data::*;
@@ -19,8 +18,14 @@ use super::gpu_data::*;
 pub struct FieldInputs(pub(super) Packed);
 
 impl FieldInputs {
-    pub fn of(scene: &Scene, billboard: &Billboard) -> Self {
-        FieldInputs(pack(scene, billboard))
+    /// The field pass's inputs for a frame: its sources and settings packed as the WGSL reads them.
+    pub fn of(setup: &FrameSetup) -> Self {
+        FieldInputs(pack(setup))
+    }
+
+    /// The side of the texture these inputs integrate, in texels.
+    pub fn resolution(&self) -> u32 {
+        self.0.params.resolution
     }
 }
 
@@ -219,16 +224,15 @@ pub(super) fn v3(v: glam::DVec3) -> [f32; 3] {
     v.as_vec3().to_array()
 }
 
-pub(super) fn pack(scene: &Scene, billboard: &Billboard) -> Packed {
-    let s = &scene.sources;
-    let reach = scene.ray_reach(billboard);
-    let i = &scene.integration.on_ray(reach.stretch);
-    let mut packed = pack_sources(scene);
+pub(super) fn pack(setup: &FrameSetup) -> Packed {
+    let (scene, billboard, reach) = (setup.scene, &setup.billboard, setup.reach);
+    let i = &setup.integration;
+    let mut packed = pack_sources(setup);
     packed.params = FieldParams {
         center: v3(billboard.center),
         size: billboard.size as f32,
         right: v3(billboard.right),
-        resolution: scene.billboard.resolution,
+        resolution: setup.resolution,
         up: v3(billboard.up),
         divisions: i.divisions,
         eye: v3(scene.camera.eye),
@@ -240,7 +244,7 @@ pub(super) fn pack(scene: &Scene, billboard: &Billboard) -> Packed {
             Integrator::Simpson => 0,
             Integrator::Adaptive => 1,
         },
-        term_tolerance: (i.tolerance / s.len().max(1) as f64) as f32,
+        term_tolerance: setup.term_tolerance as f32,
         jitter: i.jitter.is_some() as u32,
         seed: i.jitter.unwrap_or(0),
         gauss_order: crate::integrate::adaptive::kronrod_order(i.tolerance),
@@ -251,9 +255,7 @@ pub(super) fn pack(scene: &Scene, billboard: &Billboard) -> Packed {
         stretch: i.stretch as f32,
         ..packed.params
     };
-    let eye = scene.camera.eye;
-    let w = scene.billboard.resolution;
-    if let Some(clips) = shared_clip_fractions(&scene.objects, eye, billboard, reach, w) {
+    if let Some(clips) = setup.clips() {
         packed.clips = clips;
         packed.params.clipped = 1;
     }
@@ -263,10 +265,9 @@ pub(super) fn pack(scene: &Scene, billboard: &Billboard) -> Packed {
 
 /// The sources as the field's shaders read them, with their counts, the layers and the search flag in params
 /// (the scene's own epsilon there; nothing of the billboard, the rays or the integrator).
-pub(super) fn pack_sources(scene: &Scene) -> Packed {
-    let s = &scene.sources;
-    let tints = scene.tints();
-    let tinted = tints.iter().flatten().any(|&x| x != 0.0);
+pub(super) fn pack_sources(setup: &FrameSetup) -> Packed {
+    let (scene, s) = (setup.scene, &setup.scene.sources);
+    let tinted = (setup.terms.iter()).any(|t| t.tint.iter().any(|&x| x != 0.0));
     let mut packed = Packed {
         params: FieldParams {
             epsilon: scene.integration.epsilon as f32,
@@ -299,12 +300,12 @@ pub(super) fn pack_sources(scene: &Scene) -> Packed {
                 coefficient: t.coefficient as f32,
             })
             .collect(),
-        tints: (tints.iter())
-            .map(|t| [t[0] as f32, t[1] as f32, t[2] as f32, 0.0])
+        tints: (setup.terms.iter())
+            .map(|Term { tint: t, .. }| [t[0] as f32, t[1] as f32, t[2] as f32, 0.0])
             .collect(),
         ..Packed::default()
     };
-    for c in &s.curves {
+    for (c, term) in s.curves.iter().zip(&setup.terms[setup.first_curve()..]) {
         let first_segment = packed.segments.len() as u32;
         let first_weight = packed.weights.len() as u32;
         // Power-form coefficients are computed in f64, then rounded once.
@@ -318,7 +319,7 @@ pub(super) fn pack_sources(scene: &Scene) -> Packed {
             }));
         packed.weights.extend(c.weights.iter().map(|&w| w as f32));
         let first_color = packed.colors.len() as u32;
-        let intensity = c.look.intensity.unwrap_or(scene.colors.energy_intensity);
+        let intensity = term.intensity;
         packed.colors.extend(
             (c.color_series.iter())
                 .map(|x| x.map(|v| (v * intensity) as f32))
@@ -363,8 +364,8 @@ pub(crate) const SOURCE_BINDINGS: [u32; 9] = [1, 2, 3, 4, 5, 6, 9, 10, 11];
 
 /// What a pass that evaluates the field's terms at points of its own reads (`gpu::object_pass`): params with the
 /// source counts, `scene.integration.epsilon` and the search flag, and the contents of `SOURCE_BINDINGS`.
-pub(crate) fn source_bindings(scene: &Scene) -> (FieldParams, [Vec<u8>; 9]) {
-    let p = pack_sources(scene);
+pub(crate) fn source_bindings(setup: &FrameSetup) -> (FieldParams, [Vec<u8>; 9]) {
+    let p = pack_sources(setup);
     let bytes = [
         bytemuck::cast_slice(&p.points).to_vec(),
         bytemuck::cast_slice(&p.lines).to_vec(),

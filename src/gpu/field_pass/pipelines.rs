@@ -2,8 +2,7 @@
 //! structure, compiled on a thread of their own.
 
 use super::super::shaders;
-use crate::geometry::Billboard;
-use crate::scene::Scene;
+use crate::frame::FrameSetup;
 
 use super::gpu_data::*;
 use super::pack::*;
@@ -78,9 +77,9 @@ impl Structure {
         if self.integrator == 0 { &[0] } else { &[1, 2] }
     }
 
-    /// The structure of `scene` seen through `billboard`.
-    pub fn of_scene(scene: &Scene, billboard: &Billboard) -> Self {
-        Self::of(&pack(scene, billboard).params)
+    /// The structure of a frame's field pass.
+    pub fn of_frame(setup: &FrameSetup) -> Self {
+        Self::of(&pack(setup).params)
     }
 
     pub(super) fn constants(&self) -> [(&'static str, f64); 7] {

@@ -1,6 +1,7 @@
 use super::*;
 use crate::field::{Curve, Point, Torus};
 use crate::integrate::Integrator;
+use crate::scene::Scene;
 use glam::DVec3;
 
 /// The value the field module declares for `const NAME: TYPE = VALUE;`, as f64.
@@ -148,7 +149,7 @@ fn scene(points: usize, curves: &[usize], integrator: Integrator) -> Packed {
         })
         .collect();
     s.integration.integrator = integrator;
-    pack(&s, &s.place_billboard(1.0))
+    pack(&crate::frame::FrameSetup::placed(&s, 1.0))
 }
 
 /// Every term exactly once, in order; the first dispatch writes and the others add.

@@ -226,7 +226,7 @@ pub(super) fn look_editor(
             out,
             "intensity",
             Parameter::Intensity(kind, i),
-            look.intensity.unwrap_or(colors.energy_intensity),
+            colors.intensity_of(look),
             |x| {
                 DragValue::new(x)
                     .speed(0.02)

@@ -1,0 +1,132 @@
+//! A frame's resolved setup: what every renderer of one frame of a scene reads, worked out once.
+//!
+//! A frame is a scene seen through one billboard: the rays' reach (`geometry::Reach`), the integration mapped
+//! onto them, every term of the field with its energy color, tint and share of the tolerance, and the share of
+//! each texel's ray before the first surface of the scene's objects. The GPU passes (`gpu`), the CPU twin
+//! (`reference`), the viewer and the exports all take a `FrameSetup`, so that none of them works any of it out again;
+//! the renderers keep only what lives longer than a frame (pipelines, textures). A new kind of per-frame data
+//! (a particle set's slices, a translucent object's irradiance) is resolved here, once, beside the rest.
+
+use std::sync::{Arc, OnceLock};
+
+use glam::DVec3;
+
+use crate::field::Curve;
+use crate::geometry::{Billboard, Reach};
+use crate::integrate::Integration;
+use crate::objects::clip::shared_clip_fractions;
+use crate::scene::Scene;
+
+/// One term of the field as a frame integrates it, in the order of `Sources::looks` (points, lines, tori,
+/// curves).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Term {
+    /// The term's energy color Ce_i (`Palette::color_of`).
+    pub color: [f64; 3],
+    /// `Ce_i - Ce`, what the field pass integrates beside B (`Scene::tints`): zero in the scene's color, `-Ce`
+    /// for a curve with a color series (its series is integrated apart).
+    pub tint: [f64; 3],
+    /// What the term's color, or its color series, is multiplied by: its own intensity or the scene's.
+    pub intensity: f64,
+}
+
+/// What every renderer of one frame of `scene` reads (see the module's documentation).
+#[derive(Debug)]
+pub struct FrameSetup<'a> {
+    pub scene: &'a Scene,
+    pub billboard: Billboard,
+    /// W: the field texture's side in texels.
+    pub resolution: u32,
+    /// How far every texel's ray reaches.
+    pub reach: Reach,
+    /// The scene's integration mapped onto the rays (`Integration::on_ray(reach.stretch)`).
+    pub integration: Integration,
+    pub terms: Vec<Term>,
+    /// Each term's share of the tolerance (`Integration::term_tolerance`).
+    pub term_tolerance: f64,
+    /// The texels' clips at `resolution`, worked out when first asked for.
+    clips: OnceLock<Option<Arc<Vec<f32>>>>,
+}
+
+impl<'a> FrameSetup<'a> {
+    /// The frame of `scene` through `billboard`, at the scene's resolution.
+    pub fn new(scene: &'a Scene, billboard: Billboard) -> Self {
+        let reach = crate::geometry::ray_reach(
+            &scene.camera,
+            &scene.sources,
+            &billboard,
+            scene.integration.decay_length,
+        );
+        let integration = scene.integration.on_ray(reach.stretch);
+        let palette = scene.colors.palette();
+        let tints = scene.tints();
+        let terms = (scene.sources.looks().zip(tints))
+            .map(|(look, tint)| Term {
+                color: palette.color_of(look),
+                tint,
+                intensity: palette.intensity_of(look),
+            })
+            .collect();
+        FrameSetup {
+            scene,
+            billboard,
+            resolution: scene.billboard.resolution,
+            reach,
+            term_tolerance: integration.term_tolerance(scene.sources.len()),
+            integration,
+            terms,
+            clips: OnceLock::new(),
+        }
+    }
+
+    /// The frame of `scene` in a picture of `aspect` (width / height), its billboard placed as the scene says
+    /// (`Scene::place_billboard`).
+    pub fn placed(scene: &'a Scene, aspect: f64) -> Self {
+        FrameSetup::new(scene, scene.place_billboard(aspect))
+    }
+
+    /// The eye every ray leaves from.
+    pub fn eye(&self) -> DVec3 {
+        self.scene.camera.eye
+    }
+
+    /// The index of the first curve's term (`Sources::first_curve`).
+    pub fn first_curve(&self) -> usize {
+        self.scene.sources.first_curve()
+    }
+
+    /// Term `k` when it is a curve with a color series.
+    pub fn series_curve(&self, k: usize) -> Option<&'a Curve> {
+        self.scene.series_curve(k)
+    }
+
+    /// Whether some term's color differs from the scene's: the field pass integrates the tint beside B.
+    pub fn tinted(&self) -> bool {
+        self.scene.tinted()
+    }
+
+    /// The share of each texel's ray before the first surface of the scene's objects, at `resolution`, in f32 as
+    /// the GPU passes read it (`objects::clip`); none without objects.
+    pub fn clips(&self) -> Option<Arc<Vec<f32>>> {
+        self.clips
+            .get_or_init(|| self.clips_at(self.resolution))
+            .clone()
+    }
+
+    /// The clips of a texture of `w` x `w` texels over the same billboard (a coarse field's, while the view
+    /// moves).
+    pub fn clips_at(&self, w: u32) -> Option<Arc<Vec<f32>>> {
+        if w == self.resolution
+            && let Some(clips) = self.clips.get()
+        {
+            return clips.clone();
+        }
+        shared_clip_fractions(
+            &self.scene.objects,
+            self.eye(),
+            &self.billboard,
+            self.reach,
+            w,
+        )
+    }
+}
