@@ -2,11 +2,12 @@
 //! validated into a `crate::animation::Animation` (every problem reported with its place and field), and
 //! written back.
 
+use super::checker::Checker;
 use super::file::{self, FieldPath, Locator, SceneFile};
-use super::{Checker, Scene};
+use super::{Scene, limits};
 use crate::animation::{
-    Animation, CurvePulse, DEFAULT_FRAME_RATE, Key, MAX_FRAMES, Parameter, Pulse, ShapeField,
-    Track, Value,
+    Animation, CurvePulse, DEFAULT_FRAME_RATE, IntegrationSetting, Key, MAX_FRAMES, Parameter,
+    Pulse, ShapeField, Track, Value,
 };
 use crate::scene::Problem;
 
@@ -92,13 +93,6 @@ pub(super) fn validate(
     let anim = file.animation.as_ref();
     let anim_path = root.key("animation");
     let mut tracks: Vec<Track> = Vec::new();
-    // The decay length per unit of nu - 1: the eye-to-billboard distance at the file's camera.
-    let per_nu = crate::geometry::papers_decay_length(
-        &scene.camera,
-        &scene.sources,
-        scene.billboard.center,
-        2.0,
-    );
     for (i, t) in anim.map_or(&[][..], |a| &a.tracks).iter().enumerate() {
         let path = anim_path.key("tracks").index(i);
         // The papers' nu, keyed: each key becomes the decay length it gives at this file's camera.
@@ -183,10 +177,13 @@ pub(super) fn validate(
             let value_path = key_path.key("value");
             let value = match (&key.value, base) {
                 (file::ValueFile::Number(nu), Value::Number(_)) if legacy_nu => {
-                    if *nu <= 1.0 {
-                        c.fail(&value_path, format!("{nu}: nu must be greater than 1"));
-                    }
-                    Value::Number((nu - 1.0) * per_nu)
+                    c.within(&value_path, *nu, limits::nu);
+                    Value::Number(crate::geometry::papers_decay_length(
+                        &scene.camera,
+                        &scene.sources,
+                        scene.billboard.center,
+                        *nu,
+                    ))
                 }
                 (file::ValueFile::Number(x), Value::Number(_)) => Value::Number(*x),
                 (file::ValueFile::Vector(v), Value::Vector(_)) if v.len() == 3 => {
@@ -299,11 +296,14 @@ fn check_value(c: &mut Checker<'_, '_>, path: &FieldPath, parameter: &Parameter,
         (Parameter::MajorRadius(_), Value::Number(x)) if x <= 0.0 => {
             c.fail(path, format!("{x}: the major radius R must be positive"));
         }
+        (Parameter::Integration(IntegrationSetting::DecayLength), Value::Number(x)) => {
+            c.within(path, x, limits::decay_length);
+        }
         (Parameter::Integration(k), Value::Number(x)) if x <= 0.0 => {
             c.fail(path, format!("{x}: {} must be positive", k.key()));
         }
-        (Parameter::Weight(..), Value::Number(x)) if x < 0.0 => {
-            c.fail(path, format!("{x}: weights must be at least 0"));
+        (Parameter::Weight(..), Value::Number(x)) => {
+            c.within(path, x, limits::weight);
         }
         _ => {}
     }

@@ -6,7 +6,7 @@ use glam::DVec3;
 
 use crate::animation::{Animation, IntegrationSetting, Parameter, SourceKind, Value};
 use crate::field::Look;
-use crate::scene::{MAX_INTENSITY, Scene};
+use crate::scene::{MAX_INTENSITY, Scene, limits};
 
 impl Parameter {
     /// The parameter's current value in `scene`; `None` when the path names nothing there (a source or a
@@ -206,7 +206,10 @@ impl Parameter {
                 };
                 // Every keyable setting is positive. Interpolating between valid keys stays valid; this only
                 // guards against rounding.
-                *slot = x.max(1e-9);
+                *slot = match k {
+                    IntegrationSetting::DecayLength => limits::clamp_decay_length(x),
+                    _ => x.max(1e-9),
+                };
             }
             (Parameter::SeriesColor(i, j), Value::Vector(c)) => {
                 if let Some(slot) = (s.curves.get_mut(*i)).and_then(|x| x.color_series.get_mut(*j))
@@ -216,7 +219,7 @@ impl Parameter {
             }
             (Parameter::Weight(i, j), Value::Number(x)) => {
                 if let Some(slot) = s.curves.get_mut(*i).and_then(|c| c.weights.get_mut(*j)) {
-                    *slot = x.max(0.0);
+                    *slot = limits::clamp_weight(x);
                 }
             }
             _ => {}

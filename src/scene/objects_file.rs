@@ -6,8 +6,9 @@ use std::sync::Arc;
 
 use glam::DVec3;
 
+use super::MAX_COORDINATE;
+use super::checker::Checker;
 use super::file::{FieldPath, ObjectFile, SceneFile, ValueFile};
-use super::{Checker, MAX_COORDINATE};
 use crate::objects::{MeshData, MeshObject, Object, Shape, ShapeKind};
 
 /// The kinds a file may name, in the order the messages list them.

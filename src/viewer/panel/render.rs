@@ -11,7 +11,7 @@ use super::context::{
 use super::fields::{Edits, color_field, number};
 use crate::animation::{IntegrationSetting, Parameter};
 use crate::integrate::{Decay, Integrator};
-use crate::scene::{Blend, Glare, MAX_CUTOFF, MAX_GLARE_SIZE, MAX_INTENSITY, Scene};
+use crate::scene::{Blend, Glare, MAX_CUTOFF, MAX_GLARE_SIZE, MAX_INTENSITY, Scene, limits};
 
 pub(super) fn render_section(
     ui: &mut Ui,
@@ -128,7 +128,11 @@ pub(super) fn render_section(
                         "decay length",
                         setting(IntegrationSetting::DecayLength),
                         i.decay_length,
-                        |x| DragValue::new(x).range(1e-3..=1e6).speed(step),
+                        |x| {
+                            DragValue::new(x)
+                                .range(limits::MIN_DECAY_LENGTH..=limits::MAX_DECAY_LENGTH)
+                                .speed(step)
+                        },
                     )
                     .on_hover_text(
                         "The depth past the billboard, in scene units, over which \u{3b6} falls from \
