@@ -1,7 +1,7 @@
 // The adaptive integrator's pass for curve chains (entry point integrate_adaptive_curves): the chain's
 // features from a scan along the ray, cuts at its kinks, jumps, knots and joints, then Gauss-Kronrod pairs in u
-// between the cuts with the nearest point carried node to node. Assembled after field_pass.wgsl and
-// adaptive.wgsl. Twin: src/reference/adaptive_curves.rs and src/field/curve.rs.
+// between the cuts with the nearest point carried node to node. Twin: src/reference/adaptive_curves.rs.
+#import shared/adaptive.wgsl
 
 // A chain's nearest point to the ray's point at t. Twin of ChainSample.
 struct ChainSample {

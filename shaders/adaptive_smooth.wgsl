@@ -1,5 +1,6 @@
 // The adaptive integrator's pass for points, lines and tori (entry point integrate_adaptive): Gauss-Kronrod
-// pairs in u on each term's pieces. Assembled after field_pass.wgsl and adaptive.wgsl. Twin: src/reference/adaptive_smooth.rs.
+// pairs in u on each term's pieces. Twin: src/reference/adaptive_smooth.rs.
+#import shared/adaptive.wgsl
 
 // A point's, a line's or a torus's distance from p.
 fn smooth_distance(ray: Ray, p: vec3<f32>) -> f32 {

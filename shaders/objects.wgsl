@@ -1,12 +1,12 @@
 // The scene's objects: triangles drawn with depth behind the billboard, so that the glow blends over them as over
 // the background, and lit at every pixel by every source (objects::lighting): the fragment evaluates each source's
 // term of psi at the pixel's surface point and the direction to the point of the source that term reads, with the
-// field's own functions (this file comes after field_common.wgsl and field_pass.wgsl in its module, assembled by
-// src/gpu/shaders.rs::object_module_source, whose bindings 0 to 6 and 9 to 11 it shares), and shades
+// field's own functions (imported with the field pass's bindings 0 to 6 and 9 to 11, which it shares), and shades
 // `albedo (AMBIENT + S sum_i Ce_i psi_i max(0, n . l_i))`, the light of negative sources (which darken) apart, with
 // a factor of its own. The shadow factor S (the share of the direct light the
 // objects' shadows leave) is worked out in f64 at the vertices and interpolated. Rust side: src/gpu/object_pass.rs
 // (gpu_data::ObjectParams, ObjectVertex; keep in sync). CPU twin: src/reference/objects.rs.
+#import shared/brightest.wgsl
 
 struct ObjectParams {
     view_proj: mat4x4<f32>,

@@ -1,6 +1,6 @@
 // The papers' integrator (METHOD.md section 3): Simpson's rule over n + 1 evenly spaced samples of the ray, or
-// with jitter the randomly shifted rectangle rule. Entry point `integrate`. Assembled after field_pass.wgsl.
-// CPU twin: src/reference/simpson.rs.
+// with jitter the randomly shifted rectangle rule. Entry point `integrate`. CPU twin: src/reference/simpson.rs.
+#import shared/brightest.wgsl
 
 
 // A curve chain's term at p, b Sw(t) / max(eps, |p - C(t)|) at the point it reads (curve_point: the nearest point t*,

@@ -21,7 +21,7 @@
 //! found by bracketed Newton on `D - eps^2` on either side. A piece is skipped where even its largest weight over its
 //! nearest possible distance (a ball around its control polygon) cannot beat the best value found.
 //!
-//! `shaders/field_pass.wgsl` (`curve_search`) mirrors this in f32; its pieces are packed from `pieces`.
+//! `shaders/shared/brightest.wgsl` (`curve_search`) mirrors this in f32; its pieces are packed from `pieces`.
 
 use glam::DVec3;
 

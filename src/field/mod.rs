@@ -1,6 +1,6 @@
 //! The energy field psi: sources, their distance functions and the sum (METHOD.md section 1, thesis 3.1-3.28).
 //!
-//! This is the f64 reference the GPU passes are checked against; `shaders/field_common.wgsl` and the field
+//! This is the f64 reference the GPU passes are checked against; `shaders/shared/field.wgsl` and the field
 //! passes mirror it in f32, function for function.
 
 pub mod brightest;

@@ -78,7 +78,7 @@ impl Structure {
         }
     }
 
-    /// The values of `shaders/field_pass.wgsl`'s overridable constants: each kind's count up to `UNROLLED`
+    /// The values of `shaders/shared/field_pass.wgsl`'s overridable constants: each kind's count up to `UNROLLED`
     /// (past it the default, which reads the count from the sources' params), the search.
     fn constants(self) -> Vec<(&'static str, f64)> {
         let counts = [

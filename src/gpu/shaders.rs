@@ -1,72 +1,167 @@
-//! The WGSL sources, embedded in the binary. WGSL has no include: each field pass's module is assembled here
-//! from shared parts (the constants generated from the f64 twin, `field_common.wgsl` with the source structs
-//! and distance functions, `field_pass.wgsl` with the bindings, then the pass's own file), so each part lives in
-//! one place and each pass's module carries only its own code.
+//! The WGSL sources, embedded in the binary, and their composition into modules. A file names the files it uses
+//! by `#import path` lines (paths under `shaders/`); `compose` makes a module of an entry file: every file it
+//! imports, directly or not, once each, depth first in the order named, then the file itself without its import
+//! lines. Which files make up a module is written in the files themselves. The parts several passes share live in
+//! `shaders/shared/`, each the f32 twin of one Rust module and named after it (`shared/curve.wgsl` of
+//! `crate::field::curve`); the constants both twins use are generated from the Rust side (`shared_constants`) and
+//! imported as `shared/constants.wgsl`. A new pass is a file in `shaders/` that imports what it uses, listed in
+//! `FILES`.
 
-/// Shared structs and functions of the field.
-pub const FIELD_COMMON: &str = include_str!("../../shaders/field_common.wgsl");
-/// What every field pass shares: parameters, bindings, the structure's constants, the texel's ray.
-pub const FIELD_PASS: &str = include_str!("../../shaders/field_pass.wgsl");
-/// The papers' integrator, Simpson's rule (entry point `integrate`).
-pub const SIMPSON_PASS: &str = include_str!("../../shaders/simpson.wgsl");
-/// The adaptive integrator's parts shared by its two passes.
-pub const ADAPTIVE_COMMON: &str = include_str!("../../shaders/adaptive.wgsl");
-/// The adaptive integrator's pass for points, lines and tori (entry point `integrate_adaptive`).
-pub const ADAPTIVE_SMOOTH_PASS: &str = include_str!("../../shaders/adaptive_smooth.wgsl");
-/// The adaptive integrator's pass for curve chains (entry point `integrate_adaptive_curves`).
-pub const ADAPTIVE_CURVES_PASS: &str = include_str!("../../shaders/adaptive_curves.wgsl");
-
-/// The field passes: each entry point with the files of its module after the shared parts, in the order
-/// `gpu::field_pass` indexes its pipelines.
-pub const FIELD_PASSES: [(&str, &[&str]); 3] = [
-    ("integrate", &[SIMPSON_PASS]),
-    (
-        "integrate_adaptive",
-        &[ADAPTIVE_COMMON, ADAPTIVE_SMOOTH_PASS],
-    ),
-    (
-        "integrate_adaptive_curves",
-        &[ADAPTIVE_COMMON, ADAPTIVE_CURVES_PASS],
-    ),
-];
-
-/// The complete source of field pass `k`'s module (`FIELD_PASSES`): the constants it shares with its f64
-/// twin, generated from the twin's definitions (`shared_constants`), the common parts and the pass.
-pub fn field_module_source(k: usize) -> String {
-    let mut source = format!("{}\n{FIELD_COMMON}\n{FIELD_PASS}", shared_constants());
-    for part in FIELD_PASSES[k].1 {
-        source.push('\n');
-        source.push_str(part);
-    }
-    source
-}
+use std::collections::BTreeSet;
 
 /// The billboard pass.
 pub const BILLBOARD_PASS: &str = include_str!("../../shaders/billboard.wgsl");
 /// The glare pass (`gpu::glare_pass`).
 pub const GLARE_PASS: &str = include_str!("../../shaders/glare.wgsl");
-
 /// The smooth upsampling of the viewer's low-resolution preview field.
 pub const UPSAMPLE_PASS: &str = include_str!("../../shaders/upsample.wgsl");
-
 /// The running mean of jittered frames.
 pub const AVERAGE_PASS: &str = include_str!("../../shaders/average.wgsl");
-
 /// The viewer's ground grid.
 pub const GRID_PASS: &str = include_str!("../../shaders/grid.wgsl");
-/// The scene's objects, lit at every pixel (`object_module_source` is its module).
-pub const OBJECT_PASS: &str = include_str!("../../shaders/objects.wgsl");
-
-/// The object pass's module: the field's shared parts, as a field pass has them (its fragment shader evaluates
-/// every source's term at the pixel's surface point with the field's own functions), then `objects.wgsl`.
-pub fn object_module_source() -> String {
-    format!(
-        "{}\n{FIELD_COMMON}\n{FIELD_PASS}\n{OBJECT_PASS}",
-        shared_constants()
-    )
-}
 /// The viewer's copy of its offscreen viewport into egui's frame.
 pub const BLIT_PASS: &str = include_str!("../../shaders/blit.wgsl");
+
+/// The generated file of the constants both twins use (`shared_constants`), imported like any other.
+pub const CONSTANTS: &str = "shared/constants.wgsl";
+
+/// Every WGSL file but the generated one, by its path under `shaders/`.
+pub const FILES: [(&str, &str); 17] = [
+    (
+        "shared/field.wgsl",
+        include_str!("../../shaders/shared/field.wgsl"),
+    ),
+    (
+        "shared/cubic.wgsl",
+        include_str!("../../shaders/shared/cubic.wgsl"),
+    ),
+    (
+        "shared/curve.wgsl",
+        include_str!("../../shaders/shared/curve.wgsl"),
+    ),
+    (
+        "shared/field_pass.wgsl",
+        include_str!("../../shaders/shared/field_pass.wgsl"),
+    ),
+    (
+        "shared/wseries.wgsl",
+        include_str!("../../shaders/shared/wseries.wgsl"),
+    ),
+    (
+        "shared/brightest.wgsl",
+        include_str!("../../shaders/shared/brightest.wgsl"),
+    ),
+    (
+        "shared/adaptive.wgsl",
+        include_str!("../../shaders/shared/adaptive.wgsl"),
+    ),
+    ("simpson.wgsl", include_str!("../../shaders/simpson.wgsl")),
+    (
+        "adaptive_smooth.wgsl",
+        include_str!("../../shaders/adaptive_smooth.wgsl"),
+    ),
+    (
+        "adaptive_curves.wgsl",
+        include_str!("../../shaders/adaptive_curves.wgsl"),
+    ),
+    ("objects.wgsl", include_str!("../../shaders/objects.wgsl")),
+    ("billboard.wgsl", BILLBOARD_PASS),
+    ("glare.wgsl", GLARE_PASS),
+    ("upsample.wgsl", UPSAMPLE_PASS),
+    ("average.wgsl", AVERAGE_PASS),
+    ("grid.wgsl", GRID_PASS),
+    ("blit.wgsl", BLIT_PASS),
+];
+
+/// The text of the embedded file at `path` (under `shaders/`), the generated constants included.
+pub fn file(path: &str) -> Option<String> {
+    if path == CONSTANTS {
+        return Some(shared_constants());
+    }
+    FILES
+        .iter()
+        .find(|(p, _)| *p == path)
+        .map(|(_, text)| text.to_string())
+}
+
+/// The path an import line names, if `line` is one (`#import path`).
+fn import_of(line: &str) -> Option<&str> {
+    line.strip_prefix("#import ").map(str::trim)
+}
+
+/// The module of `entry`, its imports read by `lookup`: each file once, those it imports before it (depth first,
+/// in the order named), the import lines left out, the parts joined by a line break. An import of a file
+/// `lookup` does not know, or a circle of imports, is an error naming the files.
+pub fn compose_with(
+    entry: &str,
+    lookup: &dyn Fn(&str) -> Option<String>,
+) -> Result<String, String> {
+    fn visit(
+        path: &str,
+        lookup: &dyn Fn(&str) -> Option<String>,
+        open: &mut Vec<String>,
+        done: &mut BTreeSet<String>,
+        parts: &mut Vec<String>,
+    ) -> Result<(), String> {
+        if done.contains(path) {
+            return Ok(());
+        }
+        if let Some(at) = open.iter().position(|p| p == path) {
+            let mut circle = open[at..].to_vec();
+            circle.push(path.to_owned());
+            return Err(format!("a circle of imports: {}", circle.join(" -> ")));
+        }
+        let text = lookup(path).ok_or_else(|| match open.last() {
+            Some(by) => format!("{by} imports {path}, which does not exist"),
+            None => format!("no shader file {path}"),
+        })?;
+        open.push(path.to_owned());
+        for import in text.lines().filter_map(import_of) {
+            visit(import, lookup, open, done, parts)?;
+        }
+        open.pop();
+        done.insert(path.to_owned());
+        parts.push(
+            text.split_inclusive('\n')
+                .filter(|line| import_of(line).is_none())
+                .collect(),
+        );
+        Ok(())
+    }
+    let mut parts = Vec::new();
+    visit(
+        entry,
+        lookup,
+        &mut Vec::new(),
+        &mut BTreeSet::new(),
+        &mut parts,
+    )?;
+    Ok(parts.join("\n"))
+}
+
+/// The module of the embedded entry file `entry` (`compose_with` over `file`). The files are part of the
+/// program, and every module is composed by the tests (`all_modules`): a failure here is a bug in them.
+pub fn compose(entry: &str) -> String {
+    compose_with(entry, &file).unwrap_or_else(|e| panic!("shaders/{entry}: {e}"))
+}
+
+/// The field passes: each entry point and its file, in the order `gpu::field_pass` indexes its pipelines.
+pub const FIELD_PASSES: [(&str, &str); 3] = [
+    ("integrate", "simpson.wgsl"),
+    ("integrate_adaptive", "adaptive_smooth.wgsl"),
+    ("integrate_adaptive_curves", "adaptive_curves.wgsl"),
+];
+
+/// The complete source of field pass `k`'s module (`FIELD_PASSES`).
+pub fn field_module_source(k: usize) -> String {
+    compose(FIELD_PASSES[k].1)
+}
+
+/// The object pass's module (`objects.wgsl`, which imports the field's parts: its fragment shader evaluates every
+/// source's term at the pixel's surface point with the field's own functions).
+pub fn object_module_source() -> String {
+    compose("objects.wgsl")
+}
 
 /// Newton steps the adaptive curves pass takes from the last node's nearest point (GPU only: the f64 twin solves
 /// every node in closed form); `gpu::field_pass` counts them in its iteration budget.
@@ -172,30 +267,93 @@ pub fn shared_constants() -> String {
     s
 }
 
-/// Every shader module the program builds, by name: what the validation tests check.
+/// Every shader module the program builds, by its entry file: what the validation tests check.
 pub fn all_modules() -> Vec<(&'static str, String)> {
-    vec![
-        (
-            "simpson.wgsl (with field_common.wgsl and field_pass.wgsl)",
-            field_module_source(0),
-        ),
-        (
-            "adaptive_smooth.wgsl (with field_common.wgsl, field_pass.wgsl and adaptive.wgsl)",
-            field_module_source(1),
-        ),
-        (
-            "adaptive_curves.wgsl (with field_common.wgsl, field_pass.wgsl and adaptive.wgsl)",
-            field_module_source(2),
-        ),
-        ("billboard.wgsl", BILLBOARD_PASS.to_string()),
-        ("glare.wgsl", GLARE_PASS.to_string()),
-        ("average.wgsl", AVERAGE_PASS.to_string()),
-        ("upsample.wgsl", UPSAMPLE_PASS.to_string()),
-        ("grid.wgsl", GRID_PASS.to_string()),
-        (
-            "objects.wgsl (with field_common.wgsl and field_pass.wgsl)",
-            object_module_source(),
-        ),
-        ("blit.wgsl", BLIT_PASS.to_string()),
-    ]
+    FILES
+        .iter()
+        .filter(|(path, _)| !path.starts_with("shared/"))
+        .map(|(path, _)| (*path, compose(path)))
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_file_under_shaders_is_embedded_and_every_module_composes() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders");
+        let mut on_disk = Vec::new();
+        for sub in ["", "shared"] {
+            for entry in std::fs::read_dir(dir.join(sub)).unwrap() {
+                let name = entry.unwrap().file_name().into_string().unwrap();
+                if name.ends_with(".wgsl") {
+                    on_disk.push(if sub.is_empty() {
+                        name
+                    } else {
+                        format!("{sub}/{name}")
+                    });
+                }
+            }
+        }
+        on_disk.sort();
+        let mut listed: Vec<String> = FILES.iter().map(|(p, _)| p.to_string()).collect();
+        listed.sort();
+        assert_eq!(
+            on_disk, listed,
+            "FILES lists every file in shaders/ and shaders/shared/"
+        );
+        for (path, text) in FILES {
+            for import in text.lines().filter_map(import_of) {
+                assert!(
+                    file(import).is_some(),
+                    "{path} imports {import}, which does not exist"
+                );
+            }
+        }
+        assert_eq!(all_modules().len(), FILES.len() - 7);
+    }
+
+    #[test]
+    fn imports_come_first_once_each_and_circles_are_refused() {
+        let files = |p: &str| -> Option<String> {
+            Some(
+                match p {
+                    "a" => "#import b\n#import c\nA\n",
+                    "b" => "#import c\nB\n",
+                    "c" => "C\n",
+                    "x" => "#import y\nX\n",
+                    "y" => "#import x\nY\n",
+                    "z" => "#import nowhere\nZ\n",
+                    _ => return None,
+                }
+                .to_owned(),
+            )
+        };
+        assert_eq!(compose_with("a", &files).unwrap(), "C\n\nB\n\nA\n");
+        assert_eq!(
+            compose_with("x", &files).unwrap_err(),
+            "a circle of imports: x -> y -> x"
+        );
+        assert_eq!(
+            compose_with("z", &files).unwrap_err(),
+            "z imports nowhere, which does not exist"
+        );
+        // The field passes' parts come in the order they depend on one another, the constants first.
+        let curves = field_module_source(2);
+        let at = |needle: &str| curves.find(needle).unwrap_or_else(|| panic!("{needle}"));
+        assert!(
+            at("const KRONROD: ") < at("struct PointSource")
+                && at("struct PointSource") < at("struct Roots")
+        );
+        assert!(
+            at("fn segment_at(") < at("struct FieldParams")
+                && at("struct FieldParams") < at("fn wseries_knot(")
+        );
+        assert!(
+            at("fn curve_search(") < at("struct Peak {")
+                && at("struct Peak {") < at("struct ChainSample")
+        );
+        assert!(!curves.contains("#import"));
+    }
 }

@@ -63,7 +63,7 @@
 //! integrand is smooth on the panel; the cuts above are what make it so.
 //!
 //! **Files.** This file holds what both families share (the Gauss-Kronrod pairs, panels and their refinement,
-//! the features' pieces and cuts), twin of `shaders/adaptive.wgsl`; `adaptive_smooth` integrates points, lines and
+//! the features' pieces and cuts), twin of `shaders/shared/adaptive.wgsl`; `adaptive_smooth` integrates points, lines and
 //! tori (twin of `adaptive_smooth.wgsl`, entry point `integrate_adaptive`), `adaptive_curves` the curve chains
 //! (twin of `adaptive_curves.wgsl`, `integrate_adaptive_curves`). The two passes are dispatched apart
 //! (`gpu::field_pass::plan_chunks`) and add into the texture, as `field_pass::adaptive` adds the two families. Differences: along a curve's part the shader visits the nodes in order

@@ -1,4 +1,4 @@
-//! What every field pass shares, the f64 twin of `shaders/field_pass.wgsl`: each texel's ray S -> E, B along it
+//! What every field pass shares, the f64 twin of `shaders/shared/field_pass.wgsl`: each texel's ray S -> E, B along it
 //! by the scene's integrator (`simpson`, or the two families of `adaptive`), and the billboard's whole brightness
 //! texture, on every core.
 

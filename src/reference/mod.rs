@@ -2,18 +2,24 @@
 //! formula as METHOD.md states them, on every core. It is the oracle the GPU passes are tested against, and
 //! `energywave render --backend cpu`.
 //!
-//! One module for each GPU pass it twins, named after the pass's WGSL file in `shaders/`:
+//! One module for each GPU pass it twins, named after the pass's WGSL file in `shaders/`; the parts the passes
+//! share, in `shaders/shared/`, are the f32 twins of `crate::field` and of the modules here, named alike:
 //!
-//! | WGSL (`shaders/`)       | f64 twin                                                                    |
-//! |-------------------------|-----------------------------------------------------------------------------|
-//! | `field_common.wgsl`     | `crate::field`: the sources, their distances, the nearest point on a curve, the W series |
-//! | `field_pass.wgsl`       | [`field_pass`]: each texel's ray, B by the scene's integrator, the brightness texture |
-//! | `simpson.wgsl`          | [`simpson`]: the papers' rule (and the shifted rectangle rule with jitter)   |
-//! | `adaptive.wgsl`         | [`adaptive`]: the adaptive integrator's shared parts (Gauss-Kronrod, pieces, cuts) |
-//! | `adaptive_smooth.wgsl`  | [`adaptive_smooth`]: points, lines (in closed form where it holds) and tori  |
-//! | `adaptive_curves.wgsl`  | [`adaptive_curves`]: curve chains, their scan, jumps and kinks               |
-//! | `glare.wgsl`            | [`glare`]: the fog glow, the excess over a threshold blurred and added back  |
-//! | `billboard.wgsl`        | [`billboard`]: the blend and the composed frame                              |
+//! | WGSL (`shaders/`)             | f64 twin                                                              |
+//! |-------------------------------|-----------------------------------------------------------------------|
+//! | `shared/field.wgsl`           | `crate::field`: the source structs, their distances                   |
+//! | `shared/cubic.wgsl`           | `crate::field::cubic`: Cardano's formula                              |
+//! | `shared/curve.wgsl`           | `crate::field::curve`: a segment's points and its nearest point       |
+//! | `shared/wseries.wgsl`         | `crate::field::wseries`: the W series and the color series            |
+//! | `shared/brightest.wgsl`       | `crate::field::brightest`: the point a chain's term reads             |
+//! | `shared/field_pass.wgsl`      | [`field_pass`]: each texel's ray, its bindings, the brightness texture |
+//! | `shared/adaptive.wgsl`        | [`adaptive`]: the adaptive integrator's shared parts (Gauss-Kronrod, pieces, cuts) |
+//! | `simpson.wgsl`                | [`simpson`]: the papers' rule (and the shifted rectangle rule with jitter) |
+//! | `adaptive_smooth.wgsl`        | [`adaptive_smooth`]: points, lines (in closed form where it holds) and tori |
+//! | `adaptive_curves.wgsl`        | [`adaptive_curves`]: curve chains, their scan, jumps and kinks        |
+//! | `objects.wgsl`                | [`objects`]: the objects, lit at every pixel                          |
+//! | `glare.wgsl`                  | [`glare`]: the fog glow, the excess over a threshold blurred and added back |
+//! | `billboard.wgsl`              | [`billboard`]: the blend and the composed frame                       |
 //!
 //! The other shaders only display or resample a field already integrated (`average.wgsl`, the viewer's running
 //! mean of jittered frames; `upsample.wgsl`, `grid.wgsl`, `blit.wgsl`) and have no twin. [`converged`] is the

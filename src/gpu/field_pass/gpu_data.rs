@@ -1,9 +1,9 @@
-//! Rust mirrors of the WGSL structs of `shaders/field_pass.wgsl` and `shaders/field_common.wgsl` (keep in
+//! Rust mirrors of the WGSL structs of `shaders/shared/field_pass.wgsl` and `shaders/shared/field.wgsl` (keep in
 //! sync; `tests/gpu_layout.rs` checks them against naga's layout).
 
 use bytemuck::{Pod, Zeroable};
 
-/// `FieldParams` in `shaders/field_pass.wgsl`.
+/// `FieldParams` in `shaders/shared/field_pass.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct FieldParams {
@@ -38,7 +38,7 @@ pub struct FieldParams {
 }
 const _: () = assert!(size_of::<FieldParams>() == 144);
 
-/// `Chunk` in `shaders/field_pass.wgsl`: one dispatch's range of samples or terms.
+/// `Chunk` in `shaders/shared/field_pass.wgsl`: one dispatch's range of samples or terms.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Chunk {
@@ -52,7 +52,7 @@ pub struct Chunk {
 }
 const _: () = assert!(size_of::<Chunk>() == 28);
 
-/// `PointSource` in `shaders/field_common.wgsl`.
+/// `PointSource` in `shaders/shared/field.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct PointSource {
@@ -61,7 +61,7 @@ pub struct PointSource {
 }
 const _: () = assert!(size_of::<PointSource>() == 16);
 
-/// `LineSource` in `shaders/field_common.wgsl`.
+/// `LineSource` in `shaders/shared/field.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct LineSource {
@@ -72,7 +72,7 @@ pub struct LineSource {
 }
 const _: () = assert!(size_of::<LineSource>() == 32);
 
-/// `TorusSource` in `shaders/field_common.wgsl`.
+/// `TorusSource` in `shaders/shared/field.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct TorusSource {
@@ -83,7 +83,7 @@ pub struct TorusSource {
 }
 const _: () = assert!(size_of::<TorusSource>() == 32);
 
-/// `CurveSource` in `shaders/field_common.wgsl`.
+/// `CurveSource` in `shaders/shared/field.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct CurveSource {
@@ -102,7 +102,7 @@ pub struct CurveSource {
 }
 const _: () = assert!(size_of::<CurveSource>() == 48);
 
-/// `CurvePiece` in `shaders/field_common.wgsl` (twin of `field::brightest::Piece`).
+/// `CurvePiece` in `shaders/shared/field.wgsl` (twin of `field::brightest::Piece`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct CurvePiece {
@@ -121,7 +121,7 @@ pub struct CurvePiece {
 }
 const _: () = assert!(size_of::<CurvePiece>() == 80);
 
-/// `CurveSegment` in `shaders/field_common.wgsl`.
+/// `CurveSegment` in `shaders/shared/field.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct CurveSegment {

@@ -358,7 +358,7 @@ pub(super) fn pack_sources(setup: &FrameSetup) -> Packed {
     packed
 }
 
-/// The bindings of `shaders/field_pass.wgsl` that hold the sources, beside params at 0: points, lines, tori,
+/// The bindings of `shaders/shared/field_pass.wgsl` that hold the sources, beside params at 0: points, lines, tori,
 /// curves, segments, weights, tints, color series and pieces (`source_bindings`).
 pub(crate) const SOURCE_BINDINGS: [u32; 9] = [1, 2, 3, 4, 5, 6, 9, 10, 11];
 

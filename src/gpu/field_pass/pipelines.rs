@@ -40,7 +40,7 @@ impl StorageBuffer {
     }
 }
 
-/// The scene's structure a specialised pipeline is compiled for: the values of `shaders/field_pass.wgsl`'s
+/// The scene's structure a specialised pipeline is compiled for: the values of `shaders/shared/field_pass.wgsl`'s
 /// pipeline-overridable constants (source counts per kind, the Gauss-Kronrod order, jitter). Values (positions,
 /// coefficients, the camera) stay in storage buffers, so editing them never compiles anything.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

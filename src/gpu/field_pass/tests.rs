@@ -75,14 +75,7 @@ fn the_constants_shared_with_the_twin_are_generated_from_it_and_declared_once() 
             1,
             "{name} declared once"
         );
-        for (file, text) in [
-            ("field_common.wgsl", shaders::FIELD_COMMON),
-            ("field_pass.wgsl", shaders::FIELD_PASS),
-            ("simpson.wgsl", shaders::SIMPSON_PASS),
-            ("adaptive.wgsl", shaders::ADAPTIVE_COMMON),
-            ("adaptive_smooth.wgsl", shaders::ADAPTIVE_SMOOTH_PASS),
-            ("adaptive_curves.wgsl", shaders::ADAPTIVE_CURVES_PASS),
-        ] {
+        for (file, text) in shaders::FILES {
             assert!(
                 !text.contains(&declaration),
                 "{file} declares {name} by hand"

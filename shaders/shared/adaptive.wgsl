@@ -4,6 +4,7 @@
 // adaptive_smooth.wgsl (points, lines and tori; entry point integrate_adaptive) and adaptive_curves.wgsl
 // (integrate_adaptive_curves). They are dispatched separately and add into the texture; each is a module of its
 // own, so neither carries the other's code, which on CPU drivers costs even where it never runs.
+#import shared/brightest.wgsl
 
 const KIND_POINT: u32 = 0u;
 const KIND_LINE: u32 = 1u;
