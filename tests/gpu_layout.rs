@@ -85,11 +85,11 @@ fn every_wgsl_module_validates() {
         &shaders::object_module_source(),
         &[("SEARCH", 1.0)],
     );
-    // Every .wgsl file in shaders/ and shaders/shared/ is part of some module, its import lines left out (no file
+    // Every .wgsl file in shaders/ and its folders is part of some module, its import lines left out (no file
     // escapes validation).
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders");
     let all: String = shaders::all_modules().into_iter().map(|(_, s)| s).collect();
-    for sub in [dir.clone(), dir.join("shared")] {
+    for sub in [dir.clone(), dir.join("shared"), dir.join("adaptive_curves")] {
         for entry in std::fs::read_dir(sub).unwrap() {
             let path = entry.unwrap().path();
             if path.extension().is_some_and(|e| e == "wgsl") {

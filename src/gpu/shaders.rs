@@ -26,7 +26,7 @@ pub const BLIT_PASS: &str = include_str!("../../shaders/blit.wgsl");
 pub const CONSTANTS: &str = "shared/constants.wgsl";
 
 /// Every WGSL file but the generated one, by its path under `shaders/`.
-pub const FILES: [(&str, &str); 17] = [
+pub const FILES: [(&str, &str); 19] = [
     (
         "shared/field.wgsl",
         include_str!("../../shaders/shared/field.wgsl"),
@@ -54,6 +54,14 @@ pub const FILES: [(&str, &str); 17] = [
     (
         "shared/adaptive.wgsl",
         include_str!("../../shaders/shared/adaptive.wgsl"),
+    ),
+    (
+        "adaptive_curves/kinks.wgsl",
+        include_str!("../../shaders/adaptive_curves/kinks.wgsl"),
+    ),
+    (
+        "adaptive_curves/scan.wgsl",
+        include_str!("../../shaders/adaptive_curves/scan.wgsl"),
     ),
     ("simpson.wgsl", include_str!("../../shaders/simpson.wgsl")),
     (
@@ -267,11 +275,16 @@ pub fn shared_constants() -> String {
     s
 }
 
-/// Every shader module the program builds, by its entry file: what the validation tests check.
+/// Every shader module the program builds, by its entry file (every file no other imports): what the validation
+/// tests check.
 pub fn all_modules() -> Vec<(&'static str, String)> {
+    let imported: BTreeSet<&str> = FILES
+        .iter()
+        .flat_map(|(_, text)| text.lines().filter_map(import_of))
+        .collect();
     FILES
         .iter()
-        .filter(|(path, _)| !path.starts_with("shared/"))
+        .filter(|(path, _)| !imported.contains(path))
         .map(|(path, _)| (*path, compose(path)))
         .collect()
 }
@@ -284,25 +297,27 @@ mod tests {
     fn every_file_under_shaders_is_embedded_and_every_module_composes() {
         let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders");
         let mut on_disk = Vec::new();
-        for sub in ["", "shared"] {
-            for entry in std::fs::read_dir(dir.join(sub)).unwrap() {
-                let name = entry.unwrap().file_name().into_string().unwrap();
-                if name.ends_with(".wgsl") {
-                    on_disk.push(if sub.is_empty() {
-                        name
-                    } else {
-                        format!("{sub}/{name}")
-                    });
+        let mut folders = vec![String::new()];
+        while let Some(sub) = folders.pop() {
+            for entry in std::fs::read_dir(dir.join(&sub)).unwrap() {
+                let entry = entry.unwrap();
+                let name = entry.file_name().into_string().unwrap();
+                let path = if sub.is_empty() {
+                    name
+                } else {
+                    format!("{sub}/{name}")
+                };
+                if entry.file_type().unwrap().is_dir() {
+                    folders.push(path);
+                } else if path.ends_with(".wgsl") {
+                    on_disk.push(path);
                 }
             }
         }
         on_disk.sort();
         let mut listed: Vec<String> = FILES.iter().map(|(p, _)| p.to_string()).collect();
         listed.sort();
-        assert_eq!(
-            on_disk, listed,
-            "FILES lists every file in shaders/ and shaders/shared/"
-        );
+        assert_eq!(on_disk, listed, "FILES lists every file under shaders/");
         for (path, text) in FILES {
             for import in text.lines().filter_map(import_of) {
                 assert!(
@@ -311,7 +326,22 @@ mod tests {
                 );
             }
         }
-        assert_eq!(all_modules().len(), FILES.len() - 7);
+        let entries: Vec<&str> = all_modules().iter().map(|(p, _)| *p).collect();
+        assert_eq!(
+            entries,
+            [
+                "simpson.wgsl",
+                "adaptive_smooth.wgsl",
+                "adaptive_curves.wgsl",
+                "objects.wgsl",
+                "billboard.wgsl",
+                "glare.wgsl",
+                "upsample.wgsl",
+                "average.wgsl",
+                "grid.wgsl",
+                "blit.wgsl"
+            ]
+        );
     }
 
     #[test]
