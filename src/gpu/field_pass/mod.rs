@@ -4,11 +4,9 @@
 //! buffer). The texture is re-rendered only when something it depends on changed.
 
 use super::context::{
-    FIELD_LAYERS, GpuError, checked, field_storage_entry, field_texture, field_texture_bytes,
-    field_texture_layers, pass_layouts, storage_buffer_entry,
+    FIELD_LAYERS, GpuError, checked, field_texture, field_texture_bytes, field_texture_layers,
 };
 use super::frame_average::FrameAverage;
-use super::shaders;
 
 pub mod gpu_data;
 
@@ -22,17 +20,18 @@ pub use pack::{FieldInputs, layers_of};
 pub(crate) use pack::{SOURCE_BINDINGS, source_bindings, storage_buffer_init};
 use pipelines::*;
 pub use pipelines::{Specialise, Structure};
-/// The field pass: its pipelines (one per integrator) and the GPU copies of one scene's data.
+/// The field pass: its pipelines, the GPU memory a frame's field is integrated in, and how far the uploaded
+/// frame's field has come. All of it outlives a frame; a frame's own data comes in by `prepare` (`FieldInputs`,
+/// packed from the frame's `FrameSetup`).
 pub struct FieldRenderer {
-    /// The generic pipelines of the three passes (`shaders::FIELD_PASSES`), indexed by `Chunk::pipeline`: without
-    /// the search for a curve's brightest point, and with it, each built when a scene first needs it.
-    generic: [Option<Pipelines>; 2],
-    modules: Modules,
-    pipeline_layout: wgpu::PipelineLayout,
-    specialise: Specialise,
-    specialised: SpecialisedPipelines,
-    device: wgpu::Device,
-    layout: wgpu::BindGroupLayout,
+    pipelines: FieldPipelines,
+    resources: Resources,
+    progress: Progress,
+}
+
+/// The GPU memory a frame's field is integrated in, grown as frames need and kept: the inputs' buffers, the
+/// texture, the scratch texture, bound together.
+struct Resources {
     params: wgpu::Buffer,
     /// The chunks, one per `chunk_stride` bytes (bound with a dynamic offset).
     chunks: wgpu::Buffer,
@@ -44,6 +43,10 @@ pub struct FieldRenderer {
     /// texel, which nothing reads.
     scratch: (wgpu::Texture, wgpu::TextureView),
     bind_group: Option<wgpu::BindGroup>,
+}
+
+/// How far the uploaded inputs' field has come: its bands, and the jittered frames averaged.
+struct Progress {
     uploaded: Option<Packed>,
     /// Rows per band of the next upload's dispatches (0: the whole texture in one band).
     band_rows: u32,
@@ -64,57 +67,6 @@ pub struct FieldRenderer {
 impl FieldRenderer {
     /// Builds the passes' modules and layouts; their pipelines are built when a scene first needs them.
     pub fn new(device: &wgpu::Device) -> Self {
-        let modules: Modules = std::array::from_fn(|k| {
-            device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some(&format!("energywave.field.{}", shaders::FIELD_PASSES[k].0)),
-                source: wgpu::ShaderSource::Wgsl(shaders::field_module_source(k).into()),
-            })
-        });
-        let storage = storage_buffer_entry;
-        let (layout, pipeline_layout) = pass_layouts(
-            device,
-            "field",
-            &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::COMPUTE,
-                    // Read-only storage, like the chunks (binding 8): lavapipe specialises a shader for the
-                    // values of the uniforms its loops and branches depend on, a compile (and its memory) for
-                    // every new scene.
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Storage { read_only: true },
-                        has_dynamic_offset: false,
-                        min_binding_size: wgpu::BufferSize::new(size_of::<FieldParams>() as u64),
-                    },
-                    count: None,
-                },
-                storage(1),
-                storage(2),
-                storage(3),
-                storage(4),
-                storage(5),
-                storage(6),
-                field_storage_entry(7, wgpu::StorageTextureAccess::ReadWrite),
-                storage(9),
-                storage(10),
-                storage(11),
-                storage(13),
-                field_storage_entry(12, wgpu::StorageTextureAccess::ReadWrite),
-                // A read-only storage buffer rather than a uniform one: lavapipe recompiles a shader for the
-                // values of uniforms that bound its loops (to unroll them), and a chunk's range bounds the term
-                // loop, so every new range meant a new compile (seconds each, minutes for some).
-                wgpu::BindGroupLayoutEntry {
-                    binding: 8,
-                    visibility: wgpu::ShaderStages::COMPUTE,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Storage { read_only: true },
-                        has_dynamic_offset: true,
-                        min_binding_size: wgpu::BufferSize::new(size_of::<Chunk>() as u64),
-                    },
-                    count: None,
-                },
-            ],
-        );
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("energywave.field.params"),
             size: size_of::<FieldParams>() as u64,
@@ -137,29 +89,27 @@ impl FieldRenderer {
         let chunk_stride = (device.limits().min_storage_buffer_offset_alignment as u64)
             .max(size_of::<Chunk>() as u64);
         Self {
-            generic: [None, None],
-            modules,
-            pipeline_layout,
-            specialise: Specialise::default(),
-            specialised: SpecialisedPipelines::default(),
-            device: device.clone(),
-            layout,
-            params,
-            chunks: chunk_buffer(device, chunk_stride, 1),
-            chunk_stride,
-            buffers,
-            texture: None,
-            scratch: field_texture(device, "energywave.field.scratch", 1, FIELD_LAYERS),
-            bind_group: None,
-            uploaded: None,
-            band_rows: 0,
-            bands: 0,
-            band_height: 0,
-            next_band: 0,
-            dispatches: 0,
-            average: FrameAverage::new(device),
-            average_frames: 1,
-            averaged: 0,
+            pipelines: FieldPipelines::new(device),
+            resources: Resources {
+                params,
+                chunks: chunk_buffer(device, chunk_stride, 1),
+                chunk_stride,
+                buffers,
+                texture: None,
+                scratch: field_texture(device, "energywave.field.scratch", 1, FIELD_LAYERS),
+                bind_group: None,
+            },
+            progress: Progress {
+                uploaded: None,
+                band_rows: 0,
+                bands: 0,
+                band_height: 0,
+                next_band: 0,
+                dispatches: 0,
+                average: FrameAverage::new(device),
+                average_frames: 1,
+                averaged: 0,
+            },
         }
     }
 
@@ -167,34 +117,43 @@ impl FieldRenderer {
     /// (0-based) drawing its offsets with the seed `seed + k`; 1 (the default) renders each scene once. Applies
     /// to jittered scenes only: the others are deterministic, and rendered once.
     pub fn set_average_frames(&mut self, frames: u32) {
-        self.average_frames = frames.max(1);
+        self.progress.average_frames = frames.max(1);
     }
 
     /// Whether the uploaded scene is averaged over frames.
     fn averaging(&self) -> bool {
-        self.average_frames > 1 && self.uploaded.as_ref().is_some_and(|p| p.params.jitter != 0)
+        self.progress.average_frames > 1
+            && self
+                .progress
+                .uploaded
+                .as_ref()
+                .is_some_and(|p| p.params.jitter != 0)
     }
 
     /// While averaging: the frames the picture holds and the most it will hold.
     pub fn averaged_frames(&self) -> Option<(u32, u32)> {
-        self.averaging()
-            .then_some((self.averaged, self.average_frames.max(self.averaged)))
+        self.averaging().then_some((
+            self.progress.averaged,
+            self.progress.average_frames.max(self.progress.averaged),
+        ))
     }
 
     /// The weight of the next frame of the mean, and the offsets' seed (frame `averaged`).
     fn prepare_average_frame(&mut self, device: &wgpu::Device, queue: &wgpu::Queue) {
-        let (Some(packed), Some((texture, view))) = (&self.uploaded, &self.texture) else {
+        let (Some(packed), Some((texture, view))) =
+            (&self.progress.uploaded, &self.resources.texture)
+        else {
             return;
         };
         let mut params = packed.params;
-        params.seed = params.seed.wrapping_add(self.averaged);
-        queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
-        self.average.prepare(
+        params.seed = params.seed.wrapping_add(self.progress.averaged);
+        queue.write_buffer(&self.resources.params, 0, bytemuck::bytes_of(&params));
+        self.progress.average.prepare(
             device,
             queue,
             texture,
             view,
-            self.averaged + 1,
+            self.progress.averaged + 1,
             params.layers,
         );
     }
@@ -216,17 +175,17 @@ impl FieldRenderer {
             });
         }
         let packed = &inputs.0;
-        if self.uploaded.as_ref() == Some(packed) {
-            if !self.averaging() || self.averaged >= self.average_frames {
+        if self.progress.uploaded.as_ref() == Some(packed) {
+            if !self.averaging() || self.progress.averaged >= self.progress.average_frames {
                 return Ok(false);
             }
             // The next frame of the average: new offsets, nothing else changes.
             checked(device, || self.prepare_average_frame(device, queue))?;
-            self.next_band = 0;
+            self.progress.next_band = 0;
             return Ok(true);
         }
         checked(device, || {
-            let mut rebind = self.bind_group.is_none();
+            let mut rebind = self.resources.bind_group.is_none();
             let data: [&[u8]; 10] = [
                 bytemuck::cast_slice(&packed.points),
                 bytemuck::cast_slice(&packed.lines),
@@ -239,74 +198,84 @@ impl FieldRenderer {
                 bytemuck::cast_slice(&packed.pieces),
                 bytemuck::cast_slice(packed.clips.as_slice()),
             ];
-            for (buffer, bytes) in self.buffers.iter_mut().zip(data) {
+            for (buffer, bytes) in self.resources.buffers.iter_mut().zip(data) {
                 rebind |= buffer.write(device, queue, bytes);
             }
-            queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&packed.params));
+            queue.write_buffer(
+                &self.resources.params,
+                0,
+                bytemuck::bytes_of(&packed.params),
+            );
             // Every band dispatches every chunk over its rows: entry `band * chunks + k`.
-            self.band_height = match self.band_rows {
+            self.progress.band_height = match self.progress.band_rows {
                 0 => w,
                 rows => rows.min(w),
             };
-            self.bands = w.div_ceil(self.band_height);
-            let entries = packed.chunks.len() * self.bands as usize;
-            let needed = entries as u64 * self.chunk_stride;
-            if self.chunks.size() < needed {
-                self.chunks = chunk_buffer(device, self.chunk_stride, entries);
+            self.progress.bands = w.div_ceil(self.progress.band_height);
+            let entries = packed.chunks.len() * self.progress.bands as usize;
+            let needed = entries as u64 * self.resources.chunk_stride;
+            if self.resources.chunks.size() < needed {
+                self.resources.chunks = chunk_buffer(device, self.resources.chunk_stride, entries);
                 rebind = true;
             }
             let mut bytes = vec![0u8; needed as usize];
-            for band in 0..self.bands {
+            for band in 0..self.progress.bands {
                 for (k, c) in packed.chunks.iter().enumerate() {
                     let entry = Chunk {
-                        row_offset: band * self.band_height,
+                        row_offset: band * self.progress.band_height,
                         ..*c
                     };
-                    let at = (band as usize * packed.chunks.len() + k) * self.chunk_stride as usize;
+                    let at = (band as usize * packed.chunks.len() + k)
+                        * self.resources.chunk_stride as usize;
                     bytes[at..at + size_of::<Chunk>()].copy_from_slice(bytemuck::bytes_of(&entry));
                 }
             }
-            queue.write_buffer(&self.chunks, 0, &bytes);
+            queue.write_buffer(&self.resources.chunks, 0, &bytes);
             let layers = packed.params.layers;
             let stale = |t: &wgpu::Texture| {
                 t.width() != w || t.depth_or_array_layers() != field_texture_layers(device, layers)
             };
-            if self.texture.as_ref().is_none_or(|(t, _)| stale(t)) {
-                self.texture = Some(field_texture(device, "energywave.field.storage", w, layers));
+            if self
+                .resources
+                .texture
+                .as_ref()
+                .is_none_or(|(t, _)| stale(t))
+            {
+                self.resources.texture =
+                    Some(field_texture(device, "energywave.field.storage", w, layers));
                 rebind = true;
             }
             let kept = packed.chunks.iter().any(|c| c.stage != FINISH);
             let side = if kept { w } else { 1 };
-            if self.scratch.0.width() != side {
-                self.scratch =
+            if self.resources.scratch.0.width() != side {
+                self.resources.scratch =
                     field_texture(device, "energywave.field.scratch", side, FIELD_LAYERS);
                 rebind = true;
             }
             if rebind {
-                self.bind_group = Some(self.make_bind_group(device));
+                self.resources.bind_group = Some(self.make_bind_group(device));
             }
         })?;
-        self.uploaded = Some(packed.clone());
-        self.averaged = 0;
+        self.progress.uploaded = Some(packed.clone());
+        self.progress.averaged = 0;
         if self.averaging() {
             checked(device, || self.prepare_average_frame(device, queue))?;
         }
-        self.next_band = 0;
+        self.progress.next_band = 0;
         Ok(true)
     }
 
     fn make_bind_group(&self, device: &wgpu::Device) -> wgpu::BindGroup {
-        let view = &self
-            .texture
+        let view = &(self.resources.texture)
             .as_ref()
             .expect("texture created before binding")
             .1;
         let mut entries = vec![wgpu::BindGroupEntry {
             binding: 0,
-            resource: self.params.as_entire_binding(),
+            resource: self.resources.params.as_entire_binding(),
         }];
         // Bindings 1 to 6, then the tints at 9, the color series at 10, the pieces at 11 and the clips at 13.
-        for (i, b) in self.buffers.iter().enumerate() {
+        for (i, b) in self.resources.buffers.iter().enumerate() {
             entries.push(wgpu::BindGroupEntry {
                 binding: match i {
                     0..6 => i as u32 + 1,
@@ -322,19 +291,19 @@ impl FieldRenderer {
         });
         entries.push(wgpu::BindGroupEntry {
             binding: 12,
-            resource: wgpu::BindingResource::TextureView(&self.scratch.1),
+            resource: wgpu::BindingResource::TextureView(&self.resources.scratch.1),
         });
         entries.push(wgpu::BindGroupEntry {
             binding: 8,
             resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                buffer: &self.chunks,
+                buffer: &self.resources.chunks,
                 offset: 0,
                 size: wgpu::BufferSize::new(size_of::<Chunk>() as u64),
             }),
         });
         device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("energywave.field.bind_group"),
-            layout: &self.layout,
+            layout: &self.pipelines.layout,
             entries: &entries,
         })
     }
@@ -365,142 +334,62 @@ impl FieldRenderer {
         bands: u32,
         timestamps: Option<wgpu::ComputePassTimestampWrites<'_>>,
     ) -> bool {
-        let (Some(bind_group), Some(packed)) = (&self.bind_group, &self.uploaded) else {
+        let (Some(bind_group), Some(packed)) =
+            (&self.resources.bind_group, &self.progress.uploaded)
+        else {
             return false;
         };
         if !self.pending() {
             return true;
         }
         let w = packed.params.resolution;
-        let specialised = Self::specialised_for(
-            &mut self.specialised,
-            self.specialise,
-            &self.device,
-            &self.modules,
-            &self.pipeline_layout,
-            Structure::of(&packed.params),
-        );
-        // The generic pipelines where the specialised ones are not ready, built the first time they are needed.
-        let search = packed.params.search != 0;
-        let ready = |k: u32| (specialised.as_ref()).is_some_and(|set| set[k as usize].is_some());
-        if !packed.chunks.iter().all(|c| ready(c.pipeline)) {
-            let (device, modules, layout) = (&self.device, &self.modules, &self.pipeline_layout);
-            self.generic[search as usize]
-                .get_or_insert_with(|| build_pipelines(device, modules, layout, search));
-        }
-        let generic = &self.generic[search as usize];
-        let pipeline = |k: usize| {
-            (specialised.as_ref())
-                .and_then(|set| set[k].as_ref())
-                .or_else(|| generic.as_ref().map(|g| &g[k]))
-                .expect("the generic pipelines are built where the specialised are not ready")
-        };
+        let pipelines = self.pipelines.for_dispatch(&packed.params, &packed.chunks);
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("energywave.field.pass"),
             timestamp_writes: timestamps,
         });
-        let last = self.next_band.saturating_add(bands).min(self.bands);
-        for band in self.next_band..last {
-            let rows = self.band_height.min(w - band * self.band_height);
+        let last = self
+            .progress
+            .next_band
+            .saturating_add(bands)
+            .min(self.progress.bands);
+        for band in self.progress.next_band..last {
+            let rows = self
+                .progress
+                .band_height
+                .min(w - band * self.progress.band_height);
             for (k, c) in packed.chunks.iter().enumerate() {
                 let entry = band as usize * packed.chunks.len() + k;
-                pass.set_pipeline(pipeline(c.pipeline as usize));
-                pass.set_bind_group(0, bind_group, &[(entry as u64 * self.chunk_stride) as u32]);
+                pass.set_pipeline(pipelines.get(c.pipeline as usize));
+                pass.set_bind_group(
+                    0,
+                    bind_group,
+                    &[(entry as u64 * self.resources.chunk_stride) as u32],
+                );
                 pass.dispatch_workgroups(w.div_ceil(8), rows.div_ceil(8), 1);
             }
         }
-        self.next_band = last;
+        self.progress.next_band = last;
         if self.pending() {
             return false;
         }
         if self.averaging() {
-            self.average.encode(&mut pass);
-            self.averaged += 1;
+            self.progress.average.encode(&mut pass);
+            self.progress.averaged += 1;
         }
-        self.dispatches += 1;
+        self.progress.dispatches += 1;
         true
-    }
-
-    /// The pipelines specialised to `structure` if they are ready: compiled now (`Blocking`), or their compile
-    /// started on a thread of its own if it is not under way yet (`Background`, which returns `None` until it
-    /// has finished).
-    fn specialised_for(
-        cache: &mut SpecialisedPipelines,
-        mode: Specialise,
-        device: &wgpu::Device,
-        modules: &Modules,
-        layout: &wgpu::PipelineLayout,
-        structure: Structure,
-    ) -> Option<std::sync::Arc<SpecialisedSet>> {
-        if mode == Specialise::Off {
-            return None;
-        }
-        cache.collect();
-        if let Some(p) = cache.take(&structure) {
-            return Some(p);
-        }
-        match mode {
-            Specialise::Off => None,
-            Specialise::IfReady => None,
-            Specialise::Blocking => {
-                let start = std::time::Instant::now();
-                let set = build_specialised(device, modules, layout, structure);
-                Some(cache.keep(structure, set, start.elapsed().as_secs_f64() * 1e3))
-            }
-            Specialise::Background => {
-                Self::start_compile(cache, device, modules, layout, structure);
-                None
-            }
-        }
-    }
-
-    /// Starts compiling `structure`'s pipelines on a thread of its own, unless a compile is under way (one at
-    /// a time: a burst of structure changes compiles what is drawn when the compile before it has finished).
-    /// Never on GL: there every call holds the one GL context, so a compile on another thread (seconds on
-    /// llvmpipe) holds up every frame, and wgpu gives up on the context after 6 s with a panic; the generic
-    /// pipelines draw there instead.
-    fn start_compile(
-        cache: &mut SpecialisedPipelines,
-        device: &wgpu::Device,
-        modules: &Modules,
-        layout: &wgpu::PipelineLayout,
-        structure: Structure,
-    ) {
-        if cache.compiling.is_some() || device.adapter_info().backend == wgpu::Backend::Gl {
-            return;
-        }
-        let slot = CompileSlot::default();
-        let (device, modules, layout) = (device.clone(), modules.clone(), layout.clone());
-        let out = slot.clone();
-        let spawned = std::thread::Builder::new()
-            .name("energywave field compile".into())
-            .spawn(move || {
-                let start = std::time::Instant::now();
-                let p = build_specialised(&device, &modules, &layout, structure);
-                if let Ok(mut slot) = out.lock() {
-                    *slot = Some((p, start.elapsed().as_secs_f64() * 1e3));
-                }
-            });
-        if spawned.is_ok() {
-            cache.compiling = Some((structure, slot));
-        }
     }
 
     /// Starts compiling the uploaded scene's specialised pipelines on a thread of their own, if they are not
     /// ready and no compile is under way (`Specialise::IfReady`: the viewer calls this once its picture is
     /// whole). Returns whether a compile is under way.
     pub fn compile_in_background(&mut self) -> bool {
-        self.specialised.collect();
-        if let Some(p) = &self.uploaded {
+        self.pipelines.specialised.collect();
+        if let Some(p) = &self.progress.uploaded {
             let structure = Structure::of(&p.params);
             if !self.specialised_ready(&structure) {
-                Self::start_compile(
-                    &mut self.specialised,
-                    &self.device,
-                    &self.modules,
-                    &self.pipeline_layout,
-                    structure,
-                );
+                self.pipelines.start_compile(structure);
             }
         }
         self.compiling()
@@ -508,77 +397,89 @@ impl FieldRenderer {
 
     /// When to use pipelines specialised to the scene's structure (`Specialise::Off` by default).
     pub fn set_specialise(&mut self, mode: Specialise) {
-        self.specialise = mode;
+        self.pipelines.specialise = mode;
     }
 
     /// Whether the pipelines specialised to `structure` are ready (they draw the next dispatch of it).
     pub fn specialised_ready(&self, structure: &Structure) -> bool {
-        self.specialised.ready.iter().any(|(s, _)| s == structure)
+        self.pipelines
+            .specialised
+            .ready
+            .iter()
+            .any(|(s, _)| s == structure)
     }
 
     /// Whether a specialised compile is under way on its thread.
     pub fn compiling(&self) -> bool {
-        self.specialised.compiling.is_some()
+        self.pipelines.specialised.compiling.is_some()
     }
 
     /// How long each structure's pipelines took to compile, in milliseconds, in the order they finished.
     pub fn compile_times(&self) -> &[(Structure, f64)] {
-        &self.specialised.compile_ms
+        &self.pipelines.specialised.compile_ms
     }
 
     /// Whether bands of the uploaded scene are still to be dispatched.
     pub fn pending(&self) -> bool {
-        self.uploaded.is_some() && self.next_band < self.bands
+        self.progress.uploaded.is_some() && self.progress.next_band < self.progress.bands
     }
 
     /// The height of the bands of the next upload, in rows (rounded up to the shader's 8 x 8 workgroups; 0:
     /// the whole texture at once, the default). The viewer refines its picture a few bands a frame.
     pub fn set_band_rows(&mut self, rows: u32) {
-        self.band_rows = rows.div_ceil(8) * 8;
+        self.progress.band_rows = rows.div_ceil(8) * 8;
     }
 
     /// How many bands the uploaded texture is dispatched in, and how many rows each holds.
     pub fn band_layout(&self) -> (u32, u32) {
-        (self.bands, self.band_height)
+        (self.progress.bands, self.progress.band_height)
     }
 
     /// Whether the texture shows `inputs` completely (uploaded, and every band dispatched).
     pub fn shows(&self, inputs: &FieldInputs) -> bool {
-        self.uploaded.as_ref() == Some(&inputs.0) && !self.pending()
+        self.progress.uploaded.as_ref() == Some(&inputs.0) && !self.pending()
     }
 
     /// Whether `inputs` are the uploaded scene's (complete or not).
     pub fn holds(&self, inputs: &FieldInputs) -> bool {
-        self.uploaded.as_ref() == Some(&inputs.0)
+        self.progress.uploaded.as_ref() == Some(&inputs.0)
     }
 
     /// GPU memory the field pass holds now: the texture, the uniform and the storage buffers, in bytes.
     pub fn gpu_bytes(&self) -> u64 {
-        let texture = self.texture.as_ref().map_or(0, |(t, _)| {
+        let texture = self.resources.texture.as_ref().map_or(0, |(t, _)| {
             field_texture_bytes(t.width(), t.depth_or_array_layers())
         });
-        let scratch = &self.scratch.0;
+        let scratch = &self.resources.scratch.0;
         texture
             + field_texture_bytes(scratch.width(), scratch.depth_or_array_layers())
-            + self.params.size()
-            + self.buffers.iter().map(|b| b.buffer.size()).sum::<u64>()
-            + self.average.gpu_bytes()
+            + self.resources.params.size()
+            + self
+                .resources
+                .buffers
+                .iter()
+                .map(|b| b.buffer.size())
+                .sum::<u64>()
+            + self.progress.average.gpu_bytes()
     }
 
     /// The brightness texture and its view (after the first `prepare`): the mean of the frames so far while
     /// averaging, else the last frame.
     fn shown(&self) -> Option<(&wgpu::Texture, &wgpu::TextureView)> {
-        if self.averaging() && self.averaged > 0 {
-            self.average.mean()
+        if self.averaging() && self.progress.averaged > 0 {
+            self.progress.average.mean()
         } else {
-            self.texture.as_ref().map(|(t, v)| (t, v))
+            self.resources.texture.as_ref().map(|(t, v)| (t, v))
         }
     }
 
     /// The layers of the field texture the last `prepare` wrote (`layers_of` its scene): 1, B alone, or
     /// `FIELD_LAYERS`, B and the tint.
     pub fn layers(&self) -> u32 {
-        self.uploaded.as_ref().map_or(1, |p| p.params.layers)
+        self.progress
+            .uploaded
+            .as_ref()
+            .map_or(1, |p| p.params.layers)
     }
 
     /// The field texture (after the first `prepare`).
@@ -593,12 +494,12 @@ impl FieldRenderer {
 
     /// How many times the texture has been rendered.
     pub fn dispatch_count(&self) -> u64 {
-        self.dispatches
+        self.progress.dispatches
     }
 
     /// Forgets the uploaded scene, so the next `prepare` re-renders.
     pub fn invalidate(&mut self) {
-        self.uploaded = None;
+        self.progress.uploaded = None;
     }
 }
 

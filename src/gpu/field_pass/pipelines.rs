@@ -1,6 +1,7 @@
 //! The field pass's storage buffers and pipelines: the generic ones, and those specialised to a scene's
 //! structure, compiled on a thread of their own.
 
+use super::super::context::{field_storage_entry, pass_layouts, storage_buffer_entry};
 use super::super::shaders;
 use crate::frame::FrameSetup;
 
@@ -234,6 +235,191 @@ impl SpecialisedPipelines {
         if let Some((set, ms)) = done {
             let (structure, _) = self.compiling.take().expect("a compile was under way");
             self.keep(structure, set, ms);
+        }
+    }
+}
+
+/// The field passes' long-lived GPU objects: their modules and layouts, the generic pipelines (built when first
+/// needed) and those specialised to the structures met.
+pub(super) struct FieldPipelines {
+    device: wgpu::Device,
+    modules: Modules,
+    pub(super) layout: wgpu::BindGroupLayout,
+    pipeline_layout: wgpu::PipelineLayout,
+    /// The generic pipelines of the three passes (`shaders::FIELD_PASSES`), indexed by `Chunk::pipeline`: without
+    /// the search for a curve's brightest point, and with it, each built when a scene first needs it.
+    generic: [Option<Pipelines>; 2],
+    pub(super) specialise: Specialise,
+    pub(super) specialised: SpecialisedPipelines,
+}
+
+/// The pipelines one dispatch draws with: each entry point's specialised pipeline where it is ready, else the
+/// generic one.
+pub(super) struct DispatchPipelines<'a> {
+    specialised: Option<std::sync::Arc<SpecialisedSet>>,
+    generic: Option<&'a Pipelines>,
+}
+
+impl DispatchPipelines<'_> {
+    /// The pipeline of entry point `k` (`Chunk::pipeline`).
+    pub(super) fn get(&self, k: usize) -> &wgpu::ComputePipeline {
+        (self.specialised.as_ref())
+            .and_then(|set| set[k].as_ref())
+            .or_else(|| self.generic.map(|g| &g[k]))
+            .expect("the generic pipelines are built where the specialised are not ready")
+    }
+}
+
+impl FieldPipelines {
+    /// The passes' modules and layouts; no pipeline yet.
+    pub(super) fn new(device: &wgpu::Device) -> Self {
+        let modules: Modules = std::array::from_fn(|k| {
+            device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some(&format!("energywave.field.{}", shaders::FIELD_PASSES[k].0)),
+                source: wgpu::ShaderSource::Wgsl(shaders::field_module_source(k).into()),
+            })
+        });
+        let storage = storage_buffer_entry;
+        let (layout, pipeline_layout) = pass_layouts(
+            device,
+            "field",
+            &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::COMPUTE,
+                    // Read-only storage, like the chunks (binding 8): lavapipe specialises a shader for the
+                    // values of the uniforms its loops and branches depend on, a compile (and its memory) for
+                    // every new scene.
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Storage { read_only: true },
+                        has_dynamic_offset: false,
+                        min_binding_size: wgpu::BufferSize::new(size_of::<FieldParams>() as u64),
+                    },
+                    count: None,
+                },
+                storage(1),
+                storage(2),
+                storage(3),
+                storage(4),
+                storage(5),
+                storage(6),
+                field_storage_entry(7, wgpu::StorageTextureAccess::ReadWrite),
+                storage(9),
+                storage(10),
+                storage(11),
+                storage(13),
+                field_storage_entry(12, wgpu::StorageTextureAccess::ReadWrite),
+                // A read-only storage buffer rather than a uniform one: lavapipe recompiles a shader for the
+                // values of uniforms that bound its loops (to unroll them), and a chunk's range bounds the term
+                // loop, so every new range meant a new compile (seconds each, minutes for some).
+                wgpu::BindGroupLayoutEntry {
+                    binding: 8,
+                    visibility: wgpu::ShaderStages::COMPUTE,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Storage { read_only: true },
+                        has_dynamic_offset: true,
+                        min_binding_size: wgpu::BufferSize::new(size_of::<Chunk>() as u64),
+                    },
+                    count: None,
+                },
+            ],
+        );
+        Self {
+            device: device.clone(),
+            modules,
+            layout,
+            pipeline_layout,
+            generic: [None, None],
+            specialise: Specialise::default(),
+            specialised: SpecialisedPipelines::default(),
+        }
+    }
+
+    /// The pipelines that dispatch `chunks` of inputs with these `params`: the specialised ones where
+    /// `specialise` allows and they are ready, the generic ones (built now if they are not yet) for the rest.
+    pub(super) fn for_dispatch(
+        &mut self,
+        params: &FieldParams,
+        chunks: &[Chunk],
+    ) -> DispatchPipelines<'_> {
+        let specialised = self.specialised_for(Structure::of(params));
+        let search = params.search != 0;
+        let ready = |k: u32| (specialised.as_ref()).is_some_and(|set| set[k as usize].is_some());
+        if !chunks.iter().all(|c| ready(c.pipeline)) {
+            let (device, modules, layout) = (&self.device, &self.modules, &self.pipeline_layout);
+            self.generic[search as usize]
+                .get_or_insert_with(|| build_pipelines(device, modules, layout, search));
+        }
+        DispatchPipelines {
+            specialised,
+            generic: self.generic[search as usize].as_ref(),
+        }
+    }
+
+    /// The pipelines specialised to `structure` if they are ready: compiled now (`Blocking`), or their compile
+    /// started on a thread of its own if it is not under way yet (`Background`, which returns `None` until it
+    /// has finished).
+    fn specialised_for(&mut self, structure: Structure) -> Option<std::sync::Arc<SpecialisedSet>> {
+        if self.specialise == Specialise::Off {
+            return None;
+        }
+        self.specialised.collect();
+        if let Some(p) = self.specialised.take(&structure) {
+            return Some(p);
+        }
+        match self.specialise {
+            Specialise::Off => None,
+            Specialise::IfReady => None,
+            Specialise::Blocking => {
+                let start = std::time::Instant::now();
+                let set = build_specialised(
+                    &self.device,
+                    &self.modules,
+                    &self.pipeline_layout,
+                    structure,
+                );
+                Some(
+                    self.specialised
+                        .keep(structure, set, start.elapsed().as_secs_f64() * 1e3),
+                )
+            }
+            Specialise::Background => {
+                self.start_compile(structure);
+                None
+            }
+        }
+    }
+
+    /// Starts compiling `structure`'s pipelines on a thread of its own, unless a compile is under way (one at
+    /// a time: a burst of structure changes compiles what is drawn when the compile before it has finished).
+    /// Never on GL: there every call holds the one GL context, so a compile on another thread (seconds on
+    /// llvmpipe) holds up every frame, and wgpu gives up on the context after 6 s with a panic; the generic
+    /// pipelines draw there instead.
+    pub(super) fn start_compile(&mut self, structure: Structure) {
+        let device = &self.device;
+        if self.specialised.compiling.is_some()
+            || device.adapter_info().backend == wgpu::Backend::Gl
+        {
+            return;
+        }
+        let slot = CompileSlot::default();
+        let (device, modules, layout) = (
+            device.clone(),
+            self.modules.clone(),
+            self.pipeline_layout.clone(),
+        );
+        let out = slot.clone();
+        let spawned = std::thread::Builder::new()
+            .name("energywave field compile".into())
+            .spawn(move || {
+                let start = std::time::Instant::now();
+                let p = build_specialised(&device, &modules, &layout, structure);
+                if let Ok(mut slot) = out.lock() {
+                    *slot = Some((p, start.elapsed().as_secs_f64() * 1e3));
+                }
+            });
+        if spawned.is_ok() {
+            self.specialised.compiling = Some((structure, slot));
         }
     }
 }
