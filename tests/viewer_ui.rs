@@ -3,7 +3,9 @@
 
 mod common;
 
-use common::viewer::{export_and_wait, harness, light_scene, mean_abs_difference, viewport_pixels};
+use common::viewer::{
+    export_and_wait, harness, light_scene, mean_abs_difference, undo, viewport_pixels,
+};
 use egui::accesskit::Role;
 use egui::{Key, Modifiers, Pos2, Vec2};
 use egui_kittest::Harness;
@@ -118,12 +120,10 @@ fn undo_and_redo_restore_the_state() {
         (edited.integration.divisions, edited.sources.points.len()),
         (64, 1)
     );
-    h.key_press_modifiers(Modifiers::COMMAND, Key::Z);
-    h.run();
+    undo(&mut h);
     assert_eq!(h.state().scene().sources.points.len(), 0);
     assert_eq!(h.state().scene().integration.divisions, 64);
-    h.key_press_modifiers(Modifiers::COMMAND, Key::Z);
-    h.run();
+    undo(&mut h);
     assert_eq!(*h.state().scene(), original);
     h.key_press_modifiers(Modifiers::COMMAND | Modifiers::SHIFT, Key::Z);
     h.run();
@@ -215,8 +215,7 @@ fn dragging_a_control_point_bends_the_curve() {
         "the glow moved with the curve"
     );
     // One drag, one undo step.
-    h.key_press_modifiers(Modifiers::COMMAND, Key::Z);
-    h.run();
+    undo(&mut h);
     assert_eq!(handles::get(h.state().scene(), id), Some(before_point));
 
     // The rest of the movement and the release arriving in one frame (as when a frame is slow) are applied.
@@ -464,8 +463,7 @@ fn the_animated_preset_plays_steps_scrubs_loops_and_edits_while_paused() {
     assert_eq!(pulse(&h).width, 20.0);
     let after = viewport_pixels(&mut h);
     assert!(mean_abs_difference(&before, &after) > 2.0, "the edit shows");
-    h.key_press_modifiers(Modifiers::COMMAND, Key::Z);
-    h.run();
+    undo(&mut h);
     assert_eq!(pulse(&h).width, 50.0);
     assert_eq!(h.state().playback().frame, 40);
     assert!(h.state().report().error.is_none());
@@ -577,8 +575,7 @@ fn editing_a_keyed_value_while_paused_sets_a_key_at_that_frame() {
     );
     assert_eq!(scene.at_frame(10.0).sources.tori[0].major_radius, 2.4);
     // The new key is an undo step.
-    h.key_press_modifiers(Modifiers::COMMAND, Key::Z);
-    h.run();
+    undo(&mut h);
     assert_eq!(
         h.state().scene().animation.as_ref().unwrap().tracks[0]
             .keys
@@ -608,10 +605,8 @@ fn the_integrator_switch_shows_each_integrators_settings_and_is_undoable() {
     let adaptive = viewport_pixels(&mut h);
     let d = mean_abs_difference(&simpson, &adaptive);
     assert!(d < 3.0, "mean difference {d}");
-    h.key_press_modifiers(Modifiers::COMMAND, Key::Z);
-    h.run();
-    h.key_press_modifiers(Modifiers::COMMAND, Key::Z);
-    h.run();
+    undo(&mut h);
+    undo(&mut h);
     assert_eq!(
         h.state().scene().integration.integrator,
         Integrator::Simpson
@@ -673,8 +668,7 @@ fn objects_can_be_added_edited_moved_by_their_handle_deleted_and_undone() {
     let landed = handles::to_screen(&h.state().scene().camera, rect, moved).unwrap();
     assert!(landed.distance(end) < 3.0, "{landed:?} vs {end:?}");
     assert_eq!(h.state().selected_object(), Some(0), "dragging selects it");
-    h.key_press_modifiers(Modifiers::COMMAND, Key::Z);
-    h.run();
+    undo(&mut h);
     assert_eq!(handles::get(h.state().scene(), id), Some(at));
     // Deleted (the plane is the second entry's Delete, after the sources'), and undone.
     let deletes = h.get_all_by_label("Delete").count();
@@ -689,8 +683,7 @@ fn objects_can_be_added_edited_moved_by_their_handle_deleted_and_undone() {
         .click();
     h.run();
     assert_eq!(h.state().scene().objects.len(), 1);
-    h.key_press_modifiers(Modifiers::COMMAND, Key::Z);
-    h.run();
+    undo(&mut h);
     assert_eq!(h.state().scene().objects.len(), 2);
     // Saved and read back with its objects.
     let text = h.state().scene().to_toml();

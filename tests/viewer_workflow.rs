@@ -3,7 +3,9 @@
 
 mod common;
 
-use common::viewer::{export_and_wait, export_sequence, harness, light_scene};
+use common::viewer::{
+    click_label, differs, export_and_wait, export_sequence, harness, light_scene, undo,
+};
 use egui::{Pos2, Vec2};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
@@ -158,10 +160,7 @@ fn key_buttons_key_the_value_shown_and_the_i_key_does_too() {
     let mut h = harness(light_scene());
     assert!(!h.state().scene().is_animated());
     // A still scene: keying a value gives it a timeline, with the key at frame 0.
-    h.get_by_label("key tori[0].coefficient").scroll_to_me();
-    h.run();
-    h.get_by_label("key tori[0].coefficient").click();
-    h.run();
+    click_label(&mut h, "key tori[0].coefficient");
     let track = |h: &Harness<'static, ViewerApp>, p: Parameter| {
         h.state()
             .scene()
@@ -193,10 +192,7 @@ fn key_buttons_key_the_value_shown_and_the_i_key_does_too() {
     };
     assert_eq!(frames(&h), [0.0, 40.0]);
     // The button at a key removes it.
-    h.get_by_label("key tori[0].coefficient").scroll_to_me();
-    h.run();
-    h.get_by_label("key tori[0].coefficient").click();
-    h.run();
+    click_label(&mut h, "key tori[0].coefficient");
     assert_eq!(frames(&h), [0.0]);
     // I over a field keys it, as in Blender.
     let radius = h.get_by_role_and_label(Role::SpinButton, "radius R").rect();
@@ -233,10 +229,7 @@ fn the_panel_keeps_its_width_whatever_it_shows() {
     // Simpson with jitter shows the most rows; an animation adds key buttons everywhere.
     h.get_by_label("jitter (noise instead of bands)").click();
     h.run();
-    h.get_by_label("key tori[0].coefficient").scroll_to_me();
-    h.run();
-    h.get_by_label("key tori[0].coefficient").click();
-    h.run();
+    click_label(&mut h, "key tori[0].coefficient");
     assert!(h.state().scene().is_animated());
     assert_eq!(
         h.state().viewport_rect().left(),
@@ -766,8 +759,7 @@ fn the_blend_is_chosen_in_the_panel_and_is_an_undo_step() {
         mean_abs_difference(&papers, &over) > 0.05,
         "the core no longer subtracts the green"
     );
-    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
-    h.run();
+    undo(&mut h);
     assert_eq!(h.state().scene().colors.blend, Blend::Papers);
 }
 
@@ -865,14 +857,10 @@ fn a_source_gets_its_own_color_in_the_panel_keyed_and_undone() {
     let blue = viewport_pixels(&mut h);
     assert!(redness(&blue) < redness(&reddish) - 5.0);
     assert!(mean_abs_difference(&reddish, &blue) > 0.02);
-    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
-    h.run();
+    undo(&mut h);
     assert_eq!(h.state().scene().sources.tori[0].look.color, Some(red));
     // Its color keyed, then its own color dropped: the keys go with it.
-    h.get_by_label("key tori[0].color").scroll_to_me();
-    h.run();
-    h.get_by_label("key tori[0].color").click();
-    h.run();
+    click_label(&mut h, "key tori[0].color");
     let keyed = h.state().scene().animation.as_ref().is_some_and(|a| {
         (a.tracks.iter()).any(|t| t.parameter == Parameter::SourceColor(SourceKind::Tori, 0))
     });
@@ -904,20 +892,14 @@ fn a_curve_gets_a_color_series_in_the_panel_and_loses_it_again() {
     let scene = light_scene();
     let energy = scene.colors.energy;
     let mut h = harness(scene);
-    h.get_by_label("+ color series").scroll_to_me();
-    h.run();
-    h.get_by_label("+ color series").click();
-    h.run();
+    click_label(&mut h, "+ color series");
     // Two colors, both the curve's one color: the same look until one changes.
     assert_eq!(
         h.state().scene().sources.curves[0].color_series,
         [energy, energy]
     );
     assert!(h.state().scene().tinted());
-    h.get_by_label("+ color").scroll_to_me();
-    h.run();
-    h.get_by_label("+ color").click();
-    h.run();
+    click_label(&mut h, "+ color");
     assert_eq!(h.state().scene().sources.curves[0].color_series.len(), 3);
     // A control color keyed, then removed with it.
     h.get_by_label("key curves[0].color_series[2]")
@@ -932,52 +914,38 @@ fn a_curve_gets_a_color_series_in_the_panel_and_loses_it_again() {
             })
         };
     assert!(keyed(&h));
-    h.get_by_label("remove c2").scroll_to_me();
-    h.run();
-    h.get_by_label("remove c2").click();
-    h.run();
+    click_label(&mut h, "remove c2");
     assert_eq!(h.state().scene().sources.curves[0].color_series.len(), 2);
     assert!(!keyed(&h), "a key of a removed color goes with it");
     // Down to one color: the curve has that one color again, and no series.
-    h.get_by_label("remove c1").scroll_to_me();
-    h.run();
-    h.get_by_label("remove c1").click();
-    h.run();
+    click_label(&mut h, "remove c1");
     let curve = &h.state().scene().sources.curves[0];
     assert!(curve.color_series.is_empty());
     assert_eq!(curve.look.color, Some(energy));
     // Undo brings the series back.
-    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
-    h.run();
+    undo(&mut h);
     assert_eq!(h.state().scene().sources.curves[0].color_series.len(), 2);
 }
 
 #[test]
 fn glare_is_turned_on_in_the_panel_and_is_an_undo_step() {
-    use common::viewer::{mean_abs_difference, viewport_pixels};
+    use common::viewer::viewport_pixels;
     let mut h = harness(light_scene());
     let plain = viewport_pixels(&mut h);
-    h.get_by_label("glare (fog glow)").scroll_to_me();
-    h.run();
-    h.get_by_label("glare (fog glow)").click();
-    h.run();
+    click_label(&mut h, "glare (fog glow)");
     assert_eq!(
         h.state().scene().glare,
         Some(energywave::scene::Glare::default())
     );
     let glared = viewport_pixels(&mut h);
-    assert!(
-        mean_abs_difference(&plain, &glared) > 0.001,
-        "the glow glares"
-    );
-    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
-    h.run();
+    assert!(differs(&plain, &glared), "the glow glares");
+    undo(&mut h);
     assert_eq!(h.state().scene().glare, None);
 }
 
 #[test]
 fn the_w_form_is_switched_in_the_panel_and_is_an_undo_step() {
-    use common::viewer::{mean_abs_difference, viewport_pixels};
+    use common::viewer::viewport_pixels;
     use energywave::field::WForm;
     let mut h = harness(light_scene());
     assert_eq!(
@@ -985,18 +953,14 @@ fn the_w_form_is_switched_in_the_panel_and_is_an_undo_step() {
         WForm::Continuous
     );
     let continuous = viewport_pixels(&mut h);
-    h.get_by_label("continuous (no seam)").scroll_to_me();
-    h.run();
-    h.get_by_label("continuous (no seam)").click();
-    h.run();
+    click_label(&mut h, "continuous (no seam)");
     assert_eq!(h.state().scene().sources.curves[0].w_form, WForm::Nearest);
     let nearest = viewport_pixels(&mut h);
     assert!(
-        mean_abs_difference(&continuous, &nearest) > 0.001,
+        differs(&continuous, &nearest),
         "the papers' form shows another glow"
     );
-    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
-    h.run();
+    undo(&mut h);
     assert_eq!(
         h.state().scene().sources.curves[0].w_form,
         WForm::Continuous
@@ -1009,22 +973,15 @@ fn the_w_form_is_switched_in_the_panel_and_is_an_undo_step() {
 
 #[test]
 fn the_decay_is_chosen_in_the_panel_and_is_an_undo_step() {
-    use common::viewer::{mean_abs_difference, viewport_pixels};
+    use common::viewer::viewport_pixels;
     use energywave::integrate::Decay;
     let mut h = harness(light_scene());
     let distance = viewport_pixels(&mut h);
-    h.get_by_label("rms").scroll_to_me();
-    h.run();
-    h.get_by_label("rms").click();
-    h.run();
+    click_label(&mut h, "rms");
     assert_eq!(h.state().scene().integration.decay, Decay::Rms);
     let rms = viewport_pixels(&mut h);
-    assert!(
-        mean_abs_difference(&distance, &rms) > 0.001,
-        "the rms decay shows another glow"
-    );
-    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
-    h.run();
+    assert!(differs(&distance, &rms), "the rms decay shows another glow");
+    undo(&mut h);
     assert_eq!(h.state().scene().integration.decay, Decay::Distance);
 }
 
@@ -1032,10 +989,7 @@ fn the_decay_is_chosen_in_the_panel_and_is_an_undo_step() {
 fn what_is_added_is_selected_and_another_file_starts_with_nothing_selected() {
     use energywave::animation::SourceKind;
     let mut h = harness(light_scene());
-    h.get_by_label("+ sphere").scroll_to_me();
-    h.run();
-    h.get_by_label("+ sphere").click();
-    h.run();
+    click_label(&mut h, "+ sphere");
     let objects = h.state().scene().objects.len();
     assert_eq!(h.state().selected_object(), Some(objects - 1));
     // Its place and albedo are keyable from its entry.
@@ -1067,10 +1021,7 @@ fn what_is_added_is_selected_and_another_file_starts_with_nothing_selected() {
         keyed.map(|k| k.iter().map(|k| k.value).collect::<Vec<_>>()),
         Some(vec![energywave::animation::Value::Number(0.5)])
     );
-    h.get_by_label("+ point").scroll_to_me();
-    h.run();
-    h.get_by_label("+ point").click();
-    h.run();
+    click_label(&mut h, "+ point");
     let points = h.state().scene().sources.points.len();
     assert_eq!(
         h.state().selection(),

@@ -4,6 +4,7 @@
 use std::sync::{Arc, Mutex};
 
 use egui::Vec2;
+use egui_kittest::kittest::Queryable;
 use egui_kittest::{Harness, wgpu::WgpuTestRenderer};
 use energywave::gpu::GpuContext;
 use energywave::integrate::Integrator;
@@ -53,6 +54,26 @@ pub fn harness(scene: Scene) -> Harness<'static, ViewerApp> {
         .build_ui_state(|ui, app: &mut ViewerApp| app.ui(ui), app);
     h.run();
     h
+}
+
+/// Scrolls to the widget labelled `label` and clicks it, a frame after each (as a user reaches a control in the
+/// panel).
+pub fn click_label(h: &mut Harness<'static, ViewerApp>, label: &str) {
+    h.get_by_label(label).scroll_to_me();
+    h.run();
+    h.get_by_label(label).click();
+    h.run();
+}
+
+/// Undoes the last edit with the keyboard (Ctrl+Z, Cmd+Z on macOS), a frame after.
+pub fn undo(h: &mut Harness<'static, ViewerApp>) {
+    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+    h.run();
+}
+
+/// Whether two viewport pictures differ visibly: a mean absolute difference above 0.001 (`mean_abs_difference`).
+pub fn differs(a: &[[u8; 4]], b: &[[u8; 4]]) -> bool {
+    mean_abs_difference(a, b) > 0.001
 }
 
 /// The viewport's pixels of a rendered frame, as an average color and the image.
