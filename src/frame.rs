@@ -23,8 +23,10 @@ use crate::scene::Scene;
 pub struct Term {
     /// The term's energy color Ce_i (`Palette::color_of`).
     pub color: [f64; 3],
-    /// `Ce_i - Ce`, what the field pass integrates beside B (`Scene::tints`): zero in the scene's color, `-Ce`
-    /// for a curve with a color series (its series is integrated apart).
+    /// `Ce_i - Ce`, what the field pass integrates beside B, so that the colored sum is `B Ce + sum B_i (Ce_i -
+    /// Ce) = sum B_i Ce_i`: zero in the scene's color (where the blend is the papers' own to the bit), `-Ce` for a
+    /// curve with a color series (the field pass adds the integral of its term times the series itself,
+    /// `Colors::color_along`).
     pub tint: [f64; 3],
     /// What the term's color, or its color series, is multiplied by: its own intensity or the scene's.
     pub intensity: f64,
@@ -59,12 +61,20 @@ impl<'a> FrameSetup<'a> {
         );
         let integration = scene.integration.on_ray(reach.stretch);
         let palette = scene.colors.palette();
-        let tints = scene.tints();
-        let terms = (scene.sources.looks().zip(tints))
-            .map(|(look, tint)| Term {
-                color: palette.color_of(look),
-                tint,
-                intensity: palette.intensity_of(look),
+        let base = scene.colors.energy_color();
+        let terms = (scene.sources.looks().enumerate())
+            .map(|(k, look)| {
+                let color = palette.color_of(look);
+                // A curve with a color series integrates its series itself: its tint is -Ce.
+                let own = match scene.series_curve(k) {
+                    Some(_) => [0.0; 3],
+                    None => color,
+                };
+                Term {
+                    color,
+                    tint: std::array::from_fn(|j| own[j] - base[j]),
+                    intensity: palette.intensity_of(look),
+                }
             })
             .collect();
         FrameSetup {

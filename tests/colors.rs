@@ -175,11 +175,9 @@ fn the_gpu_tint_matches_the_cpu_twin() {
         let mut g = gpu();
         let b = g.brightness(&FrameSetup::new(&scene, bb)).unwrap();
         let tint = g.tint().unwrap();
-        let largest = scene
-            .tints()
-            .iter()
-            .flatten()
-            .fold(0.0f64, |m, &x| m.max(x.abs()));
+        let largest = (FrameSetup::new(&scene, bb).terms.iter())
+            .flat_map(|t| t.tint)
+            .fold(0.0f64, |m, x| m.max(x.abs()));
         let mut worst: f64 = 0.0;
         for t in 0..b.len() {
             let scale = cpu.values[t].abs().max(0.01);

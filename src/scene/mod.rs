@@ -406,26 +406,6 @@ impl Scene {
         toml::to_string_pretty(&file).expect("a scene always serialises to TOML")
     }
 
-    /// Each source's color less the scene's, `Ce_i - Ce`, in the order of the field pass's terms (points, lines,
-    /// tori, curves): what the field pass integrates beside B, `sum B_i (Ce_i - Ce)`, so that the colored sum is
-    /// `B Ce + sum B_i (Ce_i - Ce) = sum B_i Ce_i`. Zero for every source in the scene's color, where the blend is
-    /// the papers' own to the bit. A curve with a color series has `-Ce`: its color varies along it, and the
-    /// field pass adds the integral of B_i's integrand times the series (`Colors::color_along`) itself.
-    pub fn tints(&self) -> Vec<[f64; 3]> {
-        let base = self.colors.energy_color();
-        let series = |k: usize| self.series_curve(k).is_some();
-        (self.sources.looks().enumerate())
-            .map(|(k, look)| {
-                let c = if series(k) {
-                    [0.0; 3]
-                } else {
-                    self.colors.color_of(look)
-                };
-                std::array::from_fn(|j| c[j] - base[j])
-            })
-            .collect()
-    }
-
     /// Term `k` (points, lines, tori, curves) when it is a curve with a color series.
     pub fn series_curve(&self, k: usize) -> Option<&Curve> {
         let s = &self.sources;
@@ -443,7 +423,8 @@ impl Scene {
         }
     }
 
-    /// True when some source's color differs from the scene's (`tints` is not all zero), or varies along it.
+    /// True when some source's color differs from the scene's (a `frame::Term::tint` is not zero), or varies
+    /// along it.
     pub fn tinted(&self) -> bool {
         let base = self.colors.energy_color();
         (self.sources.looks()).any(|look| self.colors.color_of(look) != base)

@@ -39,7 +39,7 @@ pub(super) struct Packed {
     pub(super) curves: Vec<CurveSource>,
     pub(super) segments: Vec<CurveSegment>,
     pub(super) weights: Vec<f32>,
-    /// Each term's `Ce_i - Ce` (`Scene::tints`) in rgb, points first, then lines, tori and curves.
+    /// Each term's `Ce_i - Ce` (`frame::Term::tint`) in rgb, points first, then lines, tori and curves.
     pub(super) tints: Vec<[f32; 4]>,
     /// The curves' color series, their intensity applied, in rgb (`CurveSource::first_color`).
     pub(super) colors: Vec<[f32; 4]>,
