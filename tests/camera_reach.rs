@@ -76,7 +76,7 @@ fn every_ray_reaches_past_every_source_close_up_inside_and_orbiting() {
     }
     for (name, scene) in &cameras {
         let bb = scene.place_billboard(1.0);
-        let reach = FrameSetup::new(&scene, bb).reach;
+        let reach = FrameSetup::new(scene, bb).reach;
         let eye = scene.camera.eye;
         let inward = -bb.normal;
         let deepest = deepest_source(scene, eye, inward);

@@ -118,7 +118,7 @@ fn point_scene(position: DVec3, coefficient: f64, eye: DVec3, integrator: Integr
 /// Every texel's ray of `scene` with the settings on it.
 fn rays(scene: &Scene) -> Vec<((DVec3, DVec3), Integration)> {
     let bb = scene.place_billboard(1.0);
-    let reach = FrameSetup::new(&scene, bb).reach;
+    let reach = FrameSetup::new(scene, bb).reach;
     let w = scene.billboard.resolution;
     (0..w * w)
         .map(|k| {
