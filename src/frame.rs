@@ -110,11 +110,6 @@ impl<'a> FrameSetup<'a> {
         self.scene.series_curve(k)
     }
 
-    /// Whether some term's color differs from the scene's: the field pass integrates the tint beside B.
-    pub fn tinted(&self) -> bool {
-        self.scene.tinted()
-    }
-
     /// The share of each texel's ray before the first surface of the scene's objects, at `resolution`, in f32 as
     /// the GPU passes read it (`objects::clip`); none without objects.
     pub fn clips(&self) -> Option<Arc<Vec<f32>>> {
