@@ -197,3 +197,64 @@ fn the_viewer_previews_while_orbiting_and_ends_on_the_still_picture() {
         headless.brightness(&FrameSetup::new(&moving, bb)).unwrap()
     );
 }
+
+/// The viewport's pixels in the last presented frame (the window's other pixels hold the UI, whose status line
+/// changes from frame to frame).
+fn viewport_pixels(v: &OffscreenViewer, width: u32) -> Vec<u8> {
+    let image = v.frame_image().unwrap();
+    let rect = v.app.viewport_rect();
+    let [w, h] = v.app.viewport_px();
+    let (x0, y0) = (rect.min.x.round() as usize, rect.min.y.round() as usize);
+    (y0..y0 + h as usize)
+        .flat_map(|y| {
+            let row = 4 * (y * width as usize + x0);
+            image[row..row + 4 * w as usize].to_vec()
+        })
+        .collect()
+}
+
+/// A still view shows its last frame again rather than composing it anew, and composes anew as soon as
+/// something the frame shows changes though the field does not (an object's albedo): the frame is then the one
+/// a viewer opened on the edited scene shows, and the field is not integrated again.
+#[test]
+fn a_still_frame_is_shown_again_until_what_it_shows_changes() {
+    let scene = shipped_scene("floor.toml");
+    let (width, height) = (480, 320);
+    let mut v = OffscreenViewer::new(Document::new(scene.clone(), None), width, height).unwrap();
+    settle(&mut v);
+    v.frame().unwrap();
+    let still = viewport_pixels(&v, width);
+    let renders = v.field_renders();
+    for _ in 0..3 {
+        v.frame().unwrap();
+        assert_eq!(
+            viewport_pixels(&v, width),
+            still,
+            "a still frame is shown again"
+        );
+    }
+    let albedo = [0.9, 0.2, 0.1];
+    v.app.scene_mut().objects[1].color = albedo;
+    v.frame().unwrap();
+    let edited = viewport_pixels(&v, width);
+    assert_ne!(edited, still, "the sphere's new albedo is drawn");
+    assert_eq!(
+        v.field_renders(),
+        renders,
+        "the field is not integrated again"
+    );
+    for _ in 0..2 {
+        v.frame().unwrap();
+        assert_eq!(viewport_pixels(&v, width), edited);
+    }
+    let mut moved = scene;
+    moved.objects[1].color = albedo;
+    let mut fresh = OffscreenViewer::new(Document::new(moved, None), width, height).unwrap();
+    settle(&mut fresh);
+    fresh.frame().unwrap();
+    assert_eq!(
+        viewport_pixels(&fresh, width),
+        edited,
+        "the frame a viewer of the edited scene shows"
+    );
+}

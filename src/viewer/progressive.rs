@@ -41,8 +41,11 @@ const SMOOTHING: f64 = 0.3;
 /// What a frame integrated.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Work {
-    /// No field work.
+    /// No field work; the frame composed anew (an idle frame's cost).
     Nothing,
+    /// No field work and nothing composed: the last frame shown again. It measures nothing (a moving frame
+    /// composes, so the budget's idle frame is a composed one).
+    Shown,
     /// A coarse field of this many texels.
     Preview { texels: u64 },
     /// Texels of the full field (a whole field, or bands of it).
@@ -122,6 +125,7 @@ impl FrameBudget {
                 self.idle_ms = blend(self.idle_measured.then_some(self.idle_ms), ms);
                 self.idle_measured = true;
             }
+            Work::Shown => {}
             // Without a measured idle frame the fixed part cannot be told from it.
             Work::Preview { .. } if !self.idle_measured => {}
             Work::Preview { texels } => {
@@ -138,6 +142,13 @@ impl FrameBudget {
     /// Records what the frame started last did.
     pub fn frame_did(&mut self, now: Instant, work: Work) {
         self.last = Some((now, work));
+    }
+
+    /// The frame recorded last showed the frame before it again (`Work::Shown`), whatever its plan said.
+    pub fn frame_shown_again(&mut self) {
+        if let Some((_, work)) = &mut self.last {
+            *work = Work::Shown;
+        }
     }
 
     /// The field's share of a moving frame, in milliseconds.

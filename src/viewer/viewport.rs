@@ -74,6 +74,22 @@ pub struct ViewportGpu {
     /// The field inputs of the last frame, and whether it showed the coarse field (of the side given).
     last_inputs: Option<FieldInputs>,
     showing_preview: Option<u32>,
+    /// What the frame in `targets` shows besides the field's texels: while neither changes, it is shown again
+    /// as it is, not composed anew (a still view costs the copy into the window alone).
+    composed: Option<Composed>,
+    /// Whether the last frame was still: its field's texels and what it composed the same as the frame's
+    /// before. The first still frame composes anyway, so that the frame budget measures what an idle frame
+    /// costs; the next ones show it again.
+    still: bool,
+}
+
+/// What a composed viewport frame depends on besides the field's texels.
+#[derive(Clone, Debug, PartialEq)]
+struct Composed {
+    scene: Scene,
+    size: [u32; 2],
+    show_grid: bool,
+    threshold_preview: Option<f64>,
 }
 
 impl ViewportGpu {
@@ -110,6 +126,8 @@ impl ViewportGpu {
             budget: FrameBudget::default(),
             last_inputs: None,
             showing_preview: None,
+            composed: None,
+            still: false,
         }
     }
 
@@ -129,13 +147,27 @@ impl ViewportGpu {
                 self.blit
                     .bind_group(device, &targets.color_view, &targets.depth_value_view);
             self.targets = Some((targets, bind_group));
+            self.composed = None;
         }
         let (targets, bind_group) = self.targets.take().expect("created above");
-        let result = self.record_into(device, queue, encoder, view, &targets, view.progressive);
+        let shown = self.composed.take();
+        let result = self.record_into(
+            device,
+            queue,
+            encoder,
+            view,
+            &targets,
+            view.progressive,
+            shown,
+        );
         self.targets = Some((targets, bind_group));
         result
     }
 
+    /// `shown`: what the frame `targets` hold shows, where they hold one (then, if the field's texels and it
+    /// stay the same, the frame is left as it is).
+    // The GPU handles, the frame's view and targets, and what they hold are all distinct.
+    #[allow(clippy::too_many_arguments)]
     fn record_into(
         &mut self,
         device: &wgpu::Device,
@@ -144,32 +176,31 @@ impl ViewportGpu {
         view: &ViewportView,
         targets: &FrameTargets,
         progressive: bool,
+        shown: Option<Composed>,
     ) -> Result<(), GpuError> {
-        let vertices = if view.show_grid {
-            grid_vertices(&view.scene)
-        } else {
-            Vec::new()
-        };
-        self.grid.upload(device, queue, vertices);
         let [width, height] = targets.size;
         let setup = FrameSetup::placed(&view.scene, width as f64 / height as f64);
         let result = self.integrate(device, queue, encoder, view, &setup, progressive);
-        self.scene_renderer
-            .set_threshold_preview(view.threshold_preview);
-        let grid = &self.grid;
-        let result = result.and_then(|brightness| {
-            self.scene_renderer.compose(
-                device,
-                queue,
-                encoder,
-                &setup,
-                targets,
-                false,
-                (&brightness.0, brightness.1, brightness.2),
-                // The grid lies behind the glow, which blends over it, with the renderer's own projection.
-                |pass, view_proj| grid.draw(queue, pass, view_proj),
-            )
-        });
+        let composed = Composed {
+            scene: view.scene.clone(),
+            size: targets.size,
+            show_grid: view.show_grid,
+            threshold_preview: view.threshold_preview,
+        };
+        let still = matches!(&result, Ok((_, _, false))) && shown.as_ref() == Some(&composed);
+        let again = still && self.still;
+        self.still = still;
+        let result = if again {
+            if progressive {
+                self.budget.frame_shown_again();
+            }
+            Ok(())
+        } else {
+            self.compose(device, queue, encoder, view, &setup, targets, result)
+        };
+        if result.is_ok() {
+            self.composed = Some(composed);
+        }
         if let Ok(mut r) = self.report.lock() {
             r.error = result.as_ref().err().map(|e| e.to_string());
             r.field_renders =
@@ -179,6 +210,43 @@ impl ViewportGpu {
             r.preview = self.showing_preview;
         }
         result
+    }
+
+    /// Composes the frame into `targets` over the brightness `integrate` gave: the background and grid, the
+    /// objects, the billboard.
+    #[allow(clippy::too_many_arguments)]
+    fn compose(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+        view: &ViewportView,
+        setup: &FrameSetup,
+        targets: &FrameTargets,
+        brightness: Result<(wgpu::TextureView, u32, bool), GpuError>,
+    ) -> Result<(), GpuError> {
+        let vertices = if view.show_grid {
+            grid_vertices(&view.scene)
+        } else {
+            Vec::new()
+        };
+        self.grid.upload(device, queue, vertices);
+        self.scene_renderer
+            .set_threshold_preview(view.threshold_preview);
+        let grid = &self.grid;
+        brightness.and_then(|brightness| {
+            self.scene_renderer.compose(
+                device,
+                queue,
+                encoder,
+                setup,
+                targets,
+                false,
+                (&brightness.0, brightness.1, brightness.2),
+                // The grid lies behind the glow, which blends over it, with the renderer's own projection.
+                |pass, view_proj| grid.draw(queue, pass, view_proj),
+            )
+        })
     }
 
     /// Records this frame's field work and returns the view of the W x W brightness to show: the full field
@@ -313,7 +381,10 @@ impl ViewportGpu {
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("energywave.viewport.screenshot"),
         });
-        self.record_into(device, queue, &mut encoder, view, &targets, false)?;
+        let result = self.record_into(device, queue, &mut encoder, view, &targets, false, None);
+        // The frame composed is the screenshot's, not the one the window's targets hold.
+        self.composed = None;
+        result?;
         queue.submit([encoder.finish()]);
         read_frame(device, queue, &targets)
     }
