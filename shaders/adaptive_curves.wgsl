@@ -21,7 +21,7 @@ fn nearest_on_chain_from(c: CurveSource, p: vec3<f32>, segment: ptr<function, u3
     // Two passes at most: the piece's segment, then (at a joint) the whole chain. One call site of the solver.
     loop {
         for (var j = lo; j < hi; j++) {
-            let n = nearest_on_segment(segments[c.first_segment + j], p);
+            let n = nearest_on_segment(chain_segment(c, HELD, j), p);
             if n.y < best.y {
                 best = n;
                 best_j = j;
@@ -83,7 +83,7 @@ fn track_nearest(c: CurveSource, ray: Ray, t: f32, track: ptr<function, Track>) 
         return nearest_on_chain_from(c, p, &segment);
     }
     if j < k && reach <= TRACK_REACH {
-        let s = segments[c.first_segment + j];
+        let s = chain_segment(c, HELD, j);
         var u = clamp((*track).u + (*track).rate * (t - (*track).t), 0.0, 1.0);
         var step = 0.0;
         var convex = true;
@@ -105,7 +105,7 @@ fn track_nearest(c: CurveSource, ray: Ray, t: f32, track: ptr<function, Track>) 
     }
     var segment = j;
     let n = nearest_on_chain_from(c, p, &segment);
-    let s = segments[c.first_segment + segment];
+    let s = chain_segment(c, HELD, segment);
     let u = clamp(n.x * f32(k) - f32(segment), 0.0, 1.0);
     *track = Track(segment, u, track_rate(s, u, segment_at(s, u) - p, ray.dir), t, false);
     return n;
@@ -122,7 +122,7 @@ fn bright_track(c: CurveSource, ray: Ray, t: f32, track: ptr<function, Track>) -
     let p = ray.start + ray.dir * t;
     let k = (*track).segment;
     if k != NO_SEGMENT && !(*track).whole && abs((*track).rate * (t - (*track).t)) <= TRACK_REACH {
-        let q = pieces[k];
+        let q = chain_piece(c, HELD, k);
         let h = stationary_quartic(q, p);
         var x = clamp((*track).u + (*track).rate * (t - (*track).t), 0.0, 1.0);
         var step = 1.0;
@@ -139,7 +139,7 @@ fn bright_track(c: CurveSource, ray: Ray, t: f32, track: ptr<function, Track>) -
         var stands = falls && abs(step) <= TRACK_SETTLED && x > 0.0 && x < 1.0 && d > EPSILON;
         for (var i = 0u; i < c.piece_count; i++) {
             let j = c.first_piece + i;
-            let o = pieces[j];
+            let o = chain_piece(c, HELD, j);
             let bound = o.weight_max / max(EPSILON, length(p - o.center) - o.radius);
             stands = stands && (j == k || bound <= value);
         }
@@ -148,11 +148,11 @@ fn bright_track(c: CurveSource, ray: Ray, t: f32, track: ptr<function, Track>) -
             return Bright(value, mix(q.t0, q.t1, x), d, x, k);
         }
     }
-    let b = curve_search(c, p);
+    let b = curve_search(c, HELD, p);
     let whole = (*track).whole;
     *track = Track(NO_SEGMENT, 0.0, 0.0, t, whole);
     if b.x > 0.0 && b.x < 1.0 && b.distance > EPSILON {
-        *track = Track(b.piece, b.x, piece_rate(pieces[b.piece], b.x, p, ray.dir), t, whole);
+        *track = Track(b.piece, b.x, piece_rate(chain_piece(c, HELD, b.piece), b.x, p, ray.dir), t, whole);
     }
     return b;
 }
@@ -168,7 +168,7 @@ struct CurveRule {
 }
 
 fn curve_kronrod(ray: Ray, p: Peak, a: f32, b: f32, panel: vec2<f32>, singular: vec2<bool>, track: ptr<function, Track>) -> CurveRule {
-    let c = curves[ray.index];
+    let c = CHAIN;
     let mid = 0.5 * (a + b);
     let r = 0.5 * (b - a);
     var sum = vec2<f32>(0.0);
@@ -252,17 +252,19 @@ fn nearest_segment_index(c: CurveSource, ray: Ray, p: Peak, u: f32) -> u32 {
 // A curve's term of B over its pieces, each cut at its kinks, and that term times its color series (zero
 // without one). Twin of integrate_term and, for the series, of integrate_weighted.
 fn integrate_curve_term(index: u32, s_point: vec3<f32>, e_point: vec3<f32>) -> vec4<f32> {
-    let coefficient = curves[index].coefficient;
+    CHAIN = curves[index];
+    let c = CHAIN;
+    let coefficient = c.coefficient;
     if coefficient == 0.0 {
         return vec4<f32>(0.0);
     }
+    HELD = held_chain(c);
     let ray = Ray(s_point, e_point - s_point, 3u, index, vec3<f32>(0.0), vec3<f32>(0.0), 0.0);
-    let c = curves[index];
     // A chain with a segment at rest at an end (or of zero length) is solved on the whole chain at every node:
     // the tracking of the nearest point along one segment loses it there.
     var degenerate = false;
     for (var j = 0u; j < c.segment_count; j++) {
-        let s = segments[c.first_segment + j];
+        let s = chain_segment(c, HELD, j);
         degenerate = degenerate || starts_at_rest(s) || ends_at_rest(s);
     }
     let features = curve_features(ray);

@@ -5,8 +5,8 @@
 
 // A curve chain's term at p, b Sw(t) / max(eps, |p - C(t)|) at the point it reads (curve_point: the nearest point t*,
 // or the brightest), and that times its color series at t (zero without one).
-fn curve_field(c: CurveSource, p: vec3<f32>, eps: f32) -> vec4<f32> {
-    let best = curve_point(c, p);
+fn curve_field(c: CurveSource, held: HeldChain, p: vec3<f32>, eps: f32) -> vec4<f32> {
+    let best = curve_point(c, held, p);
     let f = c.coefficient * wseries(c, best.x) * falloff(best.y, eps);
     return vec4<f32>(f, f * color_series(c, best.x));
 }
@@ -89,9 +89,10 @@ fn torus_samples(r: Samples, src: TorusSource) -> f32 {
 // term's square).
 fn curve_samples(r: Samples, c: CurveSource) -> vec4<f32> {
     var sum = vec4<f32>(0.0);
+    let held = held_chain(c);
     for (var k = r.first; k < r.last; k++) {
         let x = sample_at(r, k);
-        let g = curve_field(c, x.xyz, EPSILON);
+        let g = curve_field(c, held, x.xyz, EPSILON);
         sum += x.w * select(g, g.x * g, r.squared);
     }
     return sum;

@@ -385,3 +385,47 @@ fn the_adaptive_pass_matches_its_f64_twin_on_every_texel_of_the_mixed_scene() {
         "worst relative difference {worst:.2e}"
     );
 }
+
+/// The field passes hold a chain's first four segments and pieces in registers and read the rest from their
+/// buffers: a chain of five segments with a W series of six weights (eight pieces in the continuous form), in both
+/// W forms and with both integrators, matches the f64 twin on every texel.
+#[test]
+fn a_chain_longer_than_what_the_passes_hold_matches_its_twin() {
+    use energywave::field::WForm;
+    let mut gpu = HeadlessRenderer::new().expect("a GPU adapter (lavapipe in CI)");
+    let mut scene = Scene::default_scene();
+    scene.animation = None;
+    scene.billboard.resolution = 32;
+    scene.integration.jitter = None;
+    let curve = &mut scene.sources.curves[0];
+    // A wave of five segments, its joints smooth (each joint the middle of its neighbours).
+    curve.control_points = (0..11)
+        .map(|k| {
+            let x = -3.5 + 0.7 * k as f64;
+            let y = if k % 2 == 1 {
+                (k as f64 * 0.9).sin() * 1.5
+            } else {
+                0.0
+            };
+            DVec3::new(x, y, 0.2 * (k as f64 * 0.5).cos())
+        })
+        .collect();
+    for k in (2..10).step_by(2) {
+        let (a, b) = (curve.control_points[k - 1], curve.control_points[k + 1]);
+        curve.control_points[k] = 0.5 * (a + b);
+    }
+    curve.weights = vec![0.4, 1.0, 0.3, 0.9, 0.5, 1.2];
+    for form in [WForm::Nearest, WForm::Continuous] {
+        for integrator in [Integrator::Simpson, Integrator::Adaptive] {
+            scene.sources.curves[0].w_form = form;
+            scene.integration.integrator = integrator;
+            let worst = worst_against_twin(&mut gpu, &scene);
+            eprintln!("{form:?}, {}: {worst:.2e}", integrator.name());
+            assert!(
+                worst <= TWIN_TOLERANCE,
+                "{form:?}, {}: {worst:.2e} against the twin",
+                integrator.name()
+            );
+        }
+    }
+}

@@ -3,6 +3,12 @@
 // jump between two of them narrowed round by round. Twin: src/reference/adaptive_curves/kinks.rs.
 #import shared/adaptive.wgsl
 
+// The chain whose term the invocation integrates (integrate_curve_term sets them): its source and its first
+// segments and pieces, read from their buffers once a term and kept in registers for every scan sample and node, which
+// reach them through CHAIN, chain_segment and chain_piece, not the buffers (see held_chain).
+var<private> CHAIN: CurveSource;
+var<private> HELD: HeldChain;
+
 // A chain's nearest point to the ray's point at t. Twin of ChainSample.
 struct ChainSample {
     t: f32,
@@ -20,13 +26,13 @@ struct ChainSample {
 // Twin of ChainSample::at: the nearest point, its velocity along the ray from the stationarity
 // (C(u) - L(t)) . C'(u) = 0, at rest at an end of the chain unless `moving`.
 fn chain_sample(ray: Ray, t: f32, moving: bool) -> ChainSample {
-    let c = curves[ray.index];
+    let c = CHAIN;
     let p = ray.start + ray.dir * t;
-    let n = curve_nearest(c, p);
+    let n = curve_nearest(c, HELD, p);
     let k = c.segment_count;
     let x = clamp(n.x, 0.0, 1.0) * f32(k);
     let j = min(u32(floor(x)), k - 1u);
-    let seg = segments[c.first_segment + j];
+    let seg = chain_segment(c, HELD, j);
     let local = x - f32(j);
     let point = segment_at(seg, local);
     let d1 = 2.0 * seg.c2 * local + seg.c1;
@@ -199,8 +205,8 @@ struct BrightSample {
 
 fn bright_sample(ray: Ray, t: f32) -> BrightSample {
     let p = ray.start + ray.dir * t;
-    let b = curve_search(curves[ray.index], p);
-    let m = bright_motion(b, p, ray.dir);
+    let b = curve_search(CHAIN, HELD, p);
+    let m = bright_motion(CHAIN, HELD, b, p, ray.dir);
     return BrightSample(t, b.t, m.x, b.value, m.y);
 }
 

@@ -194,13 +194,13 @@ fn bright_cuts(ray: Ray, x: BrightSample, y: BrightSample, kinks: ptr<function, 
     if y.t <= x.t || x.param == y.param {
         return;
     }
-    let c = curves[ray.index];
+    let c = CHAIN;
     let h = y.t - x.t;
     for (var k = 0u; k <= c.piece_count; k++) {
         let end = k == 0u || k == c.piece_count;
         var at = select(0.0, 1.0, k == c.piece_count);
         if !end {
-            at = pieces[c.first_piece + k].t0;
+            at = chain_piece(c, HELD, c.first_piece + k).t0;
         }
         var t = 0.0;
         if end {
@@ -250,17 +250,17 @@ fn end_tangent(s: CurveSegment) -> vec3<f32> {
 // Twin of curve::tangent_into and tangent_out_of: past one segment of zero length; w is 1 where that segment's
 // speed vanishes there (Segment::ends_at_rest, starts_at_rest).
 fn tangent_into(c: CurveSource, j: u32) -> vec4<f32> {
-    var s = segments[c.first_segment + j - 1u];
+    var s = chain_segment(c, HELD, j - 1u);
     if all(end_tangent(s) == vec3<f32>(0.0)) && j >= 2u {
-        s = segments[c.first_segment + j - 2u];
+        s = chain_segment(c, HELD, j - 2u);
     }
     return vec4<f32>(end_tangent(s), select(0.0, 1.0, ends_at_rest(s)));
 }
 
 fn tangent_out_of(c: CurveSource, j: u32) -> vec4<f32> {
-    var s = segments[c.first_segment + j];
+    var s = chain_segment(c, HELD, j);
     if all(start_tangent(s) == vec3<f32>(0.0)) && j + 1u < c.segment_count {
-        s = segments[c.first_segment + j + 1u];
+        s = chain_segment(c, HELD, j + 1u);
     }
     return vec4<f32>(start_tangent(s), select(0.0, 1.0, starts_at_rest(s)));
 }
@@ -270,7 +270,7 @@ fn tangent_out_of(c: CurveSource, j: u32) -> vec4<f32> {
 // no jump between them: the parameter's linear interpolation, then one Newton step on a sample there. Twin of
 // knot_cuts.
 fn knot_cuts(ray: Ray, x: vec2<f32>, y: vec2<f32>, kinks: ptr<function, Kinks>) {
-    let n = curves[ray.index].weight_count;
+    let n = CHAIN.weight_count;
     if n < 4u || x.y == y.y || y.x <= x.x {
         return;
     }
@@ -294,13 +294,13 @@ fn knot_cuts(ray: Ray, x: vec2<f32>, y: vec2<f32>, kinks: ptr<function, Kinks>) 
 // nearest point passes a joint, the joint's normal plane (two at a corner) where the samples lie on either side
 // of the joint. Twin of joint_cuts.
 fn joint_cuts(ray: Ray, x: vec2<f32>, y: vec2<f32>, kinks: ptr<function, Kinks>) {
-    let c = curves[ray.index];
+    let c = CHAIN;
     for (var j = 1u; j < c.segment_count; j++) {
         let pj = f32(j) / f32(c.segment_count);
         if (x.y - pj) * (y.y - pj) > 0.0 {
             continue;
         }
-        let joint = segments[c.first_segment + j].c0;
+        let joint = chain_segment(c, HELD, j).c0;
         let into = tangent_into(c, j);
         let out_of = tangent_out_of(c, j);
         let t_in = into.xyz;
@@ -355,9 +355,9 @@ struct CurveFeatures {
 // Twin of chain_features and chain_peaks: one pass over the scan's intervals, each split at the normal planes
 // of the chain's ends and searched for jumps, then the closest approaches refined by Newton.
 fn curve_features(ray: Ray) -> CurveFeatures {
-    let c = curves[ray.index];
-    let first = segments[c.first_segment];
-    let last = segments[c.first_segment + c.segment_count - 1u];
+    let c = CHAIN;
+    let first = HELD.s0;
+    let last = chain_segment(c, HELD, c.segment_count - 1u);
     let first_tangent = tangent_out_of(c, 0u);
     let last_tangent = tangent_into(c, c.segment_count);
     var end_t = vec2<f32>(

@@ -3,11 +3,82 @@
 // src/field/mod.rs).
 #import shared/wseries.wgsl
 
-// The nearest point of a curve chain: (t* = (j + t) / k over all segments, distance).
-fn curve_nearest(c: CurveSource, p: vec3<f32>) -> vec2<f32> {
+// A chain's first HELD_SEGMENTS segments and, in the continuous W form, its first HELD_PIECES pieces, read from
+// their buffers once (held_chain) and kept in registers for every point the chain is evaluated at. lavapipe loads
+// a storage buffer again at every pass of a loop, lane by lane: simpson's loop over a ray's samples, reading the
+// segments at each, spent most of its time loading them (the Bezier scene at 256, n = 64 to 256: 2.5 to 3x faster
+// held, the same texels to the bit). Those past them are read from the buffers where they are used.
+const HELD_SEGMENTS: u32 = 4u;
+const HELD_PIECES: u32 = 4u;
+struct HeldChain {
+    s0: CurveSegment,
+    s1: CurveSegment,
+    s2: CurveSegment,
+    s3: CurveSegment,
+    q0: CurvePiece,
+    q1: CurvePiece,
+    q2: CurvePiece,
+    q3: CurvePiece,
+}
+
+fn held_chain(c: CurveSource) -> HeldChain {
+    var held: HeldChain;
+    let last = c.first_segment + max(c.segment_count, 1u) - 1u;
+    held.s0 = segments[c.first_segment];
+    held.s1 = segments[min(c.first_segment + 1u, last)];
+    held.s2 = segments[min(c.first_segment + 2u, last)];
+    held.s3 = segments[min(c.first_segment + 3u, last)];
+    if SEARCH != 0u && c.piece_count > 0u {
+        let final_piece = c.first_piece + c.piece_count - 1u;
+        held.q0 = pieces[c.first_piece];
+        held.q1 = pieces[min(c.first_piece + 1u, final_piece)];
+        held.q2 = pieces[min(c.first_piece + 2u, final_piece)];
+        held.q3 = pieces[min(c.first_piece + 3u, final_piece)];
+    }
+    return held;
+}
+
+// Piece k (an index of the pieces buffer) of a chain whose first pieces are held: from the registers, else from
+// the buffer.
+fn chain_piece(c: CurveSource, held: HeldChain, k: u32) -> CurvePiece {
+    let i = k - c.first_piece;
+    if i == 0u {
+        return held.q0;
+    }
+    if i == 1u {
+        return held.q1;
+    }
+    if i == 2u {
+        return held.q2;
+    }
+    if i == 3u {
+        return held.q3;
+    }
+    return pieces[k];
+}
+
+// Segment j of a chain whose first segments are held: from the registers, else from the buffer.
+fn chain_segment(c: CurveSource, held: HeldChain, j: u32) -> CurveSegment {
+    if j == 0u {
+        return held.s0;
+    }
+    if j == 1u {
+        return held.s1;
+    }
+    if j == 2u {
+        return held.s2;
+    }
+    if j == 3u {
+        return held.s3;
+    }
+    return segments[c.first_segment + j];
+}
+
+// The nearest point of a chain: (t* = (j + t) / k over all segments, distance).
+fn curve_nearest(c: CurveSource, held: HeldChain, p: vec3<f32>) -> vec2<f32> {
     var best = vec2<f32>(0.0, F32_MAX);
     for (var j = 0u; j < c.segment_count; j++) {
-        let n = nearest_on_segment(segments[c.first_segment + j], p);
+        let n = nearest_on_segment(chain_segment(c, held, j), p);
         if n.y < best.y {
             best = vec2<f32>((f32(j) + n.x) / f32(c.segment_count), n.y);
         }
@@ -17,17 +88,17 @@ fn curve_nearest(c: CurveSource, p: vec3<f32>) -> vec2<f32> {
 
 // The point of a chain its term reads at p, (t, distance): the brightest point in the continuous W form
 // (piece_count > 0), else the nearest. The term is b Sw(t) / max(eps, distance) at it.
-fn curve_point(c: CurveSource, p: vec3<f32>) -> vec2<f32> {
+fn curve_point(c: CurveSource, held: HeldChain, p: vec3<f32>) -> vec2<f32> {
     if SEARCH != 0u && c.piece_count > 0u {
-        return curve_brightest(c, p);
+        return curve_brightest(c, held, p);
     }
-    return curve_nearest(c, p);
+    return curve_nearest(c, held, p);
 }
 
 // The continuous W form (twin of field::brightest): the chain parameter t of the largest Sw(t) / max(eps, |p - C(t)|)
 // and its distance from p.
-fn curve_brightest(c: CurveSource, p: vec3<f32>) -> vec2<f32> {
-    let b = curve_search(c, p);
+fn curve_brightest(c: CurveSource, held: HeldChain, p: vec3<f32>) -> vec2<f32> {
+    let b = curve_search(c, held, p);
     return vec2<f32>(b.t, b.distance);
 }
 
@@ -45,13 +116,13 @@ struct Bright {
 // the pieces that could still beat the best (their largest weight over their ball's distance), the most promising
 // first, so that near the chain one search settles the best and the rest fall to their bounds: the maxima of
 // S / sqrt(D) inside, and where a piece comes within eps of p, the ends of that stretch and S's vertex.
-fn curve_search(c: CurveSource, p: vec3<f32>) -> Bright {
+fn curve_search(c: CurveSource, held: HeldChain, p: vec3<f32>) -> Bright {
     var best = Bright(-1.0, 0.0, F32_MAX, 0.0, c.first_piece);
     var first = 0u;
     var top = -1.0;
     for (var i = 0u; i <= c.piece_count; i++) {
         let k = c.first_piece + min(i, c.piece_count - 1u);
-        let q = pieces[k];
+        let q = chain_piece(c, held, k);
         best = offer_point(best, q, k, select(0.0, 1.0, i == c.piece_count), p);
         let bound = q.weight_max / max(EPSILON, length(p - q.center) - q.radius);
         if i < c.piece_count && bound > top {
@@ -66,7 +137,7 @@ fn curve_search(c: CurveSource, p: vec3<f32>) -> Bright {
             i = select(j, j - 1u, j <= first);
         }
         let k = c.first_piece + i;
-        let q = pieces[k];
+        let q = chain_piece(c, held, k);
         let reach = length(p - q.center) - q.radius;
         if q.weight_max / max(EPSILON, reach) <= best.value {
             continue;
@@ -82,8 +153,8 @@ fn curve_search(c: CurveSource, p: vec3<f32>) -> Bright {
 
 // Twin of Brightest::motion: how the brightest point and the term move as p moves along dir, (the rate of its chain
 // parameter, the slope of the value): the rate 0 where it rests at a piece's end or on the flat top.
-fn bright_motion(b: Bright, p: vec3<f32>, dir: vec3<f32>) -> vec2<f32> {
-    let q = pieces[b.piece];
+fn bright_motion(c: CurveSource, held: HeldChain, b: Bright, p: vec3<f32>, dir: vec3<f32>) -> vec2<f32> {
+    let q = chain_piece(c, held, b.piece);
     let x = b.x;
     let off = piece_at(q, x) - p;
     let d = length(off);
