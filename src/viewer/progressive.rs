@@ -20,9 +20,10 @@ pub const MIN_PREVIEW: u32 = 16;
 /// A moving frame may cost this many times an idle one (the slack the field gets while the view moves).
 pub const MOVING_FACTOR: f64 = 1.3;
 
-/// Field work a refining frame may spend, by the estimates, in milliseconds: the full picture of a scene that
-/// takes 300 ms arrives in about half a second of frames that stay responsive (on lavapipe the frames come
-/// out at 40 to 55 ms: a frame's share of the GPU's work is measured late, so the estimates run low).
+/// Field work a refining frame may spend at least, by the estimates, in milliseconds; where an idle frame costs
+/// more, as much as an idle frame (`FrameBudget::refine_budget`). The full picture of a scene that takes 300 ms
+/// arrives in about half a second of frames that stay responsive (on lavapipe the frames come out at 40 to
+/// 55 ms: a frame's share of the GPU's work is measured late, so the estimates run low).
 pub const REFINE_MS: f64 = 25.0;
 
 /// The cost of a texel assumed until one is measured, in milliseconds: a CPU rasterizer's on the default scene
@@ -151,6 +152,15 @@ impl FrameBudget {
         }
     }
 
+    /// Field work a refining frame may spend, in milliseconds: as much as an idle frame costs, and at least
+    /// `REFINE_MS`. Every refining frame pays an idle frame's cost (the UI, the composition) besides its bands, so
+    /// bands of a fixed size would make the wait for the full picture grow with the UI's cost (33 frames of 8
+    /// rows, 4.3 to 5.8 s, where idle frames took 90 ms on a loaded machine); at an idle frame's worth, the field
+    /// takes at least half of that wait, and a refining frame costs at most about twice an idle one.
+    fn refine_budget(&self) -> f64 {
+        REFINE_MS.max(self.idle_ms)
+    }
+
     /// The field's share of a moving frame, in milliseconds.
     fn moving_budget(&self) -> f64 {
         (self.idle_ms * (MOVING_FACTOR - 1.0)).max(2.0)
@@ -200,12 +210,12 @@ impl FrameBudget {
         match self.full_ms {
             // Within one refining frame's budget, and small enough that an estimate off by a few times still
             // makes no long frame: all of it now.
-            Some(c) if c * texels <= REFINE_MS && w <= MAX_WHOLE => Plan::Full,
+            Some(c) if c * texels <= self.refine_budget() && w <= MAX_WHOLE => Plan::Full,
             // A quarter of the rows at most, so that a low estimate (frames measure the GPU's work only once it
             // is waited for) costs a few short frames, never one long one. Unmeasured: a CPU rasterizer's cost.
             c => {
                 let c = c.unwrap_or(ASSUMED_TEXEL_MS);
-                let rows = (REFINE_MS / (c * w as f64)).floor() as u32;
+                let rows = (self.refine_budget() / (c * w as f64)).floor() as u32;
                 let rows = rows.clamp(8, (w / 4).max(8));
                 Plan::Refine {
                     band_rows: rows.div_ceil(8) * 8,
@@ -283,6 +293,37 @@ mod tests {
         let band_ms = band_rows as f64 * 256.0 * 280.0 / 65536.0;
         assert!(
             bands == 1 && band_ms <= 1.25 * REFINE_MS,
+            "{band_rows} rows: {band_ms} ms"
+        );
+    }
+
+    #[test]
+    fn refining_bands_take_as_long_as_an_idle_frame_where_it_is_slow() {
+        let mut b = FrameBudget::default();
+        let mut t = Instant::now();
+        // Idle frames of 90 ms (a slow UI); full frames of 256^2 texels at 1590 ms (1500 of them the field).
+        run(&mut b, &mut t, 5, 90.0, Work::Nothing);
+        // Measured in bands of 32 rows (187.5 ms of field), frames closer than STALE_MS.
+        run(&mut b, &mut t, 5, 277.5, Work::Full { texels: 8192 });
+        let Plan::Refine { band_rows, bands } = b.plan(false, 256) else {
+            panic!("a 1500 ms field is refined in bands");
+        };
+        let band_ms = band_rows as f64 * 256.0 * 1500.0 / 65536.0;
+        assert_eq!(bands, 1);
+        assert!(
+            (0.6 * 90.0..=1.25 * 90.0).contains(&band_ms),
+            "{band_rows} rows: {band_ms} ms of field beside 90 ms idle frames"
+        );
+        // Fast idle frames (12 ms) and a 300 ms field: REFINE_MS, as before.
+        let mut b = FrameBudget::default();
+        run(&mut b, &mut t, 5, 12.0, Work::Nothing);
+        run(&mut b, &mut t, 5, 49.5, Work::Full { texels: 8192 });
+        let Plan::Refine { band_rows, .. } = b.plan(false, 256) else {
+            panic!("in bands");
+        };
+        let band_ms = band_rows as f64 * 256.0 * 300.0 / 65536.0;
+        assert!(
+            band_ms <= 1.25 * REFINE_MS,
             "{band_rows} rows: {band_ms} ms"
         );
     }
