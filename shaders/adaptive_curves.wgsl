@@ -185,7 +185,7 @@ fn curve_kronrod(ray: Ray, p: Peak, a: f32, b: f32, panel: vec2<f32>, singular: 
         } else {
             n = track_nearest(c, ray, m.x, track);
         }
-        let w = wseries(c, n.x);
+        let w = wseries(c, HELD.weights, n.x);
         var f = toward.y * m.y * w * falloff(n.y, EPSILON) * zeta_at(m.x);
         if params.decay == 1u {
             // The rms decay's square of the weighed energy (the map's derivatives stay to the first power).

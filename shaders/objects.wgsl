@@ -115,8 +115,9 @@ fn direct_light(x: vec3<f32>, n: vec3<f32>) -> Direct {
         let c = curves[k];
         if c.segment_count > 0u {
             // (t, distance) of the point the term reads; a curve with a color series has the tint -Ce.
-            let seen = curve_point(c, held_chain(c), x);
-            let strength = c.coefficient * wseries(c, seen.x) * falloff(seen.y, EPSILON);
+            let held = held_chain(c);
+            let seen = curve_point(c, held, x);
+            let strength = c.coefficient * wseries(c, held.weights, seen.x) * falloff(seen.y, EPSILON);
             let color = object.energy + tints[t].xyz + color_series(c, seen.x);
             e = add_light(e, color, strength * cosine_from(x, n, chain_point(c, seen.x)));
         }

@@ -7,7 +7,7 @@
 // or the brightest), and that times its color series at t (zero without one).
 fn curve_field(c: CurveSource, held: HeldChain, p: vec3<f32>, eps: f32) -> vec4<f32> {
     let best = curve_point(c, held, p);
-    let f = c.coefficient * wseries(c, best.x) * falloff(best.y, eps);
+    let f = c.coefficient * wseries(c, held.weights, best.x) * falloff(best.y, eps);
     return vec4<f32>(f, f * color_series(c, best.x));
 }
 

@@ -387,8 +387,8 @@ fn the_adaptive_pass_matches_its_f64_twin_on_every_texel_of_the_mixed_scene() {
 }
 
 /// The field passes hold a chain's first four segments and pieces in registers and read the rest from their
-/// buffers: a chain of five segments with a W series of six weights (eight pieces in the continuous form), in both
-/// W forms and with both integrators, matches the f64 twin on every texel.
+/// buffers, and its first eight weights: a chain of five segments with a W series of nine weights (eleven pieces
+/// in the continuous form), in both W forms and with both integrators, matches the f64 twin on every texel.
 #[test]
 fn a_chain_longer_than_what_the_passes_hold_matches_its_twin() {
     use energywave::field::WForm;
@@ -414,7 +414,7 @@ fn a_chain_longer_than_what_the_passes_hold_matches_its_twin() {
         let (a, b) = (curve.control_points[k - 1], curve.control_points[k + 1]);
         curve.control_points[k] = 0.5 * (a + b);
     }
-    curve.weights = vec![0.4, 1.0, 0.3, 0.9, 0.5, 1.2];
+    curve.weights = vec![0.4, 1.0, 0.3, 0.9, 0.5, 1.2, 0.2, 0.8, 0.6];
     for form in [WForm::Nearest, WForm::Continuous] {
         for integrator in [Integrator::Simpson, Integrator::Adaptive] {
             scene.sources.curves[0].w_form = form;

@@ -19,6 +19,7 @@ struct HeldChain {
     q1: CurvePiece,
     q2: CurvePiece,
     q3: CurvePiece,
+    weights: HeldWeights,
 }
 
 fn held_chain(c: CurveSource) -> HeldChain {
@@ -28,6 +29,7 @@ fn held_chain(c: CurveSource) -> HeldChain {
     held.s1 = segments[min(c.first_segment + 1u, last)];
     held.s2 = segments[min(c.first_segment + 2u, last)];
     held.s3 = segments[min(c.first_segment + 3u, last)];
+    held.weights = held_weights(c);
     if SEARCH != 0u && c.piece_count > 0u {
         let final_piece = c.first_piece + c.piece_count - 1u;
         held.q0 = pieces[c.first_piece];

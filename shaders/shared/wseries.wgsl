@@ -46,23 +46,57 @@ fn wseries_basis(n: u32, t: f32) -> vec3<f32> {
     return vec3<f32>(b0, b1, b2);
 }
 
-// Sw(t) of a curve's W series (METHOD.md section 2). Twin of wseries::evaluate.
-fn wseries(c: CurveSource, t_in: f32) -> f32 {
+// A W series' first eight weights, read from their buffer once (held_weights) and kept in registers for every
+// point the series is evaluated at (see held_chain); those past them are read from the buffer.
+struct HeldWeights {
+    low: vec4<f32>,
+    high: vec4<f32>,
+}
+
+fn held_weights(c: CurveSource) -> HeldWeights {
+    if c.weight_count == 0u {
+        return HeldWeights(vec4<f32>(1.0), vec4<f32>(1.0));
+    }
+    let w = c.first_weight;
+    let last = w + c.weight_count - 1u;
+    return HeldWeights(
+        vec4<f32>(weights[w], weights[min(w + 1u, last)], weights[min(w + 2u, last)], weights[min(w + 3u, last)]),
+        vec4<f32>(
+            weights[min(w + 4u, last)],
+            weights[min(w + 5u, last)],
+            weights[min(w + 6u, last)],
+            weights[min(w + 7u, last)],
+        ),
+    );
+}
+
+// Weight i of a curve's series: from the registers, else from the buffer.
+fn series_weight(c: CurveSource, held: HeldWeights, i: u32) -> f32 {
+    if i < 8u {
+        let v = select(held.low, held.high, i >= 4u);
+        let j = i & 3u;
+        return select(select(v.x, v.y, j == 1u), select(v.z, v.w, j == 3u), j >= 2u);
+    }
+    return weights[c.first_weight + i];
+}
+
+// Sw(t) of a curve's W series (METHOD.md section 2), its first weights held. Twin of wseries::evaluate.
+fn wseries(c: CurveSource, held: HeldWeights, t_in: f32) -> f32 {
     let t = clamp(t_in, 0.0, 1.0);
     let n = c.weight_count;
-    let w = c.first_weight;
     if n == 0u {
         return 1.0;
     }
     if n == 1u {
-        return weights[w];
+        return held.low.x;
     }
     if n == 2u {
-        return mix(weights[w], weights[w + 1u], t);
+        return mix(held.low.x, held.low.y, t);
     }
     let b = wseries_basis(n, t);
-    let first = w + wseries_span(n, t) - 2u;
-    return b.x * weights[first] + b.y * weights[first + 1u] + b.z * weights[first + 2u];
+    let first = wseries_span(n, t) - 2u;
+    return b.x * series_weight(c, held, first) + b.y * series_weight(c, held, first + 1u)
+        + b.z * series_weight(c, held, first + 2u);
 }
 
 // A curve's color series at t (twin of Colors::color_along): the quadratic B-spline of its colors, as wseries
