@@ -92,6 +92,25 @@ struct Composed {
     threshold_preview: Option<f64>,
 }
 
+impl Composed {
+    fn of(view: &ViewportView, size: [u32; 2]) -> Self {
+        Composed {
+            scene: view.scene.clone(),
+            size,
+            show_grid: view.show_grid,
+            threshold_preview: view.threshold_preview,
+        }
+    }
+
+    /// Whether a frame of `view` at `size` shows what this one does.
+    fn shows(&self, view: &ViewportView, size: [u32; 2]) -> bool {
+        self.size == size
+            && self.show_grid == view.show_grid
+            && self.threshold_preview == view.threshold_preview
+            && self.scene == view.scene
+    }
+}
+
 impl ViewportGpu {
     /// The brightness texture the viewport shows now (after its first frame): the upsampled coarse field while
     /// the view moves, else the full one.
@@ -181,13 +200,8 @@ impl ViewportGpu {
         let [width, height] = targets.size;
         let setup = FrameSetup::placed(&view.scene, width as f64 / height as f64);
         let result = self.integrate(device, queue, encoder, view, &setup, progressive);
-        let composed = Composed {
-            scene: view.scene.clone(),
-            size: targets.size,
-            show_grid: view.show_grid,
-            threshold_preview: view.threshold_preview,
-        };
-        let still = matches!(&result, Ok((_, _, false))) && shown.as_ref() == Some(&composed);
+        let unchanged = shown.as_ref().is_some_and(|c| c.shows(view, targets.size));
+        let still = matches!(&result, Ok((_, _, false))) && unchanged;
         let again = still && self.still;
         self.still = still;
         let result = if again {
@@ -199,7 +213,11 @@ impl ViewportGpu {
             self.compose(device, queue, encoder, view, &setup, targets, result)
         };
         if result.is_ok() {
-            self.composed = Some(composed);
+            // The scene is copied only when what the frame shows changed.
+            self.composed = match unchanged {
+                true => shown,
+                false => Some(Composed::of(view, targets.size)),
+            };
         }
         if let Ok(mut r) = self.report.lock() {
             r.error = result.as_ref().err().map(|e| e.to_string());
