@@ -420,6 +420,8 @@ mod tests {
                 refine_ms: 450.0,
                 refine_frames: 8,
                 refine_longest_frame_ms: 60.0,
+                moving_largest_difference: 40,
+                moving_share_over_16: 0.01,
                 add_source_longest_frame_ms: 70.0,
                 add_source_frames: 9,
             }),

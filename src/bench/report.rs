@@ -50,6 +50,10 @@ pub struct ViewerFrameRow {
     pub refine_ms: f64,
     pub refine_frames: u32,
     pub refine_longest_frame_ms: f64,
+    /// The last orbiting frame's viewport against the settled one's: the largest difference of a color channel
+    /// (in 1/255), and the share of pixels with one off by more than 16/255.
+    pub moving_largest_difference: u8,
+    pub moving_share_over_16: f64,
     /// A point source added (a new structure: a compile starts on its thread), then frames until the picture
     /// is whole again: the longest of them, and how many.
     pub add_source_longest_frame_ms: f64,
@@ -182,7 +186,7 @@ impl Report {
         if let Some(v) = &self.viewer {
             let _ = writeln!(
                 s,
-                "\nviewer frame {}x{} ({} scene, UI + viewport, wall): idle {:.1} ms ({:.1} FPS); orbiting {:.1} ms ({:.1} FPS, {:.2}x idle, field {}^2 while moving); dragging a control point {:.1} ms ({:.1} FPS, {:.2}x idle, field {}^2); orbiting with the whole field every frame {:.1} ms ({:.1} FPS, {:.2}x idle); full picture {:.0} ms after the last move ({} frames, longest {:.1} ms); a source added: longest frame {:.1} ms of {}",
+                "\nviewer frame {}x{} ({} scene, UI + viewport, wall): idle {:.1} ms ({:.1} FPS); orbiting {:.1} ms ({:.1} FPS, {:.2}x idle, field {}^2 while moving); dragging a control point {:.1} ms ({:.1} FPS, {:.2}x idle, field {}^2); orbiting with the whole field every frame {:.1} ms ({:.1} FPS, {:.2}x idle); full picture {:.0} ms after the last move ({} frames, longest {:.1} ms; the last moving frame off it by up to {}/255, {:.2} % of pixels by more than 16/255); a source added: longest frame {:.1} ms of {}",
                 v.width,
                 v.height,
                 v.scene,
@@ -202,6 +206,8 @@ impl Report {
                 v.refine_ms,
                 v.refine_frames,
                 v.refine_longest_frame_ms,
+                v.moving_largest_difference,
+                100.0 * v.moving_share_over_16,
                 v.add_source_longest_frame_ms,
                 v.add_source_frames,
             );

@@ -21,6 +21,21 @@ pub trait TimedViewer {
     fn orbit(&mut self, yaw: f64);
     /// Progressive refinement on (the viewer's default) or off (the whole field every frame).
     fn set_progressive(&mut self, on: bool);
+    /// The viewport's pixels as the last frame drew them: RGBA, 8 bits a channel, rows from the top.
+    fn viewport(&self) -> Result<Vec<u8>, GpuError>;
+}
+
+/// How far a moving frame's viewport lies from the settled one's (both RGBA8 of one size): the largest
+/// difference of a color channel, in 1/255, and the share of pixels with a channel off by more than 16/255.
+pub fn frame_difference(moving: &[u8], settled: &[u8]) -> (u8, f64) {
+    let (mut largest, mut over) = (0u8, 0usize);
+    let pixels = moving.len().min(settled.len()) / 4;
+    for (a, b) in moving.chunks_exact(4).zip(settled.chunks_exact(4)) {
+        let d = (0..3).map(|c| a[c].abs_diff(b[c])).max().unwrap_or(0);
+        largest = largest.max(d);
+        over += usize::from(d > 16);
+    }
+    (largest, over as f64 / pixels.max(1) as f64)
 }
 
 /// Opens the viewer to time, at `VIEWER_SIZE` on the scene `BenchOptions::viewer_scene` names.
@@ -81,7 +96,10 @@ pub(super) fn viewer_frames(
     };
     let orbit = |v: &mut dyn TimedViewer| v.orbit(0.01);
     let (orbiting, orbiting_resolution) = gesture(viewer, &orbit)?;
+    let moving = viewer.viewport()?;
     let (refine_ms, refine_frames, refine_longest_frame_ms) = settle(viewer)?;
+    let (moving_largest_difference, moving_share_over_16) =
+        frame_difference(&moving, &viewer.viewport()?);
     // A curve's control point, else a ring's center, else a point (a source moved: objects are lit again).
     let drag = |v: &mut dyn TimedViewer| {
         let s = &mut v.scene_mut().sources;
@@ -120,6 +138,8 @@ pub(super) fn viewer_frames(
         refine_ms,
         refine_frames,
         refine_longest_frame_ms,
+        moving_largest_difference,
+        moving_share_over_16,
         add_source_longest_frame_ms: first.max(added_longest),
         add_source_frames: added_frames + 1,
     })

@@ -392,4 +392,8 @@ impl crate::bench::TimedViewer for OffscreenViewer {
     fn set_progressive(&mut self, on: bool) {
         self.app.view_mut().progressive = on;
     }
+
+    fn viewport(&self) -> Result<Vec<u8>, crate::gpu::GpuError> {
+        self.viewport_pixels()
+    }
 }

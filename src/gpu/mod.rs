@@ -27,7 +27,7 @@ pub use formats::FRAME_FORMAT;
 pub use frame::{FrameTargets, SceneRenderer, f16_to_f32, read_frame};
 pub use grid_pass::GridPass;
 pub use headless::{Frame, HeadlessRenderer};
-pub use upsample::Upsample;
+pub use upsample::{Upsample, UpsampleClips};
 
 /// The Rust mirrors of the WGSL structs, for the layout tests.
 pub mod layout {

@@ -1,55 +1,125 @@
 //! The smooth upsampling of a low-resolution brightness texture to W x W (`shaders/upsample.wgsl`): the viewer
 //! integrates a coarse field while the view moves and shows it through the same billboard pass as the full
-//! one, upsampled by Catmull-Rom (no blocks, no creases between texels).
+//! one, upsampled by Catmull-Rom (no blocks, no creases between texels). Where the scene has objects, each
+//! upsampled texel reads only the coarse texels whose rays end about where its own does (their clips), so that
+//! an object's silhouette cuts the preview's glow as sharply as the full field's.
+
+use std::sync::Arc;
 
 use super::context::{
-    compute_pass, field_storage_entry, field_texture, field_texture_layers, loaded_field_entry,
+    field_storage_entry, field_texture, field_texture_layers, loaded_field_entry, pass_layouts,
+    storage_buffer_entry,
 };
 use super::shaders;
 
-/// The pipeline, and the W x W output with its bind group over one source texture.
+/// The pipelines (without objects, with them), and the W x W output over one source texture.
 pub struct Upsample {
-    pipeline: wgpu::ComputePipeline,
+    pipelines: [wgpu::ComputePipeline; 2],
     layout: wgpu::BindGroupLayout,
     bound: Option<Bound>,
+    /// The coarse texture's clips and the output's, as uploaded last.
+    clips: [ClipBuffer; 2],
 }
 
 struct Bound {
     source: wgpu::Texture,
     output: wgpu::Texture,
     view: wgpu::TextureView,
-    bind_group: wgpu::BindGroup,
+}
+
+/// A storage buffer of clips and what it holds.
+struct ClipBuffer {
+    buffer: wgpu::Buffer,
+    uploaded: Option<Arc<Vec<f32>>>,
+}
+
+impl ClipBuffer {
+    fn new(device: &wgpu::Device, size: u64) -> Self {
+        Self {
+            buffer: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("energywave.upsample.clips"),
+                size: size.max(4),
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            uploaded: None,
+        }
+    }
+
+    /// Holds `clips` (written through the queue where they changed).
+    fn upload(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, clips: &Arc<Vec<f32>>) {
+        if self.uploaded.as_ref() == Some(clips) {
+            return;
+        }
+        let bytes: &[u8] = bytemuck::cast_slice(clips);
+        if bytes.len() as u64 > self.buffer.size() {
+            *self = Self::new(device, bytes.len() as u64);
+        }
+        queue.write_buffer(&self.buffer, 0, bytes);
+        self.uploaded = Some(clips.clone());
+    }
+}
+
+/// The clips of an upsampling's two textures, where the scene has objects (`FrameSetup::clips_at`).
+pub struct UpsampleClips {
+    /// The coarse texture's.
+    pub source: Arc<Vec<f32>>,
+    /// The output's.
+    pub output: Arc<Vec<f32>>,
 }
 
 impl Upsample {
     pub fn new(device: &wgpu::Device) -> Self {
-        let (pipeline, layout) = compute_pass(
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("energywave.upsample.shader"),
+            source: wgpu::ShaderSource::Wgsl(shaders::UPSAMPLE_PASS.into()),
+        });
+        let (layout, pipeline_layout) = pass_layouts(
             device,
-            "upsample",
-            shaders::UPSAMPLE_PASS,
             "upsample",
             &[
                 loaded_field_entry(0),
                 field_storage_entry(1, wgpu::StorageTextureAccess::WriteOnly),
+                storage_buffer_entry(2),
+                storage_buffer_entry(3),
             ],
         );
+        // A pipeline without objects and one with them (the shader's OBJECTS): the clips' loads compiled out
+        // where there are none.
+        let pipelines = [0.0, 1.0].map(|objects| {
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some("energywave.upsample.upsample"),
+                layout: Some(&pipeline_layout),
+                module: &module,
+                entry_point: Some("upsample"),
+                compilation_options: wgpu::PipelineCompilationOptions {
+                    constants: &[("OBJECTS", objects)],
+                    ..Default::default()
+                },
+                cache: None,
+            })
+        });
         Self {
-            pipeline,
+            pipelines,
             layout,
             bound: None,
+            clips: [ClipBuffer::new(device, 4), ClipBuffer::new(device, 4)],
         }
     }
 
     /// Records the upsampling of `source` (its view `source_view`) into the W x W output, `w` = `resolution`:
-    /// its first `layers` layers (`field_pass::layers_of`).
+    /// its first `layers` layers (`field_pass::layers_of`), guided by both textures' `clips` where the scene
+    /// has objects.
+    #[allow(clippy::too_many_arguments)]
     pub fn encode(
         &mut self,
         device: &wgpu::Device,
+        queue: &wgpu::Queue,
         encoder: &mut wgpu::CommandEncoder,
-        source: &wgpu::Texture,
-        source_view: &wgpu::TextureView,
+        (source, source_view): (&wgpu::Texture, &wgpu::TextureView),
         resolution: u32,
         layers: u32,
+        clips: Option<UpsampleClips>,
     ) {
         let stale = self.bound.as_ref().is_none_or(|b| {
             &b.source != source
@@ -59,34 +129,46 @@ impl Upsample {
         if stale {
             let (output, view) =
                 field_texture(device, "energywave.upsample.output", resolution, layers);
-            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("energywave.upsample.bind_group"),
-                layout: &self.layout,
-                entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: wgpu::BindingResource::TextureView(source_view),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: wgpu::BindingResource::TextureView(&view),
-                    },
-                ],
-            });
             self.bound = Some(Bound {
                 source: source.clone(),
                 output,
                 view,
-                bind_group,
             });
         }
+        let objects = clips.is_some();
+        if let Some(clips) = &clips {
+            self.clips[0].upload(device, queue, &clips.source);
+            self.clips[1].upload(device, queue, &clips.output);
+        }
         let b = self.bound.as_ref().expect("bound above");
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("energywave.upsample.bind_group"),
+            layout: &self.layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::TextureView(source_view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(&b.view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: self.clips[0].buffer.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: self.clips[1].buffer.as_entire_binding(),
+                },
+            ],
+        });
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("energywave.upsample.pass"),
             timestamp_writes: None,
         });
-        pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &b.bind_group, &[]);
+        pass.set_pipeline(&self.pipelines[objects as usize]);
+        pass.set_bind_group(0, &bind_group, &[]);
         // One layer a z: B, and the tint only where the scene has one.
         pass.dispatch_workgroups(resolution.div_ceil(8), resolution.div_ceil(8), layers);
     }

@@ -198,6 +198,21 @@ impl OffscreenViewer {
         }
     }
 
+    /// The viewport's part of the last presented frame (RGBA8, rows from the top).
+    pub fn viewport_pixels(&self) -> Result<Vec<u8>, GpuError> {
+        let image = self.frame_image()?;
+        let width = self.surface.configured_size()[0] as usize;
+        let rect = self.app.viewport_rect();
+        let [w, h] = self.app.viewport_px();
+        let (x0, y0) = (rect.min.x.round() as usize, rect.min.y.round() as usize);
+        Ok((y0..y0 + h as usize)
+            .flat_map(|y| {
+                let row = 4 * (y * width + x0);
+                image[row..row + 4 * w as usize].iter().copied()
+            })
+            .collect())
+    }
+
     /// The brightness texture B the viewport shows now, read back (W x W, rows from the top): B itself, before
     /// the blend's clamp, where a non-finite value would hide in a clamped pixel.
     pub fn field_values(&mut self) -> Result<Vec<f32>, GpuError> {

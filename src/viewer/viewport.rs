@@ -9,7 +9,7 @@ use super::progressive::{FrameBudget, PREVIEW_TOLERANCE, Pacing, Plan, Work};
 use crate::frame::FrameSetup;
 use crate::gpu::{
     BlitPass, FieldInputs, FieldRenderer, FrameTargets, GpuError, GridPass, SceneRenderer,
-    Specialise, Upsample, checked, read_frame,
+    Specialise, Upsample, UpsampleClips, checked, read_frame,
 };
 use crate::scene::Scene;
 
@@ -324,13 +324,17 @@ impl ViewportGpu {
                 i.tolerance = i.tolerance.max(PREVIEW_TOLERANCE);
                 let coarse = FieldInputs::of(&FrameSetup::new(&coarse, setup.billboard));
                 self.preview.prepare(device, queue, &coarse)?;
+                // Where objects stand, both textures' clips guide the upsampling at their silhouettes.
+                let clips = (setup.clips_at(resolution))
+                    .zip(setup.clips_at(upsampled))
+                    .map(|(source, output)| UpsampleClips { source, output });
                 checked(device, || {
                     self.preview.encode(encoder);
                     let (texture, view) = (self.preview.texture(), self.preview.view());
-                    let (texture, view) = (texture.expect("prepared"), view.expect("prepared"));
+                    let source = (texture.expect("prepared"), view.expect("prepared"));
                     let layers = self.preview.layers();
                     self.upsample
-                        .encode(device, encoder, texture, view, upsampled, layers);
+                        .encode(device, queue, encoder, source, upsampled, layers, clips);
                 })?;
                 work = Work::Preview {
                     texels: resolution as u64 * resolution as u64,
