@@ -12,6 +12,12 @@ pub(super) const TOLERANCES: [f64; 11] = [
     5e-2, 2e-2, 1e-2, 3e-3, 1e-3, 3e-4, 1e-4, 3e-5, 1e-5, 3e-6, 1e-6,
 ];
 
+/// The second comparison's target: the largest |B - B_ref| both integrators are held to.
+pub(super) const TARGET_ERROR: f64 = 1e-4;
+
+/// Simpson's division counts tried for `TARGET_ERROR`, cheapest first.
+pub(super) const TARGET_DIVISIONS: [u32; 5] = [200, 400, 800, 1600, 3200];
+
 /// The error of a brightness texture against the converged reference: the largest on B itself (the tolerance's
 /// promise, B > 1 included: exports keep it), and the share of texels whose picture changes, on B clamped to
 /// [0, 1] as the blend shows it.
@@ -75,6 +81,28 @@ pub struct EqualErrorRow {
     pub speedup: f64,
     /// Every tolerance tried, with its error.
     pub tried: Vec<(f64, RenderError)>,
+    /// Both integrators at the largest error `TARGET_ERROR` on B.
+    pub at_target: AtTargetRow,
+}
+
+/// Simpson at the fewest divisions of `TARGET_DIVISIONS` whose largest error on B is at most `TARGET_ERROR`,
+/// against the adaptive integrator at the loosest tolerance that reaches it; where one never does, its finest
+/// tried stands in, marked.
+#[derive(Clone, Debug, Serialize)]
+pub struct AtTargetRow {
+    pub target_max_abs: f64,
+    pub simpson_divisions: u32,
+    pub simpson_reached: bool,
+    pub simpson: PassTiming,
+    pub simpson_error: RenderError,
+    pub adaptive_tolerance: f64,
+    pub adaptive_reached: bool,
+    pub adaptive: PassTiming,
+    pub adaptive_error: RenderError,
+    /// Median time of `simpson` over median time of `adaptive`.
+    pub speedup: f64,
+    /// Every division count tried, with its error.
+    pub tried_divisions: Vec<(u32, RenderError)>,
 }
 
 /// The equal-error comparison: on the torus, Bezier and mixed scenes at 256 and 512 (256 only with --quick),
@@ -137,16 +165,64 @@ pub(super) fn equal_error(
             progress(&format!(
                 "equal error: {name}, {resolution} x {resolution}: timing simpson n = 200 against adaptive tolerance {tolerance:e}"
             ));
-            let t = bench.interleaved(2, options.warmup(), options.frames(), |k, _| {
-                if k == 0 {
-                    simpson.clone()
-                } else {
-                    adaptive.clone()
-                }
-            })?;
-            let mut t = t.into_iter();
-            let (ts, ta) = (t.next().expect("two"), t.next().expect("two"));
+            let (ts, ta) = timed_pair(bench, options, &simpson, &adaptive)?;
             let speedup = ts.best().median_ms / ta.best().median_ms;
+            // Both at a fixed error: the cheapest simpson and the loosest tolerance reaching TARGET_ERROR.
+            progress(&format!(
+                "equal error: {name}, {resolution} x {resolution}: both at a largest error of {TARGET_ERROR:e}"
+            ));
+            let reaches = |e: &RenderError| e.max_abs <= TARGET_ERROR;
+            let mut target_simpson = simpson.clone();
+            let mut tried_divisions = Vec::new();
+            for n in TARGET_DIVISIONS {
+                target_simpson.integration.divisions = n;
+                let values = bench.brightness(&target_simpson)?;
+                let error = RenderError::of(&values, resolution, stride, &reference);
+                tried_divisions.push((n, error));
+                if reaches(&error) {
+                    break;
+                }
+            }
+            let (divisions, simpson_at) = *tried_divisions.last().expect("a count was tried");
+            let mut target_adaptive = adaptive.clone();
+            let mut adaptive_at = None;
+            for &(tolerance, error) in &tried {
+                if reaches(&error) {
+                    adaptive_at = Some((tolerance, error));
+                    break;
+                }
+            }
+            let untried = TOLERANCES
+                .iter()
+                .filter(|&&t| t < tried.last().expect("tried").0);
+            if adaptive_at.is_none() {
+                for &tolerance in untried {
+                    target_adaptive.integration.tolerance = tolerance;
+                    let values = bench.brightness(&target_adaptive)?;
+                    let error = RenderError::of(&values, resolution, stride, &reference);
+                    adaptive_at = Some((tolerance, error));
+                    if reaches(&error) {
+                        break;
+                    }
+                }
+            }
+            let (target_tolerance, adaptive_target_error) =
+                adaptive_at.unwrap_or(*tried.last().expect("tried"));
+            target_adaptive.integration.tolerance = target_tolerance;
+            let (ts_at, ta_at) = timed_pair(bench, options, &target_simpson, &target_adaptive)?;
+            let at_target = AtTargetRow {
+                target_max_abs: TARGET_ERROR,
+                simpson_divisions: divisions,
+                simpson_reached: reaches(&simpson_at),
+                speedup: ts_at.best().median_ms / ta_at.best().median_ms,
+                simpson: ts_at,
+                simpson_error: simpson_at,
+                adaptive_tolerance: target_tolerance,
+                adaptive_reached: reaches(&adaptive_target_error),
+                adaptive: ta_at,
+                adaptive_error: adaptive_target_error,
+                tried_divisions,
+            };
             rows.push(EqualErrorRow {
                 scene: name.to_string(),
                 resolution,
@@ -163,8 +239,27 @@ pub(super) fn equal_error(
                 equal_error: equal,
                 speedup,
                 tried,
+                at_target,
             });
         }
     }
     Ok(rows)
+}
+
+/// `simpson` and `adaptive` timed interleaved on the specialised pipelines.
+fn timed_pair(
+    bench: &mut FieldBench,
+    options: &BenchOptions,
+    simpson: &Scene,
+    adaptive: &Scene,
+) -> Result<(PassTiming, PassTiming), GpuError> {
+    let t = bench.interleaved(2, options.warmup(), options.frames(), |k, _| {
+        if k == 0 {
+            simpson.clone()
+        } else {
+            adaptive.clone()
+        }
+    })?;
+    let mut t = t.into_iter();
+    Ok((t.next().expect("two"), t.next().expect("two")))
 }

@@ -446,6 +446,25 @@ mod tests {
                 equal_error: true,
                 speedup: 6.0,
                 tried: vec![],
+                at_target: AtTargetRow {
+                    target_max_abs: 1e-4,
+                    simpson_divisions: 1600,
+                    simpson_reached: true,
+                    simpson: pass(240.0),
+                    simpson_error: RenderError {
+                        max_abs: 9e-5,
+                        share_over_1_255: 0.0,
+                    },
+                    adaptive_tolerance: 1e-5,
+                    adaptive_reached: false,
+                    adaptive: pass(12.0),
+                    adaptive_error: RenderError {
+                        max_abs: 2e-4,
+                        share_over_1_255: 0.0,
+                    },
+                    speedup: 20.0,
+                    tried_divisions: vec![],
+                },
             }],
             compile: vec![CompileTime {
                 structure: "torus".into(),
@@ -466,6 +485,11 @@ mod tests {
             "{table}"
         );
         assert!(table.contains("compiled torus in 280 ms"), "{table}");
+        // At a fixed error: simpson n = 1600 reached it, the adaptive pass did not (marked).
+        assert!(
+            table.contains("1600") && table.contains("2.0e-4!") && table.contains("20.00x"),
+            "{table}"
+        );
         assert!(table.contains("ratio 1.100"), "{table}");
         assert!(table.contains("test adapter") && table.contains("GPU timestamps"));
         let json: serde_json::Value = serde_json::from_str(&report.to_json()).unwrap();

@@ -247,6 +247,49 @@ impl Report {
                     if r.equal_error { "" } else { " (error larger)" }
                 );
             }
+            let _ = writeln!(
+                s,
+                "\nat a fixed error: the cheapest simpson n and the loosest adaptive tolerance with max |dB| <= {:.0e} on B",
+                super::equal_error::TARGET_ERROR
+            );
+            let _ = writeln!(
+                s,
+                "{:<7} {:>4} {:>6} {:>11} {:>20} {:>9} {:>11} {:>20} {:>8}",
+                "scene",
+                "W",
+                "n",
+                "simpson ms",
+                "simpson error",
+                "tol",
+                "adaptive ms",
+                "adaptive error",
+                "speedup"
+            );
+            for r in &self.equal_error {
+                let a = &r.at_target;
+                let e = |e: &RenderError, reached: bool| {
+                    format!(
+                        "{:.1e}{} {:.3}%",
+                        e.max_abs,
+                        if reached { "" } else { "!" },
+                        100.0 * e.share_over_1_255
+                    )
+                };
+                let _ = writeln!(
+                    s,
+                    "{:<7} {:>4} {:>6} {:>11.2} {:>20} {:>9.0e} {:>11.2} {:>20} {:>7.2}x",
+                    r.scene,
+                    r.resolution,
+                    a.simpson_divisions,
+                    a.simpson.best().median_ms,
+                    e(&a.simpson_error, a.simpson_reached),
+                    a.adaptive_tolerance,
+                    a.adaptive.best().median_ms,
+                    e(&a.adaptive_error, a.adaptive_reached),
+                    a.speedup,
+                );
+            }
+            let _ = writeln!(s, "(! : the target not reached; the finest tried shown)");
         }
         let _ = writeln!(s, "\ntotal: {:.0} s", self.total_seconds);
         s

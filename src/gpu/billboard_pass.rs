@@ -4,8 +4,8 @@
 use glam::DMat4;
 
 use super::context::{
-    RenderPipelineSpec, depth_value_entry, fragment_storage_entry, pass_layouts, render_pipeline,
-    uniform_buffer,
+    ClipBuffer, RenderPipelineSpec, depth_value_entry, fragment_storage_entry, pass_layouts,
+    render_pipeline, uniform_buffer,
 };
 use crate::geometry::{Billboard, Camera};
 use crate::scene::Blend;
@@ -118,9 +118,7 @@ pub struct BillboardRenderer {
     layout: wgpu::BindGroupLayout,
     params: wgpu::Buffer,
     /// Each texel's share of its ray before the first surface (`objects::clip`), where the scene has objects.
-    clips: wgpu::Buffer,
-    /// What `clips` holds.
-    uploaded: Option<std::sync::Arc<Vec<f32>>>,
+    clips: ClipBuffer,
 }
 
 impl BillboardRenderer {
@@ -190,8 +188,7 @@ impl BillboardRenderer {
             pipelines,
             layout,
             params,
-            clips: clip_buffer(device, 4),
-            uploaded: None,
+            clips: ClipBuffer::new(device, "energywave.billboard.clips"),
         }
     }
 
@@ -214,15 +211,8 @@ impl BillboardRenderer {
     ) {
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(params));
         let objects = clips.is_some();
-        if let Some(clips) = clips
-            && self.uploaded.as_ref() != Some(&clips)
-        {
-            let bytes: &[u8] = bytemuck::cast_slice(&clips);
-            if bytes.len() as u64 > self.clips.size() {
-                self.clips = clip_buffer(device, bytes.len() as u64);
-            }
-            queue.write_buffer(&self.clips, 0, bytes);
-            self.uploaded = Some(clips);
+        if let Some(clips) = &clips {
+            self.clips.upload(device, queue, clips);
         }
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("energywave.billboard.bind_group"),
@@ -246,7 +236,7 @@ impl BillboardRenderer {
                 },
                 wgpu::BindGroupEntry {
                     binding: 4,
-                    resource: self.clips.as_entire_binding(),
+                    resource: self.clips.binding(),
                 },
             ],
         });
@@ -270,13 +260,4 @@ impl BillboardRenderer {
         pass.set_bind_group(0, &bind_group, &[]);
         pass.draw(0..4, 0..1);
     }
-}
-
-fn clip_buffer(device: &wgpu::Device, size: u64) -> wgpu::Buffer {
-    device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("energywave.billboard.clips"),
-        size: size.max(4),
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    })
 }

@@ -158,6 +158,51 @@ pub fn compute_pass(
     (pipeline, layout)
 }
 
+/// A storage buffer of clips (`objects::clip`, one f32 a texel) and what it holds: written through the queue only
+/// when the clips change, grown when they outgrow it.
+pub struct ClipBuffer {
+    label: &'static str,
+    buffer: wgpu::Buffer,
+    uploaded: Option<Arc<Vec<f32>>>,
+}
+
+impl ClipBuffer {
+    pub fn new(device: &wgpu::Device, label: &'static str) -> Self {
+        Self::of_size(device, label, 4)
+    }
+
+    fn of_size(device: &wgpu::Device, label: &'static str, size: u64) -> Self {
+        Self {
+            label,
+            buffer: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: size.max(4),
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            uploaded: None,
+        }
+    }
+
+    /// Holds `clips` (written through the queue where they changed).
+    pub fn upload(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, clips: &Arc<Vec<f32>>) {
+        if self.uploaded.as_ref() == Some(clips) {
+            return;
+        }
+        let bytes: &[u8] = bytemuck::cast_slice(clips);
+        if bytes.len() as u64 > self.buffer.size() {
+            *self = Self::of_size(device, self.label, bytes.len() as u64);
+        }
+        queue.write_buffer(&self.buffer, 0, bytes);
+        self.uploaded = Some(clips.clone());
+    }
+
+    /// The whole buffer, to bind.
+    pub fn binding(&self) -> wgpu::BindingResource<'_> {
+        self.buffer.as_entire_binding()
+    }
+}
+
 /// A bind group layout entry for a compute pass: a read-only storage buffer.
 pub fn storage_buffer_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
     read_only_storage(binding, wgpu::ShaderStages::COMPUTE)

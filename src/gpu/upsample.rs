@@ -7,8 +7,8 @@
 use std::sync::Arc;
 
 use super::context::{
-    field_storage_entry, field_texture, field_texture_layers, loaded_field_entry, pass_layouts,
-    storage_buffer_entry,
+    ClipBuffer, field_storage_entry, field_texture, field_texture_layers, loaded_field_entry,
+    pass_layouts, storage_buffer_entry,
 };
 use super::shaders;
 
@@ -25,39 +25,6 @@ struct Bound {
     source: wgpu::Texture,
     output: wgpu::Texture,
     view: wgpu::TextureView,
-}
-
-/// A storage buffer of clips and what it holds.
-struct ClipBuffer {
-    buffer: wgpu::Buffer,
-    uploaded: Option<Arc<Vec<f32>>>,
-}
-
-impl ClipBuffer {
-    fn new(device: &wgpu::Device, size: u64) -> Self {
-        Self {
-            buffer: device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("energywave.upsample.clips"),
-                size: size.max(4),
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            }),
-            uploaded: None,
-        }
-    }
-
-    /// Holds `clips` (written through the queue where they changed).
-    fn upload(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, clips: &Arc<Vec<f32>>) {
-        if self.uploaded.as_ref() == Some(clips) {
-            return;
-        }
-        let bytes: &[u8] = bytemuck::cast_slice(clips);
-        if bytes.len() as u64 > self.buffer.size() {
-            *self = Self::new(device, bytes.len() as u64);
-        }
-        queue.write_buffer(&self.buffer, 0, bytes);
-        self.uploaded = Some(clips.clone());
-    }
 }
 
 /// The clips of an upsampling's two textures, where the scene has objects (`FrameSetup::clips_at`).
@@ -103,7 +70,10 @@ impl Upsample {
             pipelines,
             layout,
             bound: None,
-            clips: [ClipBuffer::new(device, 4), ClipBuffer::new(device, 4)],
+            clips: [
+                ClipBuffer::new(device, "energywave.upsample.clips"),
+                ClipBuffer::new(device, "energywave.upsample.clips"),
+            ],
         }
     }
 
@@ -155,11 +125,11 @@ impl Upsample {
                 },
                 wgpu::BindGroupEntry {
                     binding: 2,
-                    resource: self.clips[0].buffer.as_entire_binding(),
+                    resource: self.clips[0].binding(),
                 },
                 wgpu::BindGroupEntry {
                     binding: 3,
-                    resource: self.clips[1].buffer.as_entire_binding(),
+                    resource: self.clips[1].binding(),
                 },
             ],
         });
