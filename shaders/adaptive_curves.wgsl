@@ -65,6 +65,17 @@ fn track_rate(s: CurveSegment, u: f32, off: vec3<f32>, dir: vec3<f32>) -> f32 {
     return select(0.0, dot(d1, dir) / dg, u > 0.0 && u < 1.0 && dg > 0.0);
 }
 
+// Whether segment s's stationary cubic at p has a single real root, clear of a double one: its one stationary
+// point is then the segment's nearest point, and Newton's point is it. Near the segment's evolute (three roots,
+// or nearly) the carried point may be a local minimum that another stationary point of the same segment has
+// overtaken: a jump within the segment that the scan did not see, which the closed form does not miss.
+fn single_stationary(s: CurveSegment, p: vec3<f32>) -> bool {
+    return one_real_root(stationary_cubic(s, p), SINGLE_MARGIN);
+}
+
+// How far from a double root single_stationary asks the cubic to be, relative to its discriminant's terms.
+const SINGLE_MARGIN: f32 = 1e-2;
+
 // The nearest point of the chain to the ray's point at t, (param, d), carried from the track's last node: the
 // track's segment, its u predicted by du/dt and then TRACK_NEWTON Newton steps on the stationarity. Between a
 // piece's cuts the nearest point neither jumps nor passes a joint, so this follows it. Where Newton has not
@@ -97,7 +108,7 @@ fn track_nearest(c: CurveSource, ray: Ray, t: f32, track: ptr<function, Track>) 
             u = next;
         }
         let at_joint = (u == 0.0 && j > 0u) || (u == 1.0 && j + 1u < k);
-        if convex && abs(step) <= TRACK_SETTLED && !at_joint {
+        if convex && abs(step) <= TRACK_SETTLED && !at_joint && single_stationary(s, p) {
             let off = segment_at(s, u) - p;
             *track = Track(j, u, track_rate(s, u, off, ray.dir), t, false);
             return vec2<f32>((f32(j) + u) / f32(k), length(off));

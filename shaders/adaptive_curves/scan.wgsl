@@ -34,10 +34,23 @@ fn search_jumps(ray: Ray, a: ChainSample, b: ChainSample, kinks: ptr<function, K
         } else if round == 2u {
             x = b1;
         }
-        if miss(x, y) <= JUMP {
-            if round == 0u {
+        let whole = miss(x, y);
+        if round == 0u {
+            // Twin of the suspect interval's middle look (SUSPECT_MISS).
+            if whole <= SUSPECT_MISS * JUMP {
                 return vec4<f32>(-1.0, 0.0, -1.0, 0.0);
             }
+            if whole <= JUMP {
+                let m = chain_sample(ray, 0.5 * (a.t + b.t), false);
+                if miss(a, m) > JUMP {
+                    y = m;
+                } else if miss(m, b) > JUMP {
+                    x = m;
+                } else {
+                    return vec4<f32>(-1.0, 0.0, -1.0, 0.0);
+                }
+            }
+        } else if whole <= JUMP {
             continue;
         }
         push_kink(kinks, find_kink(ray, &x, &y), false);

@@ -11,12 +11,31 @@ fn real_cbrt(x: f32) -> f32 {
     return sign(x) * pow(abs(x), 1.0 / 3.0);
 }
 
+// (p, q) of x^3 + a x^2 + b x + c = 0 shifted by a / 3 to y^3 + 3 p y + 2 q = 0: three real roots where
+// p^3 + q^2 < 0, one where it is > 0.
+fn depressed_cubic(a: f32, b: f32, c: f32) -> vec2<f32> {
+    return vec2<f32>(-a * a / 9.0 + b / 3.0, a * a * a / 27.0 - a * b / 6.0 + c / 2.0);
+}
+
+// Whether k3 x^3 + k2 x^2 + k1 x + k0 has one real root, its discriminant clear of zero by `margin` of its
+// terms' size (a cubic that degenerates to a line has one). The GPU's alone: the f64 twin solves every cubic.
+fn one_real_root(k: vec4<f32>, margin: f32) -> bool {
+    let scale = max(max(abs(k.x), abs(k.y)), max(abs(k.z), abs(k.w)));
+    if abs(k.x) <= 1e-6 * scale {
+        return true;
+    }
+    let pq = depressed_cubic(k.y / k.x, k.z / k.x, k.w / k.x);
+    let cube = pq.x * pq.x * pq.x;
+    return cube + pq.y * pq.y > margin * (abs(cube) + pq.y * pq.y);
+}
+
 // Cardano's formula for x^3 + a x^2 + b x + c = 0, trigonometric form for three real roots, with the - a/3
 // shift (METHOD.md section 1, corrected). Twin of field::cubic::solve_monic_cubic.
 fn solve_monic_cubic(a: f32, b: f32, c: f32) -> Roots {
     let shift = a / 3.0;
-    let p = -a * a / 9.0 + b / 3.0;
-    let q = a * a * a / 27.0 - a * b / 6.0 + c / 2.0;
+    let pq = depressed_cubic(a, b, c);
+    let p = pq.x;
+    let q = pq.y;
     let r = p * p * p + q * q;
     if r >= 0.0 {
         // u on the side of -q -/+ sqrt(r) without cancellation, v = -p / u (u v = -p).

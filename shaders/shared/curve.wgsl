@@ -24,6 +24,12 @@ fn newton_step(k: vec4<f32>, t: f32) -> f32 {
     return next;
 }
 
+// The coefficients (k3, k2, k1, k0) of the segment's stationary cubic at p, C'(t).(C(t) - p) = 0.
+fn stationary_cubic(s: CurveSegment, p: vec3<f32>) -> vec4<f32> {
+    let d = s.c0 - p;
+    return vec4<f32>(2.0 * dot(s.c2, s.c2), 3.0 * dot(s.c1, s.c2), 2.0 * dot(s.c2, d) + dot(s.c1, s.c1), dot(s.c1, d));
+}
+
 // Nearest point of a segment to p: (t, distance). Candidates are both end points and the real roots of
 // C'(t).(C(t) - P) = 0 in [-0.5, 1.5], raw and polished, clamped to [0, 1]. Twin of Segment::nearest.
 fn nearest_on_segment(segment: CurveSegment, p: vec3<f32>) -> vec2<f32> {
@@ -37,12 +43,7 @@ fn nearest_on_segment(segment: CurveSegment, p: vec3<f32>) -> vec2<f32> {
         s = CurveSegment(segment.c2, 0.0, -d1, 0.0, segment.c2 + segment.c1 + segment.c0, 0.0);
     }
     let d = s.c0 - p;
-    let k = vec4<f32>(
-        2.0 * dot(s.c2, s.c2),
-        3.0 * dot(s.c1, s.c2),
-        2.0 * dot(s.c2, d) + dot(s.c1, s.c1),
-        dot(s.c1, d),
-    );
+    let k = stationary_cubic(s, p);
     var best = vec2<f32>(0.0, length(d));
     let end = length(segment_at(s, 1.0) - p);
     if end < best.y {

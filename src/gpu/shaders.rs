@@ -216,9 +216,10 @@ pub fn shared_constants() -> String {
         ("ROOT_NEWTON", b::ROOT_NEWTON as u64),
         ("KRONROD_ROWS", a::KRONROD.len() as u64),
     ];
-    let reals: [(&str, f64); 17] = [
+    let reals: [(&str, f64); 18] = [
         ("JUMP", a::JUMP),
         ("PARAM_JUMP", a::PARAM_JUMP),
+        ("SUSPECT_MISS", a::SUSPECT_MISS),
         ("END_SNAP", a::END_SNAP),
         ("KINK_BRACKET", a::KINK_BRACKET),
         ("FINE_KINK_BRACKET", a::FINE_KINK_BRACKET),

@@ -240,6 +240,13 @@ pub const JUMP: f64 = 0.1;
 /// Or where its chain parameter lands farther than this from where its rate would have taken it (`miss`).
 pub const PARAM_JUMP: f64 = 0.05;
 
+/// An interval whose miss lies between this share of `JUMP` and `JUMP` is looked at again at its middle: where the
+/// nearest point races toward a jump (near a center of curvature), the average of the two ends' velocities can
+/// carry it most of the way across the jump, so that the whole interval misses by less than `JUMP` while one of
+/// its halves misses by more. (A wavy chain of seven segments: a jump of 0.077 in the chain parameter, missed at
+/// 0.083 over a scan of 12, and B off by 1.75e-2 where the tracked segment then lost the nearest point.)
+pub const SUSPECT_MISS: f64 = 0.25;
+
 /// Most rounds of the kink search, each one or two probes. (Two are not enough: a kink misplaced by 5e-3 where W
 /// steps across it costs 5e-4 on a ray of the mixed scene.)
 pub const KINK_ROUNDS: u32 = 12;

@@ -34,6 +34,7 @@ fn the_constants_shared_with_the_twin_are_generated_from_it_and_declared_once() 
         ("SCAN", a::SCAN as f64),
         ("JUMP", a::JUMP),
         ("PARAM_JUMP", a::PARAM_JUMP),
+        ("SUSPECT_MISS", a::SUSPECT_MISS),
         ("END_SNAP", a::END_SNAP),
         ("KINK_ROUNDS", a::KINK_ROUNDS as f64),
         ("KINK_BRACKET", a::KINK_BRACKET),

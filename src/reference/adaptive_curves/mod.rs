@@ -196,6 +196,61 @@ mod tests {
     }
 
     #[test]
+    fn a_jump_the_racing_nearest_point_nearly_glides_across_is_found() {
+        // A wavy chain of seven segments and a ray past it on which the nearest point races toward a jump (near a
+        // center of curvature, its parameter's rate 40 times the usual): over a scan of 12 the two ends' average
+        // velocity carried it most of the way across the jump, the interval missed by 0.083 (under JUMP), the
+        // jump went uncut, and the tracked segment lost the nearest point: B off by 1.75e-2. Where it jumps is
+        // found here by brute force, sampling the nearest point densely along the ray.
+        let xs = [
+            [-3.5, 0.0, 0.3],
+            [-3.0, 0.713, 0.229],
+            [-2.5, 0.2935, 0.039],
+            [-2.0, -0.126, -0.151],
+            [-1.5, -0.345, -0.216],
+            [-1.0, -0.564, -0.281],
+            [-0.5, 0.1135, -0.1125],
+            [0.0, 0.791, 0.056],
+            [0.5, 0.2125, 0.178],
+            [1.0, -0.366, 0.3],
+            [1.5, -0.363, 0.173],
+            [2.0, -0.36, 0.046],
+            [2.5, 0.2145, -0.119],
+            [3.0, 0.789, -0.284],
+            [3.5, 0.121, -0.279],
+        ];
+        let c = Curve {
+            control_points: xs.iter().map(|&p| DVec3::from_array(p)).collect(),
+            ..arch()
+        };
+        let s = DVec3::new(-1.0961705825666836, -0.6690911348134301, 4.184534772785047);
+        let e = DVec3::new(-2.267743719134842, -1.3842072051862018, -4.168534772785051);
+        let dir = e - s;
+        let n = 200_000;
+        let param = |t: f64| curve::nearest_on_chain(&c.control_points, s + dir * t).t;
+        let jumps: Vec<f64> = (1..=n)
+            .map(|k| k as f64 / n as f64)
+            .filter(|&t| (param(t) - param(t - 1.0 / n as f64)).abs() > 2e-3)
+            .collect();
+        assert!(
+            jumps.iter().any(|&t| (t - 0.0863).abs() < 1e-3),
+            "the racing jump: {jumps:?}"
+        );
+        for scan in [SCAN, 12] {
+            let found = features(&c, &[], s, e, (scan, 0.01, KINK_BRACKET));
+            let kinks = &found.kinks.at[..found.kinks.count];
+            for &jump in &jumps {
+                assert!(
+                    kinks
+                        .iter()
+                        .any(|&k| (k - jump).abs() < 2.0 / n as f64 + KINK_BRACKET),
+                    "scan {scan}: the jump at {jump} in {kinks:?}"
+                );
+            }
+        }
+    }
+
+    #[test]
     fn a_chain_s_kinks_are_found_where_the_nearest_point_jumps_and_at_its_ends() {
         // Under the arch, on x = 0 the two halves are equally near: a ray along x crosses that medial plane at
         // t = 0.5 (a kink, found to second order in its bracket), and the normal planes at the arch's ends, where

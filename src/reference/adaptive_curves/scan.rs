@@ -9,7 +9,7 @@ use super::kinks::{BrightSample, ChainSample, bright_miss, find_bright_kink, fin
 use crate::field::{Curve, brightest, curve};
 use crate::integrate::adaptive::{
     BRIGHT_SCAN, CUT_BISECTIONS, END_SNAP, JUMP, MAX_KINKS, MAX_PEAKS, PARAM_JUMP, PEAK_NEWTON,
-    PEAK_SETTLED, SWITCH_INSET, SWITCH_ROUNDS,
+    PEAK_SETTLED, SUSPECT_MISS, SWITCH_INSET, SWITCH_ROUNDS,
 };
 
 /// A chain's closest approaches along the ray `s + t dir` and its kinks (appended to `kinks`), in one pass over
@@ -234,8 +234,9 @@ pub(super) fn joint_cuts(
 
 /// The jumps of a chain's nearest point between samples `a` and `b`: where it lands far from its smooth motion
 /// (`miss`), the kink is found (`find_kink`); if the bracket left around it still jumps, the rest of the interval
-/// on either side is searched once more (an interval may hold two jumps). Returns the bracket left around the
-/// first kink, if any.
+/// on either side is searched once more (an interval may hold two jumps). An interval that misses by less than
+/// `JUMP` but more than `SUSPECT_MISS` of it is looked at again at its middle, and the kink searched in the half
+/// that jumps. Returns the bracket left around the first kink, if any.
 pub(super) fn search_jumps(
     sample: &impl Fn(f64) -> ChainSample,
     ray: (DVec3, DVec3),
@@ -244,10 +245,23 @@ pub(super) fn search_jumps(
     (eps, bracket): (f64, f64),
     kinks: &mut Kinks,
 ) -> Option<(ChainSample, ChainSample)> {
-    if miss(&a, &b, eps) <= JUMP {
+    let whole = miss(&a, &b, eps);
+    if whole <= SUSPECT_MISS * JUMP {
         return None;
     }
-    let (kink, a1, b1) = find_kink(sample, ray, a, b, bracket);
+    let (x, y) = if whole > JUMP {
+        (a, b)
+    } else {
+        let m = sample(0.5 * (a.t + b.t));
+        if miss(&a, &m, eps) > JUMP {
+            (a, m)
+        } else if miss(&m, &b, eps) > JUMP {
+            (m, b)
+        } else {
+            return None;
+        }
+    };
+    let (kink, a1, b1) = find_kink(sample, ray, x, y, bracket);
     kinks.push(kink);
     if miss(&a1, &b1, eps) > JUMP {
         for (x, y) in [(a, a1), (b1, b)] {
