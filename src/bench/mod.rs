@@ -18,11 +18,13 @@ use crate::integrate::Integrator;
 use crate::scene::Scene;
 
 mod equal_error;
+mod plain;
 mod report;
 mod timing;
 mod viewer_frames;
 
 pub use equal_error::*;
+pub use plain::*;
 pub use report::*;
 pub use timing::*;
 use viewer_frames::viewer_frames;
@@ -218,26 +220,44 @@ pub fn run(
             "grid: {resolution} x {resolution}, {} cells",
             cells.len()
         ));
-        // Each cell twice, the generic pass and the specialised one, interleaved.
-        let mode = |k: usize| [Specialise::Off, Specialise::Blocking][k % 2];
+        // Each cell four times, interleaved: the generic pass, the specialised one, and a plain kernel
+        // specialised to the scene with its values constant and with them read from a buffer.
+        const PASSES: [Pass; 4] = [
+            Pass::Field(Specialise::Off),
+            Pass::Field(Specialise::Blocking),
+            Pass::Plain(Baked::All),
+            Pass::Plain(Baked::Structure),
+        ];
         let timings = bench.interleaved_as(
-            2 * cells.len(),
+            PASSES.len() * cells.len(),
             options.warmup(),
             options.frames(),
-            mode,
-            |k, _| cells[k / 2].1.clone(),
+            |k| PASSES[k % PASSES.len()],
+            |k, _| cells[k / PASSES.len()].1.clone(),
         )?;
         let field_bytes = bench.field.gpu_bytes();
         let mut timings = timings.into_iter();
         for (name, s) in &cells {
-            let (generic, specialised) =
-                (timings.next().expect("two"), timings.next().expect("two"));
+            let mut next = || timings.next().expect("one a pass");
+            let (generic, specialised, plain, plain_values) = (next(), next(), next(), next());
+            // How far the plain kernels' B lies from our specialised pass's, relative to B's largest value.
+            bench.field.set_specialise(Specialise::Blocking);
+            let ours = bench.brightness(s)?;
+            let largest = ours.iter().fold(0.0f32, |m, b| m.max(b.abs()));
+            let mut off = 0.0f32;
+            for baked in [Baked::All, Baked::Structure] {
+                let theirs = bench.plain.brightness(&bench.ctx, s, baked)?;
+                off = (ours.iter().zip(&theirs)).fold(off, |m, (a, b)| m.max((a - b).abs()));
+            }
             grid.push(GridRow {
                 scene: name.to_string(),
                 resolution,
                 divisions: s.integration.divisions,
                 ours: generic,
                 specialised,
+                plain,
+                plain_values,
+                plain_difference: (off / largest.max(f32::MIN_POSITIVE)) as f64,
                 paper_fps: paper_fps(name, resolution, s.integration.divisions),
                 field_bytes,
             });
@@ -397,6 +417,9 @@ mod tests {
                 divisions: 128,
                 ours: pass(20.0),
                 specialised: pass(15.0),
+                plain: pass(12.0),
+                plain_values: pass(14.0),
+                plain_difference: 3e-6,
                 paper_fps: paper_fps("torus", 256, 128),
                 field_bytes: 262_144 + 1024,
             }],
@@ -424,6 +447,12 @@ mod tests {
                 moving_share_over_16: 0.01,
                 add_source_longest_frame_ms: 70.0,
                 add_source_frames: 9,
+                playing: Some(PlayingRow {
+                    frame_rate: 25.0,
+                    frame: Timing::of(vec![44.0]),
+                    side: 32,
+                    full_field: Timing::of(vec![400.0]),
+                }),
             }),
             equal_error: vec![EqualErrorRow {
                 scene: "mixed".into(),
@@ -496,6 +525,9 @@ mod tests {
         assert_eq!(json["adapter"], "test adapter");
         assert_eq!(json["grid"][0]["ours"]["gpu"]["median_ms"], 20.0);
         assert_eq!(json["grid"][0]["specialised"]["gpu"]["median_ms"], 15.0);
+        assert_eq!(json["grid"][0]["plain"]["gpu"]["median_ms"], 12.0);
+        // Ours at 15 ms against the plain kernel's 12: 1.25 times its time.
+        assert!(table.contains("12.00") && table.contains("1.25"), "{table}");
         assert_eq!(json["compile"][0]["ms"], 280.0);
         assert!(
             table.contains("6.00x") && table.contains("2.0e-2 0.100%"),
@@ -510,6 +542,14 @@ mod tests {
             13.2
         );
         assert_eq!(json["viewer"]["orbiting"]["median_ms"], 40.0);
+        // Playing at 25 frames a second (40 ms a frame): the whole field takes 10 times that.
+        assert!(
+            table.contains("animation playing at 25 frames a second (40.0 ms a frame): 44.0 ms")
+                && table.contains("field 32^2 shown")
+                && table.contains("400.0 ms (10.00x"),
+            "{table}"
+        );
+        assert_eq!(json["viewer"]["playing"]["side"], 32);
         assert_eq!(json["options"]["quick"], true);
         // A run of some sections prints only theirs.
         let only = Report {

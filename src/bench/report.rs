@@ -12,6 +12,13 @@ pub struct GridRow {
     pub ours: PassTiming,
     /// The field pass specialised to the scene's structure (`gpu::Specialise`), interleaved with the generic.
     pub specialised: PassTiming,
+    /// A plainly written kernel specialised to the scene (`bench::plain`), its values constants of its text
+    /// (`Baked::All`), interleaved with both.
+    pub plain: PassTiming,
+    /// The same kernel with its values read from a buffer (`Baked::Structure`): what an editor can use.
+    pub plain_values: PassTiming,
+    /// The plain kernels' largest difference on B from the specialised pass's, over B's largest value.
+    pub plain_difference: f64,
     pub paper_fps: Option<f64>,
     /// GPU memory held by the field pass (texture, uniform and storage buffers), bytes.
     pub field_bytes: u64,
@@ -58,6 +65,22 @@ pub struct ViewerFrameRow {
     /// is whole again: the longest of them, and how many.
     pub add_source_longest_frame_ms: f64,
     pub add_source_frames: u32,
+    /// The scene's animation playing, where it has one.
+    pub playing: Option<PlayingRow>,
+}
+
+/// An animation playing in the viewer, each frame showing the next frame of it (the viewer keeping up with its
+/// rate).
+#[derive(Clone, Debug, Serialize)]
+pub struct PlayingRow {
+    /// The animation's frames a second.
+    pub frame_rate: f64,
+    /// A frame as the viewer draws it while playing (the field of each animation frame new).
+    pub frame: Timing,
+    /// The side of the field it shows (the full field's side where that fits).
+    pub side: u32,
+    /// A frame with the whole field integrated (progressive refinement off): what showing it at full quality costs.
+    pub full_field: Timing,
 }
 
 /// Everything one run measured.
@@ -92,13 +115,18 @@ impl Report {
         use std::fmt::Write;
         let _ = writeln!(
             s,
-            "\n{:<7} {:>5} {:>4} {:>11} {:>15} {:>8} {:>9} {:>10} {:>8} {:>10}",
+            "\n{:<7} {:>5} {:>4} {:>11} {:>15} {:>8} {:>9} {:>11} {:>10} {:>11} {:>9} {:>9} {:>10} {:>8} {:>10}",
             "scene",
             "W",
             "n",
             "generic ms",
             "specialised ms",
             "speedup",
+            "plain ms",
+            "spec/plain",
+            "buffered ms",
+            "spec/buff",
+            "plain off",
             "FPS",
             "paper FPS",
             "ratio",
@@ -112,13 +140,18 @@ impl Report {
                 .map_or("-".to_owned(), |p| format!("{:.3}", t.fps() / p));
             let _ = writeln!(
                 s,
-                "{:<7} {:>5} {:>4} {:>11.2} {:>15.2} {:>8.2} {:>9.2} {:>10} {:>8} {:>10.2}",
+                "{:<7} {:>5} {:>4} {:>11.2} {:>15.2} {:>8.2} {:>9.2} {:>11.2} {:>10.2} {:>11.2} {:>9.1e} {:>9.2} {:>10} {:>8} {:>10.2}",
                 r.scene,
                 r.resolution,
                 r.divisions,
                 g.median_ms,
                 t.median_ms,
                 g.median_ms / t.median_ms,
+                r.plain.best().median_ms,
+                t.median_ms / r.plain.best().median_ms,
+                r.plain_values.best().median_ms,
+                t.median_ms / r.plain_values.best().median_ms,
+                r.plain_difference,
                 t.fps(),
                 paper,
                 ratio,
@@ -127,7 +160,10 @@ impl Report {
         }
         let _ = writeln!(
             s,
-            "(FPS and the ratio to the papers' 2016 GPU are the specialised pass's; medians, min..max in the JSON)"
+            "(FPS and the ratio to the papers' 2016 GPU are the specialised pass's; spec/plain: its time over a plainly \
+             written kernel specialised to the scene (bench::plain, its values constants), spec/buff: over that \
+             kernel with its values read from a buffer, plain off: their largest difference on B over B's largest; \
+             medians, min..max in the JSON)"
         );
         for c in &self.compile {
             let _ = writeln!(s, "compiled {} in {:.0} ms", c.structure, c.ms);
@@ -211,6 +247,18 @@ impl Report {
                 v.add_source_longest_frame_ms,
                 v.add_source_frames,
             );
+            if let Some(p) = &v.playing {
+                let _ = writeln!(
+                    s,
+                    "animation playing at {:.0} frames a second ({:.1} ms a frame): {:.1} ms a viewer frame, field {}^2 shown; the whole field every frame {:.1} ms ({:.2}x the animation's frame time)",
+                    p.frame_rate,
+                    1e3 / p.frame_rate,
+                    p.frame.median_ms,
+                    p.side,
+                    p.full_field.median_ms,
+                    p.full_field.median_ms * p.frame_rate / 1e3,
+                );
+            }
         }
         if !self.equal_error.is_empty() {
             let _ = writeln!(

@@ -50,11 +50,24 @@ impl PassTiming {
     }
 }
 
+/// The timestamp queries' set, resolve buffer and read buffer, where the adapter has them.
+pub(super) type Queries = Option<(wgpu::QuerySet, wgpu::Buffer, wgpu::Buffer)>;
+
+/// What draws a frame's field in a timing.
+#[derive(Clone, Copy, Debug)]
+pub(super) enum Pass {
+    /// Our field pass, its pipelines chosen by `Specialise`.
+    Field(Specialise),
+    /// The plain kernel specialised to the scene (`plain`), holding what `Baked` says as constants.
+    Plain(Baked),
+}
+
 /// Times the field pass on one context: timestamp queries if available, else wall time only.
 pub(super) struct FieldBench {
     pub(super) ctx: GpuContext,
     pub(super) field: FieldRenderer,
-    pub(super) queries: Option<(wgpu::QuerySet, wgpu::Buffer, wgpu::Buffer)>,
+    pub(super) plain: PlainKernels,
+    pub(super) queries: Queries,
 }
 
 impl FieldBench {
@@ -88,47 +101,46 @@ impl FieldBench {
         Ok(Self {
             ctx,
             field,
+            plain: PlainKernels::new(),
             queries,
         })
     }
 
     /// Integrates the field of `scene` once (forced, even if unchanged): (GPU ms, wall ms).
     pub(super) fn frame(&mut self, scene: &Scene) -> Result<(Option<f64>, f64), GpuError> {
-        let (device, queue) = (&self.ctx.device, &self.ctx.queue);
         let start = Instant::now();
         self.field.invalidate();
         let inputs = FieldInputs::of(&FrameSetup::placed(scene, 1.0));
-        self.field.prepare(device, queue, &inputs)?;
-        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("energywave.bench.encoder"),
-        });
-        let writes = self
-            .queries
-            .as_ref()
-            .map(|(set, _, _)| wgpu::ComputePassTimestampWrites {
-                query_set: set,
-                beginning_of_pass_write_index: Some(0),
-                end_of_pass_write_index: Some(1),
-            });
-        self.field.encode_timed(&mut encoder, writes);
-        if let Some((set, resolve, read)) = &self.queries {
-            encoder.resolve_query_set(set, 0..2, resolve, 0);
-            encoder.copy_buffer_to_buffer(resolve, 0, read, 0, 16);
-        }
-        self.ctx.checked(|| queue.submit([encoder.finish()]))?;
-        device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|e| GpuError::Readback(e.to_string()))?;
-        let wall = start.elapsed().as_secs_f64() * 1e3;
-        let gpu = match &self.queries {
-            Some((_, _, read)) => {
-                let ticks: [u64; 2] = bytemuck::pod_read_unaligned(&map_read(device, read)?[..16]);
-                let period = queue.get_timestamp_period() as f64;
-                Some(ticks[1].saturating_sub(ticks[0]) as f64 * period * 1e-6)
-            }
-            None => None,
-        };
-        Ok((gpu, wall))
+        self.field
+            .prepare(&self.ctx.device, &self.ctx.queue, &inputs)?;
+        let Self {
+            ctx,
+            field,
+            queries,
+            ..
+        } = self;
+        timed(ctx, queries, start, |_, encoder, writes| {
+            field.encode_timed(encoder, writes);
+            Ok(())
+        })
+    }
+
+    /// `scene`'s field by the plain kernel specialised to it (`plain`), timed as `frame` times ours.
+    pub(super) fn plain_frame(
+        &mut self,
+        scene: &Scene,
+        baked: Baked,
+    ) -> Result<(Option<f64>, f64), GpuError> {
+        let start = Instant::now();
+        let Self {
+            ctx,
+            plain,
+            queries,
+            ..
+        } = self;
+        timed(ctx, queries, start, |ctx, encoder, writes| {
+            plain.encode(ctx, scene, baked, encoder, writes).map(|_| ())
+        })
     }
 
     /// The brightness texture of `scene`, integrated on the GPU and read back.
@@ -137,6 +149,17 @@ impl FieldBench {
         let texture = self.field.texture().expect("integrated above");
         let bytes = self.ctx.read_texture(texture, 4)?;
         Ok(bytemuck::cast_slice(&bytes).to_vec())
+    }
+
+    /// `frame` or `plain_frame`, as `pass` says.
+    fn frame_as(&mut self, pass: Pass, scene: &Scene) -> Result<(Option<f64>, f64), GpuError> {
+        match pass {
+            Pass::Field(specialise) => {
+                self.field.set_specialise(specialise);
+                self.frame(scene)
+            }
+            Pass::Plain(baked) => self.plain_frame(scene, baked),
+        }
     }
 
     /// Times `scenes` interleaved frame by frame (so that drift of a shared, noisy machine hits them alike):
@@ -149,16 +172,22 @@ impl FieldBench {
         frames: usize,
         next: impl FnMut(usize, usize) -> Scene,
     ) -> Result<Vec<PassTiming>, GpuError> {
-        self.interleaved_as(count, warmup, frames, |_| Specialise::Blocking, next)
+        self.interleaved_as(
+            count,
+            warmup,
+            frames,
+            |_| Pass::Field(Specialise::Blocking),
+            next,
+        )
     }
 
-    /// `interleaved`, scene `k` drawn by the pipelines `mode(k)` chooses (compiled in the warm-up).
+    /// `interleaved`, scene `k` drawn by the pass `mode(k)` chooses (compiled in the warm-up).
     pub(super) fn interleaved_as(
         &mut self,
         count: usize,
         warmup: usize,
         frames: usize,
-        mode: impl Fn(usize) -> Specialise,
+        mode: impl Fn(usize) -> Pass,
         mut next: impl FnMut(usize, usize) -> Scene,
     ) -> Result<Vec<PassTiming>, GpuError> {
         let mut gpu = vec![Vec::new(); count];
@@ -167,15 +196,13 @@ impl FieldBench {
         let mut round = 0;
         while round < warmup || warming(start, round) {
             for k in 0..count {
-                self.field.set_specialise(mode(k));
-                self.frame(&next(k, round))?;
+                self.frame_as(mode(k), &next(k, round))?;
             }
             round += 1;
         }
         for round in round..round + frames {
             for k in 0..count {
-                self.field.set_specialise(mode(k));
-                let (g, w) = self.frame(&next(k, round))?;
+                let (g, w) = self.frame_as(mode(k), &next(k, round))?;
                 wall[k].push(w);
                 if let Some(g) = g {
                     gpu[k].push(g);
@@ -202,4 +229,48 @@ pub(super) const MAX_WARMUP_ROUNDS: usize = 100_000;
 /// Whether warm-up that began at `start` and has run `rounds` rounds should go on.
 pub(super) fn warming(start: Instant, rounds: usize) -> bool {
     rounds < MAX_WARMUP_ROUNDS && start.elapsed().as_secs_f64() < WARMUP_SECONDS
+}
+
+/// Records the compute pass `encode` records, timestamped where the adapter can, submits it and waits:
+/// (GPU ms, wall ms since `start`).
+fn timed(
+    ctx: &GpuContext,
+    queries: &Queries,
+    start: Instant,
+    encode: impl FnOnce(
+        &GpuContext,
+        &mut wgpu::CommandEncoder,
+        Option<wgpu::ComputePassTimestampWrites>,
+    ) -> Result<(), GpuError>,
+) -> Result<(Option<f64>, f64), GpuError> {
+    let (device, queue) = (&ctx.device, &ctx.queue);
+    let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+        label: Some("energywave.bench.encoder"),
+    });
+    let writes = queries
+        .as_ref()
+        .map(|(set, _, _)| wgpu::ComputePassTimestampWrites {
+            query_set: set,
+            beginning_of_pass_write_index: Some(0),
+            end_of_pass_write_index: Some(1),
+        });
+    encode(ctx, &mut encoder, writes)?;
+    if let Some((set, resolve, read)) = &queries {
+        encoder.resolve_query_set(set, 0..2, resolve, 0);
+        encoder.copy_buffer_to_buffer(resolve, 0, read, 0, 16);
+    }
+    ctx.checked(|| queue.submit([encoder.finish()]))?;
+    device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .map_err(|e| GpuError::Readback(e.to_string()))?;
+    let wall = start.elapsed().as_secs_f64() * 1e3;
+    let gpu = match &queries {
+        Some((_, _, read)) => {
+            let ticks: [u64; 2] = bytemuck::pod_read_unaligned(&map_read(device, read)?[..16]);
+            let period = queue.get_timestamp_period() as f64;
+            Some(ticks[1].saturating_sub(ticks[0]) as f64 * period * 1e-6)
+        }
+        None => None,
+    };
+    Ok((gpu, wall))
 }

@@ -17,6 +17,9 @@ pub trait TimedViewer {
     fn preview(&self) -> Option<u32>;
     /// The scene, changed between frames as a user's gesture would.
     fn scene_mut(&mut self) -> &mut Scene;
+    /// Shows the animation's next frame, as playback at the animation's rate does; returns that rate (frames a
+    /// second), or none where the scene has no animation.
+    fn step_animation(&mut self) -> Option<f64>;
     /// Turns the camera about its target by `yaw` radians, as an orbit drag does.
     fn orbit(&mut self, yaw: f64);
     /// Progressive refinement on (the viewer's default) or off (the whole field every frame).
@@ -125,6 +128,26 @@ pub(super) fn viewer_frames(
     viewer.set_progressive(false);
     let (orbiting_full_field, _) = gesture(viewer, &orbit)?;
     viewer.set_progressive(true);
+    // An animation playing, each frame the next of it: as the viewer draws it, and with the whole field.
+    let playing = match viewer.step_animation() {
+        Some(frame_rate) => {
+            settle(viewer)?;
+            let step = |v: &mut dyn TimedViewer| {
+                v.step_animation();
+            };
+            let (frame, side) = gesture(viewer, &step)?;
+            viewer.set_progressive(false);
+            let (full_field, _) = gesture(viewer, &step)?;
+            viewer.set_progressive(true);
+            Some(PlayingRow {
+                frame_rate,
+                frame: Timing::of(frame),
+                side,
+                full_field: Timing::of(full_field),
+            })
+        }
+        None => None,
+    };
     Ok(ViewerFrameRow {
         width,
         height,
@@ -142,5 +165,6 @@ pub(super) fn viewer_frames(
         moving_share_over_16,
         add_source_longest_frame_ms: first.max(added_longest),
         add_source_frames: added_frames + 1,
+        playing,
     })
 }

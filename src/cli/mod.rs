@@ -385,6 +385,10 @@ impl crate::bench::TimedViewer for OffscreenViewer {
         self.app.scene_mut()
     }
 
+    fn step_animation(&mut self) -> Option<f64> {
+        self.app.step_animation()
+    }
+
     fn orbit(&mut self, yaw: f64) {
         crate::viewer::navigation::orbit(&mut self.app.scene_mut().camera, yaw, 0.0);
     }

@@ -19,8 +19,9 @@ mod upsample;
 pub use billboard_pass::{BillboardRenderer, billboard_params, view_projection};
 pub use blit_pass::BlitPass;
 pub use context::{
-    FIELD_LAYERS, GpuContext, GpuError, checked, describe, field_texture, field_texture_bytes,
-    field_texture_layers, map_read, read_texture, read_texture_layer, texture_2d, uniform_buffer,
+    FIELD_LAYERS, GpuContext, GpuError, checked, compute_pass, describe, field_storage_entry,
+    field_texture, field_texture_bytes, field_texture_layers, map_read, read_texture,
+    read_texture_layer, texture_2d, uniform_buffer,
 };
 pub use field_pass::{FieldInputs, FieldRenderer, Specialise, Structure, layers_of};
 pub use formats::FRAME_FORMAT;

@@ -73,6 +73,14 @@ impl ViewerApp {
         &self.playback
     }
 
+    /// Shows the animation's next frame (around its end), as playback does when the viewer keeps up with the
+    /// animation's rate; returns that rate, or none without an animation.
+    pub fn step_animation(&mut self) -> Option<f64> {
+        let a = self.doc.scene.animation.as_ref()?;
+        self.playback.step(1, a.frames);
+        Some(a.frame_rate)
+    }
+
     /// True while an export runs beside the UI.
     pub fn is_exporting(&self) -> bool {
         self.export_job.is_some()
