@@ -4,6 +4,7 @@
 //! - [`integrate`]: how a scene integrates along a texel's ray: the integrator, its settings, the decay zeta;
 //! - [`geometry`]: the camera, the billboard and its rays;
 //! - [`objects`]: spheres, boxes, planes and glTF meshes that hide the glow and are lit by it;
+//! - [`particles`]: particle sets (smoke, dust, sparks): the particle, its kernel and the kernel's integrals;
 //! - [`animation`]: time in scenes: the travelling pulse (thesis eq. 5.1) and keyframes;
 //! - [`scene`]: TOML scene files, validated field by field;
 //! - [`frame`]: a frame's resolved setup (billboard, reach, terms, clips), worked out once for every renderer;
@@ -29,6 +30,7 @@ pub mod gpu;
 pub mod integrate;
 pub mod objects;
 pub mod output;
+pub mod particles;
 pub mod reference;
 pub mod scene;
 pub mod viewer;

@@ -21,6 +21,9 @@
 //! | `glare.wgsl`                  | [`glare`]: the fog glow, the excess over a threshold blurred and added back |
 //! | `billboard.wgsl`              | [`billboard`]: the blend and the composed frame                       |
 //!
+//! [`particles`] renders particle sets by image-aligned sheet-buffer splatting along a ray, in f64, beside the
+//! finely ray-marched medium it converges to.
+//!
 //! The other shaders only display or resample a field already integrated (`average.wgsl`, the viewer's running
 //! mean of jittered frames; `upsample.wgsl`, `grid.wgsl`, `blit.wgsl`) and have no twin. [`converged`] is the
 //! value both twins are held to: Simpson refined until converged, knowing nothing of either integrator.
@@ -36,6 +39,7 @@ pub mod converged;
 pub mod field_pass;
 pub mod glare;
 pub mod objects;
+pub mod particles;
 pub mod simpson;
 
 pub use billboard::{Backdrop, compose_frame, compose_frame_over, compose_frame_unclamped};

@@ -1,0 +1,107 @@
+//! Particle sets: smoke, dust and sparks around the glow (METHOD.md section 10, after paper 002_, Beliaev and
+//! Zaytseva, image-aligned sheet-buffer splatting). A particle spreads its material over a ball by the paper's
+//! reconstruction kernel; the medium's extinction is the sum of the particles' kernels times their densities.
+//! Here the particle model and the kernel in f64, with the kernel's integral along a line in closed form (what a
+//! splat's pre-integrated segment holds); the renderer that slices them is `reference::particles`.
+//!
+//! Conventions (METHOD.md section 10, as we read the paper):
+//! - `G(r) = 0.446 exp(-2 r^2)` for `r = |x - p| / R < 1`, zero beyond (the paper's eq. 6, truncated at the
+//!   particle's ball). 0.446 is the paper's constant, kept as its peak, not a normalisation.
+//! - The extinction coefficient, per scene unit, is `sigma(x) = sum_k rho_k G(|x - p_k| / R_k)`: a particle's
+//!   density scales its kernel, and a slab's opacity is `1 - exp(-optical depth)`. (The paper writes
+//!   `tau = 1 - alpha` with alpha the density, which read literally makes denser particles clearer.)
+//! - A particle's color is its material's: the share of light its material scatters, per channel.
+
+use glam::DVec3;
+
+/// The paper's kernel at the particle's center (its eq. 6).
+pub const KERNEL_PEAK: f64 = 0.446;
+
+/// The kernel's exponent: `G(r) = KERNEL_PEAK exp(-KERNEL_FALLOFF r^2)`.
+pub const KERNEL_FALLOFF: f64 = 2.0;
+
+/// One particle: a ball of material.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Particle {
+    pub position: DVec3,
+    /// The ball's radius R, scene units, > 0.
+    pub radius: f64,
+    /// rho: the extinction per scene unit at the center is `rho KERNEL_PEAK`, >= 0.
+    pub density: f64,
+    /// The material's color, linear, each channel in [0, 1].
+    pub color: [f64; 3],
+}
+
+/// `G(r)`, r in radii from the center: the paper's Gaussian inside the ball, zero outside.
+pub fn kernel(r: f64) -> f64 {
+    if r < 1.0 {
+        KERNEL_PEAK * (-KERNEL_FALLOFF * r * r).exp()
+    } else {
+        0.0
+    }
+}
+
+/// The extinction coefficient at `x`, per scene unit: `sum_k rho_k G(|x - p_k| / R_k)`.
+pub fn extinction(particles: &[Particle], x: DVec3) -> f64 {
+    particles
+        .iter()
+        .map(|p| p.density * kernel((x - p.position).length() / p.radius))
+        .sum()
+}
+
+/// The kernel integrated along a line that passes `u` radii from the center, from `s0` to `s1` radii along the
+/// line past its closest approach: `integral of G(sqrt(u^2 + s^2)) ds` over `[s0, s1]` within the ball, in radii.
+/// In closed form, `G(u) sqrt(pi / 8) (erf(sqrt 2 b) - erf(sqrt 2 a))` over the chord's part `[a, b]`: the
+/// footprint of a pre-integrated segment at a texel.
+pub fn segment_integral(u: f64, s0: f64, s1: f64) -> f64 {
+    if u >= 1.0 || s1 <= s0 {
+        return 0.0;
+    }
+    let half_chord = (1.0 - u * u).sqrt();
+    let (a, b) = (s0.max(-half_chord), s1.min(half_chord));
+    if b <= a {
+        return 0.0;
+    }
+    let k = KERNEL_FALLOFF.sqrt();
+    let gauss = KERNEL_PEAK * (-KERNEL_FALLOFF * u * u).exp();
+    gauss
+        * (std::f64::consts::PI / (4.0 * KERNEL_FALLOFF)).sqrt()
+        * (libm::erf(k * b) - libm::erf(k * a))
+}
+
+/// A ray from `origin` along the unit `direction`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ray {
+    pub origin: DVec3,
+    pub direction: DVec3,
+}
+
+impl Ray {
+    pub fn at(&self, t: f64) -> DVec3 {
+        self.origin + self.direction * t
+    }
+}
+
+impl Particle {
+    /// Where `ray` meets the particle's ball, `(t_in, t_out)` along it, if it does.
+    pub fn chord(&self, ray: &Ray) -> Option<(f64, f64)> {
+        let closest = (self.position - ray.origin).dot(ray.direction);
+        let miss = (ray.at(closest) - self.position).length_squared();
+        let half = (self.radius * self.radius - miss).sqrt();
+        (half > 0.0).then_some((closest - half, closest + half))
+    }
+
+    /// The optical depth the particle gives the stretch `[t0, t1]` of `ray`: its density times its kernel
+    /// integrated along the stretch (exact: `segment_integral` scaled to scene units).
+    pub fn optical_depth(&self, ray: &Ray, t0: f64, t1: f64) -> f64 {
+        let closest = (self.position - ray.origin).dot(ray.direction);
+        let u = (ray.at(closest) - self.position).length() / self.radius;
+        self.density
+            * self.radius
+            * segment_integral(
+                u,
+                (t0 - closest) / self.radius,
+                (t1 - closest) / self.radius,
+            )
+    }
+}
