@@ -2,7 +2,8 @@
 //! Zaytseva, image-aligned sheet-buffer splatting). A particle spreads its material over a ball by the paper's
 //! reconstruction kernel; the medium's extinction is the sum of the particles' kernels times their densities.
 //! Here the particle model and the kernel in f64, with the kernel's integral along a line in closed form (what a
-//! splat's pre-integrated segment holds); the renderer that slices them is `reference::particles`.
+//! splat's pre-integrated segment holds), and the wave's light in the medium; the renderer that slices them is
+//! `reference::particles`.
 //!
 //! Conventions (METHOD.md section 10, as we read the paper):
 //! - `G(r) = 0.446 exp(-2 r^2)` for `r = |x - p| / R < 1`, zero beyond (the paper's eq. 6, truncated at the
@@ -13,6 +14,8 @@
 //! - A particle's color is its material's: the share of light its material scatters, per channel.
 
 use glam::DVec3;
+
+use crate::objects::lighting::{AMBIENT, Lights};
 
 /// The paper's kernel at the particle's center (its eq. 6).
 pub const KERNEL_PEAK: f64 = 0.446;
@@ -104,4 +107,49 @@ impl Particle {
                 (t1 - closest) / self.radius,
             )
     }
+}
+
+/// The share of light the medium scatters from a direction into one at angle theta to it, the paper's Rayleigh
+/// phase (its eq. 5): `3/4 (1 + cos^2 theta)`. Its mean over the sphere is 1 (the isotropic phase is 1 in this
+/// convention), so that an albedo is the share of the light a particle's material scatters in all.
+pub fn phase(cos_theta: f64) -> f64 {
+    0.75 * (1.0 + cos_theta * cos_theta)
+}
+
+/// The optical depth of `particles` along the straight segment from `a` to `b`: each particle's kernel
+/// integrated exactly over its part of it.
+pub fn optical_depth_between(particles: &[Particle], a: DVec3, b: DVec3) -> f64 {
+    let length = (b - a).length();
+    let Some(direction) = (b - a).try_normalize() else {
+        return 0.0;
+    };
+    let ray = Ray {
+        origin: a,
+        direction,
+    };
+    particles
+        .iter()
+        .map(|p| p.optical_depth(&ray, 0.0, length))
+        .sum()
+}
+
+/// The wave's light at `x` in the medium, in-scattered toward `eye` (METHOD.md section 10): every source a
+/// light at the point of it its term reads from `x`, of its color and of the strength its term of psi has at
+/// `x` (as it lights objects, `objects::lighting`), dimmed by the particles between that point and `x`, times
+/// the phase at the angle between its light and the view; plus the ambient share objects get too:
+/// `L_in(x) = AMBIENT + sum_i Ce_i psi_i(x) T_i(x) p(theta_i)`, each channel at least 0 (a source of negative
+/// coefficient darkens the light, never below none).
+pub fn in_scattered(lights: &Lights, particles: &[Particle], x: DVec3, eye: DVec3) -> [f64; 3] {
+    let toward_eye = (eye - x).normalize_or_zero();
+    let mut light = [AMBIENT; 3];
+    for sample in lights.at(x) {
+        let along = (x - sample.from).normalize_or_zero();
+        let reach = sample.strength
+            * (-optical_depth_between(particles, sample.from, x)).exp()
+            * phase(along.dot(toward_eye));
+        for (l, c) in light.iter_mut().zip(sample.color) {
+            *l += c * reach;
+        }
+    }
+    light.map(|l| l.max(0.0))
 }
