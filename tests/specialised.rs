@@ -184,7 +184,8 @@ fn only_the_latest_structures_keep_their_pipelines() {
 /// what the papers' Simpson's rule gives in f64 (the twin) on the papers' scenes: our pass is timed against a
 /// kernel that computes the same picture, not a cheaper one. The Bezier scene at 256 x 256, n = 256, in the band
 /// of rows where rays graze the chain (Cardano's root unpolished left B 0.063 off there); the torus whole at
-/// 40 x 40; its values constants of its text and read from a buffer. Scenes it is not written for are refused.
+/// 40 x 40, and the chain weighed by a uniform W series; its values constants of its text and read from a buffer.
+/// Scenes it is not written for are refused.
 #[test]
 fn the_plain_kernel_the_bench_times_ours_against_gives_the_twins_simpson() {
     use energywave::bench::{Baked, PlainKernels, plain_unsupported};
@@ -224,4 +225,19 @@ fn the_plain_kernel_the_bench_times_ours_against_gives_the_twins_simpson() {
             "{name}: {off} off, B up to {largest}"
         );
     }
+    // A W series of equal weights weighs the chain by that weight everywhere; the plain kernel takes it.
+    let mut scene = common::shipped_scene("bezier_b5.0.toml");
+    scene.integration.integrator = Integrator::Simpson;
+    scene.billboard.resolution = 24;
+    scene.integration.divisions = 64;
+    scene.sources.curves[0].weights = vec![2.5; 4];
+    assert_eq!(plain_unsupported(&scene), None);
+    let gpu = plain.brightness(&ctx, &scene, Baked::Structure).unwrap();
+    let twin = energywave::reference::render_brightness(&FrameSetup::placed(&scene, 1.0)).values;
+    let largest = twin.iter().fold(0.0f64, |m, b| m.max(b.abs()));
+    let off = (gpu.iter().zip(&twin)).fold(0.0f64, |m, (a, b)| m.max((*a as f64 - b).abs()));
+    assert!(
+        largest > 1.0 && off <= 2e-5 * largest,
+        "{off} off, B up to {largest}"
+    );
 }

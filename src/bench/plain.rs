@@ -173,7 +173,11 @@ pub fn plain_kernel_source(
         let _ = writeln!(
             psi,
             "    sum += {} / max(EPS, sqrt({nearest}));",
-            values.scalar(&format!("CURVE{k}_C"), c.coefficient)
+            // A uniform W series weighs the chain by its one weight everywhere (its B-spline sums to it).
+            values.scalar(
+                &format!("CURVE{k}_C"),
+                c.coefficient * c.weights.first().copied().unwrap_or(1.0)
+            )
         );
     }
     let buffer = match baked {
