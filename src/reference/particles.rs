@@ -72,6 +72,34 @@ pub struct Composite {
     pub transmittance: f64,
 }
 
+/// Light emitted along a ray in and around the medium: the energy wave's glow. `over(t0, t1)` is its integral
+/// over the stretch `[t0, t1]` of the ray, unattenuated (what the field pass integrates there); it lies on
+/// `[start, end]`.
+pub struct Glow<'a> {
+    pub over: &'a dyn Fn(f64, f64) -> [f64; 3],
+    pub start: f64,
+    pub end: f64,
+}
+
+impl Glow<'_> {
+    /// No glow.
+    pub const NONE: Glow<'static> = Glow {
+        over: &|_, _| [0.0; 3],
+        start: 0.0,
+        end: 0.0,
+    };
+
+    /// Its integral over `[t0, t1]` clipped to where it lies.
+    fn between(&self, t0: f64, t1: f64) -> DVec3 {
+        let (a, b) = (t0.max(self.start), t1.min(self.end));
+        if b > a {
+            DVec3::from_array((self.over)(a, b))
+        } else {
+            DVec3::ZERO
+        }
+    }
+}
+
 /// `ray` through `particles` by image-aligned sheet-buffer splatting over `slicing`: each slab's segments added
 /// (optical depth, and optical depth times color), then the slabs composited front to back, a slab scattering
 /// `albedo` times its color times `light` at its middle on the ray (the light in-scattered toward the eye
@@ -83,12 +111,28 @@ pub fn sheet_buffer(
     albedo: f64,
     light: impl Fn(DVec3) -> [f64; 3],
 ) -> Composite {
+    sheet_buffer_glowing(particles, ray, slicing, albedo, light, &Glow::NONE)
+}
+
+/// [`sheet_buffer`] with the wave's `glow` along the ray as an emitter inside the medium (METHOD.md section 10):
+/// the glow in front of the slabs comes through whole, the glow within a slab is dimmed by what lies in front of
+/// it and, spread evenly over the slab, by `(1 - exp(-tau)) / tau` of its own optical depth, the glow behind
+/// them by their transmittance. Without particles it is the glow's integral itself.
+pub fn sheet_buffer_glowing(
+    particles: &[Particle],
+    ray: &Ray,
+    slicing: &Slicing,
+    albedo: f64,
+    light: impl Fn(DVec3) -> [f64; 3],
+    glow: &Glow,
+) -> Composite {
     // The sheet buffer along this ray: each slab's optical depth and its color weighed by it.
     let mut depth = vec![0.0; slicing.count as usize];
     let mut colored = vec![DVec3::ZERO; slicing.count as usize];
-    if ray.direction.dot(slicing.axis) <= 0.0 {
+    let facing = ray.direction.dot(slicing.axis) > 0.0 && slicing.count > 0;
+    if !facing {
         return Composite {
-            radiance: [0.0; 3],
+            radiance: glow.between(f64::NEG_INFINITY, f64::INFINITY).to_array(),
             transmittance: 1.0,
         };
     }
@@ -103,17 +147,22 @@ pub fn sheet_buffer(
             colored[j as usize] += tau * DVec3::from_array(p.color);
         }
     }
-    let (mut radiance, mut transmittance) = (DVec3::ZERO, 1.0);
+    let mut radiance = glow.between(f64::NEG_INFINITY, slicing.slab(ray, 0).0);
+    let mut transmittance = 1.0;
     for (j, (&tau, &colored)) in (0..slicing.count).zip(depth.iter().zip(&colored)) {
+        let (t0, t1) = slicing.slab(ray, j);
+        let emitted = glow.between(t0, t1);
         if tau <= 0.0 {
+            radiance += transmittance * emitted;
             continue;
         }
-        let (t0, t1) = slicing.slab(ray, j);
         let lit = DVec3::from_array(light(ray.at(0.5 * (t0 + t1))));
         let opacity = -(-tau).exp_m1();
-        radiance += transmittance * albedo * colored / tau * lit * opacity;
+        radiance +=
+            transmittance * (albedo * colored / tau * lit * opacity + emitted * opacity / tau);
         transmittance *= (-tau).exp();
     }
+    radiance += transmittance * glow.between(slicing.slab(ray, slicing.count - 1).1, f64::INFINITY);
     Composite {
         radiance: radiance.to_array(),
         transmittance,
@@ -130,21 +179,53 @@ pub fn marched(
     light: impl Fn(DVec3) -> [f64; 3],
     steps: u32,
 ) -> Composite {
-    let chords: Vec<(f64, f64)> = particles.iter().filter_map(|p| p.chord(ray)).collect();
+    marched_glowing(
+        particles,
+        ray,
+        albedo,
+        light,
+        (&|_| [0.0; 3], 0.0, 0.0),
+        steps,
+    )
+}
+
+/// [`marched`] with a glow along the ray, `(density, start, end)`: its light per unit length at t, on
+/// `[start, end]`, emitted at each step's middle and dimmed by the medium in front and, over the step, by its
+/// own layer. What [`sheet_buffer_glowing`] converges to.
+pub fn marched_glowing(
+    particles: &[Particle],
+    ray: &Ray,
+    albedo: f64,
+    light: impl Fn(DVec3) -> [f64; 3],
+    (glow, glow_start, glow_end): (&dyn Fn(f64) -> [f64; 3], f64, f64),
+    steps: u32,
+) -> Composite {
+    let chords = particles.iter().filter_map(|p| p.chord(ray));
+    let (mut start, mut end) = chords.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), c| {
+        (a.min(c.0.max(0.0)), b.max(c.1))
+    });
+    if glow_end > glow_start {
+        (start, end) = (start.min(glow_start), end.max(glow_end));
+    }
     let (mut radiance, mut transmittance) = (DVec3::ZERO, 1.0);
-    let Some(start) = chords.iter().map(|c| c.0).reduce(f64::min) else {
+    if end <= start {
         return Composite {
             radiance: [0.0; 3],
             transmittance,
         };
-    };
-    let start = start.max(0.0);
-    let end = chords.iter().map(|c| c.1).fold(start, f64::max);
+    }
     let dt = (end - start) / steps as f64;
     for k in 0..steps {
-        let x = ray.at(start + (k as f64 + 0.5) * dt);
+        let t = start + (k as f64 + 0.5) * dt;
+        let x = ray.at(t);
+        let emitted = if (glow_start..glow_end).contains(&t) {
+            DVec3::from_array(glow(t)) * dt
+        } else {
+            DVec3::ZERO
+        };
         let sigma = extinction(particles, x);
         if sigma <= 0.0 {
+            radiance += transmittance * emitted;
             continue;
         }
         let color: DVec3 = (particles.iter())
@@ -157,7 +238,8 @@ pub fn marched(
             / sigma;
         let lit = DVec3::from_array(light(x));
         let opacity = -(-sigma * dt).exp_m1();
-        radiance += transmittance * albedo * color * lit * opacity;
+        radiance +=
+            transmittance * (albedo * color * lit * opacity + emitted * opacity / (sigma * dt));
         transmittance *= (-sigma * dt).exp();
     }
     Composite {
