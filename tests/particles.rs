@@ -432,11 +432,11 @@ fn the_glow_behind_the_smoke_is_dimmed_by_it_and_the_glow_in_front_is_not() {
         } else {
             scattered.transmittance
         };
-        for k in 0..3 {
-            let expected = scattered.radiance[k] + through * whole[k];
+        for ((seen, scattered), whole) in seen.radiance.iter().zip(scattered.radiance).zip(whole) {
+            let expected = scattered + through * whole;
             assert!(
-                (seen.radiance[k] - expected).abs() < 1e-12,
-                "{place}: {seen:?} {expected}"
+                (seen - expected).abs() < 1e-12,
+                "{place}: {seen} {expected}"
             );
         }
         assert!(
