@@ -17,7 +17,9 @@ use serde::Serialize;
 use crate::field::brightest::uniform;
 use crate::field::curve::segments;
 use crate::frame::FrameSetup;
-use crate::gpu::{GpuContext, GpuError, compute_pass, field_storage_entry, field_texture};
+use crate::gpu::{
+    GpuContext, GpuError, compute_pass, field_storage_entry, field_texture, storage_buffer_entry,
+};
 use crate::integrate::{Decay, Integrator};
 use crate::scene::Scene;
 
@@ -360,16 +362,7 @@ fn compile(device: &wgpu::Device, source: &str, scene: &Scene, data: &[[f32; 4]]
         wgpu::StorageTextureAccess::WriteOnly,
     )];
     if !data.is_empty() {
-        entries.push(wgpu::BindGroupLayoutEntry {
-            binding: 1,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only: true },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        });
+        entries.push(storage_buffer_entry(1));
     }
     let (pipeline, layout) = compute_pass(device, "bench.plain", source, "main", &entries);
     let w = scene.billboard.resolution;

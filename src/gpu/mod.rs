@@ -21,7 +21,7 @@ pub use blit_pass::BlitPass;
 pub use context::{
     FIELD_LAYERS, GpuContext, GpuError, checked, compute_pass, describe, field_storage_entry,
     field_texture, field_texture_bytes, field_texture_layers, map_read, read_texture,
-    read_texture_layer, texture_2d, uniform_buffer,
+    read_texture_layer, storage_buffer_entry, texture_2d, uniform_buffer,
 };
 pub use field_pass::{FieldInputs, FieldRenderer, Specialise, Structure, layers_of};
 pub use formats::FRAME_FORMAT;
