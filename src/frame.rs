@@ -15,6 +15,7 @@ use crate::field::Curve;
 use crate::geometry::{Billboard, Reach};
 use crate::integrate::Integration;
 use crate::objects::clip::shared_clip_fractions;
+use crate::particles::light::{LitParticles, shared_lit};
 use crate::scene::Scene;
 
 /// One term of the field as a frame integrates it, in the order of `Sources::looks` (points, lines, tori,
@@ -48,6 +49,8 @@ pub struct FrameSetup<'a> {
     pub term_tolerance: f64,
     /// The texels' clips at `resolution`, worked out when first asked for.
     clips: OnceLock<Option<Arc<Vec<f32>>>>,
+    /// The scene's particles and their light, worked out when first asked for.
+    particles: OnceLock<Option<Arc<LitParticles>>>,
 }
 
 impl<'a> FrameSetup<'a> {
@@ -86,6 +89,7 @@ impl<'a> FrameSetup<'a> {
             integration,
             terms,
             clips: OnceLock::new(),
+            particles: OnceLock::new(),
         }
     }
 
@@ -115,6 +119,21 @@ impl<'a> FrameSetup<'a> {
     pub fn clips(&self) -> Option<Arc<Vec<f32>>> {
         self.clips
             .get_or_init(|| self.clips_at(self.resolution))
+            .clone()
+    }
+
+    /// The scene's particles, each with the light it scatters (`particles::light`); none without particles.
+    pub fn particles(&self) -> Option<Arc<LitParticles>> {
+        self.particles
+            .get_or_init(|| {
+                let scene = self.scene;
+                shared_lit(
+                    &scene.particles,
+                    &scene.sources,
+                    scene.colors.palette(),
+                    scene.integration.epsilon,
+                )
+            })
             .clone()
     }
 

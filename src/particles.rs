@@ -13,9 +13,67 @@
 //!   `tau = 1 - alpha` with alpha the density, which read literally makes denser particles clearer.)
 //! - A particle's color is its material's: the share of light its material scatters, per channel.
 
+pub mod emit;
+pub mod light;
+pub mod ply;
+pub mod view;
+
+use std::path::PathBuf;
+use std::sync::Arc;
+
 use glam::DVec3;
 
+use crate::field::Sources;
 use crate::objects::lighting::{AMBIENT, Lights};
+
+/// The share of the light reaching a particle that its material scatters, where a set gives none (the paper's).
+pub const DEFAULT_ALBEDO: f64 = 0.9;
+
+/// The slices' width in radii of the smallest particle, where a scene gives none (the paper's R/2).
+pub const DEFAULT_SLICE_WIDTH: f64 = 0.5;
+
+/// A set of particles in a scene: where they come from, and how much of the light they scatter.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ParticleSet {
+    pub origin: Origin,
+    /// The share of the light reaching a particle that it scatters, in 0..=1 (times its color per channel).
+    pub albedo: f64,
+}
+
+/// Where a set's particles come from.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Origin {
+    /// A PLY point cloud (`ply`): its path as the scene file gives it, the values its vertices lack, and the
+    /// particles read, shared by the copies of a scene.
+    File {
+        path: PathBuf,
+        defaults: ply::Defaults,
+        particles: Arc<Vec<Particle>>,
+    },
+    Emitter(emit::Emitter),
+}
+
+impl ParticleSet {
+    /// The set's particles, each with its color times the set's albedo: the share of light it scatters, per
+    /// channel (what the renderers take as its color, with an albedo of 1).
+    pub fn particles(&self, sources: &Sources) -> Vec<Particle> {
+        let own = match &self.origin {
+            Origin::File { particles, .. } => particles.as_ref().clone(),
+            Origin::Emitter(e) => e.emit(sources),
+        };
+        own.into_iter()
+            .map(|p| Particle {
+                color: p.color.map(|c| c * self.albedo),
+                ..p
+            })
+            .collect()
+    }
+}
+
+/// Every particle of `sets`, as [`ParticleSet::particles`] gives them.
+pub fn gather(sets: &[ParticleSet], sources: &Sources) -> Vec<Particle> {
+    sets.iter().flat_map(|s| s.particles(sources)).collect()
+}
 
 /// The paper's kernel at the particle's center (its eq. 6).
 pub const KERNEL_PEAK: f64 = 0.446;

@@ -8,6 +8,7 @@ use super::field_pass::{FieldInputs, FieldRenderer};
 use super::formats::{DEPTH_FORMAT, DEPTH_VALUE_CLEAR, DEPTH_VALUE_FORMAT, FRAME_FORMAT};
 use super::glare_pass::GlarePass;
 use super::object_pass::ObjectPass;
+use super::particle_pass::ParticlePass;
 use crate::frame::FrameSetup;
 
 /// The two textures of a composed frame: what lies behind the billboard, and the result.
@@ -72,6 +73,7 @@ pub struct SceneRenderer {
     billboard: BillboardRenderer,
     glare: GlarePass,
     objects: ObjectPass,
+    particles: ParticlePass,
     /// The objects hide the glow but are not drawn: the glow alone with them as a holdout, to layer over a
     /// render of the same scene made elsewhere.
     holdout: bool,
@@ -88,6 +90,7 @@ impl SceneRenderer {
             billboard: BillboardRenderer::new(device, FRAME_FORMAT),
             glare: GlarePass::new(device),
             objects: ObjectPass::new(device),
+            particles: ParticlePass::new(device),
             holdout: false,
             unclamped: false,
             threshold_preview: None,
@@ -109,6 +112,11 @@ impl SceneRenderer {
     /// Whether the objects are left out of the picture while still hiding the glow (`holdout`).
     pub fn set_holdout(&mut self, holdout: bool) {
         self.holdout = holdout;
+    }
+
+    /// The particle pass, for inspection (the smoke's image and its plan).
+    pub fn particles(&self) -> &ParticlePass {
+        &self.particles
     }
 
     /// The field pass, for inspection (dispatch count, texture) and for the brightness alone.
@@ -251,6 +259,30 @@ impl SceneRenderer {
                 self.objects
                     .draw(queue, &mut pass, view_proj, !self.holdout);
             }
+            // The particles' smoke behind the billboard's plane over the background and the objects, its rays
+            // ended by the objects; the smoke in front of the plane goes over the glow.
+            let smoke = self.particles.prepare(device, queue, setup, targets.size);
+            if smoke {
+                self.particles
+                    .encode(device, encoder, &targets.depth_value_view);
+                let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("energywave.frame.particles"),
+                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                        view: &targets.background_view,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Load,
+                            store: wgpu::StoreOp::Store,
+                        },
+                    })],
+                    depth_stencil_attachment: None,
+                    timestamp_writes: None,
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                });
+                self.particles.draw(&mut pass, false);
+            }
             // The billboard blends over a copy of what lies behind it.
             encoder.copy_texture_to_texture(
                 targets.background.as_image_copy(),
@@ -290,6 +322,25 @@ impl SceneRenderer {
                 layers,
                 &params,
             );
+            if smoke {
+                let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("energywave.frame.particles.front"),
+                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                        view: &targets.color_view,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Load,
+                            store: wgpu::StoreOp::Store,
+                        },
+                    })],
+                    depth_stencil_attachment: None,
+                    timestamp_writes: None,
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                });
+                self.particles.draw(&mut pass, true);
+            }
         })
     }
 }

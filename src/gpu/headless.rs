@@ -27,6 +27,13 @@ impl HeadlessRenderer {
         Ok(Self::from_context(GpuContext::new()?))
     }
 
+    /// The last frame's smoke image and its plan (`ParticlePass::read_image`); none without particles.
+    pub fn smoke_image(
+        &self,
+    ) -> Result<Option<(Vec<[[f32; 4]; 2]>, crate::particles::view::SmokeView)>, GpuError> {
+        (self.renderer.particles()).read_image(&self.ctx.device, &self.ctx.queue)
+    }
+
     /// A renderer on an existing context.
     pub fn from_context(ctx: GpuContext) -> Self {
         let renderer = SceneRenderer::new(&ctx.device);

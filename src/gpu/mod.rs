@@ -13,6 +13,7 @@ pub mod glare_pass;
 pub mod grid_pass;
 mod headless;
 pub mod object_pass;
+pub mod particle_pass;
 pub mod shaders;
 mod upsample;
 

@@ -26,7 +26,7 @@ pub const BLIT_PASS: &str = include_str!("../../shaders/blit.wgsl");
 pub const CONSTANTS: &str = "shared/constants.wgsl";
 
 /// Every WGSL file but the generated one, by its path under `shaders/`.
-pub const FILES: [(&str, &str); 19] = [
+pub const FILES: [(&str, &str); 20] = [
     (
         "shared/field.wgsl",
         include_str!("../../shaders/shared/field.wgsl"),
@@ -73,6 +73,10 @@ pub const FILES: [(&str, &str); 19] = [
         include_str!("../../shaders/adaptive_curves.wgsl"),
     ),
     ("objects.wgsl", include_str!("../../shaders/objects.wgsl")),
+    (
+        "particles.wgsl",
+        include_str!("../../shaders/particles.wgsl"),
+    ),
     ("billboard.wgsl", BILLBOARD_PASS),
     ("glare.wgsl", GLARE_PASS),
     ("upsample.wgsl", UPSAMPLE_PASS),

@@ -247,3 +247,55 @@ pub fn marched_glowing(
         transmittance,
     }
 }
+
+/// One pixel of a frame's smoke, as the GPU pass renders it (`gpu::particle_pass`, METHOD.md section 10): the
+/// sheet buffer along `ray` over `slicing`, each segment scattering its particle's color times the light that
+/// particle scatters back along the ray (`lights[k]`, `particles::light`), the slabs whose front lies at or past
+/// `until` (the depth along the view axis of the first object on the ray; infinite for none) left out. Two
+/// images: the slabs whose middle lies in front of `split` (the depth of the billboard's plane on the ray), which
+/// go over the glow, and the others, under it.
+pub fn smoke_pixel(
+    particles: &[Particle],
+    lights: &[crate::particles::light::ParticleLight],
+    ray: &Ray,
+    slicing: &Slicing,
+    until: f64,
+    split: f64,
+) -> [Composite; 2] {
+    let mut depth = vec![0.0; slicing.count as usize];
+    let mut colored = vec![DVec3::ZERO; slicing.count as usize];
+    let toward_eye = -ray.direction;
+    let along = ray.direction.dot(slicing.axis);
+    for (p, light) in particles.iter().zip(lights) {
+        let Some((t_in, t_out)) = p.chord(ray) else {
+            continue;
+        };
+        let lit = DVec3::from_array(p.color) * DVec3::from_array(light.toward(toward_eye));
+        for j in slicing.slabs_between(ray, t_in, t_out) {
+            let (t0, t1) = slicing.slab(ray, j);
+            let tau = p.optical_depth(ray, t0.max(t_in), t1.min(t_out));
+            depth[j as usize] += tau;
+            colored[j as usize] += tau * lit;
+        }
+    }
+    let none = (DVec3::ZERO, 1.0);
+    let mut images = [none, none];
+    for (j, (&tau, &colored)) in depth.iter().zip(&colored).enumerate() {
+        let front = slicing.near + j as f64 * slicing.width;
+        if front >= until || !(along > 0.0) {
+            break;
+        }
+        if tau <= 0.0 {
+            continue;
+        }
+        let (radiance, transmittance) =
+            &mut images[(front + 0.5 * slicing.width >= split) as usize];
+        let opacity = -(-tau).exp_m1();
+        *radiance += *transmittance * colored / tau * opacity;
+        *transmittance *= (-tau).exp();
+    }
+    images.map(|(radiance, transmittance)| Composite {
+        radiance: radiance.to_array(),
+        transmittance,
+    })
+}

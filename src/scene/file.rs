@@ -33,6 +33,10 @@ pub(crate) struct SceneFile {
     pub curves: Vec<CurveFile>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub objects: Vec<ObjectFile>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub particles: Vec<ParticlesFile>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub slices: Option<SlicesFile>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub animation: Option<AnimationFile>,
 }
@@ -194,6 +198,51 @@ pub(crate) struct ObjectFile {
     pub scale: Option<ValueFile>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub color: Option<[f64; 3]>,
+}
+
+/// `[[particles]]`: a particle set, from a PLY file or an emitter; which keys it takes depends on which
+/// (checked in `scene::particles_file`).
+#[derive(Debug, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct ParticlesFile {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub file: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub emitter: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub center: Option<[f64; 3]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub radius: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub size: Option<ValueFile>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub curve: Option<i64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub torus: Option<i64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub spread: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub count: Option<i64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub particle_radius: Option<ValueFile>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub density: Option<ValueFile>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub color: Option<[f64; 3]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub seed: Option<i64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub noise: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub albedo: Option<f64>,
+}
+
+/// `[slices]`: how particle sets are sliced.
+#[derive(Debug, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct SlicesFile {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub width: Option<f64>,
 }
 
 /// `[animation]`: the timeline and the keyed parameters.

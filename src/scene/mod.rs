@@ -12,9 +12,11 @@ pub mod format;
 mod keyed;
 pub mod limits;
 mod objects_file;
+mod particles_file;
 mod validate;
 
 pub use objects_file::DEFAULT_ALBEDO;
+pub use particles_file::DEFAULTS as PARTICLE_DEFAULTS;
 
 use std::path::{Path, PathBuf};
 
@@ -29,6 +31,7 @@ use crate::field::{Curve, Look, Sources, WForm};
 use crate::geometry::{self, Billboard, Camera};
 use crate::integrate::{Decay, Integration};
 use crate::objects::Object;
+use crate::particles::ParticleSet;
 
 /// The scene used when none is given, embedded in the binary.
 pub const DEFAULT_SCENE_TOML: &str = include_str!("../../assets/scenes/default.toml");
@@ -208,6 +211,10 @@ pub struct Scene {
     pub sources: Sources,
     /// What stands around the effect: it hides the glow behind it and is lit by it (`crate::objects`).
     pub objects: Vec<Object>,
+    /// Smoke, dust and sparks around the glow, lit by it (`crate::particles`).
+    pub particles: Vec<ParticleSet>,
+    /// The particles' slices' width, in radii of the smallest particle (the paper's R/2: 0.5).
+    pub slice_width: f64,
     /// Time: `None` for a still scene (see `crate::animation`).
     pub animation: Option<Animation>,
 }
@@ -400,6 +407,8 @@ impl Scene {
                 })
                 .collect(),
             objects: objects_file::write(&self.objects),
+            particles: particles_file::write(&self.particles),
+            slices: particles_file::write_slices(self.slice_width),
             animation: None,
         };
         animation_file::write(self, &mut file);

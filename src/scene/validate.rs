@@ -10,7 +10,7 @@ use super::error::Problem;
 use super::file::{self, FieldPath, Locator, SceneFile};
 use super::{
     BillboardSettings, Blend, Colors, Glare, MAX_CUTOFF, MAX_GLARE_SIZE, MAX_INTENSITY, PAPERS_NU,
-    Scene, limits, objects_file,
+    Scene, limits, objects_file, particles_file,
 };
 use crate::field::{Curve, Line, Point, Sources, Torus, WForm};
 use crate::geometry::{self, Camera};
@@ -43,6 +43,7 @@ pub(super) fn validate(
         d
     });
 
+    let particles = particles_file::check_particles(&mut c, file, base, &sources);
     Scene {
         camera,
         billboard,
@@ -54,6 +55,8 @@ pub(super) fn validate(
         glare: check_glare(&mut c, file),
         sources,
         objects: objects_file::check_objects(&mut c, file, base),
+        particles,
+        slice_width: particles_file::check_slices(&mut c, file),
         animation: None,
     }
 }

@@ -255,6 +255,8 @@ fn same_effect(a: &Scene, b: &Scene) -> bool {
         glare,
         sources,
         objects,
+        particles,
+        slice_width,
         animation,
     } = a;
     *billboard == b.billboard
@@ -263,6 +265,8 @@ fn same_effect(a: &Scene, b: &Scene) -> bool {
         && *glare == b.glare
         && *sources == b.sources
         && *objects == b.objects
+        && *particles == b.particles
+        && *slice_width == b.slice_width
         && *animation == b.animation
 }
 

@@ -1,0 +1,483 @@
+//! Particle sets on the GPU (`shaders/particles.wgsl`, METHOD.md section 10): the smoke's image by sheet-buffer
+//! splatting, a compute pass over its pixels, then laid over the frame's background and objects before the
+//! glow. The particles and their light come from the frame (`FrameSetup::particles`, lit once per edit); the
+//! slices and each tile's segments from its camera (`particles::view::SmokeView`), worked out again only when
+//! the view or the particles change. CPU twin: `reference::particles::smoke_pixel`.
+
+use std::sync::Arc;
+
+use wgpu::util::DeviceExt;
+
+use super::context::{
+    RenderPipelineSpec, compute_pass, fragment_storage_entry, pass_layouts, render_pipeline,
+    storage_buffer_entry, uniform_buffer,
+};
+use super::formats::FRAME_FORMAT;
+use crate::frame::FrameSetup;
+use crate::objects::lighting::AMBIENT;
+use crate::particles::light::LitParticles;
+use crate::particles::view::{GlowPlace, SmokeView};
+
+/// Rust mirrors of `shaders/particles.wgsl` (keep in sync; `tests/gpu_layout.rs` checks them).
+pub mod gpu_data {
+    use bytemuck::{Pod, Zeroable};
+
+    /// `SmokeParams` in `shaders/particles.wgsl`.
+    #[repr(C)]
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+    pub struct SmokeParams {
+        pub eye: [f32; 3],
+        pub tan_half: f32,
+        pub forward: [f32; 3],
+        pub aspect: f32,
+        pub right: [f32; 3],
+        pub near: f32,
+        pub up: [f32; 3],
+        pub width: f32,
+        pub size: [u32; 2],
+        pub tiles_x: u32,
+        pub chunk: u32,
+        pub frame: [u32; 2],
+        pub objects: u32,
+        pub pad0: u32,
+        pub depth_near: f32,
+        pub depth_far: f32,
+        pub pad1: f32,
+        pub pad2: f32,
+    }
+    const _: () = assert!(size_of::<SmokeParams>() == 112);
+
+    /// `SmokeParticle` in `shaders/particles.wgsl`.
+    #[repr(C)]
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+    pub struct SmokeParticle {
+        pub position: [f32; 3],
+        pub radius: f32,
+        pub color: [f32; 3],
+        pub density: f32,
+        pub iso: [f32; 4],
+        pub diag_r: [f32; 4],
+        pub off_r: [f32; 4],
+        pub diag_g: [f32; 4],
+        pub off_g: [f32; 4],
+        pub diag_b: [f32; 4],
+        pub off_b: [f32; 4],
+    }
+    const _: () = assert!(size_of::<SmokeParticle>() == 144);
+
+    /// `SmokeChunk` in `shaders/particles.wgsl`.
+    #[repr(C)]
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+    pub struct SmokeChunk {
+        pub index: u32,
+        pub last: u32,
+        pub pad0: u32,
+        pub pad1: u32,
+    }
+}
+
+use gpu_data::{SmokeChunk, SmokeParams, SmokeParticle};
+
+/// The most segments a pixel takes in one dispatch: lavapipe stops an invocation's loops after 65535
+/// iterations in all.
+pub const CHUNK: u32 = 16384;
+
+/// The smoke image's pixels per frame pixel: about the field's texel density (a texel per `resolution`-th of the
+/// frame's height), at most one a frame pixel and at least a quarter.
+pub fn smoke_size(frame: [u32; 2], resolution: u32) -> [u32; 2] {
+    let step = (frame[1] / resolution.max(1)).clamp(1, 4);
+    frame.map(|s| s.div_ceil(step).max(1))
+}
+
+/// The splatting and compositing pipelines, and the last frame's buffers.
+pub struct ParticlePass {
+    splat: wgpu::ComputePipeline,
+    splat_layout: wgpu::BindGroupLayout,
+    /// The front image over the glow, the back image under it.
+    draw: [wgpu::RenderPipeline; 2],
+    draw_layout: wgpu::BindGroupLayout,
+    params: wgpu::Buffer,
+    /// One `SmokeChunk` every `chunk_stride` bytes, bound at a dynamic offset.
+    chunks: wgpu::Buffer,
+    chunk_stride: u64,
+    prepared: Option<Prepared>,
+}
+
+/// What the frame last prepared holds.
+struct Prepared {
+    lit: Arc<LitParticles>,
+    view: SmokeView,
+    frame: [u32; 2],
+    particles: wgpu::Buffer,
+    segments: wgpu::Buffer,
+    starts: wgpu::Buffer,
+    glow: wgpu::Buffer,
+    state: wgpu::Buffer,
+    dispatches: u32,
+    draw_group: wgpu::BindGroup,
+}
+
+impl ParticlePass {
+    pub fn new(device: &wgpu::Device) -> Self {
+        let source = super::shaders::compose("particles.wgsl");
+        let uniform = |binding, visibility, dynamic| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: dynamic,
+                min_binding_size: None,
+            },
+            count: None,
+        };
+        let compute = wgpu::ShaderStages::COMPUTE;
+        let splat_entries = [
+            uniform(0, compute, false),
+            storage_buffer_entry(1),
+            storage_buffer_entry(2),
+            storage_buffer_entry(3),
+            storage_buffer_entry(8),
+            wgpu::BindGroupLayoutEntry {
+                binding: 4,
+                visibility: compute,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Storage { read_only: false },
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            },
+            wgpu::BindGroupLayoutEntry {
+                binding: 5,
+                visibility: compute,
+                ty: wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Uint,
+                    view_dimension: wgpu::TextureViewDimension::D2,
+                    multisampled: false,
+                },
+                count: None,
+            },
+            uniform(6, compute, true),
+        ];
+        let (splat, splat_layout) =
+            compute_pass(device, "particles.splat", &source, "splat", &splat_entries);
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("energywave.particles.draw.shader"),
+            source: wgpu::ShaderSource::Wgsl(source.as_str().into()),
+        });
+        let (draw_layout, pipeline_layout) = pass_layouts(
+            device,
+            "particles.draw",
+            &[
+                uniform(0, wgpu::ShaderStages::FRAGMENT, false),
+                fragment_storage_entry(7),
+            ],
+        );
+        let draw = ["fs_front", "fs_back"].map(|fragment_entry| {
+            render_pipeline(
+                device,
+                RenderPipelineSpec {
+                    name: "particles.draw",
+                    module: &module,
+                    layout: &pipeline_layout,
+                    vertex_buffers: &[],
+                    topology: wgpu::PrimitiveTopology::TriangleList,
+                    fragment_entry,
+                    constants: &[],
+                    targets: &[Some(wgpu::ColorTargetState {
+                        format: FRAME_FORMAT,
+                        blend: Some(wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING),
+                        write_mask: wgpu::ColorWrites::ALL,
+                    })],
+                    depth: None,
+                },
+            )
+        });
+        let chunk_stride = (device.limits().min_uniform_buffer_offset_alignment as u64)
+            .max(size_of::<SmokeChunk>() as u64);
+        Self {
+            splat,
+            splat_layout,
+            draw,
+            draw_layout,
+            params: uniform_buffer::<SmokeParams>(device, "energywave.particles.params"),
+            chunks: chunk_buffer(device, chunk_stride, 1),
+            chunk_stride,
+            prepared: None,
+        }
+    }
+
+    /// Uploads the frame's particles and plans its segments for a frame of `frame` pixels, where the particles,
+    /// the view or the size changed. Returns whether there is smoke to draw.
+    pub fn prepare(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        setup: &FrameSetup,
+        frame: [u32; 2],
+    ) -> bool {
+        let Some(lit) = setup.particles() else {
+            self.prepared = None;
+            return false;
+        };
+        let scene = setup.scene;
+        let size = smoke_size(frame, setup.resolution);
+        if let Some(p) = &self.prepared
+            && Arc::ptr_eq(&p.lit, &lit)
+            && p.view.camera == scene.camera
+            && p.view.size == size
+            && p.frame == frame
+        {
+            self.write_params(queue, setup, frame);
+            return true;
+        }
+        let view = SmokeView::new(
+            &lit.particles,
+            &scene.camera,
+            size,
+            scene.slice_width,
+            &GlowPlace {
+                sources: &scene.sources,
+                epsilon: scene.integration.epsilon,
+                billboard: &setup.billboard,
+                nu: setup.reach.nu,
+                alpha: setup.integration.alpha,
+                beta: setup.integration.beta,
+            },
+        );
+        let (segments, starts) = view.segments(&lit.particles);
+        let busiest = starts.windows(2).map(|w| w[1] - w[0]).max().unwrap_or(0);
+        let dispatches = busiest.div_ceil(CHUNK).max(1);
+        if self.chunks.size() < dispatches as u64 * self.chunk_stride {
+            self.chunks = chunk_buffer(device, self.chunk_stride, dispatches);
+        }
+        for i in 0..dispatches {
+            let c = SmokeChunk {
+                index: i,
+                last: (i + 1 == dispatches) as u32,
+                ..Default::default()
+            };
+            queue.write_buffer(
+                &self.chunks,
+                i as u64 * self.chunk_stride,
+                bytemuck::bytes_of(&c),
+            );
+        }
+        let same_particles = self
+            .prepared
+            .as_ref()
+            .is_some_and(|p| Arc::ptr_eq(&p.lit, &lit));
+        let particles = match self.prepared.take() {
+            Some(p) if same_particles => p.particles,
+            _ => storage(
+                device,
+                "particles",
+                bytemuck::cast_slice(&gpu_particles(&lit)),
+            ),
+        };
+        let segments = storage(device, "segments", bytemuck::cast_slice(&segments));
+        let starts = storage(device, "starts", bytemuck::cast_slice(&starts));
+        let glow = storage(device, "glow", bytemuck::cast_slice(&view.glow));
+        let state = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("energywave.particles.state"),
+            size: 64 * (size[0] as u64 * size[1] as u64),
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let draw_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("energywave.particles.draw.bind_group"),
+            layout: &self.draw_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: self.params.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 7,
+                    resource: state.as_entire_binding(),
+                },
+            ],
+        });
+        self.prepared = Some(Prepared {
+            lit,
+            view,
+            frame,
+            particles,
+            segments,
+            starts,
+            glow,
+            state,
+            dispatches,
+            draw_group,
+        });
+        self.write_params(queue, setup, frame);
+        true
+    }
+
+    fn write_params(&self, queue: &wgpu::Queue, setup: &FrameSetup, frame: [u32; 2]) {
+        let Some(p) = &self.prepared else {
+            return;
+        };
+        let camera = &setup.scene.camera;
+        let f = camera.frame();
+        let v = |x: glam::DVec3| x.as_vec3().to_array();
+        let (depth_near, depth_far) = super::billboard_pass::depth_range(camera, &setup.billboard);
+        let params = SmokeParams {
+            eye: v(camera.eye),
+            tan_half: camera.tan_half_fov() as f32,
+            forward: v(f.forward),
+            aspect: frame[0] as f32 / frame[1] as f32,
+            right: v(f.right),
+            near: p.view.slicing.near as f32,
+            up: v(f.up),
+            width: p.view.slicing.width as f32,
+            size: p.view.size,
+            tiles_x: p.view.tiles()[0],
+            chunk: CHUNK,
+            frame,
+            objects: !setup.scene.objects.is_empty() as u32,
+            depth_near: depth_near as f32,
+            depth_far: depth_far as f32,
+            ..Default::default()
+        };
+        queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+    }
+
+    /// Records the splatting: the smoke's image of the prepared frame, its rays ended by the objects' depth
+    /// (`depth_value`, read where the scene has objects).
+    pub fn encode(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        depth_value: &wgpu::TextureView,
+    ) {
+        let Some(p) = &self.prepared else {
+            return;
+        };
+        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("energywave.particles.splat.bind_group"),
+            layout: &self.splat_layout,
+            entries: &[
+                entry(0, self.params.as_entire_binding()),
+                entry(1, p.particles.as_entire_binding()),
+                entry(2, p.segments.as_entire_binding()),
+                entry(3, p.starts.as_entire_binding()),
+                entry(8, p.glow.as_entire_binding()),
+                entry(4, p.state.as_entire_binding()),
+                entry(5, wgpu::BindingResource::TextureView(depth_value)),
+                entry(
+                    6,
+                    wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                        buffer: &self.chunks,
+                        offset: 0,
+                        size: wgpu::BufferSize::new(size_of::<SmokeChunk>() as u64),
+                    }),
+                ),
+            ],
+        });
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("energywave.particles.splat"),
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(&self.splat);
+        let [w, h] = p.view.size;
+        for i in 0..p.dispatches {
+            pass.set_bind_group(0, &group, &[(i as u64 * self.chunk_stride) as u32]);
+            pass.dispatch_workgroups(w.div_ceil(8), h.div_ceil(8), 1);
+        }
+    }
+
+    /// Lays the smoke's front image (in front of the billboard's plane) or its back image over what `pass` draws
+    /// into (premultiplied: its light, plus what lies behind times its transmittance).
+    pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>, front: bool) {
+        if let Some(p) = &self.prepared {
+            pass.set_pipeline(&self.draw[!front as usize]);
+            pass.set_bind_group(0, &p.draw_group, &[]);
+            pass.draw(0..3, 0..1);
+        }
+    }
+
+    /// The last frame's smoke image read back (waits for the GPU): per pixel, rows from the top, the front and
+    /// the back image's (radiance, transmittance); with the plan it was made by.
+    pub fn read_image(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<Option<(Vec<[[f32; 4]; 2]>, SmokeView)>, super::context::GpuError> {
+        let Some(p) = &self.prepared else {
+            return Ok(None);
+        };
+        let staging = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("energywave.particles.readback"),
+            size: p.state.size(),
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut encoder = device.create_command_encoder(&Default::default());
+        encoder.copy_buffer_to_buffer(&p.state, 0, &staging, 0, p.state.size());
+        queue.submit([encoder.finish()]);
+        let bytes = super::context::map_read(device, &staging)?;
+        let floats: &[f32] = bytemuck::cast_slice(&bytes);
+        let pixels = floats
+            .chunks_exact(16)
+            .map(|c| [[c[0], c[1], c[2], c[3]], [c[4], c[5], c[6], c[7]]])
+            .collect();
+        Ok(Some((pixels, p.view.clone())))
+    }
+}
+
+fn entry(binding: u32, resource: wgpu::BindingResource<'_>) -> wgpu::BindGroupEntry<'_> {
+    wgpu::BindGroupEntry { binding, resource }
+}
+
+fn storage(device: &wgpu::Device, name: &str, bytes: &[u8]) -> wgpu::Buffer {
+    // An empty list still binds: a buffer of one word.
+    let bytes = if bytes.is_empty() {
+        &[0u8; 8][..]
+    } else {
+        bytes
+    };
+    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some(&format!("energywave.particles.{name}")),
+        contents: bytes,
+        usage: wgpu::BufferUsages::STORAGE,
+    })
+}
+
+fn chunk_buffer(device: &wgpu::Device, stride: u64, count: u32) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("energywave.particles.chunks"),
+        size: stride * count.max(1) as u64,
+        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
+}
+
+/// The particles as the shader reads them, the ambient share in `iso`.
+fn gpu_particles(lit: &LitParticles) -> Vec<SmokeParticle> {
+    let f = |x: f64| x as f32;
+    (lit.particles.iter().zip(&lit.lights))
+        .map(|(p, l)| {
+            let diag = |c: usize| [f(l.m[c][0]), f(l.m[c][1]), f(l.m[c][2]), 0.0];
+            let off = |c: usize| [f(l.m[c][3]), f(l.m[c][4]), f(l.m[c][5]), 0.0];
+            SmokeParticle {
+                position: p.position.as_vec3().to_array(),
+                radius: f(p.radius),
+                color: p.color.map(f),
+                density: f(p.density),
+                iso: [
+                    f(AMBIENT + l.iso[0]),
+                    f(AMBIENT + l.iso[1]),
+                    f(AMBIENT + l.iso[2]),
+                    0.0,
+                ],
+                diag_r: diag(0),
+                off_r: off(0),
+                diag_g: diag(1),
+                off_g: off(1),
+                diag_b: diag(2),
+                off_b: off(2),
+            }
+        })
+        .collect()
+}

@@ -1,0 +1,227 @@
+//! A frame's particles as both renderers read them (METHOD.md section 10): the smoke's own image of `size`
+//! pixels over the frame (rays from the eye through its pixel centers), the slices perpendicular to the view, and
+//! for the GPU each tile's segments, a segment being a particle cut by a slab, in slab order. The CPU twin
+//! (`reference::particles::smoke_pixel`) takes the same rays and slices.
+
+use glam::DVec3;
+use rayon::prelude::*;
+
+use super::{Particle, Ray};
+use crate::field::Sources;
+use crate::geometry::{Billboard, Camera};
+use crate::integrate::zeta;
+use crate::reference::particles::Slicing;
+
+/// The smoke image's tiles: the pixels that share a list of segments.
+pub const TILE: u32 = 16;
+
+/// The most segments a frame takes: past it the slices widen (a scene of a million particles keeps a bounded
+/// plan; 16 M segments are 128 MiB on the GPU).
+pub const MAX_SEGMENTS: usize = 1 << 24;
+
+/// The samples of psi along a ray that place its glow (`GlowPlace`).
+pub const GLOW_SAMPLES: u32 = 48;
+
+/// The smoke image of a frame: its size, its rays and its slices, and where the glow lies along its rays.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SmokeView {
+    pub camera: Camera,
+    pub size: [u32; 2],
+    pub slicing: Slicing,
+    /// The glow's depth along the view axis at the tiles' corners (`tiles + 1` a row, rows from the top), f32 as
+    /// the GPU reads it: the slabs in front of it go over the glow, the others under it (`split_at`).
+    pub glow: Vec<f32>,
+}
+
+/// What places the glow along a ray: the sources, their epsilon, the rays' reach from S on the billboard to
+/// E = V + nu (S - V), and the decay `zeta(s) = alpha / (s + beta)^2` over it (the frame's
+/// `Integration::on_ray`).
+pub struct GlowPlace<'a> {
+    pub sources: &'a Sources,
+    pub epsilon: f64,
+    pub billboard: &'a Billboard,
+    pub nu: f64,
+    pub alpha: f64,
+    pub beta: f64,
+}
+
+impl GlowPlace<'_> {
+    /// The depth along the view `axis` of the glow on `ray`: the mean of the depth weighed by what the field
+    /// pass integrates there, `|psi zeta|`, over `GLOW_SAMPLES` midpoints from S to E (the centre of a source's
+    /// falloff along a ray passing it is where the ray passes nearest, whatever the samples miss of its peak);
+    /// the billboard's depth where psi is 0 all along.
+    pub fn depth(&self, ray: &Ray, axis: DVec3) -> f64 {
+        let b = self.billboard;
+        let along = ray.direction.dot(axis);
+        let t_s = (b.center - ray.origin).dot(b.normal) / ray.direction.dot(b.normal);
+        if !(t_s > 0.0 && t_s.is_finite()) {
+            return (b.center - ray.origin).dot(axis);
+        }
+        let t_e = self.nu * t_s;
+        let field = self.sources.field();
+        let (mut weight, mut moment) = (0.0, 0.0);
+        for k in 0..GLOW_SAMPLES {
+            let s = (k as f64 + 0.5) / GLOW_SAMPLES as f64;
+            let t = t_s + s * (t_e - t_s);
+            let w = (field.psi(ray.at(t), self.epsilon) * zeta(s, self.alpha, self.beta)).abs();
+            weight += w;
+            moment += w * t;
+        }
+        if weight > 0.0 && moment.is_finite() {
+            along * moment / weight
+        } else {
+            along * t_s
+        }
+    }
+}
+
+impl SmokeView {
+    /// The smoke of `particles` seen by `camera` in an image of `size` pixels, sliced at `width` radii of the
+    /// smallest particle (widened where the segments would exceed `MAX_SEGMENTS`).
+    pub fn new(
+        particles: &[Particle],
+        camera: &Camera,
+        size: [u32; 2],
+        width: f64,
+        glow: &GlowPlace,
+    ) -> SmokeView {
+        let axis = camera.frame().forward;
+        let smallest = particles
+            .iter()
+            .map(|p| p.radius)
+            .fold(f64::INFINITY, f64::min);
+        let mut slicing = Slicing::covering(particles, camera.eye, axis, width * smallest);
+        // Each particle spans about 2 R / width + 1 slabs.
+        let spans: f64 = particles
+            .iter()
+            .map(|p| 2.0 * p.radius / slicing.width + 2.0)
+            .sum();
+        if spans > MAX_SEGMENTS as f64 / 4.0 {
+            let widen = spans / (MAX_SEGMENTS as f64 / 4.0);
+            slicing = Slicing::covering(particles, camera.eye, axis, slicing.width * widen);
+        }
+        let mut view = SmokeView {
+            camera: camera.clone(),
+            size,
+            slicing,
+            glow: Vec::new(),
+        };
+        let [tx, ty] = view.tiles();
+        view.glow = (0..(tx + 1) * (ty + 1))
+            .into_par_iter()
+            .map(|k| {
+                let (i, j) = (k % (tx + 1), k / (tx + 1));
+                let at = |c: u32, n: u32| (c * TILE).min(n) as f64;
+                let ray = Ray {
+                    origin: camera.eye,
+                    direction: camera.pixel_ray(at(i, size[0]), at(j, size[1]), size[0], size[1]),
+                };
+                glow.depth(&ray, axis) as f32
+            })
+            .collect();
+        view
+    }
+
+    /// The glow's depth along the view axis at the center of pixel `(x, y)`: bilinear between the tiles' corners
+    /// (`glow`), in f32 as the GPU pass works it out.
+    pub fn split_at(&self, x: u32, y: u32) -> f64 {
+        let [tx, ty] = self.tiles();
+        let g = [
+            (x as f32 + 0.5) / TILE as f32,
+            (y as f32 + 0.5) / TILE as f32,
+        ];
+        let i = [(g[0] as u32).min(tx - 1), (g[1] as u32).min(ty - 1)];
+        let f = [g[0] - i[0] as f32, g[1] - i[1] as f32];
+        let at = |a: u32, b: u32| self.glow[(b * (tx + 1) + a) as usize];
+        let top = at(i[0], i[1]) + (at(i[0] + 1, i[1]) - at(i[0], i[1])) * f[0];
+        let bottom = at(i[0], i[1] + 1) + (at(i[0] + 1, i[1] + 1) - at(i[0], i[1] + 1)) * f[0];
+        (top + (bottom - top) * f[1]) as f64
+    }
+
+    /// The ray through the center of pixel `(x, y)` of the smoke image.
+    pub fn ray(&self, x: u32, y: u32) -> Ray {
+        let [w, h] = self.size;
+        Ray {
+            origin: self.camera.eye,
+            direction: self.camera.pixel_ray(x as f64 + 0.5, y as f64 + 0.5, w, h),
+        }
+    }
+
+    pub fn tiles(&self) -> [u32; 2] {
+        self.size.map(|s| s.div_ceil(TILE))
+    }
+
+    /// Each tile's segments `(slab, particle)`, in slab order, flattened, with each tile's start in them (one
+    /// more start than tiles: the end).
+    pub fn segments(&self, particles: &[Particle]) -> (Vec<[u32; 2]>, Vec<u32>) {
+        let [tx, ty] = self.tiles();
+        let s = &self.slicing;
+        let f = self.camera.frame();
+        let mut keyed: Vec<(u32, [u32; 2])> = particles
+            .par_iter()
+            .enumerate()
+            .flat_map_iter(|(k, p)| {
+                let depth = (p.position - self.camera.eye).dot(f.forward);
+                let first = ((depth - p.radius - s.near) / s.width).floor().max(0.0);
+                let last = ((depth + p.radius - s.near) / s.width)
+                    .floor()
+                    .min(s.count as f64 - 1.0);
+                let tiles = self.footprint(p);
+                let slabs = if last >= first {
+                    first as u32..last as u32 + 1
+                } else {
+                    0..0
+                };
+                tiles.into_iter().flat_map(move |(x0, x1, y0, y1)| {
+                    let slabs = slabs.clone();
+                    (y0..y1).flat_map(move |y| {
+                        let slabs = slabs.clone();
+                        (x0..x1).flat_map(move |x| {
+                            slabs.clone().map(move |j| (y * tx + x, [j, k as u32]))
+                        })
+                    })
+                })
+            })
+            .collect();
+        keyed.par_sort_unstable_by_key(|&(tile, [j, k])| (tile, j, k));
+        let mut starts = vec![0u32; (tx * ty) as usize + 1];
+        for &(tile, _) in &keyed {
+            starts[tile as usize + 1] += 1;
+        }
+        for i in 1..starts.len() {
+            starts[i] += starts[i - 1];
+        }
+        (keyed.into_iter().map(|(_, e)| e).collect(), starts)
+    }
+
+    /// The tiles a particle's ball may cover, `(x0, x1, y0, y1)` half-open: the box of its bounding cube's
+    /// corners projected, or every tile where a corner lies at or behind the eye; none off the image.
+    fn footprint(&self, p: &Particle) -> Option<(u32, u32, u32, u32)> {
+        let [w, h] = self.size;
+        let [tx, ty] = self.tiles();
+        let f = self.camera.frame();
+        if (p.position - self.camera.eye).dot(f.forward) + p.radius <= 0.0 {
+            return None;
+        }
+        let (mut lo, mut hi) = (
+            (f64::INFINITY, f64::INFINITY),
+            (f64::NEG_INFINITY, f64::NEG_INFINITY),
+        );
+        for corner in 0..8 {
+            let sign = |bit: u32| if corner >> bit & 1 == 1 { 1.0 } else { -1.0 };
+            let c = p.position + p.radius * DVec3::new(sign(0), sign(1), sign(2));
+            // A corner too near the eye's plane projects without bound: the whole image.
+            if (c - self.camera.eye).dot(f.forward) <= 1e-6 * p.radius {
+                return Some((0, tx, 0, ty));
+            }
+            let (x, y) = self.camera.project(c, w, h)?;
+            lo = (lo.0.min(x), lo.1.min(y));
+            hi = (hi.0.max(x), hi.1.max(y));
+        }
+        let tile = |v: f64, n: u32| (v / TILE as f64).floor().clamp(0.0, n as f64) as u32;
+        let (x0, x1) = (tile(lo.0, tx), tile(hi.0, tx - 1) + 1);
+        let (y0, y1) = (tile(lo.1, ty), tile(hi.1, ty - 1) + 1);
+        (hi.0 >= 0.0 && hi.1 >= 0.0 && lo.0 < w as f64 && lo.1 < h as f64 && x0 < x1 && y0 < y1)
+            .then_some((x0, x1, y0, y1))
+    }
+}

@@ -1,0 +1,228 @@
+//! Particle sets on the GPU and in scene files: the smoke's image against the f64 twin pixel by pixel, the
+//! particles' light against the light marched point by point, the emitters and PLY files as scene files give
+//! them, and every bad input refused with its place named.
+
+use std::path::Path;
+use std::sync::{Mutex, MutexGuard, OnceLock};
+
+use energywave::frame::FrameSetup;
+use energywave::gpu::HeadlessRenderer;
+use energywave::objects::lighting::Lights;
+use energywave::particles::light::light_particles;
+use energywave::particles::{Particle, in_scattered};
+use energywave::reference::particles::smoke_pixel;
+use energywave::scene::Scene;
+
+fn gpu() -> MutexGuard<'static, HeadlessRenderer> {
+    static GPU: OnceLock<Mutex<HeadlessRenderer>> = OnceLock::new();
+    GPU.get_or_init(|| Mutex::new(HeadlessRenderer::new().expect("a GPU adapter (lavapipe in CI)")))
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+}
+
+fn scene(text: &str) -> Scene {
+    Scene::parse(text, Path::new("test.toml")).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// A cloud of 400 particles around a point source and a line, the camera looking at it from the side.
+const CLOUD: &str = r#"
+[camera]
+eye = [1.0, 2.0, 9.0]
+target = [0.0, 0.0, 0.0]
+fov_y = 40.0
+
+[[points]]
+position = [0.3, 0.2, 0.0]
+coefficient = 1.5
+color = [1.0, 0.6, 0.2]
+
+[[lines]]
+point = [0.0, -0.8, 0.0]
+direction = [1.0, 0.1, 0.0]
+coefficient = 0.5
+
+[[particles]]
+emitter = "sphere"
+center = [0.0, 0.0, 0.0]
+radius = 1.6
+count = 400
+particle_radius = [0.15, 0.35]
+density = [2.0, 6.0]
+color = [0.9, 0.85, 0.8]
+seed = 11
+noise = 0.5
+"#;
+
+#[test]
+fn the_gpu_smoke_image_is_the_twins_pixel_by_pixel() {
+    let scene = scene(CLOUD);
+    let (w, h) = (96, 72);
+    let mut gpu = gpu();
+    gpu.render(&scene, w, h, false).unwrap();
+    let (image, view) = gpu.smoke_image().unwrap().expect("the scene has particles");
+    let setup = FrameSetup::placed(&scene, w as f64 / h as f64);
+    let lit = setup.particles().unwrap();
+    let [sw, sh] = view.size;
+    assert_eq!(image.len(), (sw * sh) as usize);
+    let (mut worst, mut covered, mut split_apart, mut both) = (0.0f64, 0, 0, 0);
+    for y in 0..sh {
+        for x in 0..sw {
+            let ray = view.ray(x, y);
+            let split = view.split_at(x, y);
+            let want = smoke_pixel(
+                &lit.particles,
+                &lit.lights,
+                &ray,
+                &view.slicing,
+                f64::INFINITY,
+                split,
+            );
+            let got = image[(y * sw + x) as usize];
+            // The whole smoke, the front image over the back one: independent of where the glow splits it.
+            let over = |f: [f64; 4], b: [f64; 4]| -> [f64; 4] {
+                std::array::from_fn(|k| {
+                    if k < 3 {
+                        f[k] + f[3] * b[k]
+                    } else {
+                        f[3] * b[3]
+                    }
+                })
+            };
+            let of = |c: &energywave::reference::particles::Composite| {
+                [c.radiance[0], c.radiance[1], c.radiance[2], c.transmittance]
+            };
+            let whole = over(of(&want[0]), of(&want[1]));
+            let gpu_whole = over(got[0].map(f64::from), got[1].map(f64::from));
+            for k in 0..4 {
+                worst = worst.max((gpu_whole[k] - whole[k]).abs());
+            }
+            // Where the split lies: the images apart, unless a slab's middle is within f32 rounding of the glow.
+            let apart = (0..2).any(|i| (got[i][3] as f64 - want[i].transmittance).abs() > 2e-3);
+            split_apart += apart as u32;
+            covered += (want[0].transmittance * want[1].transmittance < 0.9) as u32;
+            both += (want[0].transmittance < 0.95 && want[1].transmittance < 0.95) as u32;
+        }
+    }
+    // The smoke is there (a good share of the image is covered, some of it on both sides of the glow), and the
+    // f32 pass is the f64 twin's to a thousandth of the radiance's scale (about 1).
+    assert!(
+        covered * 10 > sw * sh,
+        "{covered} of {} pixels covered",
+        sw * sh
+    );
+    assert!(both * 50 > sw * sh, "{both} of {} pixels split", sw * sh);
+    assert!(worst < 2e-3, "largest difference {worst}");
+    assert!(
+        split_apart * 100 <= sw * sh,
+        "{split_apart} pixels split elsewhere"
+    );
+}
+
+#[test]
+fn a_particles_light_is_the_light_marched_to_its_center() {
+    // Light's closed form (per particle, view-independent) against particles::in_scattered at each center,
+    // whose shadow rays integrate every particle exactly (brute force, no grid).
+    let scene = scene(CLOUD);
+    let lights = Lights::new(
+        &scene.sources,
+        scene.colors.palette(),
+        scene.integration.epsilon,
+    );
+    let particles: Vec<Particle> = energywave::particles::gather(&scene.particles, &scene.sources);
+    let lit = light_particles(&lights, &particles);
+    let eye = scene.camera.eye;
+    let mut worst = 0.0f64;
+    for (p, l) in particles.iter().zip(&lit) {
+        let toward = (eye - p.position).normalize();
+        let want = in_scattered(&lights, &particles, p.position, eye);
+        let got = l.toward(toward);
+        for k in 0..3 {
+            worst = worst.max((got[k] - want[k]).abs() / want[k].max(1e-3));
+        }
+    }
+    assert!(worst < 1e-9, "largest relative difference {worst}");
+    // Shadows matter here: the light at the cloud's far side is well below the unshadowed light.
+    let bare = in_scattered(&lights, &[], particles[0].position, eye);
+    let shadowed = in_scattered(&lights, &particles, particles[0].position, eye);
+    assert!(shadowed[0] < bare[0]);
+}
+
+#[test]
+fn smoke_in_front_of_the_glow_covers_it_and_smoke_behind_it_does_not() {
+    // A point source at the origin: a dense wall of black smoke in front of it hides the glow, the same wall
+    // behind it leaves the glow whole.
+    let wall = |z: f64| {
+        format!(
+            r#"
+[camera]
+eye = [0.0, 0.0, 8.0]
+fov_y = 30.0
+[colors]
+energy = [1.0, 0.5, 0.2]
+background = [0.0, 0.0, 0.0]
+[[points]]
+position = [0.0, 0.0, 0.0]
+coefficient = 1.0
+[[particles]]
+emitter = "box"
+center = [0.0, 0.0, {z}]
+size = [3.0, 3.0, 0.4]
+count = 3000
+particle_radius = 0.15
+density = 30.0
+color = [0.0, 0.0, 0.0]
+albedo = 0.0
+"#
+        )
+    };
+    let (w, h) = (64, 64);
+    let center = |text: &str| {
+        let frame = gpu().render(&scene(text), w, h, false).unwrap();
+        frame.pixels[(h / 2 * w + w / 2) as usize]
+    };
+    let bare = center(
+        r#"
+[camera]
+eye = [0.0, 0.0, 8.0]
+fov_y = 30.0
+[colors]
+energy = [1.0, 0.5, 0.2]
+background = [0.0, 0.0, 0.0]
+[[points]]
+position = [0.0, 0.0, 0.0]
+coefficient = 1.0
+"#,
+    );
+    let front = center(&wall(1.0));
+    let behind = center(&wall(-1.0));
+    assert!(bare[0] > 0.5, "{bare:?}");
+    // Black smoke of optical depth well above 5 in front: the glow is gone.
+    assert!(front[0] < 0.02, "{front:?}");
+    // Behind the source: the glow as without the smoke.
+    assert!((behind[0] - bare[0]).abs() < 0.02, "{behind:?} {bare:?}");
+}
+
+#[test]
+fn zz_debug() {
+    let Ok(text) = std::fs::read_to_string("/tmp/p/dbg.toml") else {
+        return;
+    };
+    let scene = scene(&text);
+    let mut gpu = gpu();
+    let f = gpu.render(&scene, 640, 400, false).unwrap();
+    let (image, view) = gpu.smoke_image().unwrap().unwrap();
+    let tmin = image
+        .iter()
+        .map(|p| p[0][3].min(p[1][3]))
+        .fold(1.0f32, f32::min);
+    let rmax = image
+        .iter()
+        .map(|p| p[0][0].max(p[1][0]))
+        .fold(0.0f32, f32::max);
+    let covered = image.iter().filter(|p| p[0][3] * p[1][3] < 0.9).count();
+    let c = (200 * 640 + 320) as usize;
+    eprintln!(
+        "size {:?} tmin {tmin} rmax {rmax} covered {covered} center {:?} frame {:?}",
+        view.size, image[c], f.pixels[c]
+    );
+}
