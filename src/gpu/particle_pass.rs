@@ -16,7 +16,7 @@ use super::formats::FRAME_FORMAT;
 use crate::frame::FrameSetup;
 use crate::objects::lighting::AMBIENT;
 use crate::particles::light::LitParticles;
-use crate::particles::view::{GlowPlace, SmokeView};
+use crate::particles::view::{SmokeView, smoke_size};
 
 /// Rust mirrors of `shaders/particles.wgsl` (keep in sync; `tests/gpu_layout.rs` checks them).
 pub mod gpu_data {
@@ -81,13 +81,6 @@ use gpu_data::{SmokeChunk, SmokeParams, SmokeParticle};
 /// The most segments a pixel takes in one dispatch: lavapipe stops an invocation's loops after 65535
 /// iterations in all.
 pub const CHUNK: u32 = 16384;
-
-/// The smoke image's pixels per frame pixel: about the field's texel density (a texel per `resolution`-th of the
-/// frame's height), at most one a frame pixel and at least a quarter.
-pub fn smoke_size(frame: [u32; 2], resolution: u32) -> [u32; 2] {
-    let step = (frame[1] / resolution.max(1)).clamp(1, 4);
-    frame.map(|s| s.div_ceil(step).max(1))
-}
 
 /// The splatting and compositing pipelines, and the last frame's buffers.
 pub struct ParticlePass {
@@ -231,20 +224,7 @@ impl ParticlePass {
             self.write_params(queue, setup, frame);
             return true;
         }
-        let view = SmokeView::new(
-            &lit.particles,
-            &scene.camera,
-            size,
-            scene.slice_width,
-            &GlowPlace {
-                sources: &scene.sources,
-                epsilon: scene.integration.epsilon,
-                billboard: &setup.billboard,
-                nu: setup.reach.nu,
-                alpha: setup.integration.alpha,
-                beta: setup.integration.beta,
-            },
-        );
+        let view = SmokeView::for_frame(setup, &lit.particles, frame);
         let (segments, starts) = view.segments(&lit.particles);
         let busiest = starts.windows(2).map(|w| w[1] - w[0]).max().unwrap_or(0);
         let dispatches = busiest.div_ceil(CHUNK).max(1);

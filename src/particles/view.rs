@@ -8,6 +8,7 @@ use rayon::prelude::*;
 
 use super::{Particle, Ray};
 use crate::field::Sources;
+use crate::frame::FrameSetup;
 use crate::geometry::{Billboard, Camera};
 use crate::integrate::zeta;
 use crate::reference::particles::Slicing;
@@ -75,7 +76,33 @@ impl GlowPlace<'_> {
     }
 }
 
+/// The smoke image's size for a frame of `frame` pixels: about the field's texel density (a texel per
+/// `resolution`-th of the frame's height), at most a pixel a frame pixel and at least a quarter of one a side.
+pub fn smoke_size(frame: [u32; 2], resolution: u32) -> [u32; 2] {
+    let step = (frame[1] / resolution.max(1)).clamp(1, 4);
+    frame.map(|s| s.div_ceil(step).max(1))
+}
+
 impl SmokeView {
+    /// The smoke of `setup`'s frame of `frame` pixels: its camera, its slices, its glow placed by its sources.
+    pub fn for_frame(setup: &FrameSetup, particles: &[Particle], frame: [u32; 2]) -> SmokeView {
+        let scene = setup.scene;
+        SmokeView::new(
+            particles,
+            &scene.camera,
+            smoke_size(frame, setup.resolution),
+            scene.slice_width,
+            &GlowPlace {
+                sources: &scene.sources,
+                epsilon: scene.integration.epsilon,
+                billboard: &setup.billboard,
+                nu: setup.reach.nu,
+                alpha: setup.integration.alpha,
+                beta: setup.integration.beta,
+            },
+        )
+    }
+
     /// The smoke of `particles` seen by `camera` in an image of `size` pixels, sliced at `width` radii of the
     /// smallest particle (widened where the segments would exceed `MAX_SEGMENTS`).
     pub fn new(

@@ -225,6 +225,13 @@ fn compose(
         texture.resolution,
     );
     let drawn = backdrop != Backdrop::Holdout;
+    // The particles' smoke, its rays ended by the objects; the back image under the glow, the front one over it.
+    let forward = scene.camera.frame().forward;
+    let smoke = super::particles::SmokeImage::of(setup, [width, height], |x, y| {
+        let dir = (scene.camera).pixel_ray(x as f64 + 0.5, y as f64 + 0.5, width, height);
+        let hit = objects.as_ref().and_then(|o| o.hit(scene.camera.eye, dir));
+        hit.map_or(f64::INFINITY, |(t, _)| t * dir.dot(forward))
+    });
     let glared = scene.glare.map(|g| super::glare::apply(texture, &g));
     let texture = glared.as_ref().unwrap_or(texture);
     let mut pixels = vec![clear; width as usize * height as usize];
@@ -241,6 +248,10 @@ fn compose(
                     Some((_, [r, g, b])) if drawn => [r, g, b, 1.0],
                     _ => clear,
                 };
+                let [front, back] = smoke
+                    .as_ref()
+                    .map_or([[0.0, 0.0, 0.0, 1.0]; 2], |s| s.at(x as u32, y as u32));
+                let under = super::particles::smoke_over(back, under);
                 *out = under;
                 if let Some((u, v)) = billboard.hit(scene.camera.eye, dir) {
                     let (b, tint) = match (&objects, hit) {
@@ -285,9 +296,10 @@ fn compose(
                             Blend::Over => over_unclamped(b, g, cb),
                         }
                         .map(|c| c.clamp(0.0, top));
-                        [r, g, b, 1.0]
+                        [r, g, b, under[3]]
                     };
                 }
+                *out = super::particles::smoke_over(front, *out);
             }
         });
     pixels

@@ -299,3 +299,86 @@ pub fn smoke_pixel(
         transmittance,
     })
 }
+
+/// A frame's smoke as the GPU pass renders it (`gpu::particle_pass`): the image over its plan, each pixel the
+/// front and back images of `smoke_pixel`, and the frame it lies over.
+pub struct SmokeImage {
+    pub view: crate::particles::view::SmokeView,
+    pub pixels: Vec<[Composite; 2]>,
+    frame: [u32; 2],
+}
+
+impl SmokeImage {
+    /// The smoke of `setup`'s frame of `frame` pixels, none without particles; `until(x, y)` is the depth along the
+    /// view axis of the first object on the ray of frame pixel `(x, y)` (infinite for none), which ends the rays
+    /// of the smoke's pixels that fall in it.
+    pub fn of(
+        setup: &crate::frame::FrameSetup,
+        frame: [u32; 2],
+        until: impl Fn(u32, u32) -> f64 + Sync,
+    ) -> Option<SmokeImage> {
+        use rayon::prelude::*;
+        let lit = setup.particles()?;
+        let view = crate::particles::view::SmokeView::for_frame(setup, &lit.particles, frame);
+        let [w, h] = view.size;
+        let pixels = (0..w * h)
+            .into_par_iter()
+            .map(|k| {
+                let (x, y) = (k % w, k / w);
+                let at = |c: u32, n: u32, f: u32| {
+                    (((c as f64 + 0.5) * f as f64 / n as f64) as u32).min(f - 1)
+                };
+                let end = until(at(x, w, frame[0]), at(y, h, frame[1]));
+                smoke_pixel(
+                    &lit.particles,
+                    &lit.lights,
+                    &view.ray(x, y),
+                    &view.slicing,
+                    end,
+                    view.split_at(x, y),
+                )
+            })
+            .collect();
+        Some(SmokeImage {
+            view,
+            pixels,
+            frame,
+        })
+    }
+
+    /// The front and the back image at frame pixel `(x, y)`, bilinear between the smoke's pixel centers as the
+    /// GPU's draw reads them: `[radiance, transmittance]` each.
+    pub fn at(&self, x: u32, y: u32) -> [[f64; 4]; 2] {
+        let [w, h] = self.view.size;
+        let g = [
+            (x as f64 + 0.5) * w as f64 / self.frame[0] as f64 - 0.5,
+            (y as f64 + 0.5) * h as f64 / self.frame[1] as f64 - 0.5,
+        ];
+        let i0 = [g[0].floor(), g[1].floor()];
+        let f = [g[0] - i0[0], g[1] - i0[1]];
+        let px = |dx: f64, dy: f64, which: usize| {
+            let cx = (i0[0] + dx).clamp(0.0, w as f64 - 1.0) as u32;
+            let cy = (i0[1] + dy).clamp(0.0, h as f64 - 1.0) as u32;
+            let c = &self.pixels[(cy * w + cx) as usize][which];
+            [c.radiance[0], c.radiance[1], c.radiance[2], c.transmittance]
+        };
+        std::array::from_fn(|which| {
+            std::array::from_fn(|k| {
+                let top = px(0.0, 0.0, which)[k] * (1.0 - f[0]) + px(1.0, 0.0, which)[k] * f[0];
+                let bottom = px(0.0, 1.0, which)[k] * (1.0 - f[0]) + px(1.0, 1.0, which)[k] * f[0];
+                top * (1.0 - f[1]) + bottom * f[1]
+            })
+        })
+    }
+}
+
+/// `smoke` ([radiance, transmittance]) laid over `under` (RGBA, premultiplied), as the GPU's premultiplied blend.
+pub fn smoke_over(smoke: [f64; 4], under: [f64; 4]) -> [f64; 4] {
+    let t = smoke[3];
+    [
+        smoke[0] + t * under[0],
+        smoke[1] + t * under[1],
+        smoke[2] + t * under[2],
+        (1.0 - t) + t * under[3],
+    ]
+}
