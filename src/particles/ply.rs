@@ -79,16 +79,17 @@ impl PropertyAccess for Vertex {
     }
 }
 
-/// Reads the particles of the PLY file at `path`; every problem is a sentence naming the vertex and the value.
+/// Reads the particles of the PLY file at `path`; every problem a phrase to follow the file's name, naming the
+/// vertex and the value where one is at fault.
 pub fn read(path: &Path, defaults: Defaults) -> Result<Vec<Particle>, String> {
     let parser = Parser::<Vertex>::new();
     let file = std::fs::File::open(path).map_err(|e| format!("cannot be read: {e}"))?;
     let mut reader = ply_rs_bw::parser::Reader::new(BufReader::new(file));
     let header = parser
         .read_header(&mut reader)
-        .map_err(|e| format!("is not a PLY file this reads: {e}"))?;
+        .map_err(|e| format!("not a PLY file this reads: {e}"))?;
     let Some(element) = header.elements.get("vertex") else {
-        return Err("has no vertex element: its particles are its vertices".to_owned());
+        return Err("no vertex element: a particle set's particles are its vertices".to_owned());
     };
     for axis in ["x", "y", "z"] {
         if !element.properties.contains_key(axis) {
@@ -99,14 +100,15 @@ pub fn read(path: &Path, defaults: Defaults) -> Result<Vec<Particle>, String> {
     }
     if element.count > MAX_PARTICLES {
         return Err(format!(
-            "has {} vertices: a scene takes at most {MAX_PARTICLES} particles",
+            "{} vertices: a scene takes at most {MAX_PARTICLES} particles",
             element.count
         ));
     }
     let payload = parser.read_payload(&mut reader, &header).map_err(|e| {
         format!(
-            "is cut short or damaged ({e}): its header promises {} vertices",
-            element.count
+            "cut short or damaged, its header promising {} vertices: {}",
+            element.count,
+            e.to_string().replace('\n', " ").replace('\t', "")
         )
     })?;
     let byte_order = match header.encoding {

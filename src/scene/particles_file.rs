@@ -139,7 +139,7 @@ pub(super) fn check_particles(
                         particles: Arc::new(particles),
                     },
                     Err(e) => {
-                        c.fail(&path.key("file"), format!("{} {e}", full.display()));
+                        c.fail(&path.key("file"), format!("{}: {e}", full.display()));
                         continue;
                     }
                 }
