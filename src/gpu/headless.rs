@@ -30,7 +30,7 @@ impl HeadlessRenderer {
     /// The last frame's smoke image and its plan (`ParticlePass::read_image`); none without particles.
     pub fn smoke_image(
         &self,
-    ) -> Result<Option<(Vec<[[f32; 4]; 2]>, crate::particles::view::SmokeView)>, GpuError> {
+    ) -> Result<Option<crate::gpu::particle_pass::SmokeReadback>, GpuError> {
         (self.renderer.particles()).read_image(&self.ctx.device, &self.ctx.queue)
     }
 

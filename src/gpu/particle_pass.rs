@@ -96,11 +96,42 @@ pub struct ParticlePass {
     prepared: Option<Prepared>,
 }
 
+/// A smoke image read back: per pixel, rows from the top, the front and the back image's (radiance,
+/// transmittance); with the plan it was made by.
+pub type SmokeReadback = (Vec<[[f32; 4]; 2]>, SmokeView);
+
+/// What a frame's plan depends on besides its particles: the view, the image's size, the slices' width, and
+/// what places the glow along the rays.
+#[derive(Clone, Debug, PartialEq)]
+struct ViewKey {
+    camera: crate::geometry::Camera,
+    frame: [u32; 2],
+    resolution: u32,
+    slice_width: f64,
+    billboard: crate::geometry::Billboard,
+    nu: f64,
+    decay: (f64, f64),
+}
+
+impl ViewKey {
+    fn of(setup: &FrameSetup, frame: [u32; 2]) -> ViewKey {
+        ViewKey {
+            camera: setup.scene.camera.clone(),
+            frame,
+            resolution: setup.resolution,
+            slice_width: setup.scene.slice_width,
+            billboard: setup.billboard,
+            nu: setup.reach.nu,
+            decay: (setup.integration.alpha, setup.integration.beta),
+        }
+    }
+}
+
 /// What the frame last prepared holds.
 struct Prepared {
     lit: Arc<LitParticles>,
+    key: ViewKey,
     view: SmokeView,
-    frame: [u32; 2],
     particles: wgpu::Buffer,
     segments: wgpu::Buffer,
     starts: wgpu::Buffer,
@@ -213,13 +244,11 @@ impl ParticlePass {
             self.prepared = None;
             return false;
         };
-        let scene = setup.scene;
         let size = smoke_size(frame, setup.resolution);
+        let key = ViewKey::of(setup, frame);
         if let Some(p) = &self.prepared
             && Arc::ptr_eq(&p.lit, &lit)
-            && p.view.camera == scene.camera
-            && p.view.size == size
-            && p.frame == frame
+            && p.key == key
         {
             self.write_params(queue, setup, frame);
             return true;
@@ -280,8 +309,8 @@ impl ParticlePass {
         });
         self.prepared = Some(Prepared {
             lit,
+            key,
             view,
-            frame,
             particles,
             segments,
             starts,
@@ -383,7 +412,7 @@ impl ParticlePass {
         &self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
-    ) -> Result<Option<(Vec<[[f32; 4]; 2]>, SmokeView)>, super::context::GpuError> {
+    ) -> Result<Option<SmokeReadback>, super::context::GpuError> {
         let Some(p) = &self.prepared else {
             return Ok(None);
         };

@@ -282,7 +282,7 @@ pub fn smoke_pixel(
     let mut images = [none, none];
     for (j, (&tau, &colored)) in depth.iter().zip(&colored).enumerate() {
         let front = slicing.near + j as f64 * slicing.width;
-        if front >= until || !(along > 0.0) {
+        if front >= until || along <= 0.0 {
             break;
         }
         if tau <= 0.0 {
@@ -381,4 +381,46 @@ pub fn smoke_over(smoke: [f64; 4], under: [f64; 4]) -> [f64; 4] {
         smoke[2] + t * under[2],
         (1.0 - t) + t * under[3],
     ]
+}
+
+/// The medium of [`smoke_pixel`] ray-marched in `steps` equal steps over the particles' span on `ray`: at each
+/// step's middle the extinction and, weighed by it, each particle's color times the light it scatters back
+/// along the ray (`lights`), the step a layer of them. What `smoke_pixel`'s two images, the front one over the
+/// back, converge to as its slabs thin.
+pub fn marched_lit(
+    particles: &[Particle],
+    lights: &[crate::particles::light::ParticleLight],
+    ray: &Ray,
+    steps: u32,
+) -> Composite {
+    let toward_eye = -ray.direction;
+    let lit: Vec<DVec3> = (particles.iter().zip(lights))
+        .map(|(p, l)| DVec3::from_array(p.color) * DVec3::from_array(l.toward(toward_eye)))
+        .collect();
+    let chords = particles.iter().filter_map(|p| p.chord(ray));
+    let (start, end) = chords.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), c| {
+        (a.min(c.0.max(0.0)), b.max(c.1))
+    });
+    let (mut radiance, mut transmittance) = (DVec3::ZERO, 1.0);
+    if end > start {
+        let dt = (end - start) / steps as f64;
+        for k in 0..steps {
+            let x = ray.at(start + (k as f64 + 0.5) * dt);
+            let (mut sigma, mut colored) = (0.0, DVec3::ZERO);
+            for (p, c) in particles.iter().zip(&lit) {
+                let s = p.density * kernel((x - p.position).length() / p.radius);
+                sigma += s;
+                colored += s * *c;
+            }
+            if sigma > 0.0 {
+                let opacity = -(-sigma * dt).exp_m1();
+                radiance += transmittance * colored / sigma * opacity;
+                transmittance *= (-sigma * dt).exp();
+            }
+        }
+    }
+    Composite {
+        radiance: radiance.to_array(),
+        transmittance,
+    }
 }
