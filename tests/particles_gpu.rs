@@ -377,9 +377,9 @@ fn the_smoke_converges_to_the_marched_medium_as_slices_thin_on_the_cpu_and_the_g
         .map(|&width| smoke_errors(&lit_cloud(width, true)))
         .collect();
     for pair in rows.windows(2) {
-        for k in 0..2 {
-            assert!(pair[1][k] < 0.5 * pair[0][k], "{rows:?}");
-        }
+        // The twin's and the GPU's.
+        assert!(pair[1][0] < 0.5 * pair[0][0], "{rows:?}");
+        assert!(pair[1][1] < 0.5 * pair[0][1], "{rows:?}");
     }
     assert!(rows[3][0] < 1e-4 && rows[3][1] < 1e-4, "{rows:?}");
 }
