@@ -697,6 +697,80 @@ fn objects_can_be_added_edited_moved_by_their_handle_deleted_and_undone() {
 }
 
 #[test]
+fn particle_sets_can_be_added_edited_deleted_and_undone_and_show_in_the_viewport() {
+    use energywave::particles::Origin;
+    let mut h = harness(light_scene());
+    let before = viewport_pixels(&mut h);
+    let click = |h: &mut Harness<'static, ViewerApp>, label: &str| {
+        h.get_all_by_label(label).next().unwrap().scroll_to_me();
+        h.run();
+        h.get_all_by_label(label).next().unwrap().click();
+        h.run();
+    };
+    click(&mut h, "+ smoke");
+    assert_eq!(h.state().scene().particles.len(), 1);
+    // A cloud at the camera's target: it shows (the image changes).
+    let with = viewport_pixels(&mut h);
+    let d = mean_abs_difference(&before, &with);
+    assert!(d > 1.0, "the smoke shows: {d}");
+    // Its count and the slices' width edited in the panel, each one undo step.
+    h.get_by_role_and_label(Role::SpinButton, "count")
+        .set_value_accesskit(120.0);
+    h.run();
+    let Origin::Emitter(e) = &h.state().scene().particles[0].origin else {
+        panic!("an emitter");
+    };
+    assert_eq!(e.count, 120);
+    h.get_by_role_and_label(Role::SpinButton, "slices")
+        .set_value_accesskit(0.25);
+    h.run();
+    assert_eq!(h.state().scene().slice_width, 0.25);
+    undo(&mut h);
+    assert_eq!(h.state().scene().slice_width, 0.5);
+    // Duplicated with the next seed (the set's is the last Duplicate of the panel, after the sources').
+    let last = h.get_all_by_label("Duplicate").count() - 1;
+    h.get_all_by_label("Duplicate")
+        .nth(last)
+        .unwrap()
+        .scroll_to_me();
+    h.run();
+    h.get_all_by_label("Duplicate").nth(last).unwrap().click();
+    h.run();
+    let sets = &h.state().scene().particles;
+    assert_eq!(sets.len(), 2);
+    assert_ne!(sets[0], sets[1]);
+    // Dust around the ring; saved and read back with every set.
+    click(&mut h, "+ ring dust");
+    assert_eq!(h.state().scene().particles.len(), 3);
+    let text = h.state().scene().to_toml();
+    let back = Scene::parse(&text, std::path::Path::new("s.toml")).unwrap();
+    assert_eq!(back.particles, h.state().scene().particles);
+    undo(&mut h);
+    undo(&mut h);
+    assert_eq!(h.state().scene().particles.len(), 1);
+    // Deleting the torus the ring dust follows takes the dust with it: the scene still saves as a valid file.
+    click(&mut h, "+ ring dust");
+    assert_eq!(h.state().scene().particles.len(), 2);
+    h.state_mut()
+        .apply(energywave::viewer::action::Action::Edit(
+            energywave::viewer::action::Edit::DeleteSource(
+                energywave::animation::SourceKind::Tori,
+                0,
+            ),
+        ));
+    h.run();
+    assert!(h.state().scene().sources.tori.is_empty());
+    assert_eq!(h.state().scene().particles.len(), 1);
+    let text = h.state().scene().to_toml();
+    Scene::parse(&text, std::path::Path::new("s.toml")).unwrap();
+    assert!(
+        h.state().report().error.is_none(),
+        "{:?}",
+        h.state().report().error
+    );
+}
+
+#[test]
 fn hovering_the_glare_threshold_previews_what_glares() {
     let mut scene = light_scene();
     // The default scene's B is above 0.5 nearly everywhere in frame: a threshold that leaves the cores.

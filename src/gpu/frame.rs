@@ -261,7 +261,7 @@ impl SceneRenderer {
             }
             // The particles' smoke behind the billboard's plane over the background and the objects, its rays
             // ended by the objects; the smoke in front of the plane goes over the glow.
-            let smoke = self.particles.prepare(device, queue, setup, targets.size);
+            let smoke = (self.particles).prepare(device, queue, setup, targets.size, resolution);
             if smoke {
                 self.particles
                     .encode(device, encoder, &targets.depth_value_view);

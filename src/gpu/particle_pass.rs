@@ -16,7 +16,7 @@ use super::formats::FRAME_FORMAT;
 use crate::frame::FrameSetup;
 use crate::objects::lighting::AMBIENT;
 use crate::particles::light::LitParticles;
-use crate::particles::view::{SmokeView, smoke_size};
+use crate::particles::view::SmokeView;
 
 /// Rust mirrors of `shaders/particles.wgsl` (keep in sync; `tests/gpu_layout.rs` checks them).
 pub mod gpu_data {
@@ -114,11 +114,11 @@ struct ViewKey {
 }
 
 impl ViewKey {
-    fn of(setup: &FrameSetup, frame: [u32; 2]) -> ViewKey {
+    fn of(setup: &FrameSetup, frame: [u32; 2], resolution: u32) -> ViewKey {
         ViewKey {
             camera: setup.scene.camera.clone(),
             frame,
-            resolution: setup.resolution,
+            resolution,
             slice_width: setup.scene.slice_width,
             billboard: setup.billboard,
             nu: setup.reach.nu,
@@ -231,21 +231,22 @@ impl ParticlePass {
         }
     }
 
-    /// Uploads the frame's particles and plans its segments for a frame of `frame` pixels, where the particles,
-    /// the view or the size changed. Returns whether there is smoke to draw.
+    /// Uploads the frame's particles and plans its segments for a frame of `frame` pixels over a field of
+    /// `resolution` texels a side (`SmokeView::for_frame`), where the particles, the view or the size changed.
+    /// Returns whether there is smoke to draw.
     pub fn prepare(
         &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         setup: &FrameSetup,
         frame: [u32; 2],
+        resolution: u32,
     ) -> bool {
         let Some(lit) = setup.particles() else {
             self.prepared = None;
             return false;
         };
-        let size = smoke_size(frame, setup.resolution);
-        let key = ViewKey::of(setup, frame);
+        let key = ViewKey::of(setup, frame, resolution);
         if let Some(p) = &self.prepared
             && Arc::ptr_eq(&p.lit, &lit)
             && p.key == key
@@ -253,7 +254,8 @@ impl ParticlePass {
             self.write_params(queue, setup, frame);
             return true;
         }
-        let view = SmokeView::for_frame(setup, &lit.particles, frame);
+        let view = SmokeView::for_frame(setup, &lit.particles, frame, resolution);
+        let size = view.size;
         let (segments, starts) = view.segments(&lit.particles);
         let busiest = starts.windows(2).map(|w| w[1] - w[0]).max().unwrap_or(0);
         let dispatches = busiest.div_ceil(CHUNK).max(1);

@@ -84,14 +84,22 @@ pub fn smoke_size(frame: [u32; 2], resolution: u32) -> [u32; 2] {
 }
 
 impl SmokeView {
-    /// The smoke of `setup`'s frame of `frame` pixels: its camera, its slices, its glow placed by its sources.
-    pub fn for_frame(setup: &FrameSetup, particles: &[Particle], frame: [u32; 2]) -> SmokeView {
+    /// The smoke of `setup`'s frame of `frame` pixels over a field of `resolution` texels a side: its camera, its
+    /// slices, its glow placed by its sources. A field coarser than the scene's (the viewer's while the view
+    /// moves) gets a coarser image and slices as much wider, up to four times.
+    pub fn for_frame(
+        setup: &FrameSetup,
+        particles: &[Particle],
+        frame: [u32; 2],
+        resolution: u32,
+    ) -> SmokeView {
         let scene = setup.scene;
+        let coarser = (setup.resolution as f64 / resolution.max(1) as f64).clamp(1.0, 4.0);
         SmokeView::new(
             particles,
             &scene.camera,
-            smoke_size(frame, setup.resolution),
-            scene.slice_width,
+            smoke_size(frame, resolution),
+            scene.slice_width * coarser,
             &GlowPlace {
                 sources: &scene.sources,
                 epsilon: scene.integration.epsilon,

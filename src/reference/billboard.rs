@@ -227,11 +227,12 @@ fn compose(
     let drawn = backdrop != Backdrop::Holdout;
     // The particles' smoke, its rays ended by the objects; the back image under the glow, the front one over it.
     let forward = scene.camera.frame().forward;
-    let smoke = super::particles::SmokeImage::of(setup, [width, height], |x, y| {
-        let dir = (scene.camera).pixel_ray(x as f64 + 0.5, y as f64 + 0.5, width, height);
-        let hit = objects.as_ref().and_then(|o| o.hit(scene.camera.eye, dir));
-        hit.map_or(f64::INFINITY, |(t, _)| t * dir.dot(forward))
-    });
+    let smoke =
+        super::particles::SmokeImage::of(setup, [width, height], texture.resolution, |x, y| {
+            let dir = (scene.camera).pixel_ray(x as f64 + 0.5, y as f64 + 0.5, width, height);
+            let hit = objects.as_ref().and_then(|o| o.hit(scene.camera.eye, dir));
+            hit.map_or(f64::INFINITY, |(t, _)| t * dir.dot(forward))
+        });
     let glared = scene.glare.map(|g| super::glare::apply(texture, &g));
     let texture = glared.as_ref().unwrap_or(texture);
     let mut pixels = vec![clear; width as usize * height as usize];

@@ -309,17 +309,19 @@ pub struct SmokeImage {
 }
 
 impl SmokeImage {
-    /// The smoke of `setup`'s frame of `frame` pixels, none without particles; `until(x, y)` is the depth along the
-    /// view axis of the first object on the ray of frame pixel `(x, y)` (infinite for none), which ends the rays
-    /// of the smoke's pixels that fall in it.
+    /// The smoke of `setup`'s frame of `frame` pixels over a field of `resolution` texels a side, none without
+    /// particles; `until(x, y)` is the depth along the view axis of the first object on the ray of frame pixel
+    /// `(x, y)` (infinite for none), which ends the rays of the smoke's pixels that fall in it.
     pub fn of(
         setup: &crate::frame::FrameSetup,
         frame: [u32; 2],
+        resolution: u32,
         until: impl Fn(u32, u32) -> f64 + Sync,
     ) -> Option<SmokeImage> {
         use rayon::prelude::*;
         let lit = setup.particles()?;
-        let view = crate::particles::view::SmokeView::for_frame(setup, &lit.particles, frame);
+        let view =
+            crate::particles::view::SmokeView::for_frame(setup, &lit.particles, frame, resolution);
         let [w, h] = view.size;
         let pixels = (0..w * h)
             .into_par_iter()

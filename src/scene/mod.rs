@@ -16,7 +16,7 @@ mod particles_file;
 mod validate;
 
 pub use objects_file::DEFAULT_ALBEDO;
-pub use particles_file::DEFAULTS as PARTICLE_DEFAULTS;
+pub use particles_file::{DEFAULTS as PARTICLE_DEFAULTS, MIN_SLICE_WIDTH};
 
 use std::path::{Path, PathBuf};
 

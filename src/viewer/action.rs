@@ -12,6 +12,8 @@ use crate::field::{Curve, Line, Point, Torus, WForm};
 use crate::geometry::Camera;
 use crate::integrate::{Decay, Integrator};
 use crate::objects::{Object, Shape, ShapeKind};
+use crate::particles::emit::EmitterShape;
+use crate::particles::{Origin, ParticleSet};
 use crate::scene::{Blend, DEFAULT_ALBEDO, Glare, Scene};
 
 /// One request from the UI.
@@ -136,6 +138,16 @@ pub enum Edit {
     /// A copy of object `i`, listed right after it.
     DuplicateObject(usize),
     DeleteObject(usize),
+    /// A particle set appended.
+    AddParticles(ParticleSet),
+    /// Particle set `i` replaced: any of its settings edited.
+    SetParticles(usize, ParticleSet),
+    /// A copy of particle set `i`, listed right after it, with the next seed (an emitter's) so that it is not
+    /// drawn over the first.
+    DuplicateParticles(usize),
+    DeleteParticles(usize),
+    /// The particles' slices' width, in radii of the smallest particle.
+    SliceWidth(f64),
 }
 
 impl Action {
@@ -224,6 +236,23 @@ impl Edit {
             Edit::DeleteObject(i) => {
                 remove(&mut scene.objects, i);
             }
+            Edit::AddParticles(set) => scene.particles.push(set),
+            Edit::SetParticles(i, set) => {
+                if let Some(p) = scene.particles.get_mut(i) {
+                    *p = set;
+                }
+            }
+            Edit::DuplicateParticles(i) => {
+                if duplicate(&mut scene.particles, i)
+                    && let Origin::Emitter(e) = &mut scene.particles[i + 1].origin
+                {
+                    e.seed = e.seed.wrapping_add(1);
+                }
+            }
+            Edit::DeleteParticles(i) => {
+                remove(&mut scene.particles, i);
+            }
+            Edit::SliceWidth(w) => scene.slice_width = w,
             Edit::Glare(g) => scene.glare = g,
             Edit::AddSeriesColor(i) => {
                 let colors = scene.colors.clone();
@@ -306,9 +335,12 @@ impl Edit {
                     SourceKind::Tori => duplicate(&mut s.tori, i),
                     SourceKind::Curves => duplicate(&mut s.curves, i),
                 };
-                // Pulses and keys follow their sources.
+                // Pulses and keys follow their sources; so do emitters (the copy has none of its own).
                 if copied && let Some(a) = &mut scene.animation {
                     a.source_inserted(kind, i + 1);
+                }
+                if copied {
+                    emitters_follow_insertion(&mut scene.particles, kind, i + 1);
                 }
             }
             Edit::DeleteSource(kind, i) => {
@@ -320,6 +352,9 @@ impl Edit {
                 };
                 if removed && let Some(a) = &mut scene.animation {
                     a.source_removed(kind, i);
+                }
+                if removed {
+                    emitters_follow_removal(&mut scene.particles, kind, i);
                 }
             }
             Edit::AddSegment(c) => {
@@ -391,6 +426,42 @@ impl Edit {
         if let Some(mut a) = scene.animation.take() {
             a.retain_valid(scene);
             scene.animation = Some(a);
+        }
+    }
+}
+
+/// The source index an emitter is placed around, where it is of `kind`.
+fn emitter_source(set: &mut ParticleSet, kind: SourceKind) -> Option<&mut usize> {
+    let Origin::Emitter(e) = &mut set.origin else {
+        return None;
+    };
+    match (&mut e.shape, kind) {
+        (EmitterShape::Curve { curve, .. }, SourceKind::Curves) => Some(curve),
+        (EmitterShape::Torus { torus, .. }, SourceKind::Tori) => Some(torus),
+        _ => None,
+    }
+}
+
+/// After source `i` of `kind` is removed: the emitters placed around it go with it, and those around a later
+/// one of its kind follow it down the list (so that the scene still saves as a valid file).
+fn emitters_follow_removal(sets: &mut Vec<ParticleSet>, kind: SourceKind, i: usize) {
+    sets.retain_mut(|set| match emitter_source(set, kind) {
+        Some(index) if *index == i => false,
+        Some(index) if *index > i => {
+            *index -= 1;
+            true
+        }
+        _ => true,
+    });
+}
+
+/// After a source of `kind` is inserted at `i`: the emitters around it and the later ones follow it up the list.
+fn emitters_follow_insertion(sets: &mut [ParticleSet], kind: SourceKind, i: usize) {
+    for set in sets {
+        if let Some(index) = emitter_source(set, kind)
+            && *index >= i
+        {
+            *index += 1;
         }
     }
 }

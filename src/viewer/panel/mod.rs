@@ -4,13 +4,14 @@
 //! directions, ...), so the GPU never sees them.
 //!
 //! One file a section: `file` (the document, files, screenshots), `view` (the camera), `render` (integration,
-//! billboard, colors), `sources`, `objects`; `fields` holds the editors with their key buttons, `context` what the panel
+//! billboard, colors), `sources`, `objects`, `particles`; `fields` holds the editors with their key buttons, `context` what the panel
 //! reads and its own settings.
 
 mod context;
 mod fields;
 mod file;
 mod objects;
+mod particles;
 mod render;
 mod sources;
 mod view;
@@ -39,5 +40,7 @@ pub fn show(ui: &mut Ui, cx: &Context, path: &mut String, view: &mut ViewSetting
     sources::sources_section(ui, cx, &mut out);
     ui.separator();
     objects::objects_section(ui, cx, &mut out);
+    ui.separator();
+    particles::particles_section(ui, cx, &mut out);
     out.actions
 }
