@@ -1,6 +1,6 @@
 // Particle sets by image-aligned sheet-buffer splatting (METHOD.md section 10, after paper 002_): the smoke's own
-// image, a ray through each pixel's center, slabs perpendicular to the view. Each tile of TILE x TILE pixels
-// has its segments (a particle cut by a slab) in slab order; a pixel adds the optical depth of its slab's
+// image, a ray through each pixel's center, slabs perpendicular to the view. Each tile of TILE x TILE pixels (a
+// workgroup) has its segments (a particle cut by a slab) in slab order; a pixel adds the optical depth of its slab's
 // segments (commutative: no order among them, so no popping) and their color times the light each particle
 // scatters back along the ray, then composites the slab over what lies behind it, front to back. The glow is taken
 // to lie where its weight along the ray does (particles::view::GlowPlace): the slabs whose middle lies in front of
@@ -55,19 +55,23 @@ struct SmokeChunk {
     pad1: u32,
 }
 
-const TILE: u32 = 16u;
+const TILE: u32 = 4u;
+// particles::view::GLOW_CELL.
+const GLOW_CELL: u32 = 16u;
 // particles::KERNEL_PEAK and KERNEL_FALLOFF.
 const KERNEL_PEAK: f32 = 0.446;
 const KERNEL_FALLOFF: f32 = 2.0;
 
 @group(0) @binding(0) var<uniform> params: SmokeParams;
 @group(0) @binding(1) var<storage, read> particles: array<SmokeParticle>;
+// Each particle's ball (center, radius), read alone first: most segments of a tile miss a given pixel.
+@group(0) @binding(9) var<storage, read> balls: array<vec4<f32>>;
 // (slab, particle) a segment, each tile's in slab order.
 @group(0) @binding(2) var<storage, read> segments: array<vec2<u32>>;
 // Each tile's first segment; one more than tiles.
 @group(0) @binding(3) var<storage, read> starts: array<u32>;
-// The glow's depth along the view axis at the tiles' corners (tiles_x + 1 a row): the slabs in front of it go over
-// the glow (particles::view::SmokeView::split_at).
+// The glow's depth along the view axis at the glow cells' corners (one more than cells a row): the slabs in front of
+// it go over the glow (particles::view::SmokeView::split_at).
 @group(0) @binding(8) var<storage, read> glow: array<f32>;
 // Four a pixel: the front image (radiance, transmittance) once the billboard's plane is passed, the image so far,
 // the open slab's (sum of tau color light, sum of tau), and the open slab's index and whether the plane is
@@ -113,7 +117,7 @@ fn close_slab(acc: vec4<f32>, open: vec4<f32>) -> vec4<f32> {
     return vec4<f32>(acc.xyz + acc.w * open.xyz / open.w * (1.0 - through), acc.w * through);
 }
 
-@compute @workgroup_size(8, 8)
+@compute @workgroup_size(4, 4)
 fn splat(@builtin(global_invocation_id) gid: vec3<u32>) {
     if gid.x >= params.size.x || gid.y >= params.size.y {
         return;
@@ -138,12 +142,12 @@ fn splat(@builtin(global_invocation_id) gid: vec3<u32>) {
             until = view_depth(d);
         }
     }
-    // Where the glow lies along the ray, bilinear between the tiles' corners.
-    let g = (vec2<f32>(gid.xy) + 0.5) / f32(TILE);
-    let tiles = vec2<u32>(params.tiles_x, (params.size.y + TILE - 1u) / TILE);
-    let c = min(vec2<u32>(g), tiles - 1u);
+    // Where the glow lies along the ray, bilinear between the glow cells' corners.
+    let g = (vec2<f32>(gid.xy) + 0.5) / f32(GLOW_CELL);
+    let cells = (params.size + GLOW_CELL - 1u) / GLOW_CELL;
+    let c = min(vec2<u32>(g), cells - 1u);
     let f = g - vec2<f32>(c);
-    let row = params.tiles_x + 1u;
+    let row = cells.x + 1u;
     let at = c.y * row + c.x;
     let top = glow[at] + (glow[at + 1u] - glow[at]) * f.x;
     let bottom = glow[at + row] + (glow[at + row + 1u] - glow[at + row]) * f.x;
@@ -163,12 +167,17 @@ fn splat(@builtin(global_invocation_id) gid: vec3<u32>) {
         passed = bitcast<u32>(marks.y);
     }
     let toward_eye = -dir;
+    // What the loop reads, in registers (lavapipe loads a buffer again at every pass of a loop).
+    let near = params.near;
+    let width = params.width;
+    let eye = params.eye;
+    let per_depth = 1.0 / along;
     for (var i = first; i < last; i++) {
         let s = segments[i];
         if s.x != slab {
             if slab != 0xffffffffu {
                 // The first slab whose middle lies past the plane begins the back image.
-                if passed == 0u && params.near + (f32(slab) + 0.5) * params.width >= split {
+                if passed == 0u && near + (f32(slab) + 0.5) * width >= split {
                     front = acc;
                     acc = none;
                     passed = 1u;
@@ -178,26 +187,28 @@ fn splat(@builtin(global_invocation_id) gid: vec3<u32>) {
             open = vec4<f32>(0.0);
             slab = s.x;
         }
-        let front = params.near + f32(s.x) * params.width;
-        if front >= until {
+        let slab_front = near + f32(s.x) * width;
+        if slab_front >= until {
             continue;
         }
-        let p = particles[s.y];
-        let to = p.position - params.eye;
+        let ball = balls[s.y];
+        let radius = ball.w;
+        let to = ball.xyz - eye;
         let closest = dot(to, dir);
-        let u = length(to - dir * closest) / p.radius;
+        let u = length(to - dir * closest) / radius;
         if u >= 1.0 {
             continue;
         }
         let half = sqrt(1.0 - u * u);
-        let a = max((front / along - closest) / p.radius, -half);
-        let b = min(((front + params.width) / along - closest) / p.radius, half);
+        let a = max((slab_front * per_depth - closest) / radius, -half);
+        let b = min(((slab_front + width) * per_depth - closest) / radius, half);
         if b <= a {
             continue;
         }
+        let p = particles[s.y];
         let k = sqrt(KERNEL_FALLOFF);
         // particles::segment_integral in scene units: rho R G(u) sqrt(pi / (4 falloff)) (erf(k b) - erf(k a)).
-        let tau = p.density * p.radius * KERNEL_PEAK * exp(-KERNEL_FALLOFF * u * u)
+        let tau = p.density * radius * KERNEL_PEAK * exp(-KERNEL_FALLOFF * u * u)
             * sqrt(3.14159265 / (4.0 * KERNEL_FALLOFF)) * (erf_approx(k * b) - erf_approx(k * a));
         if tau > 0.0 {
             open += vec4<f32>(tau * p.color * light_toward(p, toward_eye), tau);
@@ -205,7 +216,7 @@ fn splat(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     if chunk.last != 0u {
         if slab != 0xffffffffu {
-            if passed == 0u && params.near + (f32(slab) + 0.5) * params.width >= split {
+            if passed == 0u && near + (f32(slab) + 0.5) * width >= split {
                 front = acc;
                 acc = none;
                 passed = 1u;

@@ -214,6 +214,30 @@ fn rust_mirrors_match_the_wgsl_layouts() {
         size_of::<energywave::gpu::object_pass::gpu_data::ObjectParams>(),
         fields!(energywave::gpu::object_pass::gpu_data::ObjectParams: view_proj, energy, ambient),
     );
+    let particles = parse_and_validate("particles", &shaders::compose("particles.wgsl"));
+    {
+        use energywave::gpu::particle_pass::gpu_data::{SmokeChunk, SmokeParams, SmokeParticle};
+        check_struct(
+            &particles,
+            "SmokeParams",
+            size_of::<SmokeParams>(),
+            fields!(SmokeParams: eye, tan_half, forward, aspect, right, near, up, width, size, tiles_x, chunk,
+                frame, objects, pad0, depth_near, depth_far, pad1, pad2),
+        );
+        check_struct(
+            &particles,
+            "SmokeParticle",
+            size_of::<SmokeParticle>(),
+            fields!(SmokeParticle: position, radius, color, density, iso, diag_r, off_r, diag_g, off_g, diag_b,
+                off_b),
+        );
+        check_struct(
+            &particles,
+            "SmokeChunk",
+            size_of::<SmokeChunk>(),
+            fields!(SmokeChunk: index, last, pad0, pad1),
+        );
+    }
     let billboard = parse_and_validate("billboard", shaders::BILLBOARD_PASS);
     check_struct(
         &billboard,

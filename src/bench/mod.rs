@@ -18,12 +18,14 @@ use crate::integrate::Integrator;
 use crate::scene::Scene;
 
 mod equal_error;
+mod particles;
 mod plain;
 mod report;
 mod timing;
 mod viewer_frames;
 
 pub use equal_error::*;
+pub use particles::*;
 pub use plain::*;
 pub use report::*;
 pub use timing::*;
@@ -85,6 +87,8 @@ pub enum Section {
     EqualError,
     /// Whole viewer frames.
     Viewer,
+    /// Particle sets beside paper 002_'s tables.
+    Particles,
 }
 
 /// Which sections run.
@@ -94,6 +98,7 @@ pub struct Sections {
     pub deformation: bool,
     pub equal_error: bool,
     pub viewer: bool,
+    pub particles: bool,
 }
 
 impl Sections {
@@ -103,6 +108,7 @@ impl Sections {
         deformation: true,
         equal_error: true,
         viewer: true,
+        particles: true,
     };
 
     /// Only those listed; every section for an empty list.
@@ -115,6 +121,7 @@ impl Sections {
             deformation: list.contains(&Section::Deformation),
             equal_error: list.contains(&Section::EqualError),
             viewer: list.contains(&Section::Viewer),
+            particles: list.contains(&Section::Particles),
         }
     }
 }
@@ -310,6 +317,12 @@ pub fn run(
     } else {
         None
     };
+    let particles = if options.sections.particles {
+        progress("particle sets: two, 500 and 50,000 particles around the default beam");
+        particle_rows(options.warmup(), options.frames())?
+    } else {
+        Vec::new()
+    };
 
     Ok(Report {
         adapter,
@@ -322,6 +335,7 @@ pub fn run(
         deformation,
         viewer,
         equal_error,
+        particles,
         compile,
         total_seconds: start.elapsed().as_secs_f64(),
     })
@@ -454,6 +468,17 @@ mod tests {
                     full_field: Timing::of(vec![400.0]),
                 }),
             }),
+            particles: vec![ParticleRow {
+                case: "500 particles".into(),
+                particles: 500,
+                light: Timing::of(vec![3.0]),
+                plan: Timing::of(vec![2.0]),
+                segments: 4000,
+                frame: Timing::of(vec![60.0]),
+                bare: Timing::of(vec![50.0]),
+                paper_unlit_ms: Some(58.1),
+                paper_lit_ms: Some(286.0),
+            }],
             equal_error: vec![EqualErrorRow {
                 scene: "mixed".into(),
                 resolution: 256,
@@ -550,12 +575,18 @@ mod tests {
             "{table}"
         );
         assert_eq!(json["viewer"]["playing"]["side"], 32);
+        assert!(
+            table.contains("500 particles") && table.contains("286.0"),
+            "{table}"
+        );
+        assert_eq!(json["particles"][0]["frame"]["median_ms"], 60.0);
         assert_eq!(json["options"]["quick"], true);
         // A run of some sections prints only theirs.
         let only = Report {
             grid: Vec::new(),
             deformation: Vec::new(),
             viewer: None,
+            particles: Vec::new(),
             ..report
         };
         let table = only.table();
@@ -563,7 +594,13 @@ mod tests {
             table.contains("speedup") && table.contains("6.00x"),
             "{table}"
         );
-        for absent in ["paper FPS", "deformation", "viewer frame", "--quick"] {
+        for absent in [
+            "paper FPS",
+            "deformation",
+            "viewer frame",
+            "--quick",
+            "particle sets",
+        ] {
             assert!(!table.contains(absent), "{absent}: {table}");
         }
     }

@@ -97,6 +97,8 @@ pub struct Report {
     pub deformation: Vec<DeformationRow>,
     pub viewer: Option<ViewerFrameRow>,
     pub equal_error: Vec<EqualErrorRow>,
+    /// Particle sets beside paper 002_'s tables.
+    pub particles: Vec<super::ParticleRow>,
     /// What each structure's specialised pipelines took to compile, in milliseconds.
     pub compile: Vec<CompileTime>,
     pub total_seconds: f64,
@@ -257,6 +259,49 @@ impl Report {
                     p.side,
                     p.full_field.median_ms,
                     p.full_field.median_ms * p.frame_rate / 1e3,
+                );
+            }
+        }
+        if !self.particles.is_empty() {
+            let _ = writeln!(
+                s,
+                "\nparticle sets around the default beam, W = 256, 512 x 512 (wall ms, median (min..max)): light per edit, plan per view, frame of a planned view with and without them; added = plan + frame - bare, per moved view; the paper's on its 2003 GPU"
+            );
+            let _ = writeln!(
+                s,
+                "{:<17} {:>9} {:>9} {:>10} {:>9} {:>15} {:>15} {:>9} {:>13} {:>11}",
+                "case",
+                "particles",
+                "light ms",
+                "segments",
+                "plan ms",
+                "frame ms",
+                "bare frame ms",
+                "added ms",
+                "paper unlit",
+                "paper lit"
+            );
+            let paper = |x: Option<f64>| x.map_or("-".to_owned(), |v| format!("{v:.1}"));
+            for r in &self.particles {
+                let _ = writeln!(
+                    s,
+                    "{:<17} {:>9} {:>9.1} {:>10} {:>9.1} {:>15} {:>15} {:>9.1} {:>13} {:>11}",
+                    r.case,
+                    r.particles,
+                    r.light.median_ms,
+                    r.segments,
+                    r.plan.median_ms,
+                    format!(
+                        "{:.1} ({:.0}..{:.0})",
+                        r.frame.median_ms, r.frame.min_ms, r.frame.max_ms
+                    ),
+                    format!(
+                        "{:.1} ({:.0}..{:.0})",
+                        r.bare.median_ms, r.bare.min_ms, r.bare.max_ms
+                    ),
+                    r.added_ms(),
+                    paper(r.paper_unlit_ms),
+                    paper(r.paper_lit_ms),
                 );
             }
         }

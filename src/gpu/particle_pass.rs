@@ -16,7 +16,7 @@ use super::formats::FRAME_FORMAT;
 use crate::frame::FrameSetup;
 use crate::objects::lighting::AMBIENT;
 use crate::particles::light::LitParticles;
-use crate::particles::view::SmokeView;
+use crate::particles::view::{SmokeView, TILE};
 
 /// Rust mirrors of `shaders/particles.wgsl` (keep in sync; `tests/gpu_layout.rs` checks them).
 pub mod gpu_data {
@@ -133,6 +133,7 @@ struct Prepared {
     key: ViewKey,
     view: SmokeView,
     particles: wgpu::Buffer,
+    balls: wgpu::Buffer,
     segments: wgpu::Buffer,
     starts: wgpu::Buffer,
     glow: wgpu::Buffer,
@@ -161,6 +162,7 @@ impl ParticlePass {
             storage_buffer_entry(2),
             storage_buffer_entry(3),
             storage_buffer_entry(8),
+            storage_buffer_entry(9),
             wgpu::BindGroupLayoutEntry {
                 binding: 4,
                 visibility: compute,
@@ -278,13 +280,24 @@ impl ParticlePass {
             .prepared
             .as_ref()
             .is_some_and(|p| Arc::ptr_eq(&p.lit, &lit));
-        let particles = match self.prepared.take() {
-            Some(p) if same_particles => p.particles,
-            _ => storage(
-                device,
-                "particles",
-                bytemuck::cast_slice(&gpu_particles(&lit)),
-            ),
+        let (particles, balls) = match self.prepared.take() {
+            Some(p) if same_particles => (p.particles, p.balls),
+            _ => {
+                let balls: Vec<[f32; 4]> = (lit.particles.iter())
+                    .map(|p| {
+                        let c = p.position.as_vec3();
+                        [c.x, c.y, c.z, p.radius as f32]
+                    })
+                    .collect();
+                (
+                    storage(
+                        device,
+                        "particles",
+                        bytemuck::cast_slice(&gpu_particles(&lit)),
+                    ),
+                    storage(device, "balls", bytemuck::cast_slice(&balls)),
+                )
+            }
         };
         let segments = storage(device, "segments", bytemuck::cast_slice(&segments));
         let starts = storage(device, "starts", bytemuck::cast_slice(&starts));
@@ -314,6 +327,7 @@ impl ParticlePass {
             key,
             view,
             particles,
+            balls,
             segments,
             starts,
             glow,
@@ -374,6 +388,7 @@ impl ParticlePass {
                 entry(2, p.segments.as_entire_binding()),
                 entry(3, p.starts.as_entire_binding()),
                 entry(8, p.glow.as_entire_binding()),
+                entry(9, p.balls.as_entire_binding()),
                 entry(4, p.state.as_entire_binding()),
                 entry(5, wgpu::BindingResource::TextureView(depth_value)),
                 entry(
@@ -394,7 +409,7 @@ impl ParticlePass {
         let [w, h] = p.view.size;
         for i in 0..p.dispatches {
             pass.set_bind_group(0, &group, &[(i as u64 * self.chunk_stride) as u32]);
-            pass.dispatch_workgroups(w.div_ceil(8), h.div_ceil(8), 1);
+            pass.dispatch_workgroups(w.div_ceil(TILE), h.div_ceil(TILE), 1);
         }
     }
 
