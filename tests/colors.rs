@@ -469,7 +469,7 @@ fn colors_and_intensities_in_scene_files() {
     let original = std::fs::read_to_string(&path).unwrap();
     let mut edited = scene.clone();
     edited.sources.tori[1].look.color = Some([0.2, 1.0, 0.4]);
-    let saved = energywave::scene::format::update_text(&original, &scene, &edited);
+    let saved = energywave::scene::format::update_text(&original, &scene, &edited, &path);
     let changed: Vec<_> = original
         .lines()
         .zip(saved.lines())

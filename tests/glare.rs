@@ -124,7 +124,7 @@ fn glare_in_scene_files() {
         "{text}"
     );
     assert_eq!(Scene::parse(&text, Path::new("saved.toml")).unwrap(), scene);
-    let fresh = energywave::scene::format::fresh_text(&scene);
+    let fresh = energywave::scene::format::fresh_text(&scene, Path::new("saved.toml"));
     assert_eq!(
         Scene::parse(&fresh, Path::new("saved.toml")).unwrap(),
         scene

@@ -339,6 +339,7 @@ mod tests {
                 "adaptive_smooth.wgsl",
                 "adaptive_curves.wgsl",
                 "objects.wgsl",
+                "particles.wgsl",
                 "billboard.wgsl",
                 "glare.wgsl",
                 "upsample.wgsl",

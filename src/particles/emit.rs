@@ -313,21 +313,34 @@ mod tests {
 
     #[test]
     fn noise_clumps() {
-        // The particles' counts over the noise's cells spread out more than a uniform draw's.
+        // A box of side 4 over 64 whole cells of the noise (a quarter of the emitter's extent: 1): the particles'
+        // counts over them spread out more than a uniform draw's (whose variance is its mean, Poisson).
         let sources = Sources::default();
+        let boxed = |noise| Emitter {
+            shape: EmitterShape::Box {
+                center: DVec3::ZERO,
+                size: DVec3::splat(4.0),
+            },
+            count: 6400,
+            noise,
+            ..sphere(0.0, 3)
+        };
         let spread = |e: Emitter| {
             let mut cells = std::collections::HashMap::<[i64; 3], f64>::new();
             for p in e.emit(&sources) {
                 *cells
-                    .entry((p.position * 4.0).floor().as_i64vec3().to_array())
+                    .entry(p.position.floor().as_i64vec3().to_array())
                     .or_default() += 1.0;
             }
             let n = cells.len() as f64;
             let mean = cells.values().sum::<f64>() / n;
             cells.values().map(|c| (c - mean).powi(2)).sum::<f64>() / n / mean
         };
-        let (uniform, clumped) = (spread(sphere(0.0, 3)), spread(sphere(1.0, 3)));
-        assert!(clumped > 1.5 * uniform, "{uniform} {clumped}");
+        let (uniform, clumped) = (spread(boxed(0.0)), spread(boxed(1.0)));
+        assert!(
+            uniform < 2.0 && clumped > 3.0 * uniform,
+            "{uniform} {clumped}"
+        );
     }
 
     #[test]

@@ -24,8 +24,11 @@ pub const TILE: u32 = 4;
 pub const GLOW_CELL: u32 = 16;
 
 /// The most segments a frame takes: past it the slices widen (a scene of a million particles keeps a bounded
-/// plan; 16 M segments are 128 MiB on the GPU).
-pub const MAX_SEGMENTS: usize = 1 << 24;
+/// plan; 8 M segments are 64 MiB on the GPU, within every adapter's storage binding).
+pub const MAX_SEGMENTS: usize = 1 << 23;
+
+/// The most slabs a frame takes: past it the slices widen (a tiny particle far from a large one).
+pub const MAX_SLABS: u32 = 1 << 14;
 
 /// The samples of psi along a ray that place its glow (`GlowPlace`).
 pub const GLOW_SAMPLES: u32 = 48;
@@ -132,22 +135,14 @@ impl SmokeView {
             .iter()
             .map(|p| p.radius)
             .fold(f64::INFINITY, f64::min);
-        let mut slicing = Slicing::covering(particles, camera.eye, axis, width * smallest);
-        // Each particle spans about 2 R / width + 1 slabs.
-        let spans: f64 = particles
-            .iter()
-            .map(|p| 2.0 * p.radius / slicing.width + 2.0)
-            .sum();
-        if spans > MAX_SEGMENTS as f64 / 4.0 {
-            let widen = spans / (MAX_SEGMENTS as f64 / 4.0);
-            slicing = Slicing::covering(particles, camera.eye, axis, slicing.width * widen);
-        }
+        let slicing = Slicing::covering(particles, camera.eye, axis, width * smallest);
         let mut view = SmokeView {
             camera: camera.clone(),
             size,
             slicing,
             glow: Vec::new(),
         };
+        view.bound(particles);
         let [gx, gy] = view.glow_cells();
         view.glow = (0..(gx + 1) * (gy + 1))
             .into_par_iter()
@@ -162,6 +157,46 @@ impl SmokeView {
             })
             .collect();
         view
+    }
+
+    /// Bounds the plan: at most `MAX_SLABS` slabs (the twin keeps two numbers a slab along a ray), and at most
+    /// `MAX_SEGMENTS` segments (a particle's tiles times the slabs it spans), the slices widened as much as that
+    /// takes, and where even a slab a particle is too many, the image made coarser.
+    fn bound(&mut self, particles: &[Particle]) {
+        let (axis, eye) = (self.slicing.axis, self.camera.eye);
+        let far = (particles.iter())
+            .map(|p| (p.position - eye).dot(axis) + p.radius)
+            .fold(f64::NEG_INFINITY, f64::max);
+        let depth = far - self.slicing.near;
+        if self.slicing.count > MAX_SLABS {
+            self.slicing = Slicing::covering(particles, eye, axis, depth / MAX_SLABS as f64);
+        }
+        for _ in 0..8 {
+            let tiles: Vec<f64> = particles
+                .par_iter()
+                .map(|p| {
+                    self.footprint(p)
+                        .map_or(0.0, |(x0, x1, y0, y1)| ((x1 - x0) * (y1 - y0)) as f64)
+                })
+                .collect();
+            let at_least: f64 = tiles.iter().map(|t| 2.0 * t).sum();
+            if at_least <= MAX_SEGMENTS as f64 {
+                let spans = |width: f64| -> f64 {
+                    (particles.iter().zip(&tiles))
+                        .map(|(p, t)| t * (2.0 * p.radius / width + 2.0))
+                        .sum()
+                };
+                let mut width = self.slicing.width;
+                while spans(width) > MAX_SEGMENTS as f64 {
+                    width *= 2.0;
+                }
+                if width != self.slicing.width {
+                    self.slicing = Slicing::covering(particles, eye, axis, width);
+                }
+                return;
+            }
+            self.size = self.size.map(|s| s.div_ceil(2).max(1));
+        }
     }
 
     /// The glow's depth along the view axis at the center of pixel `(x, y)`: bilinear between the glow cells'

@@ -12,15 +12,16 @@ use super::Scene;
 /// Arrays whose one-line form is longer than this (characters) get one element a line.
 const ONE_LINE: usize = 96;
 
-/// `scene` as fresh TOML text: every setting, one key a line, small arrays on one line.
-pub fn fresh_text(scene: &Scene) -> String {
+/// `scene` as fresh TOML text: every setting, one key a line, small arrays on one line. `path` is where the text
+/// is to be read from (a mesh's or a PLY file's relative path is read against its folder).
+pub fn fresh_text(scene: &Scene, path: &Path) -> String {
     let generated = scene.to_toml();
     let Ok(mut doc) = generated.parse::<DocumentMut>() else {
         return generated;
     };
     tidy_table(doc.as_table_mut());
     let text = doc.to_string();
-    if reads_back(&text, scene) {
+    if reads_back(&text, scene, path) {
         text
     } else {
         generated
@@ -31,21 +32,22 @@ pub fn fresh_text(scene: &Scene) -> String {
 /// values the user left alone keep their text (a direction written `[1, 0.25, 0]` stays so, though it loads
 /// normalised), comments and the order of keys and tables stay, sources added are appended and sources removed
 /// dropped. A decay length the file derives (from `nu` and its camera) is written out when it would derive
-/// differently now (the camera moved). Should the text still not read back as the scene, `fresh_text`.
-pub fn update_text(original: &str, saved: &Scene, scene: &Scene) -> String {
+/// differently now (the camera moved). Should the text still not read back as the scene, `fresh_text`. `path`
+/// is where the text is to be read from, as `fresh_text`'s.
+pub fn update_text(original: &str, saved: &Scene, scene: &Scene, path: &Path) -> String {
     let Ok(doc) = original.parse::<DocumentMut>() else {
-        return fresh_text(scene);
+        return fresh_text(scene, path);
     };
     let (Ok(old), Ok(new)) = (
         saved.to_toml().parse::<DocumentMut>(),
         scene.to_toml().parse::<DocumentMut>(),
     ) else {
-        return fresh_text(scene);
+        return fresh_text(scene, path);
     };
     let mut merged = doc;
     merge_table(merged.as_table_mut(), Some(old.as_table()), new.as_table());
     let text = merged.to_string();
-    if reads_back(&text, scene) {
+    if reads_back(&text, scene, path) {
         return text;
     }
     // The decay length, derived from the camera, pinned.
@@ -62,16 +64,16 @@ pub fn update_text(original: &str, saved: &Scene, scene: &Scene) -> String {
             t.insert("decay_length", Item::Value(decay.clone()));
         }
         let text = merged.to_string();
-        if reads_back(&text, scene) {
+        if reads_back(&text, scene, path) {
             return text;
         }
     }
-    fresh_text(scene)
+    fresh_text(scene, path)
 }
 
 /// True when `text` loads as `scene`.
-fn reads_back(text: &str, scene: &Scene) -> bool {
-    Scene::parse(text, Path::new("saved.toml")).is_ok_and(|s| s == *scene)
+fn reads_back(text: &str, scene: &Scene, path: &Path) -> bool {
+    Scene::parse(text, path).is_ok_and(|s| s == *scene)
 }
 
 /// Writes `new`'s changes from `old` into `orig`. A key whose value is the same in `old` and `new` is left as
@@ -223,7 +225,10 @@ mod tests {
     #[test]
     fn an_unchanged_scene_writes_its_file_back_as_it_was() {
         let saved = load(FILE);
-        assert_eq!(update_text(FILE, &saved, &saved), FILE);
+        assert_eq!(
+            update_text(FILE, &saved, &saved, Path::new("saved.toml")),
+            FILE
+        );
     }
 
     #[test]
@@ -232,7 +237,7 @@ mod tests {
         let mut scene = saved.clone();
         scene.sources.tori[0].major_radius = 0.97;
         scene.camera.eye.x = 3.0;
-        let text = update_text(FILE, &saved, &scene);
+        let text = update_text(FILE, &saved, &scene, Path::new("saved.toml"));
         // The decay the file derived from its camera is written out, since the camera moved.
         let decay = format!(
             "\n[integration]\ndecay_length = {}\n",
@@ -257,14 +262,14 @@ mod tests {
         second.center.y = 2.0;
         scene.sources.tori.push(second);
         scene.colors.background = [0.1, 0.2, 0.3];
-        let text = update_text(FILE, &saved, &scene);
+        let text = update_text(FILE, &saved, &scene, Path::new("saved.toml"));
         assert_eq!(load(&text), scene);
         assert!(text.starts_with("# A ring and a beam."));
         assert_eq!(text.matches("[[tori]]").count(), 2);
         assert!(text.contains("background = [0.1, 0.2, 0.3]"), "{text}");
         let mut fewer = scene.clone();
         fewer.sources.tori.clear();
-        let text = update_text(FILE, &saved, &fewer);
+        let text = update_text(FILE, &saved, &fewer, Path::new("saved.toml"));
         assert_eq!(load(&text), fewer);
         assert!(!text.contains("[[tori]]"));
     }
@@ -275,7 +280,7 @@ mod tests {
         let saved = load(FILE);
         let mut scene = saved.clone();
         scene.camera.eye.z = 30.0;
-        let text = update_text(FILE, &saved, &scene);
+        let text = update_text(FILE, &saved, &scene, Path::new("saved.toml"));
         assert_eq!(load(&text), scene);
         assert!(text.contains("decay_length"));
         assert!(text.contains("# from above"));
@@ -286,10 +291,14 @@ mod tests {
         let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes");
         for entry in std::fs::read_dir(dir).unwrap() {
             let path = entry.unwrap().path();
+            // Scenes only (a PLY file lies beside the one that reads it).
+            if path.extension().is_none_or(|e| e != "toml") {
+                continue;
+            }
             let text = std::fs::read_to_string(&path).unwrap();
             let saved = Scene::parse(&text, &path).unwrap();
             assert_eq!(
-                update_text(&text, &saved, &saved),
+                update_text(&text, &saved, &saved, &path),
                 text,
                 "{}",
                 path.display()
@@ -304,7 +313,7 @@ mod tests {
                 _ => continue,
             };
             *c = 2.75;
-            let edited = update_text(&text, &saved, &scene);
+            let edited = update_text(&text, &saved, &scene, &path);
             assert_eq!(load(&edited), scene, "{}", path.display());
             let changed = text
                 .lines()
@@ -320,7 +329,7 @@ mod tests {
     fn fresh_text_puts_small_arrays_on_one_line_and_numbers_short() {
         let mut scene = Scene::default_scene();
         scene.sources.tori[0].major_radius = 0.97;
-        let text = fresh_text(&scene);
+        let text = fresh_text(&scene, Path::new("saved.toml"));
         assert_eq!(load(&text), scene);
         assert!(text.contains("eye = [2.0, 4.5, 14.0]\n"), "{text}");
         assert!(text.contains("major_radius = 0.97\n"));

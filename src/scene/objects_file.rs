@@ -186,7 +186,7 @@ fn required(c: &mut Checker<'_, '_>, path: &FieldPath, key: &'static str, x: Opt
     }
 }
 
-fn positive(c: &mut Checker<'_, '_>, path: &FieldPath, x: f64, what: &str) {
+pub(super) fn positive(c: &mut Checker<'_, '_>, path: &FieldPath, x: f64, what: &str) {
     if c.finite(path, x) && !(x > 0.0 && x <= MAX_COORDINATE) {
         c.fail(
             path,

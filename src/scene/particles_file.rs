@@ -9,6 +9,7 @@ use glam::DVec3;
 use super::MAX_COORDINATE;
 use super::checker::Checker;
 use super::file::{FieldPath, ParticlesFile, SceneFile, SlicesFile, ValueFile};
+use super::objects_file::positive;
 use crate::field::Sources;
 use crate::particles::emit::{Emitter, EmitterKind, EmitterShape, Span};
 use crate::particles::ply::{self, Defaults, MAX_PARTICLES};
@@ -423,15 +424,6 @@ fn span(
         return Span::one(1.0);
     }
     s
-}
-
-fn positive(c: &mut Checker<'_, '_>, path: &FieldPath, x: f64, what: &str) {
-    if c.finite(path, x) && !(x > 0.0 && x <= MAX_COORDINATE) {
-        c.fail(
-            path,
-            format!("{x} is out of range: {what} must be positive"),
-        );
-    }
 }
 
 fn at_least_zero(c: &mut Checker<'_, '_>, path: &FieldPath, x: f64, what: &str) {

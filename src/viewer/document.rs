@@ -126,8 +126,8 @@ impl Document {
     /// without a file is written fresh (`scene::format`).
     pub fn save_as(&mut self, path: &Path) -> Result<(), OutputError> {
         let text = match &self.source {
-            Some(source) => format::update_text(source, &self.saved, &self.scene),
-            None => format::fresh_text(&self.scene),
+            Some(source) => format::update_text(source, &self.saved, &self.scene, path),
+            None => format::fresh_text(&self.scene, path),
         };
         output::write_atomically(path, text.as_bytes())?;
         self.source = Some(text);
