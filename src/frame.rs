@@ -16,6 +16,7 @@ use crate::geometry::{Billboard, Reach};
 use crate::integrate::Integration;
 use crate::objects::clip::shared_clip_fractions;
 use crate::particles::light::{LitParticles, shared_lit};
+use crate::particles::view::{GlowPlace, SmokeView, smoke_size};
 use crate::scene::Scene;
 
 /// One term of the field as a frame integrates it, in the order of `Sources::looks` (points, lines, tori,
@@ -135,6 +136,34 @@ impl<'a> FrameSetup<'a> {
                 )
             })
             .clone()
+    }
+
+    /// The smoke of this frame of `frame` pixels over a field of `resolution` texels a side: its camera, its
+    /// slices, its glow placed by its sources. A field coarser than the scene's (the viewer's while the view
+    /// moves) gets a coarser image and slices as much wider, up to four times.
+    pub fn smoke_view(
+        &self,
+        particles: &[crate::particles::Particle],
+        frame: [u32; 2],
+        resolution: u32,
+    ) -> SmokeView {
+        let setup = self;
+        let scene = setup.scene;
+        let coarser = (setup.resolution as f64 / resolution.max(1) as f64).clamp(1.0, 4.0);
+        SmokeView::new(
+            particles,
+            &scene.camera,
+            smoke_size(frame, resolution),
+            scene.slice_width * coarser,
+            &GlowPlace {
+                sources: &scene.sources,
+                epsilon: scene.integration.epsilon,
+                billboard: &setup.billboard,
+                nu: setup.reach.nu,
+                alpha: setup.integration.alpha,
+                beta: setup.integration.beta,
+            },
+        )
     }
 
     /// The clips of a texture of `w` x `w` texels over the same billboard (a coarse field's, while the view

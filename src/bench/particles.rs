@@ -16,7 +16,6 @@ use crate::frame::FrameSetup;
 use crate::gpu::{GpuError, HeadlessRenderer};
 use crate::objects::lighting::Lights;
 use crate::particles::light::light_particles;
-use crate::particles::view::SmokeView;
 use crate::scene::Scene;
 
 /// One case: its particles, and where the time goes.
@@ -97,7 +96,7 @@ pub fn particle_rows(warmup: usize, frames: usize) -> Result<Vec<ParticleRow>, G
             (0..frames.max(3))
                 .map(|_| {
                     let t = Instant::now();
-                    let view = SmokeView::for_frame(&setup, &particles, [w, h], 256);
+                    let view = setup.smoke_view(&particles, [w, h], 256);
                     segments = view.segments(&particles).0.len();
                     t.elapsed().as_secs_f64() * 1e3
                 })

@@ -234,7 +234,7 @@ impl ParticlePass {
     }
 
     /// Uploads the frame's particles and plans its segments for a frame of `frame` pixels over a field of
-    /// `resolution` texels a side (`SmokeView::for_frame`), where the particles, the view or the size changed.
+    /// `resolution` texels a side (`FrameSetup::smoke_view`), where the particles, the view or the size changed.
     /// Returns whether there is smoke to draw.
     pub fn prepare(
         &mut self,
@@ -256,7 +256,7 @@ impl ParticlePass {
             self.write_params(queue, setup, frame);
             return true;
         }
-        let view = SmokeView::for_frame(setup, &lit.particles, frame, resolution);
+        let view = setup.smoke_view(&lit.particles, frame, resolution);
         let size = view.size;
         let (segments, starts) = view.segments(&lit.particles);
         let busiest = starts.windows(2).map(|w| w[1] - w[0]).max().unwrap_or(0);

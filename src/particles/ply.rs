@@ -15,6 +15,10 @@ use super::Particle;
 /// The most particles a scene takes in all, from files and emitters together.
 pub const MAX_PARTICLES: usize = 1_000_000;
 
+/// The largest coordinate a position may have (the scene's `MAX_COORDINATE`): past it a value is taken for a
+/// byte order misread.
+pub const MAX_COORDINATE: f64 = 1e15;
+
 /// What a particle takes from the set where its file gives nothing.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Defaults {
@@ -135,7 +139,7 @@ fn particle(
         let x = slot.ok_or_else(|| format!("vertex {i} has no {name}"))?;
         // A binary file read in the wrong byte order gives garbage: huge, not a number, or subnormal.
         let absurd = !x.is_finite()
-            || x.abs() > crate::scene::MAX_COORDINATE
+            || x.abs() > MAX_COORDINATE
             || (x != 0.0 && x.abs() < f32::MIN_POSITIVE as f64);
         if absurd {
             let hint = byte_order.map_or(String::new(), |o| {

@@ -6,12 +6,10 @@
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::{Particle, Ray};
+use super::{Particle, Ray, Slicing};
 use crate::field::Sources;
-use crate::frame::FrameSetup;
 use crate::geometry::{Billboard, Camera};
 use crate::integrate::zeta;
-use crate::reference::particles::Slicing;
 
 /// The smoke image's tiles: the pixels that share a list of segments. Measured on lavapipe (50,000 particles of
 /// 1 to 2 pixels' radius, 256 x 256): tiles of 16 took 1.9 s to splat, of 8 1.9 s, of 4 1.2 s (a pixel
@@ -94,33 +92,6 @@ pub fn smoke_size(frame: [u32; 2], resolution: u32) -> [u32; 2] {
 }
 
 impl SmokeView {
-    /// The smoke of `setup`'s frame of `frame` pixels over a field of `resolution` texels a side: its camera, its
-    /// slices, its glow placed by its sources. A field coarser than the scene's (the viewer's while the view
-    /// moves) gets a coarser image and slices as much wider, up to four times.
-    pub fn for_frame(
-        setup: &FrameSetup,
-        particles: &[Particle],
-        frame: [u32; 2],
-        resolution: u32,
-    ) -> SmokeView {
-        let scene = setup.scene;
-        let coarser = (setup.resolution as f64 / resolution.max(1) as f64).clamp(1.0, 4.0);
-        SmokeView::new(
-            particles,
-            &scene.camera,
-            smoke_size(frame, resolution),
-            scene.slice_width * coarser,
-            &GlowPlace {
-                sources: &scene.sources,
-                epsilon: scene.integration.epsilon,
-                billboard: &setup.billboard,
-                nu: setup.reach.nu,
-                alpha: setup.integration.alpha,
-                beta: setup.integration.beta,
-            },
-        )
-    }
-
     /// The smoke of `particles` seen by `camera` in an image of `size` pixels, sliced at `width` radii of the
     /// smallest particle (widened where the segments would exceed `MAX_SEGMENTS`).
     pub fn new(

@@ -10,59 +10,7 @@
 
 use glam::DVec3;
 
-use crate::particles::{Particle, Ray, extinction, kernel};
-
-/// The slices: planes perpendicular to the view `axis` (unit, from the eye into the scene), the first one
-/// `near` past the ray's origin along it, `count` slabs of `width` between them.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Slicing {
-    pub axis: DVec3,
-    pub near: f64,
-    pub width: f64,
-    pub count: u32,
-}
-
-impl Slicing {
-    /// Slabs of `width` from the nearest particle's front to the farthest one's back, as seen from `eye` along
-    /// `axis`; none without particles in front of the eye.
-    pub fn covering(particles: &[Particle], eye: DVec3, axis: DVec3, width: f64) -> Slicing {
-        let depths = particles.iter().map(|p| (p.position - eye).dot(axis));
-        let near = (particles.iter().zip(depths.clone()))
-            .map(|(p, d)| d - p.radius)
-            .fold(f64::INFINITY, f64::min)
-            .max(0.0);
-        let far = (particles.iter().zip(depths))
-            .map(|(p, d)| d + p.radius)
-            .fold(f64::NEG_INFINITY, f64::max);
-        let count = if far > near {
-            ((far - near) / width).ceil() as u32
-        } else {
-            0
-        };
-        Slicing {
-            axis,
-            near,
-            width,
-            count,
-        }
-    }
-
-    /// Where `ray` (from the eye the slicing was made for) crosses the front and back planes of slab `j`.
-    fn slab(&self, ray: &Ray, j: u32) -> (f64, f64) {
-        let along = ray.direction.dot(self.axis);
-        let front = self.near + j as f64 * self.width;
-        (front / along, (front + self.width) / along)
-    }
-
-    /// The slabs `ray` crosses between `t0` and `t1` along it.
-    fn slabs_between(&self, ray: &Ray, t0: f64, t1: f64) -> std::ops::Range<u32> {
-        let along = ray.direction.dot(self.axis);
-        let index = |t: f64| ((t * along - self.near) / self.width).floor();
-        let first = index(t0).max(0.0) as u32;
-        let last = (index(t1) + 1.0).clamp(0.0, self.count as f64) as u32;
-        first.min(last)..last
-    }
-}
+use crate::particles::{Particle, Ray, Slicing, extinction, kernel};
 
 /// What a ray through the medium gives: the light its particles scatter toward the eye, and the share of what
 /// lies behind them that comes through.
@@ -320,8 +268,7 @@ impl SmokeImage {
     ) -> Option<SmokeImage> {
         use rayon::prelude::*;
         let lit = setup.particles()?;
-        let view =
-            crate::particles::view::SmokeView::for_frame(setup, &lit.particles, frame, resolution);
+        let view = setup.smoke_view(&lit.particles, frame, resolution);
         let [w, h] = view.size;
         let pixels = (0..w * h)
             .into_par_iter()

@@ -22,6 +22,8 @@ pub const DEFAULTS: Defaults = Defaults {
     color: [0.8, 0.8, 0.8],
 };
 
+const _: () = assert!(ply::MAX_COORDINATE == MAX_COORDINATE);
+
 /// The most slices per particle radius (`[slices] width` at least its inverse).
 pub const MIN_SLICE_WIDTH: f64 = 0.05;
 
