@@ -5,7 +5,8 @@
 //! of different colors meet at equal depth, where a sorted splat of the same particles jumps.
 
 use energywave::particles::{Particle, Ray, extinction, kernel, segment_integral};
-use energywave::reference::particles::{Composite, Slicing, marched, sheet_buffer};
+use energywave::particles::Slicing;
+use energywave::reference::particles::{Composite, marched, sheet_buffer};
 use glam::DVec3;
 
 mod common;
