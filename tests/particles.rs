@@ -4,8 +4,8 @@
 //! glow inside it), the glow in front of and behind the smoke exactly, and no color popping where two particles
 //! of different colors meet at equal depth, where a sorted splat of the same particles jumps.
 
-use energywave::particles::{Particle, Ray, extinction, kernel, segment_integral};
 use energywave::particles::Slicing;
+use energywave::particles::{Particle, Ray, extinction, kernel, segment_integral};
 use energywave::reference::particles::{Composite, marched, sheet_buffer};
 use glam::DVec3;
 
