@@ -143,7 +143,12 @@ fn title(set: &ParticleSet, i: usize) -> String {
         Origin::File {
             path, particles, ..
         } => {
-            format!("{} ({} particles)", path.display(), particles.len())
+            format!(
+                "{}. {} ({} particles)",
+                i + 1,
+                path.display(),
+                particles.len()
+            )
         }
         Origin::Emitter(e) => {
             let shape = match e.shape {
@@ -152,7 +157,7 @@ fn title(set: &ParticleSet, i: usize) -> String {
                 EmitterShape::Curve { curve, .. } => format!("Along curve {}", curve + 1),
                 EmitterShape::Torus { torus, .. } => format!("Around torus {}", torus + 1),
             };
-            format!("{shape} {} ({} particles)", i + 1, e.count)
+            format!("{}. {shape} ({} particles)", i + 1, e.count)
         }
     }
 }
