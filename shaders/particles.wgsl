@@ -31,14 +31,14 @@ struct SmokeParams {
     pad2: f32,
 }
 
-// A particle as the GPU reads it: its light as `AMBIENT + iso + v^T M v` per channel toward the unit v
-// (particles::light::ParticleLight, the ambient share in `iso`), M's diagonal and off-diagonal (xy, xz, yz).
+// A particle as the GPU reads it (128 bytes: a million fit one storage binding): its light as
+// `AMBIENT + iso + v^T M v` per channel toward the unit v (particles::light::ParticleLight, the ambient share in
+// `iso`), each channel's M diagonal in xyz with its `iso` in w, and its off-diagonal (xy, xz, yz).
 struct SmokeParticle {
     position: vec3<f32>,
     radius: f32,
     color: vec3<f32>,   // its material's color times its set's albedo
     density: f32,
-    iso: vec4<f32>,
     diag_r: vec4<f32>,
     off_r: vec4<f32>,
     diag_g: vec4<f32>,
@@ -105,7 +105,7 @@ fn light_toward(p: SmokeParticle, v: vec3<f32>) -> vec3<f32> {
         dot(p.diag_g.xyz, sq) + 2.0 * dot(p.off_g.xyz, cross_terms),
         dot(p.diag_b.xyz, sq) + 2.0 * dot(p.off_b.xyz, cross_terms),
     );
-    return max(p.iso.xyz + q, vec3<f32>(0.0));
+    return max(vec3<f32>(p.diag_r.w, p.diag_g.w, p.diag_b.w) + q, vec3<f32>(0.0));
 }
 
 // The open slab composited behind what `acc` holds: its light over its opacity 1 - exp(-tau).

@@ -228,8 +228,7 @@ fn rust_mirrors_match_the_wgsl_layouts() {
             &particles,
             "SmokeParticle",
             size_of::<SmokeParticle>(),
-            fields!(SmokeParticle: position, radius, color, density, iso, diag_r, off_r, diag_g, off_g, diag_b,
-                off_b),
+            fields!(SmokeParticle: position, radius, color, density, diag_r, off_r, diag_g, off_g, diag_b, off_b),
         );
         check_struct(
             &particles,

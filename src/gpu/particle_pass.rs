@@ -55,7 +55,6 @@ pub mod gpu_data {
         pub radius: f32,
         pub color: [f32; 3],
         pub density: f32,
-        pub iso: [f32; 4],
         pub diag_r: [f32; 4],
         pub off_r: [f32; 4],
         pub diag_g: [f32; 4],
@@ -63,7 +62,7 @@ pub mod gpu_data {
         pub diag_b: [f32; 4],
         pub off_b: [f32; 4],
     }
-    const _: () = assert!(size_of::<SmokeParticle>() == 144);
+    const _: () = assert!(size_of::<SmokeParticle>() == 128);
 
     /// `SmokeChunk` in `shaders/particles.wgsl`.
     #[repr(C)]
@@ -479,24 +478,27 @@ fn chunk_buffer(device: &wgpu::Device, stride: u64, count: u32) -> wgpu::Buffer 
     })
 }
 
-/// The particles as the shader reads them, the ambient share in `iso`.
+/// The particles as the shader reads them, each channel's isotropic part (the ambient share in it) in its
+/// diagonal's w.
 fn gpu_particles(lit: &LitParticles) -> Vec<SmokeParticle> {
     let f = |x: f64| x as f32;
     (lit.particles.iter().zip(&lit.lights))
         .map(|(p, l)| {
-            let diag = |c: usize| [f(l.m[c][0]), f(l.m[c][1]), f(l.m[c][2]), 0.0];
+            // The diagonal, and the isotropic part with the ambient share in w.
+            let diag = |c: usize| {
+                [
+                    f(l.m[c][0]),
+                    f(l.m[c][1]),
+                    f(l.m[c][2]),
+                    f(AMBIENT + l.iso[c]),
+                ]
+            };
             let off = |c: usize| [f(l.m[c][3]), f(l.m[c][4]), f(l.m[c][5]), 0.0];
             SmokeParticle {
                 position: p.position.as_vec3().to_array(),
                 radius: f(p.radius),
                 color: p.color.map(f),
                 density: f(p.density),
-                iso: [
-                    f(AMBIENT + l.iso[0]),
-                    f(AMBIENT + l.iso[1]),
-                    f(AMBIENT + l.iso[2]),
-                    0.0,
-                ],
                 diag_r: diag(0),
                 off_r: off(0),
                 diag_g: diag(1),
