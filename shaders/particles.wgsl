@@ -117,6 +117,17 @@ fn close_slab(acc: vec4<f32>, open: vec4<f32>) -> vec4<f32> {
     return vec4<f32>(acc.xyz + acc.w * open.xyz / open.w * (1.0 - through), acc.w * through);
 }
 
+// The open slab composited into the image so far; the first slab whose middle lies past the glow (`behind`)
+// begins the back image, what came before it kept as the front image.
+fn close_into(front: ptr<function, vec4<f32>>, acc: ptr<function, vec4<f32>>, passed: ptr<function, u32>, open: vec4<f32>, behind: bool) {
+    if *passed == 0u && behind {
+        *front = *acc;
+        *acc = vec4<f32>(0.0, 0.0, 0.0, 1.0);
+        *passed = 1u;
+    }
+    *acc = close_slab(*acc, open);
+}
+
 @compute @workgroup_size(4, 4)
 fn splat(@builtin(global_invocation_id) gid: vec3<u32>) {
     if gid.x >= params.size.x || gid.y >= params.size.y {
@@ -176,13 +187,7 @@ fn splat(@builtin(global_invocation_id) gid: vec3<u32>) {
         let s = segments[i];
         if s.x != slab {
             if slab != 0xffffffffu {
-                // The first slab whose middle lies past the plane begins the back image.
-                if passed == 0u && near + (f32(slab) + 0.5) * width >= split {
-                    front = acc;
-                    acc = none;
-                    passed = 1u;
-                }
-                acc = close_slab(acc, open);
+                close_into(&front, &acc, &passed, open, near + (f32(slab) + 0.5) * width >= split);
             }
             open = vec4<f32>(0.0);
             slab = s.x;
@@ -216,12 +221,7 @@ fn splat(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     if chunk.last != 0u {
         if slab != 0xffffffffu {
-            if passed == 0u && near + (f32(slab) + 0.5) * width >= split {
-                front = acc;
-                acc = none;
-                passed = 1u;
-            }
-            acc = close_slab(acc, open);
+            close_into(&front, &acc, &passed, open, near + (f32(slab) + 0.5) * width >= split);
         }
         if passed == 0u {
             front = acc;

@@ -25,6 +25,23 @@ fn scene(text: &str) -> Scene {
     Scene::parse(text, Path::new("test.toml")).unwrap_or_else(|e| panic!("{e}"))
 }
 
+/// A smoke image's pixel `f` ([radiance, transmittance]) over `b`: the front image over the back one, the whole
+/// smoke along the ray.
+fn over(f: [f64; 4], b: [f64; 4]) -> [f64; 4] {
+    std::array::from_fn(|k| {
+        if k < 3 {
+            f[k] + f[3] * b[k]
+        } else {
+            f[3] * b[3]
+        }
+    })
+}
+
+/// A composite as [radiance, transmittance].
+fn of(c: &energywave::reference::particles::Composite) -> [f64; 4] {
+    [c.radiance[0], c.radiance[1], c.radiance[2], c.transmittance]
+}
+
 /// A cloud of 400 particles around a point source and a line, the camera looking at it from the side.
 const CLOUD: &str = r#"
 [camera]
@@ -80,18 +97,6 @@ fn the_gpu_smoke_image_is_the_twins_pixel_by_pixel() {
             );
             let got = image[(y * sw + x) as usize];
             // The whole smoke, the front image over the back one: independent of where the glow splits it.
-            let over = |f: [f64; 4], b: [f64; 4]| -> [f64; 4] {
-                std::array::from_fn(|k| {
-                    if k < 3 {
-                        f[k] + f[3] * b[k]
-                    } else {
-                        f[3] * b[3]
-                    }
-                })
-            };
-            let of = |c: &energywave::reference::particles::Composite| {
-                [c.radiance[0], c.radiance[1], c.radiance[2], c.transmittance]
-            };
             let whole = over(of(&want[0]), of(&want[1]));
             let gpu_whole = over(got[0].map(f64::from), got[1].map(f64::from));
             for k in 0..4 {
@@ -314,18 +319,7 @@ fn smoke_errors(scene: &Scene) -> [f64; 4] {
         scene.colors.palette(),
         scene.integration.epsilon,
     );
-    let whole = |f: [f64; 4], b: [f64; 4]| -> [f64; 4] {
-        std::array::from_fn(|k| {
-            if k < 3 {
-                f[k] + f[3] * b[k]
-            } else {
-                f[3] * b[3]
-            }
-        })
-    };
-    let of = |c: &energywave::reference::particles::Composite| {
-        [c.radiance[0], c.radiance[1], c.radiance[2], c.transmittance]
-    };
+    let whole = over;
     let mut e = [0.0f64; 4];
     let [sw, sh] = view.size;
     for y in (0..sh).step_by(3) {
@@ -438,15 +432,7 @@ file = "two.ply"
         let (image, _) = gpu.smoke_image().unwrap().unwrap();
         let whole: Vec<[f64; 4]> = image
             .iter()
-            .map(|[f, b]| {
-                std::array::from_fn(|k| {
-                    if k < 3 {
-                        f[k] as f64 + f[3] as f64 * b[k] as f64
-                    } else {
-                        (f[3] * b[3]) as f64
-                    }
-                })
-            })
+            .map(|[f, b]| over(f.map(f64::from), b.map(f64::from)))
             .collect();
         if let Some(before) = &last {
             let jump = (whole.iter().zip(before))

@@ -265,22 +265,11 @@ impl SceneRenderer {
             if smoke {
                 self.particles
                     .encode(device, encoder, &targets.depth_value_view);
-                let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                    label: Some("energywave.frame.particles"),
-                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                        view: &targets.background_view,
-                        depth_slice: None,
-                        resolve_target: None,
-                        ops: wgpu::Operations {
-                            load: wgpu::LoadOp::Load,
-                            store: wgpu::StoreOp::Store,
-                        },
-                    })],
-                    depth_stencil_attachment: None,
-                    timestamp_writes: None,
-                    occlusion_query_set: None,
-                    multiview_mask: None,
-                });
+                let mut pass = over(
+                    encoder,
+                    "energywave.frame.particles",
+                    &targets.background_view,
+                );
                 self.particles.draw(&mut pass, false);
             }
             // The billboard blends over a copy of what lies behind it.
@@ -323,26 +312,39 @@ impl SceneRenderer {
                 &params,
             );
             if smoke {
-                let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                    label: Some("energywave.frame.particles.front"),
-                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                        view: &targets.color_view,
-                        depth_slice: None,
-                        resolve_target: None,
-                        ops: wgpu::Operations {
-                            load: wgpu::LoadOp::Load,
-                            store: wgpu::StoreOp::Store,
-                        },
-                    })],
-                    depth_stencil_attachment: None,
-                    timestamp_writes: None,
-                    occlusion_query_set: None,
-                    multiview_mask: None,
-                });
+                let mut pass = over(
+                    encoder,
+                    "energywave.frame.particles.front",
+                    &targets.color_view,
+                );
                 self.particles.draw(&mut pass, true);
             }
         })
     }
+}
+
+/// A render pass that draws over what `view` holds (loaded, stored), one color attachment, no depth.
+fn over<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    label: &str,
+    view: &wgpu::TextureView,
+) -> wgpu::RenderPass<'e> {
+    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some(label),
+        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+            view,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations {
+                load: wgpu::LoadOp::Load,
+                store: wgpu::StoreOp::Store,
+            },
+        })],
+        depth_stencil_attachment: None,
+        timestamp_writes: None,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    })
 }
 
 /// Reads a frame's color back: RGBA, rows from the top (waits for the GPU).
