@@ -13,8 +13,10 @@
 //!   `tau = 1 - alpha` with alpha the density, which read literally makes denser particles clearer.)
 //! - A particle's color is its material's: the share of light its material scatters, per channel.
 
+pub mod curl;
 pub mod emit;
 pub mod light;
+pub mod live;
 pub mod ply;
 pub mod view;
 
@@ -38,6 +40,9 @@ pub struct ParticleSet {
     pub origin: Origin,
     /// The share of the light reaching a particle that it scatters, in 0..=1 (times its color per channel).
     pub albedo: f64,
+    /// A live set's particles at the frame its scene was taken at (`Scene::at_frame`); none in a scene as
+    /// loaded or edited, and for a still set.
+    pub live: Option<Arc<Vec<Particle>>>,
 }
 
 /// Where a set's particles come from.
@@ -59,6 +64,9 @@ impl ParticleSet {
     pub fn particles(&self, sources: &Sources) -> Vec<Particle> {
         let own = match &self.origin {
             Origin::File { particles, .. } => particles.as_ref().clone(),
+            Origin::Emitter(e) if e.life.is_some() => {
+                self.live.as_deref().cloned().unwrap_or_default()
+            }
             Origin::Emitter(e) => e.emit(sources),
         };
         own.into_iter()
@@ -67,6 +75,24 @@ impl ParticleSet {
                 ..p
             })
             .collect()
+    }
+}
+
+impl ParticleSet {
+    /// The set's emitter's life, where it is live.
+    pub fn life(&self) -> Option<&live::Life> {
+        match &self.origin {
+            Origin::Emitter(e) => e.life.as_deref(),
+            Origin::File { .. } => None,
+        }
+    }
+
+    /// The set without its particles of a frame (as a document holds it).
+    pub fn unframed(&self) -> ParticleSet {
+        ParticleSet {
+            live: None,
+            ..self.clone()
+        }
     }
 }
 

@@ -138,6 +138,83 @@ pub enum Parameter {
     /// `objects[i].rotation`, `.radius`, `.size`, `.scale`, `.normal`: the rest of an object's transform, where
     /// its shape has it
     ObjectShape(usize, ShapeField),
+    /// `particles[i].rate`, `.center`, ...: a particle set's emitter setting, where its emitter has it
+    Particles(usize, ParticleField),
+}
+
+/// The settings of a particle set that can be keyed: each belongs to some sets.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ParticleField {
+    /// A live emitter's particles a second.
+    Rate,
+    /// A sphere's or a box's center.
+    Center,
+    /// A sphere emitter's radius.
+    Radius,
+    /// A curve or torus emitter's spread around its source.
+    Spread,
+    /// An emitter's particles' color (at their birth, for a live one).
+    Color,
+    /// Any set's albedo.
+    Albedo,
+    /// A live emitter's acceleration (gravity, wind).
+    Acceleration,
+    /// A live emitter's drag.
+    Drag,
+    /// A live emitter's turbulence's strength.
+    Turbulence,
+}
+
+impl ParticleField {
+    pub const ALL: [ParticleField; 9] = [
+        ParticleField::Rate,
+        ParticleField::Center,
+        ParticleField::Radius,
+        ParticleField::Spread,
+        ParticleField::Color,
+        ParticleField::Albedo,
+        ParticleField::Acceleration,
+        ParticleField::Drag,
+        ParticleField::Turbulence,
+    ];
+
+    /// Its name in a scene file.
+    pub fn key(self) -> &'static str {
+        match self {
+            ParticleField::Rate => "rate",
+            ParticleField::Center => "center",
+            ParticleField::Radius => "radius",
+            ParticleField::Spread => "spread",
+            ParticleField::Color => "color",
+            ParticleField::Albedo => "albedo",
+            ParticleField::Acceleration => "acceleration",
+            ParticleField::Drag => "drag",
+            ParticleField::Turbulence => "turbulence",
+        }
+    }
+
+    /// The sets that have it, for messages.
+    pub fn sets(self) -> &'static str {
+        match self {
+            ParticleField::Rate | ParticleField::Acceleration | ParticleField::Drag => {
+                "a live emitter ([particles.life])"
+            }
+            ParticleField::Turbulence => "a live emitter with a turbulence",
+            ParticleField::Center => "a sphere or box emitter",
+            ParticleField::Radius => "a sphere emitter",
+            ParticleField::Spread => "a curve or torus emitter",
+            ParticleField::Color => "an emitter",
+            ParticleField::Albedo => "any set",
+        }
+    }
+
+    /// Whether its value is a vector.
+    pub fn is_vector(self) -> bool {
+        matches!(
+            self,
+            ParticleField::Center | ParticleField::Color | ParticleField::Acceleration
+        )
+    }
 }
 
 /// The fields of an object's shape that can be keyed besides its position: each belongs to some shapes.
@@ -215,7 +292,9 @@ points[i].color and points[i].intensity (any kind of source), curves[i].color_se
 integration.decay_length, integration.alpha, integration.beta, integration.epsilon, colors.cutoff, \
 objects[i].position (a sphere's or box's center, a plane's point, a mesh's translation), objects[i].color, \
 objects[i].rotation (a box or a mesh), objects[i].radius (a sphere), objects[i].size (a box), \
-objects[i].scale (a mesh), objects[i].normal (a plane)";
+objects[i].scale (a mesh), objects[i].normal (a plane), particles[i].rate, particles[i].center, \
+particles[i].radius, particles[i].spread, particles[i].color, particles[i].albedo, particles[i].acceleration, \
+particles[i].drag, particles[i].turbulence";
 
 /// Splits `name[3]` into `("name", Some(3))`, `name` into `("name", None)`.
 fn indexed(part: &str) -> Option<(&str, Option<usize>)> {
@@ -258,6 +337,12 @@ impl Parameter {
             [("objects", Some(i)), (name, None)] => Parameter::ObjectShape(
                 *i,
                 (ShapeField::ALL.into_iter())
+                    .find(|f| f.key() == *name)
+                    .ok_or_else(err)?,
+            ),
+            [("particles", Some(i)), (name, None)] => Parameter::Particles(
+                *i,
+                (ParticleField::ALL.into_iter())
                     .find(|f| f.key() == *name)
                     .ok_or_else(err)?,
             ),
@@ -307,6 +392,7 @@ impl Parameter {
                 | Parameter::ObjectPosition(..)
                 | Parameter::ObjectColor(..)
         ) || matches!(self, Parameter::ObjectShape(_, f) if *f != ShapeField::Radius)
+            || matches!(self, Parameter::Particles(_, f) if f.is_vector())
     }
 
     /// The source this parameter belongs to, if any.
@@ -319,6 +405,7 @@ impl Parameter {
             | Parameter::ObjectPosition(_)
             | Parameter::ObjectColor(_)
             | Parameter::ObjectShape(..)
+            | Parameter::Particles(..)
             | Parameter::Integration(_) => None,
             Parameter::Position(k, i)
             | Parameter::Direction(k, i)
@@ -359,6 +446,7 @@ impl fmt::Display for Parameter {
             Parameter::ObjectPosition(i) => write!(f, "objects[{i}].position"),
             Parameter::ObjectColor(i) => write!(f, "objects[{i}].color"),
             Parameter::ObjectShape(i, field) => write!(f, "objects[{i}].{}", field.key()),
+            Parameter::Particles(i, field) => write!(f, "particles[{i}].{}", field.key()),
             Parameter::SourceColor(k, i) => write!(f, "{}[{i}].color", k.key()),
             Parameter::Intensity(k, i) => write!(f, "{}[{i}].intensity", k.key()),
             Parameter::Position(k, i) => {

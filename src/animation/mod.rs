@@ -10,7 +10,8 @@ pub mod keyframes;
 pub mod pulse;
 
 pub use keyframes::{
-    IntegrationSetting, Key, PARAMETER_FORMS, Parameter, ShapeField, SourceKind, Track, Value,
+    IntegrationSetting, Key, PARAMETER_FORMS, Parameter, ParticleField, ShapeField, SourceKind,
+    Track, Value,
 };
 pub use pulse::Pulse;
 
@@ -98,6 +99,30 @@ impl Animation {
                 && i > index
             {
                 t.parameter = t.parameter.with_source_index(i - 1);
+            }
+        }
+    }
+
+    /// Particle set `index` was removed: its tracks go, later sets' move down one.
+    pub fn particles_removed(&mut self, index: usize) {
+        self.tracks
+            .retain(|t| !matches!(t.parameter, Parameter::Particles(i, _) if i == index));
+        for t in &mut self.tracks {
+            if let Parameter::Particles(i, f) = t.parameter
+                && i > index
+            {
+                t.parameter = Parameter::Particles(i - 1, f);
+            }
+        }
+    }
+
+    /// A particle set was inserted at `index`: later sets' tracks move up one.
+    pub fn particles_inserted(&mut self, index: usize) {
+        for t in &mut self.tracks {
+            if let Parameter::Particles(i, f) = t.parameter
+                && i >= index
+            {
+                t.parameter = Parameter::Particles(i + 1, f);
             }
         }
     }

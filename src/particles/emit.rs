@@ -7,6 +7,7 @@
 use glam::DVec3;
 
 use super::Particle;
+use super::curl::Turbulence;
 use crate::field::{Sources, curve};
 
 /// A closed range `[min, max]` a value is drawn from uniformly (`min == max`: that value).
@@ -21,7 +22,7 @@ impl Span {
         Span { min: x, max: x }
     }
 
-    fn draw(&self, rng: &mut SplitMix) -> f64 {
+    pub(crate) fn draw(&self, rng: &mut SplitMix) -> f64 {
         self.min + (self.max - self.min) * rng.unit()
     }
 }
@@ -91,6 +92,156 @@ pub struct Emitter {
     pub seed: u64,
     /// How much the particles clump, in 0..=1 (0: uniform).
     pub noise: f64,
+    /// What makes it live: particles born over time, moving, aging (`super::live`); none for a still set of
+    /// `count` particles.
+    pub life: Option<Box<Life>>,
+}
+
+/// Particles thrown at once, at a frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Burst {
+    /// The frame they are born at (>= 0).
+    pub frame: f64,
+    pub count: u32,
+}
+
+/// The direction a particle is thrown in, before its cone's spread.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Direction {
+    /// Away from the shape: a ball's or a box's center, a chain's or a ring's line.
+    Normal,
+    /// Along a chain or a torus's ring.
+    Tangent,
+    /// Away from the emitter's center: a ring's radius, in its plane.
+    Outward,
+    /// One direction for all (unit).
+    Fixed(DVec3),
+}
+
+impl Direction {
+    /// The name in scene files (a fixed direction is written as its vector).
+    pub fn name(&self) -> Option<&'static str> {
+        match self {
+            Direction::Normal => Some("normal"),
+            Direction::Tangent => Some("tangent"),
+            Direction::Outward => Some("outward"),
+            Direction::Fixed(_) => None,
+        }
+    }
+}
+
+/// A value over a particle's life: linear between keys `[age share, value]` (ages in 0..=1, increasing), held
+/// before the first and after the last.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LifeCurve {
+    pub keys: Vec<(f64, f64)>,
+}
+
+impl LifeCurve {
+    pub fn constant(x: f64) -> LifeCurve {
+        LifeCurve {
+            keys: vec![(0.0, x)],
+        }
+    }
+
+    /// The default fade of a particle's density: in over the first tenth of its life, out over the last quarter,
+    /// so that nothing pops into or out of existence.
+    pub fn fade() -> LifeCurve {
+        LifeCurve {
+            keys: vec![(0.0, 0.0), (0.1, 1.0), (0.75, 1.0), (1.0, 0.0)],
+        }
+    }
+
+    pub fn at(&self, age: f64) -> f64 {
+        sample(&self.keys, age, |a, b, s| a + (b - a) * s).unwrap_or(1.0)
+    }
+}
+
+/// Colors over a particle's life: `[age share, color]` keys, linear between them. Empty: the emitter's color.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ColorCurve {
+    pub keys: Vec<(f64, [f64; 3])>,
+}
+
+impl ColorCurve {
+    pub fn at(&self, age: f64) -> Option<[f64; 3]> {
+        sample(&self.keys, age, |a, b, s| {
+            std::array::from_fn(|c| a[c] + (b[c] - a[c]) * s)
+        })
+    }
+}
+
+/// Piecewise-linear keys at `x`, held outside them; `None` without keys.
+fn sample<T: Copy>(keys: &[(f64, T)], x: f64, lerp: impl Fn(T, T, f64) -> T) -> Option<T> {
+    let first = keys.first()?;
+    let last = keys.last()?;
+    if x <= first.0 {
+        return Some(first.1);
+    }
+    if x >= last.0 {
+        return Some(last.1);
+    }
+    let i = keys.partition_point(|k| k.0 <= x);
+    let (a, b) = (keys[i - 1], keys[i]);
+    Some(lerp(a.1, b.1, (x - a.0) / (b.0 - a.0)))
+}
+
+/// What makes an emitter live (`[particles.life]` in scene files).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Life {
+    /// Particles a second (>= 0).
+    pub rate: f64,
+    pub bursts: Vec<Burst>,
+    /// Seconds a particle lives (> 0).
+    pub lifetime: Span,
+    /// Scene units a second a particle is thrown at (>= 0).
+    pub speed: Span,
+    pub direction: Direction,
+    /// Half the angle of the cone around the direction, degrees in 0..=180 (uniform over its solid angle).
+    pub cone: f64,
+    /// Scene units per second squared: gravity, wind.
+    pub acceleration: DVec3,
+    /// Per second (>= 0): the velocity relaxes toward `acceleration / drag` at this rate.
+    pub drag: f64,
+    pub turbulence: Option<Turbulence>,
+    /// The share of the emitter's own velocity (a moving center, a keyed control point) a particle keeps (>= 0).
+    pub inherit: f64,
+    /// A curve emitter emits where its W series is lit (a travelling pulse), as much as it is lit: a draw at
+    /// chain parameter t is kept with probability min(1, W(t)).
+    pub along_pulse: bool,
+    /// The particle's radius over its life, a factor (>= 0).
+    pub size: LifeCurve,
+    /// Its density over its life, a factor (>= 0).
+    pub opacity: LifeCurve,
+    pub colors: ColorCurve,
+}
+
+impl Default for Life {
+    fn default() -> Self {
+        Life {
+            rate: 100.0,
+            bursts: Vec::new(),
+            lifetime: Span { min: 1.0, max: 2.0 },
+            speed: Span::one(0.5),
+            direction: Direction::Normal,
+            cone: 30.0,
+            acceleration: DVec3::ZERO,
+            drag: 0.0,
+            turbulence: None,
+            inherit: 0.0,
+            along_pulse: false,
+            size: LifeCurve::constant(1.0),
+            opacity: LifeCurve::fade(),
+            colors: ColorCurve::default(),
+        }
+    }
+}
+
+impl Life {
+    /// The most particles it can hold at once at `rate`: every burst plus a rate's worth of the longest life.
+    pub fn most_alive(&self, rate: f64) -> f64 {
+        rate * self.lifetime.max + self.bursts.iter().map(|b| b.count as f64).sum::<f64>()
+    }
 }
 
 impl Emitter {
@@ -126,11 +277,17 @@ impl Emitter {
 }
 
 /// A shape resolved against the scene's sources, ready to draw points from.
-enum Placement {
+pub(crate) enum Placement {
     Ball(DVec3, f64),
     Box(DVec3, DVec3),
-    /// A polyline along the chain with its cumulative lengths, and the tube's radius.
-    Tube(Vec<DVec3>, Vec<f64>, f64),
+    /// A polyline along the chain with its cumulative lengths and each point's chain parameter, and the tube's
+    /// radius.
+    Tube {
+        points: Vec<DVec3>,
+        lengths: Vec<f64>,
+        params: Vec<f64>,
+        spread: f64,
+    },
     Ring {
         center: DVec3,
         axes: (DVec3, DVec3),
@@ -139,29 +296,58 @@ enum Placement {
     },
 }
 
+/// Where in its shape a particle is drawn, apart from where the shape is: a share along a chain or a ring and an
+/// offset in the unit ball (or the unit cube around 0 for a box). The same draw placed in the shape at two
+/// instants gives a moving emitter's velocity there.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Draw {
+    along: f64,
+    offset: DVec3,
+}
+
+/// A point placed in a shape, with the directions a live emitter throws particles along.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Spot {
+    pub position: DVec3,
+    /// Away from the shape: from a ball's or a box's center, from a chain's or a ring's line.
+    pub normal: DVec3,
+    /// Along a chain or a ring (a ball or a box has none: its normal).
+    pub tangent: DVec3,
+    /// Away from the emitter's center: a ring's radius in its plane; the normal for the other shapes.
+    pub outward: DVec3,
+}
+
 /// Polyline points a chain segment is measured by for the draw by arc length.
 const STEPS_PER_SEGMENT: usize = 64;
 
 impl Placement {
-    fn of(shape: &EmitterShape, sources: &Sources) -> Option<Placement> {
+    pub(crate) fn of(shape: &EmitterShape, sources: &Sources) -> Option<Placement> {
         Some(match *shape {
             EmitterShape::Sphere { center, radius } => Placement::Ball(center, radius),
             EmitterShape::Box { center, size } => Placement::Box(center, size),
             EmitterShape::Curve { curve, spread } => {
                 let c = sources.curves.get(curve)?;
+                let k = curve::segments(&c.control_points).count().max(1) as f64;
                 let mut points = Vec::new();
-                for s in curve::segments(&c.control_points) {
+                let mut params = Vec::new();
+                for (j, s) in curve::segments(&c.control_points).enumerate() {
                     let first = usize::from(!points.is_empty());
-                    points.extend(
-                        (first..=STEPS_PER_SEGMENT)
-                            .map(|i| s.at(i as f64 / STEPS_PER_SEGMENT as f64)),
-                    );
+                    for i in first..=STEPS_PER_SEGMENT {
+                        let t = i as f64 / STEPS_PER_SEGMENT as f64;
+                        points.push(s.at(t));
+                        params.push((j as f64 + t) / k);
+                    }
                 }
                 let mut lengths = vec![0.0];
                 for w in points.windows(2) {
                     lengths.push(lengths.last().unwrap() + (w[1] - w[0]).length());
                 }
-                Placement::Tube(points, lengths, spread)
+                Placement::Tube {
+                    points,
+                    lengths,
+                    params,
+                    spread,
+                }
             }
             EmitterShape::Torus { torus, spread } => {
                 let t = sources.tori.get(torus)?;
@@ -180,31 +366,101 @@ impl Placement {
         let e = match self {
             Placement::Ball(_, r) => 2.0 * r,
             Placement::Box(_, size) => size.max_element(),
-            Placement::Tube(_, lengths, spread) => lengths.last().unwrap().max(2.0 * spread),
+            Placement::Tube {
+                lengths, spread, ..
+            } => lengths.last().unwrap().max(2.0 * spread),
             Placement::Ring { radius, spread, .. } => 2.0 * (radius + spread),
         };
         if e > 0.0 { e } else { 1.0 }
     }
 
-    fn draw(&self, rng: &mut SplitMix) -> DVec3 {
+    /// A draw for this kind of shape.
+    pub(crate) fn sample(&self, rng: &mut SplitMix) -> Draw {
         match self {
-            Placement::Ball(center, r) => center + r * rng.in_ball(),
-            Placement::Box(center, size) => {
-                center + size * DVec3::new(rng.unit() - 0.5, rng.unit() - 0.5, rng.unit() - 0.5)
+            Placement::Ball(..) => Draw {
+                along: 0.0,
+                offset: rng.in_ball(),
+            },
+            Placement::Box(..) => Draw {
+                along: 0.0,
+                offset: DVec3::new(rng.unit() - 0.5, rng.unit() - 0.5, rng.unit() - 0.5),
+            },
+            Placement::Tube { .. } | Placement::Ring { .. } => {
+                let along = rng.unit();
+                Draw {
+                    along,
+                    offset: rng.in_ball(),
+                }
             }
-            Placement::Tube(points, lengths, spread) => {
-                let total = *lengths.last().unwrap();
-                let s = rng.unit() * total;
-                let i = lengths
-                    .partition_point(|&l| l <= s)
-                    .clamp(1, points.len() - 1);
-                let piece = lengths[i] - lengths[i - 1];
-                let f = if piece > 0.0 {
-                    (s - lengths[i - 1]) / piece
-                } else {
-                    0.0
-                };
-                points[i - 1].lerp(points[i], f) + spread * rng.in_ball()
+        }
+    }
+
+    /// A tube's polyline piece holding the draw's share of the length, and where in it.
+    fn piece(lengths: &[f64], along: f64) -> (usize, f64) {
+        let total = *lengths.last().unwrap();
+        let s = along * total;
+        let i = lengths
+            .partition_point(|&l| l <= s)
+            .clamp(1, lengths.len() - 1);
+        let piece = lengths[i] - lengths[i - 1];
+        let f = if piece > 0.0 {
+            (s - lengths[i - 1]) / piece
+        } else {
+            0.0
+        };
+        (i, f)
+    }
+
+    /// The chain parameter a draw sits at, for a tube (where a curve's W series is read).
+    pub(crate) fn chain_parameter(&self, d: &Draw) -> Option<f64> {
+        let Placement::Tube {
+            lengths, params, ..
+        } = self
+        else {
+            return None;
+        };
+        let (i, f) = Placement::piece(lengths, d.along);
+        Some(params[i - 1] + (params[i] - params[i - 1]) * f)
+    }
+
+    /// The draw placed in the shape.
+    pub(crate) fn place(&self, d: &Draw) -> Spot {
+        let away = |v: DVec3, fallback: DVec3| v.try_normalize().unwrap_or(fallback);
+        match self {
+            Placement::Ball(center, r) => {
+                let normal = away(d.offset, DVec3::Y);
+                Spot {
+                    position: center + r * d.offset,
+                    normal,
+                    tangent: normal,
+                    outward: normal,
+                }
+            }
+            Placement::Box(center, size) => {
+                let normal = away(d.offset, DVec3::Y);
+                Spot {
+                    position: center + size * d.offset,
+                    normal,
+                    tangent: normal,
+                    outward: normal,
+                }
+            }
+            Placement::Tube {
+                points,
+                lengths,
+                spread,
+                ..
+            } => {
+                let (i, f) = Placement::piece(lengths, d.along);
+                let tangent = away(points[i] - points[i - 1], DVec3::X);
+                let across = d.offset - tangent * d.offset.dot(tangent);
+                let normal = away(across, tangent.any_orthonormal_vector());
+                Spot {
+                    position: points[i - 1].lerp(points[i], f) + spread * d.offset,
+                    normal,
+                    tangent,
+                    outward: normal,
+                }
             }
             Placement::Ring {
                 center,
@@ -212,19 +468,31 @@ impl Placement {
                 radius,
                 spread,
             } => {
-                let angle = std::f64::consts::TAU * rng.unit();
-                center + radius * (angle.cos() * u + angle.sin() * v) + spread * rng.in_ball()
+                let angle = std::f64::consts::TAU * d.along;
+                let outward = angle.cos() * u + angle.sin() * v;
+                Spot {
+                    position: center + radius * outward + spread * d.offset,
+                    normal: away(d.offset, outward),
+                    tangent: -angle.sin() * u + angle.cos() * v,
+                    outward,
+                }
             }
         }
+    }
+
+    fn draw(&self, rng: &mut SplitMix) -> DVec3 {
+        let d = self.sample(rng);
+        self.place(&d).position
     }
 }
 
 /// SplitMix64 (Steele, Lea and Flood 2014): a small generator whose stream is fixed by its seed on every
 /// platform, which a scene's emitters need (a file renders the same wherever it is opened).
-struct SplitMix(u64);
+#[derive(Clone, Debug)]
+pub(crate) struct SplitMix(pub(crate) u64);
 
 impl SplitMix {
-    fn next(&mut self) -> u64 {
+    pub(crate) fn next(&mut self) -> u64 {
         self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
         let mut z = self.0;
         z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
@@ -233,12 +501,12 @@ impl SplitMix {
     }
 
     /// Uniform in [0, 1), 53 bits.
-    fn unit(&mut self) -> f64 {
+    pub(crate) fn unit(&mut self) -> f64 {
         (self.next() >> 11) as f64 / (1u64 << 53) as f64
     }
 
     /// Uniform in the unit ball (by rejection).
-    fn in_ball(&mut self) -> DVec3 {
+    pub(crate) fn in_ball(&mut self) -> DVec3 {
         loop {
             let p = DVec3::new(self.unit(), self.unit(), self.unit()) * 2.0 - DVec3::ONE;
             if p.length_squared() <= 1.0 {
@@ -288,6 +556,7 @@ mod tests {
             color: [0.5, 0.6, 0.7],
             seed,
             noise,
+            life: None,
         }
     }
 

@@ -133,6 +133,11 @@ pub(super) fn validate(
                 Parameter::ObjectPosition(_) | Parameter::ObjectColor(_) => {
                     "names an object the scene does not have"
                 }
+                Parameter::Particles(_, field) => &*format!(
+                    "names a particle set the scene does not have, or one without a {} (the sets with one: {})",
+                    field.key(),
+                    field.sets()
+                ),
                 _ => "names a source or control point the scene does not have",
             };
             c.fail(&path.key("parameter"), format!("{}: {why}", t.parameter));
@@ -255,10 +260,28 @@ fn check_value(c: &mut Checker<'_, '_>, path: &FieldPath, parameter: &Parameter,
             | Parameter::BackgroundColor
             | Parameter::SourceColor(..)
             | Parameter::SeriesColor(..)
-            | Parameter::ObjectColor(..),
+            | Parameter::ObjectColor(..)
+            | Parameter::Particles(_, crate::animation::ParticleField::Color),
             Value::Vector(v),
         ) => {
             c.color(path, v);
+        }
+        (Parameter::Particles(_, field), Value::Number(x)) => {
+            use crate::animation::ParticleField as F;
+            let (ok, what) = match field {
+                F::Radius => (x > 0.0, "positive"),
+                F::Albedo => ((0.0..=1.0).contains(&x), "in 0..1"),
+                _ => (x >= 0.0, "at least 0"),
+            };
+            if c.finite(path, x) && !ok {
+                c.fail(
+                    path,
+                    format!(
+                        "{x} is out of range: particles[i].{} must be {what}",
+                        field.key()
+                    ),
+                );
+            }
         }
         (Parameter::EnergyIntensity | Parameter::Intensity(..), Value::Number(x)) => {
             c.intensity(path, x);

@@ -235,6 +235,62 @@ pub(crate) struct ParticlesFile {
     pub noise: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub albedo: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub life: Option<LifeFile>,
+}
+
+/// `[particles.life]`: what makes an emitter live (checked in `scene::life_file`).
+#[derive(Debug, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct LifeFile {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rate: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bursts: Option<Vec<[f64; 2]>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lifetime: Option<ValueFile>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub speed: Option<ValueFile>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub direction: Option<DirectionFile>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cone: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub acceleration: Option<[f64; 3]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub drag: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub inherit_velocity: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub along_pulse: Option<bool>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub size: Option<Vec<[f64; 2]>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub opacity: Option<Vec<[f64; 2]>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub colors: Option<Vec<[f64; 4]>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub turbulence: Option<TurbulenceFile>,
+}
+
+/// `[particles.life.turbulence]`: curl noise.
+#[derive(Debug, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct TurbulenceFile {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scale: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub strength: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub speed: Option<f64>,
+}
+
+/// A live emitter's direction: a name or a vector.
+#[derive(Debug, Deserialize, Serialize)]
+#[serde(untagged)]
+pub(crate) enum DirectionFile {
+    Name(String),
+    Vector([f64; 3]),
 }
 
 /// `[slices]`: how particle sets are sliced.

@@ -4,8 +4,11 @@
 
 use glam::DVec3;
 
-use crate::animation::{Animation, IntegrationSetting, Parameter, SourceKind, Value};
+use crate::animation::{
+    Animation, IntegrationSetting, Parameter, ParticleField, SourceKind, Value,
+};
 use crate::field::Look;
+use crate::particles::{Origin, ParticleSet};
 use crate::scene::{MAX_INTENSITY, Scene, limits};
 
 impl Parameter {
@@ -64,6 +67,7 @@ impl Parameter {
                     _ => return None,
                 }
             }
+            Parameter::Particles(i, field) => particle_field(scene.particles.get(i)?, field)?,
             Parameter::Integration(k) => Value::Number(match k {
                 IntegrationSetting::DecayLength => scene.integration.decay_length,
                 IntegrationSetting::Alpha => scene.integration.alpha,
@@ -196,6 +200,11 @@ impl Parameter {
                     _ => {}
                 }
             }
+            (Parameter::Particles(i, field), value) => {
+                if let Some(set) = scene.particles.get_mut(*i) {
+                    set_particle_field(set, *field, value);
+                }
+            }
             (Parameter::Integration(k), Value::Number(x)) => {
                 let i = &mut scene.integration;
                 let slot = match k {
@@ -223,6 +232,84 @@ impl Parameter {
                 }
             }
             _ => {}
+        }
+    }
+}
+
+/// A keyable setting of a particle set, where the set has it.
+fn particle_field(set: &ParticleSet, field: ParticleField) -> Option<Value> {
+    use crate::particles::emit::EmitterShape as S;
+    if field == ParticleField::Albedo {
+        return Some(Value::Number(set.albedo));
+    }
+    let Origin::Emitter(e) = &set.origin else {
+        return None;
+    };
+    let life = e.life.as_deref();
+    Some(match (field, &e.shape) {
+        (ParticleField::Rate, _) => Value::Number(life?.rate),
+        (ParticleField::Center, S::Sphere { center, .. } | S::Box { center, .. }) => {
+            Value::Vector(center.to_array())
+        }
+        (ParticleField::Radius, S::Sphere { radius, .. }) => Value::Number(*radius),
+        (ParticleField::Spread, S::Curve { spread, .. } | S::Torus { spread, .. }) => {
+            Value::Number(*spread)
+        }
+        (ParticleField::Color, _) => Value::Vector(e.color),
+        (ParticleField::Acceleration, _) => Value::Vector(life?.acceleration.to_array()),
+        (ParticleField::Drag, _) => Value::Number(life?.drag),
+        (ParticleField::Turbulence, _) => Value::Number(life?.turbulence?.strength),
+        _ => return None,
+    })
+}
+
+/// Writes a keyable setting of a particle set, kept valid as the loader requires it (rates, drags, spreads and
+/// strengths at least 0, a radius positive, colors and the albedo in 0..1).
+fn set_particle_field(set: &mut ParticleSet, field: ParticleField, value: Value) {
+    use crate::particles::emit::EmitterShape as S;
+    match (field, value) {
+        (ParticleField::Albedo, Value::Number(x)) => set.albedo = x.clamp(0.0, 1.0),
+        _ => {
+            let Origin::Emitter(e) = &mut set.origin else {
+                return;
+            };
+            let finite = |x: f64| if x.is_finite() { x.max(0.0) } else { 0.0 };
+            match (field, value, &mut e.shape) {
+                (
+                    ParticleField::Center,
+                    Value::Vector(c),
+                    S::Sphere { center, .. } | S::Box { center, .. },
+                ) => *center = DVec3::from_array(c),
+                (ParticleField::Radius, Value::Number(x), S::Sphere { radius, .. }) => {
+                    *radius = x.max(1e-9)
+                }
+                (
+                    ParticleField::Spread,
+                    Value::Number(x),
+                    S::Curve { spread, .. } | S::Torus { spread, .. },
+                ) => *spread = finite(x),
+                (ParticleField::Color, Value::Vector(c), _) => {
+                    e.color = c.map(|x| x.clamp(0.0, 1.0))
+                }
+                (_, value, _) => {
+                    let Some(life) = e.life.as_deref_mut() else {
+                        return;
+                    };
+                    match (field, value) {
+                        (ParticleField::Rate, Value::Number(x)) => life.rate = finite(x),
+                        (ParticleField::Acceleration, Value::Vector(a)) => {
+                            life.acceleration = DVec3::from_array(a)
+                        }
+                        (ParticleField::Drag, Value::Number(x)) => life.drag = finite(x),
+                        (ParticleField::Turbulence, Value::Number(x)) => {
+                            if let Some(t) = &mut life.turbulence {
+                                t.strength = finite(x);
+                            }
+                        }
+                        _ => {}
+                    }
+                }
+            }
         }
     }
 }
@@ -290,11 +377,22 @@ impl Scene {
         self.animation.as_ref().map_or(1, |a| a.frames)
     }
 
-    /// The scene as it is at `frame`: keyed parameters and pulses applied (a clone of the scene if still).
+    /// The scene as it is at `frame`: keyed parameters and pulses applied, live particle sets simulated up to
+    /// it (`scene::live`; a fractional frame takes the whole frame before it); a clone of the scene if still.
     pub fn at_frame(&self, frame: f64) -> Scene {
         let mut s = self.clone();
         if let Some(a) = &self.animation {
             a.apply(&mut s, frame);
+        }
+        for (i, set) in s.particles.iter_mut().enumerate() {
+            if set.life().is_some() {
+                let whole = if frame.is_finite() {
+                    frame.floor().clamp(0.0, u32::MAX as f64)
+                } else {
+                    0.0
+                };
+                set.live = Some(super::live::particles_at(self, i, whole as u32));
+            }
         }
         s
     }

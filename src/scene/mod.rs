@@ -10,11 +10,15 @@ mod error;
 mod file;
 pub mod format;
 mod keyed;
+mod life_file;
 pub mod limits;
+mod live;
 mod objects_file;
 mod particles_file;
 mod validate;
 
+pub use life_file::MAX_RATE;
+pub use live::state_at as live_state_at;
 pub use objects_file::DEFAULT_ALBEDO;
 pub use particles_file::{DEFAULTS as PARTICLE_DEFAULTS, MIN_SLICE_WIDTH};
 

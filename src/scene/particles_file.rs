@@ -9,6 +9,7 @@ use glam::DVec3;
 use super::MAX_COORDINATE;
 use super::checker::Checker;
 use super::file::{FieldPath, ParticlesFile, SceneFile, SlicesFile, ValueFile};
+use super::life_file::{self, span};
 use super::objects_file::positive;
 use crate::field::Sources;
 use crate::particles::emit::{Emitter, EmitterKind, EmitterShape, Span};
@@ -38,7 +39,8 @@ fn shape_keys(kind: EmitterKind) -> &'static [&'static str] {
 }
 
 /// The keys every emitter takes.
-const EMITTER_KEYS: [&str; 8] = [
+const EMITTER_KEYS: [&str; 9] = [
+    "life",
     "count",
     "particle_radius",
     "density",
@@ -65,7 +67,8 @@ pub(super) fn check_particles(
     let mut total = 0usize;
     for (i, f) in file.particles.iter().enumerate() {
         let path = root.index(i);
-        let given: [(&'static str, bool); 15] = [
+        let given: [(&'static str, bool); 16] = [
+            ("life", f.life.is_some()),
             ("file", f.file.is_some()),
             ("emitter", f.emitter.is_some()),
             ("center", f.center.is_some()),
@@ -170,7 +173,29 @@ pub(super) fn check_particles(
                 let Some(shape) = shape(c, &path, f, kind, sources) else {
                     continue;
                 };
+                let life = match &f.life {
+                    None => None,
+                    Some(l) => {
+                        if file.animation.is_none() {
+                            c.fail(
+                                &path.key("life"),
+                                "a live set lives in time: the scene needs its [animation] (a frame rate and a length)",
+                            );
+                        }
+                        if f.count.is_some() {
+                            c.fail(
+                                &path.key("count"),
+                                "a live emitter makes its particles by its life's rate and bursts: count is for a still set",
+                            );
+                        }
+                        let Some(life) = life_file::check_life(c, &path, l, kind) else {
+                            continue;
+                        };
+                        Some(life)
+                    }
+                };
                 let count = match f.count {
+                    None if life.is_some() => 0,
                     None => {
                         c.fail(
                             &path,
@@ -232,13 +257,23 @@ pub(super) fn check_particles(
                     color,
                     seed,
                     noise,
+                    life,
                 })
             }
         };
-        let set = ParticleSet { origin, albedo };
+        let set = ParticleSet {
+            origin,
+            albedo,
+            live: None,
+        };
         total += match &set.origin {
             Origin::File { particles, .. } => particles.len(),
-            Origin::Emitter(e) => e.count as usize,
+            Origin::Emitter(e) => match &e.life {
+                // The most a live set holds at once at its own rate (a keyed rate is bounded the same way as it
+                // is simulated: births past the limit are skipped).
+                Some(life) => life.most_alive(life.rate).min(MAX_PARTICLES as f64 + 1.0) as usize,
+                None => e.count as usize,
+            },
         };
         out.push(set);
     }
@@ -382,52 +417,6 @@ fn one_number(c: &mut Checker<'_, '_>, path: &FieldPath, v: &ValueFile, what: &s
     }
 }
 
-/// A range `[min, max]` or one number.
-fn span(
-    c: &mut Checker<'_, '_>,
-    path: &FieldPath,
-    v: &ValueFile,
-    strictly: bool,
-    what: &str,
-) -> Span {
-    let s = match v {
-        ValueFile::Number(x) => Span::one(*x),
-        ValueFile::Vector(a) if a.len() == 2 => Span {
-            min: a[0],
-            max: a[1],
-        },
-        ValueFile::Vector(a) => {
-            c.fail(
-                path,
-                format!(
-                    "{} numbers: {what} is one number or a range [min, max]",
-                    a.len()
-                ),
-            );
-            return Span::one(1.0);
-        }
-    };
-    let low_ok = if strictly { s.min > 0.0 } else { s.min >= 0.0 };
-    if !(s.min.is_finite()
-        && s.max.is_finite()
-        && low_ok
-        && s.max >= s.min
-        && s.max <= MAX_COORDINATE)
-    {
-        c.fail(
-            path,
-            format!(
-                "[{}, {}]: {what} must be {} and the range's first number at most its second",
-                s.min,
-                s.max,
-                if strictly { "positive" } else { "at least 0" }
-            ),
-        );
-        return Span::one(1.0);
-    }
-    s
-}
-
 fn at_least_zero(c: &mut Checker<'_, '_>, path: &FieldPath, x: f64, what: &str) {
     if c.finite(path, x) && !(0.0..=MAX_COORDINATE).contains(&x) {
         c.fail(
@@ -479,7 +468,10 @@ pub(super) fn write(sets: &[ParticleSet]) -> Vec<ParticlesFile> {
                             f.spread = Some(spread);
                         }
                     }
-                    f.count = Some(e.count as i64);
+                    match &e.life {
+                        Some(life) => f.life = Some(life_file::write_life(life)),
+                        None => f.count = Some(e.count as i64),
+                    }
                     f.particle_radius = range(e.radius);
                     f.density = range(e.density);
                     f.color = Some(e.color);

@@ -236,21 +236,36 @@ impl Edit {
             Edit::DeleteObject(i) => {
                 remove(&mut scene.objects, i);
             }
-            Edit::AddParticles(set) => scene.particles.push(set),
+            Edit::AddParticles(set) => {
+                if set.life().is_some() && scene.animation.is_none() {
+                    scene.animation = Some(Animation::default());
+                }
+                scene.particles.push(set.unframed());
+            }
             Edit::SetParticles(i, set) => {
+                if set.life().is_some() && scene.animation.is_none() {
+                    scene.animation = Some(Animation::default());
+                }
                 if let Some(p) = scene.particles.get_mut(i) {
-                    *p = set;
+                    *p = set.unframed();
                 }
             }
             Edit::DuplicateParticles(i) => {
-                if duplicate(&mut scene.particles, i)
-                    && let Origin::Emitter(e) = &mut scene.particles[i + 1].origin
-                {
-                    e.seed = e.seed.wrapping_add(1);
+                if duplicate(&mut scene.particles, i) {
+                    if let Origin::Emitter(e) = &mut scene.particles[i + 1].origin {
+                        e.seed = e.seed.wrapping_add(1);
+                    }
+                    if let Some(a) = &mut scene.animation {
+                        a.particles_inserted(i + 1);
+                    }
                 }
             }
             Edit::DeleteParticles(i) => {
-                remove(&mut scene.particles, i);
+                if remove(&mut scene.particles, i)
+                    && let Some(a) = &mut scene.animation
+                {
+                    a.particles_removed(i);
+                }
             }
             Edit::SliceWidth(w) => scene.slice_width = w,
             Edit::Glare(g) => scene.glare = g,
@@ -354,7 +369,11 @@ impl Edit {
                     a.source_removed(kind, i);
                 }
                 if removed {
-                    emitters_follow_removal(&mut scene.particles, kind, i);
+                    for set in emitters_follow_removal(&mut scene.particles, kind, i) {
+                        if let Some(a) = &mut scene.animation {
+                            a.particles_removed(set);
+                        }
+                    }
                 }
             }
             Edit::AddSegment(c) => {
@@ -443,16 +462,28 @@ fn emitter_source(set: &mut ParticleSet, kind: SourceKind) -> Option<&mut usize>
 }
 
 /// After source `i` of `kind` is removed: the emitters placed around it go with it, and those around a later
-/// one of its kind follow it down the list (so that the scene still saves as a valid file).
-fn emitters_follow_removal(sets: &mut Vec<ParticleSet>, kind: SourceKind, i: usize) {
-    sets.retain_mut(|set| match emitter_source(set, kind) {
-        Some(index) if *index == i => false,
-        Some(index) if *index > i => {
-            *index -= 1;
-            true
+/// one of its kind follow it down the list (so that the scene still saves as a valid file). The indices the
+/// removed sets had, from the last, for their keys to follow.
+fn emitters_follow_removal(sets: &mut Vec<ParticleSet>, kind: SourceKind, i: usize) -> Vec<usize> {
+    let mut removed = Vec::new();
+    let mut at = 0;
+    sets.retain_mut(|set| {
+        let keep = match emitter_source(set, kind) {
+            Some(index) if *index == i => false,
+            Some(index) if *index > i => {
+                *index -= 1;
+                true
+            }
+            _ => true,
+        };
+        if !keep {
+            removed.push(at);
         }
-        _ => true,
+        at += 1;
+        keep
     });
+    removed.reverse();
+    removed
 }
 
 /// After a source of `kind` is inserted at `i`: the emitters around it and the later ones follow it up the list.

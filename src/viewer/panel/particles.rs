@@ -133,8 +133,10 @@ fn new_set(shape: EmitterShape) -> ParticleSet {
             color: PARTICLE_DEFAULTS.color,
             seed: 0,
             noise: 0.5,
+            life: None,
         }),
         albedo: DEFAULT_ALBEDO,
+        live: None,
     }
 }
 

@@ -1,0 +1,191 @@
+//! Live particle sets in their scene: the simulation (`particles::live`) read from the scene's sources and keyed
+//! settings at each instant, and the states it has reached kept, so that playback steps one frame from the
+//! last, scrubbing back starts from a kept state a few frames before, and an export of a sequence simulates each
+//! frame once. Kept states are the ones every run computes on its way (frame N is always frame 0 stepped N
+//! times), so a frame is the same to the bit however it is reached.
+
+use std::collections::BTreeMap;
+use std::sync::{Arc, Mutex};
+
+use super::Scene;
+use crate::animation::Animation;
+use crate::field::Sources;
+use crate::particles::live::{self, State, Timeline, World};
+use crate::particles::{Origin, Particle, ParticleSet};
+
+/// A live set's scene, as far as its simulation reads it: its sources, the sets (for their keyed settings) and
+/// the animation. A camera move or an object's edit leaves it, and the kept states, as they were.
+#[derive(Clone, PartialEq)]
+struct Key {
+    index: usize,
+    sources: Sources,
+    sets: Vec<ParticleSet>,
+    animation: Option<Animation>,
+}
+
+impl Key {
+    fn of(scene: &Scene, index: usize) -> Key {
+        Key {
+            index,
+            sources: scene.sources.clone(),
+            sets: scene.particles.iter().map(ParticleSet::unframed).collect(),
+            animation: scene.animation.clone(),
+        }
+    }
+}
+
+/// The scene a key stands for, read at any frame.
+struct SceneTimeline {
+    index: usize,
+    /// The scene without its animation and objects.
+    still: Scene,
+    animation: Option<Animation>,
+}
+
+impl SceneTimeline {
+    fn new(scene: &Scene, key: &Key) -> SceneTimeline {
+        SceneTimeline {
+            index: key.index,
+            still: Scene {
+                sources: key.sources.clone(),
+                particles: key.sets.clone(),
+                objects: Vec::new(),
+                animation: None,
+                ..scene.clone_settings()
+            },
+            animation: key.animation.clone(),
+        }
+    }
+}
+
+impl Timeline for SceneTimeline {
+    fn world(&self, frame: f64) -> World {
+        let mut s = Scene {
+            sources: self.still.sources.clone(),
+            particles: self.still.particles.clone(),
+            ..self.still.clone_settings()
+        };
+        if let Some(a) = &self.animation {
+            a.apply(&mut s, frame);
+        }
+        let emitter = match s.particles.swap_remove(self.index).origin {
+            Origin::Emitter(e) => e,
+            Origin::File { .. } => unreachable!("only an emitter is live"),
+        };
+        World {
+            sources: s.sources,
+            emitter,
+        }
+    }
+
+    fn frame_rate(&self) -> f64 {
+        (self.animation.as_ref()).map_or(crate::animation::DEFAULT_FRAME_RATE, |a| a.frame_rate)
+    }
+}
+
+/// States of one simulation, by frame.
+struct Kept {
+    key: Key,
+    states: BTreeMap<u32, Arc<State>>,
+    /// Frames kept: multiples of it, and the latest reached.
+    stride: u32,
+    latest: u32,
+}
+
+/// Particles the kept states may hold in all (about 250 MB); past it, fewer states are kept.
+const BUDGET: usize = 2_000_000;
+/// Simulations kept (the viewer's, an export's, a test's).
+const SIMULATIONS: usize = 4;
+/// Frames between kept states at first.
+const STRIDE: u32 = 8;
+
+static KEPT: Mutex<Vec<Kept>> = Mutex::new(Vec::new());
+
+/// The particles of live set `index` of `scene` at `frame`, as the renderers draw them.
+pub(super) fn particles_at(scene: &Scene, index: usize, frame: u32) -> Arc<Vec<Particle>> {
+    let state = state_at(scene, index, frame);
+    let key = Key::of(scene, index);
+    Arc::new(state.particles(&SceneTimeline::new(scene, &key)))
+}
+
+/// The state of live set `index` of `scene` at `frame`: from the nearest kept state at or before it.
+pub fn state_at(scene: &Scene, index: usize, frame: u32) -> Arc<State> {
+    let key = Key::of(scene, index);
+    let timeline = SceneTimeline::new(scene, &key);
+    let from = KEPT.lock().ok().and_then(|kept| {
+        let k = kept.iter().find(|k| k.key == key)?;
+        k.states.range(..=frame).next_back().map(|(_, s)| s.clone())
+    });
+    let mut state = from.unwrap_or_else(|| Arc::new(live::start(&timeline)));
+    let mut reached = vec![state.clone()];
+    while state.frame < frame {
+        state = Arc::new(live::advance(&state, &timeline));
+        reached.push(state.clone());
+    }
+    if let Ok(mut kept) = KEPT.lock() {
+        let at = match kept.iter().position(|k| k.key == key) {
+            Some(i) => i,
+            None => {
+                if kept.len() >= SIMULATIONS {
+                    kept.remove(0);
+                }
+                kept.push(Kept {
+                    key,
+                    states: BTreeMap::new(),
+                    stride: STRIDE,
+                    latest: 0,
+                });
+                kept.len() - 1
+            }
+        };
+        // The most recently used last.
+        let mut k = kept.remove(at);
+        keep(&mut k, &reached);
+        kept.push(k);
+    }
+    state
+}
+
+/// Keeps the states `reached` that fall on the stride, and the last one as the latest; thins the kept states
+/// (doubling the stride) while they hold more particles than the budget.
+fn keep(k: &mut Kept, reached: &[Arc<State>]) {
+    let last = reached.last().expect("at least the state started from");
+    let old_latest = k.latest;
+    for s in reached {
+        if s.frame % k.stride == 0 {
+            k.states.insert(s.frame, s.clone());
+        }
+    }
+    if old_latest % k.stride != 0 && old_latest != last.frame {
+        k.states.remove(&old_latest);
+    }
+    k.states.insert(last.frame, last.clone());
+    k.latest = last.frame;
+    let held = |k: &Kept| k.states.values().map(|s| s.particles.len()).sum::<usize>();
+    while held(k) > BUDGET && k.states.len() > 1 {
+        k.stride = k.stride.saturating_mul(2);
+        let (stride, latest) = (k.stride, k.latest);
+        k.states.retain(|&f, _| f % stride == 0 || f == latest);
+        if k.stride > 1 << 20 {
+            k.states.retain(|&f, _| f == latest);
+        }
+    }
+}
+
+impl Scene {
+    /// The scene's settings with no sources, objects, particles or animation (cheap to clone).
+    fn clone_settings(&self) -> Scene {
+        Scene {
+            camera: self.camera.clone(),
+            billboard: self.billboard.clone(),
+            integration: self.integration.clone(),
+            colors: self.colors.clone(),
+            glare: self.glare,
+            sources: Sources::default(),
+            objects: Vec::new(),
+            particles: Vec::new(),
+            slice_width: self.slice_width,
+            animation: None,
+        }
+    }
+}
