@@ -856,3 +856,69 @@ fn overlays_toggle_by_button_and_key_and_the_guides_let_the_glow_through() {
     assert!(h.state().view().show_overlays);
     assert!(mean_abs_difference(&with, &viewport_pixels(&mut h)) < 0.5);
 }
+
+#[test]
+fn a_live_set_is_added_edited_keyed_and_played_in_the_viewer() {
+    use energywave::animation::{Parameter, ParticleField};
+    let mut h = harness(light_scene());
+    assert!(h.state().scene().animation.is_none());
+    let click = |h: &mut Harness<'static, ViewerApp>, label: &str| {
+        h.get_all_by_label(label).next().unwrap().scroll_to_me();
+        h.run();
+        h.get_all_by_label(label).next().unwrap().click();
+        h.run();
+    };
+    click(&mut h, "+ fountain");
+    // A live set needs a timeline: the still scene got one.
+    assert_eq!(h.state().scene().particles.len(), 1);
+    assert!(h.state().scene().particles[0].life().is_some());
+    assert!(h.state().scene().animation.is_some());
+    let first = viewport_pixels(&mut h);
+    // Its rate edited in the panel, one undo step; then keyed at frame 0 by its key button.
+    h.get_by_role_and_label(Role::SpinButton, "rate /s")
+        .set_value_accesskit(450.0);
+    h.run();
+    assert_eq!(h.state().scene().particles[0].life().unwrap().rate, 450.0);
+    undo(&mut h);
+    assert_eq!(h.state().scene().particles[0].life().unwrap().rate, 200.0);
+    click(&mut h, "key particles[0].rate");
+    let keyed = Parameter::Particles(0, ParticleField::Rate);
+    assert!(
+        h.state()
+            .scene()
+            .animation
+            .as_ref()
+            .unwrap()
+            .track(&keyed)
+            .is_some()
+    );
+    // Twenty frames on, the fountain has risen: the viewport shows the scene at that frame, particles included.
+    h.get_by_role_and_label(Role::Slider, "frame")
+        .set_value_accesskit(20.0);
+    h.run();
+    assert_eq!(h.state().playback().frame, 20);
+    let later = viewport_pixels(&mut h);
+    let d = mean_abs_difference(&first, &later);
+    assert!(d > 0.5, "the particles show: {d}");
+    let shown = h.state().frame_scene();
+    let expected = h.state().scene().at_frame(20.0);
+    assert_eq!(shown.particles, expected.particles);
+    assert!(shown.particles[0].live.as_ref().unwrap().len() > 100);
+    // Turbulence switched on; saved and read back whole.
+    click(&mut h, "turbulence");
+    assert!(
+        h.state().scene().particles[0]
+            .life()
+            .unwrap()
+            .turbulence
+            .is_some()
+    );
+    let text = h.state().scene().to_toml();
+    let back = Scene::parse(&text, std::path::Path::new("s.toml")).unwrap();
+    assert_eq!(back.particles, h.state().scene().particles);
+    assert!(
+        h.state().report().error.is_none(),
+        "{:?}",
+        h.state().report().error
+    );
+}

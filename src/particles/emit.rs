@@ -207,7 +207,7 @@ pub struct Life {
     /// The share of the emitter's own velocity (a moving center, a keyed control point) a particle keeps (>= 0).
     pub inherit: f64,
     /// A curve emitter emits where its W series is lit (a travelling pulse), as much as it is lit: a draw at
-    /// chain parameter t is kept with probability min(1, W(t)).
+    /// chain parameter t is kept with probability min(1, W(t)), so that `rate` is a fully lit chain's.
     pub along_pulse: bool,
     /// The particle's radius over its life, a factor (>= 0).
     pub size: LifeCurve,

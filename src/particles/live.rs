@@ -1,6 +1,6 @@
 //! Particles that live: an emitter that makes particles over time (a rate and bursts), each with a lifetime,
 //! thrown with a velocity, moved by a constant acceleration, a drag and a turbulence (curl noise), its size,
-//! density and color following curves over its life (METHOD.md section 10.6).
+//! density and color following curves over its life (docs/METHOD.md section 9, "Particles that live").
 //!
 //! The simulation is a pure function of the scene and the frame: the state at frame N is the state at frame 0
 //! stepped N times by [`advance`], each step the same `SUBSTEPS` substeps on one global time grid, each particle
@@ -222,29 +222,24 @@ impl State {
             return None;
         };
         let mut rng = particle_rng(emitter.seed, id);
-        let draw = if life.along_pulse {
+        let draw = p1.sample(&mut rng);
+        if life.along_pulse {
+            // Born where the chain is lit, as often as it is: kept with probability min(1, W(t)) at its draw's
+            // chain parameter, so that the rate is a fully lit chain's.
             let weights = match emitter.shape {
                 super::emit::EmitterShape::Curve { curve, .. } => {
                     after.world.sources.curves.get(curve).map(|c| &c.weights)
                 }
                 _ => None,
             };
-            let mut kept = None;
-            for _ in 0..32 {
-                let d = p1.sample(&mut rng);
-                let w = match (weights, p1.chain_parameter(&d)) {
-                    (Some(w), Some(t)) => wseries::evaluate(w, t).clamp(0.0, 1.0),
-                    _ => 1.0,
-                };
-                if rng.unit() < w {
-                    kept = Some(d);
-                    break;
-                }
+            let w = match (weights, p1.chain_parameter(&draw)) {
+                (Some(w), Some(t)) => wseries::evaluate(w, t).clamp(0.0, 1.0),
+                _ => 1.0,
+            };
+            if rng.unit() >= w {
+                return None;
             }
-            kept?
-        } else {
-            p1.sample(&mut rng)
-        };
+        }
         let (a, b): (Spot, Spot) = (p0.place(&draw), p1.place(&draw));
         let position = a.position.lerp(b.position, share);
         let carried = (b.position - a.position) / h;
@@ -354,7 +349,8 @@ pub fn ballistic(x: DVec3, v: DVec3, a: DVec3, k: f64, dt: f64) -> (DVec3, DVec3
     )
 }
 
-/// Every particle moved by one substep from `t` (on two threads where there are many: each particle alone).
+/// Every particle moved by one substep from `t` (on every core where there are many: each particle alone, so the
+/// result does not depend on how they are split).
 fn move_all(particles: &mut [LiveParticle], motion: &Motion, t: f64, h: f64) {
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     if particles.len() < 4096 || threads < 2 {

@@ -182,6 +182,12 @@ pub(super) fn check_particles(
                                 "a live set lives in time: the scene needs its [animation] (a frame rate and a length)",
                             );
                         }
+                        if f.noise.is_some() {
+                            c.fail(
+                                &path.key("noise"),
+                                "noise clumps a still set; a live set's particles move: give it a turbulence ([particles.life.turbulence])",
+                            );
+                        }
                         if f.count.is_some() {
                             c.fail(
                                 &path.key("count"),
@@ -476,7 +482,7 @@ pub(super) fn write(sets: &[ParticleSet]) -> Vec<ParticlesFile> {
                     f.density = range(e.density);
                     f.color = Some(e.color);
                     f.seed = Some(e.seed as i64);
-                    f.noise = Some(e.noise);
+                    f.noise = e.life.is_none().then_some(e.noise);
                 }
             }
             f
