@@ -270,6 +270,10 @@ fn composed_frames_match_the_golden_images() {
     let (w, h) = GOLDEN_SIZE;
     let bless = std::env::var_os("ENERGYWAVE_BLESS").is_some();
     for (name, mut scene) in shipped() {
+        // A scene with live particles at its frame 30, where they are (its frame 0 holds only what is born then).
+        if scene.particles.iter().any(|p| p.life().is_some()) {
+            scene = scene.at_frame(30.0);
+        }
         scene.billboard.resolution = GOLDEN_RESOLUTION;
         // The goldens hold the compositing pipeline still; the integrators have tests/integrators.rs.
         scene.integration.integrator = Integrator::Simpson;

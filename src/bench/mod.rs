@@ -18,6 +18,7 @@ use crate::integrate::Integrator;
 use crate::scene::Scene;
 
 mod equal_error;
+mod live;
 mod particles;
 mod plain;
 mod report;
@@ -25,6 +26,7 @@ mod timing;
 mod viewer_frames;
 
 pub use equal_error::*;
+pub use live::*;
 pub use particles::*;
 pub use plain::*;
 pub use report::*;
@@ -89,6 +91,8 @@ pub enum Section {
     Viewer,
     /// Particle sets beside paper 002_'s tables.
     Particles,
+    /// Live particle sets: playing, scrubbing and rendering them.
+    Live,
 }
 
 /// Which sections run.
@@ -99,6 +103,7 @@ pub struct Sections {
     pub equal_error: bool,
     pub viewer: bool,
     pub particles: bool,
+    pub live: bool,
 }
 
 impl Sections {
@@ -109,6 +114,7 @@ impl Sections {
         equal_error: true,
         viewer: true,
         particles: true,
+        live: true,
     };
 
     /// Only those listed; every section for an empty list.
@@ -122,6 +128,7 @@ impl Sections {
             equal_error: list.contains(&Section::EqualError),
             viewer: list.contains(&Section::Viewer),
             particles: list.contains(&Section::Particles),
+            live: list.contains(&Section::Live),
         }
     }
 }
@@ -323,6 +330,14 @@ pub fn run(
     } else {
         Vec::new()
     };
+    let live = if options.sections.live {
+        progress(
+            "live particle sets: the sparks preset, 10,000 and 100,000 alive around the default beam",
+        );
+        live_rows(options.warmup(), options.frames())?
+    } else {
+        Vec::new()
+    };
 
     Ok(Report {
         adapter,
@@ -336,6 +351,7 @@ pub fn run(
         viewer,
         equal_error,
         particles,
+        live,
         compile,
         total_seconds: start.elapsed().as_secs_f64(),
     })
@@ -479,6 +495,16 @@ mod tests {
                 paper_unlit_ms: Some(58.1),
                 paper_lit_ms: Some(286.0),
             }],
+            live: vec![LiveRow {
+                case: "10,000 alive".into(),
+                alive: 10_000,
+                step: Timing::of(vec![40.0]),
+                scrub_back: Timing::of(vec![120.0]),
+                scratch_ms: 3000.0,
+                frame: Timing::of(vec![900.0]),
+                bare: Timing::of(vec![70.0]),
+                frame_rate: 30.0,
+            }],
             equal_error: vec![EqualErrorRow {
                 scene: "mixed".into(),
                 resolution: 256,
@@ -580,6 +606,11 @@ mod tests {
             "{table}"
         );
         assert_eq!(json["particles"][0]["frame"]["median_ms"], 60.0);
+        assert_eq!(json["live"][0]["scrub_back"]["median_ms"], 120.0);
+        assert!(
+            table.contains("live particle sets") && table.contains("10,000 alive"),
+            "{table}"
+        );
         assert_eq!(json["options"]["quick"], true);
         // A run of some sections prints only theirs.
         let only = Report {
@@ -587,6 +618,7 @@ mod tests {
             deformation: Vec::new(),
             viewer: None,
             particles: Vec::new(),
+            live: Vec::new(),
             ..report
         };
         let table = only.table();
@@ -600,6 +632,7 @@ mod tests {
             "viewer frame",
             "--quick",
             "particle sets",
+            "alive",
         ] {
             assert!(!table.contains(absent), "{absent}: {table}");
         }

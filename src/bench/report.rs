@@ -99,6 +99,8 @@ pub struct Report {
     pub equal_error: Vec<EqualErrorRow>,
     /// Particle sets beside paper 002_'s tables.
     pub particles: Vec<super::ParticleRow>,
+    /// Live particle sets: playback, scrubbing and rendering.
+    pub live: Vec<super::LiveRow>,
     /// What each structure's specialised pipelines took to compile, in milliseconds.
     pub compile: Vec<CompileTime>,
     pub total_seconds: f64,
@@ -302,6 +304,41 @@ impl Report {
                     r.added_ms(),
                     paper(r.paper_unlit_ms),
                     paper(r.paper_lit_ms),
+                );
+            }
+        }
+        if !self.live.is_empty() {
+            let _ = writeln!(
+                s,
+                "\nlive particle sets, W = 256, 512 x 512 (wall ms, median (min..max)): a frame of playback on the CPU (simulation stepped one frame, particles drawn up), a frame back while scrubbing, the last frame from scratch, the frame rendered (light, plan, field, smoke) and without its particles"
+            );
+            let _ = writeln!(
+                s,
+                "{:<18} {:>8} {:>16} {:>16} {:>11} {:>18} {:>16} {:>10}",
+                "case",
+                "alive",
+                "step ms",
+                "scrub back ms",
+                "scratch ms",
+                "frame ms",
+                "bare ms",
+                "budget ms"
+            );
+            let t = |x: &super::Timing| {
+                format!("{:.1} ({:.0}..{:.0})", x.median_ms, x.min_ms, x.max_ms)
+            };
+            for r in &self.live {
+                let _ = writeln!(
+                    s,
+                    "{:<18} {:>8} {:>16} {:>16} {:>11.0} {:>18} {:>16} {:>10.1}",
+                    r.case,
+                    r.alive,
+                    t(&r.step),
+                    t(&r.scrub_back),
+                    r.scratch_ms,
+                    t(&r.frame),
+                    t(&r.bare),
+                    1e3 / r.frame_rate,
                 );
             }
         }

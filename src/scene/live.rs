@@ -92,8 +92,10 @@ struct Kept {
     latest: u32,
 }
 
-/// Particles the kept states may hold in all (about 250 MB); past it, fewer states are kept.
+/// Particles one simulation's kept states may hold (about 240 MB); past it, fewer states are kept.
 const BUDGET: usize = 2_000_000;
+/// Particles every simulation's kept states may hold together; past it, the least recently used go.
+const TOTAL_BUDGET: usize = 4_000_000;
 /// Simulations kept (the viewer's, an export's, a test's).
 const SIMULATIONS: usize = 4;
 /// Frames between kept states at first.
@@ -142,6 +144,10 @@ pub fn state_at(scene: &Scene, index: usize, frame: u32) -> Arc<State> {
         let mut k = kept.remove(at);
         keep(&mut k, &reached);
         kept.push(k);
+        let held = |k: &Kept| k.states.values().map(|s| s.particles.len()).sum::<usize>();
+        while kept.len() > 1 && kept.iter().map(held).sum::<usize>() > TOTAL_BUDGET {
+            kept.remove(0);
+        }
     }
     state
 }

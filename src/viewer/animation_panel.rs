@@ -161,9 +161,14 @@ pub fn show(
                     animation.frames =
                         Animation::natural_length(&animation.pulses, &animation.tracks);
                 }
+                // A live particle set lives in time: the scene keeps its timeline while it has one.
+                let live = shown.particles.iter().any(|p| p.life().is_some());
                 if ui
-                    .small_button("make still")
+                    .add_enabled(!live, egui::Button::new("make still").small())
                     .on_hover_text("Remove the animation (pulses and keys too)")
+                    .on_disabled_hover_text(
+                        "A live particle set lives in time: make it still (its live switch) or delete it first",
+                    )
                     .clicked()
                 {
                     remove_animation = true;
