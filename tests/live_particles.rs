@@ -568,3 +568,38 @@ fn the_pulse_throws_sparks_where_it_is() {
     let (early, late) = (mean_x(8), mean_x(45));
     assert!(early < -1.0 && late > 1.0, "{early} {late}");
 }
+
+#[test]
+fn particles_are_thrown_along_the_shape() {
+    // A torus's ring (radius 2 about +y at the origin, no spread): "outward" along the ring's radius in its plane,
+    // "tangent" along the ring; a curve's chain: "tangent" along it, "normal" across it. Cone 0, speed 1.
+    let scene = |emitter: &str, direction: &str| {
+        let text = format!(
+            "[[tori]]\ncenter = [0.0, 0.0, 0.0]\naxis = [0.0, 1.0, 0.0]\nmajor_radius = 2.0\ncoefficient = 1.0\n\n\
+             [[curves]]\ncontrol_points = [[-2.0, 0.0, 0.0], [0.0, 0.0, 0.0], [2.0, 0.0, 0.0]]\ncoefficient = 1.0\n\n\
+             [[particles]]\n{emitter}\nspread = 0.0\nparticle_radius = 0.1\n\n[particles.life]\nrate = 0.0\n\
+             bursts = [[0.0, 200.0]]\nlifetime = 10.0\nspeed = 1.0\ncone = 0.0\ndirection = \"{direction}\"\n\n\
+             [animation]\nframes = 10\n"
+        );
+        live_state_at(&parse(&text).unwrap(), 0, 0)
+    };
+    for p in &scene("emitter = \"torus\"\ntorus = 0", "outward").particles {
+        let radial = DVec3::new(p.position.x, 0.0, p.position.z) / 2.0;
+        assert!((p.position.length() - 2.0).abs() < 1e-9);
+        assert!(
+            (p.velocity - radial).length() < 1e-9,
+            "{:?} {radial:?}",
+            p.velocity
+        );
+    }
+    for p in &scene("emitter = \"torus\"\ntorus = 0", "tangent").particles {
+        assert!(p.velocity.dot(p.position).abs() < 1e-9 && p.velocity.y.abs() < 1e-9);
+        assert!((p.velocity.length() - 1.0).abs() < 1e-9);
+    }
+    for p in &scene("emitter = \"curve\"\ncurve = 0", "tangent").particles {
+        assert!((p.velocity.x.abs() - 1.0).abs() < 1e-9, "{:?}", p.velocity);
+    }
+    for p in &scene("emitter = \"curve\"\ncurve = 0", "normal").particles {
+        assert!(p.velocity.x.abs() < 1e-9 && (p.velocity.length() - 1.0).abs() < 1e-9);
+    }
+}

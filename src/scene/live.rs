@@ -158,11 +158,11 @@ fn keep(k: &mut Kept, reached: &[Arc<State>]) {
     let last = reached.last().expect("at least the state started from");
     let old_latest = k.latest;
     for s in reached {
-        if s.frame % k.stride == 0 {
+        if s.frame.is_multiple_of(k.stride) {
             k.states.insert(s.frame, s.clone());
         }
     }
-    if old_latest % k.stride != 0 && old_latest != last.frame {
+    if !old_latest.is_multiple_of(k.stride) && old_latest != last.frame {
         k.states.remove(&old_latest);
     }
     k.states.insert(last.frame, last.clone());
