@@ -474,7 +474,7 @@ fn bad_input_is_refused_with_its_place() {
         )
     };
     let sphere = "emitter = \"sphere\"";
-    let cases: [(String, &str); 14] = [
+    let cases: [(String, &str); 15] = [
         (base(sphere, "rate = -1.0", true), "particles[0].life.rate"),
         (
             base(sphere, "lifetime = [-1.0, 2.0]", true),
@@ -521,6 +521,11 @@ fn bad_input_is_refused_with_its_place() {
         (
             base(sphere, "rate = 1.0", true)
                 + "[[animation.tracks]]\nparameter = \"particles[0].rate\"\nkeys = [[0, -3.0]]\n",
+            "animation.tracks[0].keys",
+        ),
+        (
+            base(sphere, "rate = 1.0", true)
+                + "[[animation.tracks]]\nparameter = \"particles[0].rate\"\nkeys = [[0, 1e12]]\n",
             "animation.tracks[0].keys",
         ),
     ];

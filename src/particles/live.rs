@@ -173,9 +173,14 @@ impl State {
         if owed > self.owed {
             let first = (self.owed + 1e-9).floor() as u64 + 1;
             let last = (owed + 1e-9).floor() as u64;
-            for m in first..=last {
+            // Births past the room the set has left are skipped, their numbers used all the same (a rate keyed
+            // beyond reason costs no memory).
+            let room = MAX_ALIVE.saturating_sub(self.particles.len()) as u64;
+            let listed = last.saturating_sub(first - 1).min(room);
+            for m in first..first + listed {
                 births.push(t0 + h * ((m as f64 - self.owed) / (owed - self.owed)).clamp(0.0, 1.0));
             }
+            self.next_id += last.saturating_sub(first - 1) - listed;
         }
         self.owed = owed;
         // A burst's substep by its frame, exact for whole frames.

@@ -270,6 +270,10 @@ fn check_value(c: &mut Checker<'_, '_>, path: &FieldPath, parameter: &Parameter,
             use crate::animation::ParticleField as F;
             let (ok, what) = match field {
                 F::Radius => (x > 0.0, "positive"),
+                F::Rate => (
+                    (0.0..=crate::scene::MAX_RATE).contains(&x),
+                    "0 to 1e6 particles a second",
+                ),
                 F::Albedo => ((0.0..=1.0).contains(&x), "in 0..1"),
                 _ => (x >= 0.0, "at least 0"),
             };

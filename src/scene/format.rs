@@ -137,8 +137,21 @@ fn merge_item(orig: &mut Item, old: Option<&Item>, new: &Item) {
             *o = value;
         }
         (orig, new) => {
+            // The same value the file writes in another form (keys as `[frame, value]` pairs, which the scene
+            // writes as tables): the file's text stays.
+            if old.is_some_and(|old| same(old, new)) {
+                return;
+            }
             let mut item = new.clone();
             tidy_item(&mut item);
+            // Tables where the file has a value inline (an array of pairs in a table of an array of tables): an
+            // inline array of them, which stays in its table, where new table headers would land after the file's
+            // later tables and read back into the wrong one.
+            if let (Item::Value(o), Item::ArrayOfTables(tables)) = (&*orig, &item) {
+                let mut value = Value::Array(tables.clone().into_array());
+                *value.decor_mut() = o.decor().clone();
+                item = Item::Value(value);
+            }
             *orig = item;
         }
     }
@@ -323,6 +336,31 @@ mod tests {
             assert_eq!(changed, 1, "{}:\n{edited}", path.display());
             assert_eq!(text.lines().count(), edited.lines().count());
         }
+    }
+
+    #[test]
+    fn keys_written_as_pairs_stay_in_their_track_when_one_changes() {
+        let text = "[[tori]]\ncenter = [0.0, 0.0, 0.0]\naxis = [0.0, 1.0, 0.0]\nmajor_radius = 1.0\ncoefficient = 1.0\n\n\
+                    [animation]\nframes = 100\n\n[[animation.tracks]]\nparameter = \"tori[0].major_radius\"\n\
+                    keys = [[0, 0.5], [90, 3.0]]  # swells\n\n[[animation.tracks]]\nparameter = \"tori[0].coefficient\"\n\
+                    keys = [[0, 2.5], [70, 1.5]]\n";
+        let path = Path::new("pairs.toml");
+        let saved = Scene::parse(text, path).unwrap();
+        assert_eq!(update_text(text, &saved, &saved, path), text);
+        let mut scene = saved.clone();
+        scene.animation.as_mut().unwrap().tracks[0].keys[1].value =
+            crate::animation::Value::Number(4.0);
+        let edited = update_text(text, &saved, &scene, path);
+        assert_eq!(load(&edited), scene, "{edited}");
+        // Only the edited track's keys line changed, still inside its own track, with its comment.
+        let changed: Vec<(&str, &str)> = (text.lines().zip(edited.lines()))
+            .filter(|(a, b)| a != b)
+            .collect();
+        assert_eq!(changed.len(), 1, "{edited}");
+        assert!(
+            changed[0].1.contains("4.0") && changed[0].1.contains("# swells"),
+            "{edited}"
+        );
     }
 
     #[test]

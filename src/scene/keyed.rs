@@ -296,7 +296,9 @@ fn set_particle_field(set: &mut ParticleSet, field: ParticleField, value: Value)
                         return;
                     };
                     match (field, value) {
-                        (ParticleField::Rate, Value::Number(x)) => life.rate = finite(x),
+                        (ParticleField::Rate, Value::Number(x)) => {
+                            life.rate = finite(x).min(crate::scene::MAX_RATE)
+                        }
                         (ParticleField::Acceleration, Value::Vector(a)) => {
                             life.acceleration = DVec3::from_array(a)
                         }
