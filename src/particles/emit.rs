@@ -426,25 +426,19 @@ impl Placement {
     /// The draw placed in the shape.
     pub(crate) fn place(&self, d: &Draw) -> Spot {
         let away = |v: DVec3, fallback: DVec3| v.try_normalize().unwrap_or(fallback);
+        // A ball's or a box's point: every direction away from its center.
+        let radial = |position: DVec3| {
+            let normal = away(d.offset, DVec3::Y);
+            Spot {
+                position,
+                normal,
+                tangent: normal,
+                outward: normal,
+            }
+        };
         match self {
-            Placement::Ball(center, r) => {
-                let normal = away(d.offset, DVec3::Y);
-                Spot {
-                    position: center + r * d.offset,
-                    normal,
-                    tangent: normal,
-                    outward: normal,
-                }
-            }
-            Placement::Box(center, size) => {
-                let normal = away(d.offset, DVec3::Y);
-                Spot {
-                    position: center + size * d.offset,
-                    normal,
-                    tangent: normal,
-                    outward: normal,
-                }
-            }
+            Placement::Ball(center, r) => radial(center + r * d.offset),
+            Placement::Box(center, size) => radial(center + size * d.offset),
             Placement::Tube {
                 points,
                 lengths,

@@ -598,15 +598,20 @@ fn bursts(ui: &mut Ui, bursts: &mut Vec<Burst>) {
     }
 }
 
-/// A curve over a life: its keys `age, value`, ages kept in order.
-fn life_curve(ui: &mut Ui, label: &str, curve: &mut LifeCurve) {
-    ui.label(label);
+/// Keys over a life, `(age, value)`, one row each: the age kept between its neighbours', the value by `value`,
+/// a remove button (not on the last key when `keep_one`); the index of a key removed.
+fn key_rows<T>(
+    ui: &mut Ui,
+    keys: &mut [(f64, T)],
+    keep_one: bool,
+    mut value: impl FnMut(&mut Ui, &mut T),
+) -> Option<usize> {
     let mut gone = None;
-    let n = curve.keys.len();
+    let n = keys.len();
     for j in 0..n {
-        let (low, high) = age_bounds(&curve.keys.iter().map(|k| k.0).collect::<Vec<_>>(), j);
+        let (low, high) = age_bounds(&keys.iter().map(|k| k.0).collect::<Vec<_>>(), j);
         ui.horizontal(|ui| {
-            let (age, value) = &mut curve.keys[j];
+            let (age, v) = &mut keys[j];
             labelled(
                 ui,
                 "age",
@@ -615,15 +620,8 @@ fn life_curve(ui: &mut Ui, label: &str, curve: &mut LifeCurve) {
                     .speed(0.005)
                     .max_decimals(3),
             );
-            labelled(
-                ui,
-                "x",
-                DragValue::new(value)
-                    .range(0.0..=1e3)
-                    .speed(0.01)
-                    .max_decimals(3),
-            );
-            if n > 1
+            value(ui, v);
+            if (n > 1 || !keep_one)
                 && ui
                     .small_button("x")
                     .on_hover_text("Remove this key")
@@ -633,6 +631,22 @@ fn life_curve(ui: &mut Ui, label: &str, curve: &mut LifeCurve) {
             }
         });
     }
+    gone
+}
+
+/// A curve over a life: its keys `age, value`, ages kept in order, one key at least.
+fn life_curve(ui: &mut Ui, label: &str, curve: &mut LifeCurve) {
+    ui.label(label);
+    let gone = key_rows(ui, &mut curve.keys, true, |ui, value| {
+        labelled(
+            ui,
+            "x",
+            DragValue::new(value)
+                .range(0.0..=1e3)
+                .speed(0.01)
+                .max_decimals(3),
+        );
+    });
     if let Some(j) = gone {
         curve.keys.remove(j);
     }
@@ -646,32 +660,11 @@ fn life_curve(ui: &mut Ui, label: &str, curve: &mut LifeCurve) {
 /// Colors over a life: none (the set's color) or keys `age, color`.
 fn color_curve(ui: &mut Ui, curve: &mut crate::particles::emit::ColorCurve) {
     ui.label("color over life");
-    let mut gone = None;
-    let n = curve.keys.len();
-    for j in 0..n {
-        let (low, high) = age_bounds(&curve.keys.iter().map(|k| k.0).collect::<Vec<_>>(), j);
-        ui.horizontal(|ui| {
-            let (age, c) = &mut curve.keys[j];
-            labelled(
-                ui,
-                "age",
-                DragValue::new(age)
-                    .range(low..=high)
-                    .speed(0.005)
-                    .max_decimals(3),
-            );
-            if let (Some(edited), _) = color(ui, "", *c) {
-                *c = edited;
-            }
-            if ui
-                .small_button("x")
-                .on_hover_text("Remove this key")
-                .clicked()
-            {
-                gone = Some(j);
-            }
-        });
-    }
+    let gone = key_rows(ui, &mut curve.keys, false, |ui, c| {
+        if let (Some(edited), _) = color(ui, "", *c) {
+            *c = edited;
+        }
+    });
     if let Some(j) = gone {
         curve.keys.remove(j);
     }
