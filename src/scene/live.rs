@@ -105,13 +105,17 @@ static KEPT: Mutex<Vec<Kept>> = Mutex::new(Vec::new());
 
 /// The particles of live set `index` of `scene` at `frame`, as the renderers draw them.
 pub(super) fn particles_at(scene: &Scene, index: usize, frame: u32) -> Arc<Vec<Particle>> {
-    let state = state_at(scene, index, frame);
-    let key = Key::of(scene, index);
-    Arc::new(state.particles(&SceneTimeline::new(scene, &key)))
+    let (state, timeline) = reached(scene, index, frame);
+    Arc::new(state.particles(&timeline))
 }
 
 /// The state of live set `index` of `scene` at `frame`: from the nearest kept state at or before it.
 pub fn state_at(scene: &Scene, index: usize, frame: u32) -> Arc<State> {
+    reached(scene, index, frame).0
+}
+
+/// The state of live set `index` of `scene` at `frame`, and the scene as its simulation reads it.
+fn reached(scene: &Scene, index: usize, frame: u32) -> (Arc<State>, SceneTimeline) {
     let key = Key::of(scene, index);
     let timeline = SceneTimeline::new(scene, &key);
     let from = KEPT.lock().ok().and_then(|kept| {
@@ -149,7 +153,7 @@ pub fn state_at(scene: &Scene, index: usize, frame: u32) -> Arc<State> {
             kept.remove(0);
         }
     }
-    state
+    (state, timeline)
 }
 
 /// Keeps the states `reached` that fall on the stride, and the last one as the latest; thins the kept states
