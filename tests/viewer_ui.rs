@@ -4,7 +4,7 @@
 mod common;
 
 use common::viewer::{
-    export_and_wait, harness, light_scene, mean_abs_difference, undo, viewport_pixels,
+    click_first, export_and_wait, harness, light_scene, mean_abs_difference, undo, viewport_pixels,
 };
 use egui::accesskit::Role;
 use egui::{Key, Modifiers, Pos2, Vec2};
@@ -622,12 +622,7 @@ fn objects_can_be_added_edited_moved_by_their_handle_deleted_and_undone() {
     use energywave::objects::Shape;
     let mut h = harness(light_scene());
     let before = viewport_pixels(&mut h);
-    let click = |h: &mut Harness<'static, ViewerApp>, label: &str| {
-        h.get_all_by_label(label).next().unwrap().scroll_to_me();
-        h.run();
-        h.get_all_by_label(label).next().unwrap().click();
-        h.run();
-    };
+    let click = click_first;
     click(&mut h, "+ sphere");
     click(&mut h, "+ plane");
     assert_eq!(h.state().scene().objects.len(), 2);
@@ -701,12 +696,7 @@ fn particle_sets_can_be_added_edited_deleted_and_undone_and_show_in_the_viewport
     use energywave::particles::Origin;
     let mut h = harness(light_scene());
     let before = viewport_pixels(&mut h);
-    let click = |h: &mut Harness<'static, ViewerApp>, label: &str| {
-        h.get_all_by_label(label).next().unwrap().scroll_to_me();
-        h.run();
-        h.get_all_by_label(label).next().unwrap().click();
-        h.run();
-    };
+    let click = click_first;
     click(&mut h, "+ smoke");
     assert_eq!(h.state().scene().particles.len(), 1);
     // A cloud at the camera's target: it shows (the image changes).
@@ -862,12 +852,7 @@ fn a_live_set_is_added_edited_keyed_and_played_in_the_viewer() {
     use energywave::animation::{Parameter, ParticleField};
     let mut h = harness(light_scene());
     assert!(h.state().scene().animation.is_none());
-    let click = |h: &mut Harness<'static, ViewerApp>, label: &str| {
-        h.get_all_by_label(label).next().unwrap().scroll_to_me();
-        h.run();
-        h.get_all_by_label(label).next().unwrap().click();
-        h.run();
-    };
+    let click = click_first;
     click(&mut h, "+ fountain");
     // A live set needs a timeline: the still scene got one.
     assert_eq!(h.state().scene().particles.len(), 1);

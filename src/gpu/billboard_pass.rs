@@ -240,22 +240,7 @@ impl BillboardRenderer {
                 },
             ],
         });
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("energywave.billboard.pass"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: target,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Load,
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            depth_stencil_attachment: None,
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
+        let mut pass = super::context::over(encoder, "energywave.billboard.pass", target);
         pass.set_pipeline(&self.pipelines[(layers > 1) as usize][objects as usize]);
         pass.set_bind_group(0, &bind_group, &[]);
         pass.draw(0..4, 0..1);

@@ -3,7 +3,7 @@
 //! adds its grid behind the glow through the `behind` hook.
 
 use super::billboard_pass::{BillboardRenderer, BlendMode, billboard_params, view_projection};
-use super::context::{GpuError, checked, read_texture, texture_2d};
+use super::context::{GpuError, checked, over, read_texture, texture_2d};
 use super::field_pass::{FieldInputs, FieldRenderer};
 use super::formats::{DEPTH_FORMAT, DEPTH_VALUE_CLEAR, DEPTH_VALUE_FORMAT, FRAME_FORMAT};
 use super::glare_pass::GlarePass;
@@ -321,30 +321,6 @@ impl SceneRenderer {
             }
         })
     }
-}
-
-/// A render pass that draws over what `view` holds (loaded, stored), one color attachment, no depth.
-fn over<'e>(
-    encoder: &'e mut wgpu::CommandEncoder,
-    label: &str,
-    view: &wgpu::TextureView,
-) -> wgpu::RenderPass<'e> {
-    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-        label: Some(label),
-        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-            view,
-            depth_slice: None,
-            resolve_target: None,
-            ops: wgpu::Operations {
-                load: wgpu::LoadOp::Load,
-                store: wgpu::StoreOp::Store,
-            },
-        })],
-        depth_stencil_attachment: None,
-        timestamp_writes: None,
-        occlusion_query_set: None,
-        multiview_mask: None,
-    })
 }
 
 /// Reads a frame's color back: RGBA, rows from the top (waits for the GPU).

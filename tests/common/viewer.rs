@@ -65,6 +65,15 @@ pub fn click_label(h: &mut Harness<'static, ViewerApp>, label: &str) {
     h.run();
 }
 
+/// Scrolls to the first widget labelled `label` (of several: a section's button that others share) and clicks
+/// it, a frame after each.
+pub fn click_first(h: &mut Harness<'static, ViewerApp>, label: &str) {
+    h.get_all_by_label(label).next().unwrap().scroll_to_me();
+    h.run();
+    h.get_all_by_label(label).next().unwrap().click();
+    h.run();
+}
+
 /// Undoes the last edit with the keyboard (Ctrl+Z, Cmd+Z on macOS), a frame after.
 pub fn undo(h: &mut Harness<'static, ViewerApp>) {
     h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);

@@ -237,70 +237,26 @@ fn fountain(at: DVec3, scale: f64) -> ParticleSet {
     )
 }
 
-/// Sparks thrown off the first curve where its W series is lit (the shipped `pulse_sparks` preset's).
+/// The live set of a shipped preset (its first), for the panel to add: one definition of each.
+fn shipped_set(text: &str, name: &str) -> ParticleSet {
+    let scene = crate::scene::Scene::parse(text, std::path::Path::new(name))
+        .expect("the shipped presets are valid (held by tests)");
+    scene.particles[0].unframed()
+}
+
+/// Sparks thrown off the first curve where its W series is lit: the shipped `pulse_sparks` preset's.
 fn pulse_sparks() -> ParticleSet {
-    live_set(
-        EmitterShape::Curve {
-            curve: 0,
-            spread: 0.12,
-        },
-        Span {
-            min: 0.035,
-            max: 0.07,
-        },
-        Span {
-            min: 60.0,
-            max: 120.0,
-        },
-        [1.0, 0.85, 0.6],
-        Life {
-            rate: 2500.0,
-            along_pulse: true,
-            lifetime: Span { min: 0.4, max: 0.9 },
-            speed: Span { min: 1.5, max: 3.5 },
-            direction: Direction::Normal,
-            cone: 35.0,
-            acceleration: DVec3::new(0.0, -5.0, 0.0),
-            drag: 1.2,
-            size: LifeCurve {
-                keys: vec![(0.0, 1.0), (1.0, 0.35)],
-            },
-            ..Life::default()
-        },
+    shipped_set(
+        include_str!("../../../assets/scenes/pulse_sparks.toml"),
+        "pulse_sparks.toml",
     )
 }
 
-/// Smoke shed outward from the first torus's ring, curling (the shipped `ring_smoke` preset's).
+/// Smoke shed outward from the first torus's ring, curling: the shipped `ring_smoke` preset's.
 fn ring_smoke() -> ParticleSet {
-    live_set(
-        EmitterShape::Torus {
-            torus: 0,
-            spread: 0.15,
-        },
-        Span {
-            min: 0.18,
-            max: 0.3,
-        },
-        Span { min: 1.5, max: 3.0 },
-        [0.8, 0.82, 0.85],
-        Life {
-            rate: 300.0,
-            lifetime: Span { min: 1.5, max: 2.5 },
-            speed: Span { min: 0.2, max: 0.5 },
-            direction: Direction::Outward,
-            cone: 25.0,
-            acceleration: DVec3::new(0.0, 0.25, 0.0),
-            drag: 0.8,
-            turbulence: Some(Turbulence {
-                scale: 0.8,
-                strength: 0.7,
-                speed: 0.8,
-            }),
-            size: LifeCurve {
-                keys: vec![(0.0, 0.6), (1.0, 1.8)],
-            },
-            ..Life::default()
-        },
+    shipped_set(
+        include_str!("../../../assets/scenes/ring_smoke.toml"),
+        "ring_smoke.toml",
     )
 }
 
