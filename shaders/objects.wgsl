@@ -12,6 +12,8 @@ struct ObjectParams {
     view_proj: mat4x4<f32>,
     energy: vec3<f32>, // the scene's Ce, its intensity applied: each term's color is energy + its tint
     ambient: f32,      // objects::lighting::AMBIENT
+    eye: vec3<f32>,    // the camera: a translucent surface's exit angle
+    pad0: f32,
 }
 
 @group(0) @binding(14) var<uniform> object: ObjectParams;
@@ -23,6 +25,8 @@ struct VertexOut {
     @location(2) albedo: vec3<f32>,
     @location(3) shadow: vec3<f32>,
     @location(4) shadow_dark: vec3<f32>,
+    @location(5) subsurface: vec3<f32>,
+    @location(6) eta: f32,
 }
 
 @vertex
@@ -32,6 +36,8 @@ fn vs_main(
     @location(2) albedo: vec3<f32>,
     @location(3) shadow: vec3<f32>,
     @location(4) shadow_dark: vec3<f32>,
+    @location(5) subsurface: vec3<f32>,
+    @location(6) eta: f32,
 ) -> VertexOut {
     var out: VertexOut;
     out.position = object.view_proj * vec4<f32>(position, 1.0);
@@ -40,6 +46,8 @@ fn vs_main(
     out.albedo = albedo;
     out.shadow = shadow;
     out.shadow_dark = shadow_dark;
+    out.subsurface = subsurface;
+    out.eta = eta;
     return out;
 }
 
@@ -56,9 +64,33 @@ fn fs_main(in: VertexOut) -> FragmentOut {
     load_scalars();
     let l = length(in.normal);
     let n = select(vec3<f32>(0.0), in.normal / l, l > 0.0);
+    let depth = bitcast<u32>(in.position.z);
+    if in.eta > 0.0 {
+        // A translucent surface: the light its voxels scatter out, through the exit's Fresnel toward the eye
+        // (objects::lighting::shaded_translucent).
+        let to_eye = object.eye - in.world;
+        let d_eye = length(to_eye);
+        let cos_view = select(1.0, abs(dot(n, to_eye / d_eye)), d_eye > 0.0 && l > 0.0);
+        let t = fresnel_transmittance(in.eta, cos_view);
+        return FragmentOut(vec4<f32>(in.albedo * t * (object.ambient + in.subsurface), 1.0), depth);
+    }
     let d = direct_light(in.world, n);
     let e = object.ambient + in.shadow * d.bright + in.shadow_dark * d.dark;
-    return FragmentOut(vec4<f32>(in.albedo * e, 1.0), bitcast<u32>(in.position.z));
+    return FragmentOut(vec4<f32>(in.albedo * e, 1.0), depth);
+}
+
+// The unpolarised Fresnel transmittance of light crossing at cos_outside into or out of a medium of relative
+// index eta: 1 - (rs^2 + rp^2) / 2, 0 past the critical angle. Twin of objects::translucent::fresnel_transmittance.
+fn fresnel_transmittance(eta: f32, cos_outside: f32) -> f32 {
+    let c = min(abs(cos_outside), 1.0);
+    let sin2_t = (1.0 - c * c) / (eta * eta);
+    if sin2_t >= 1.0 {
+        return 0.0;
+    }
+    let cos_t = sqrt(1.0 - sin2_t);
+    let rs = (c - eta * cos_t) / (c + eta * cos_t);
+    let rp = (eta * c - cos_t) / (eta * c + cos_t);
+    return clamp(1.0 - 0.5 * (rs * rs + rp * rp), 0.0, 1.0);
 }
 
 // Lambert's cosine at x (normal n) of the light from `source`; 1 at the source itself, where the light comes from

@@ -212,7 +212,7 @@ fn rust_mirrors_match_the_wgsl_layouts() {
         &objects,
         "ObjectParams",
         size_of::<energywave::gpu::object_pass::gpu_data::ObjectParams>(),
-        fields!(energywave::gpu::object_pass::gpu_data::ObjectParams: view_proj, energy, ambient),
+        fields!(energywave::gpu::object_pass::gpu_data::ObjectParams: view_proj, energy, ambient, eye, pad0),
     );
     let particles = parse_and_validate("particles", &shaders::compose("particles.wgsl"));
     {

@@ -125,6 +125,7 @@ fn ray_hits_are_the_crossings_a_root_finder_finds() {
         let object = Object {
             shape: shape.clone(),
             color: [0.5; 3],
+            translucent: None,
         };
         // From outside, toward the shape's middle with a spread (many hit, some graze, some miss), and from
         // inside for the solids.
@@ -206,6 +207,7 @@ fn ray_hits_are_the_crossings_a_root_finder_finds() {
             radius: 2.0,
         },
         color: [1.0; 3],
+        translucent: None,
     };
     assert_eq!(sphere.hit(DVec3::ZERO, -DVec3::Z, 0.0, 100.0), Some(8.0));
     let cube = Object {
@@ -215,6 +217,7 @@ fn ray_hits_are_the_crossings_a_root_finder_finds() {
             rotation: DVec3::ZERO,
         },
         color: [1.0; 3],
+        translucent: None,
     };
     assert_eq!(cube.hit(DVec3::ZERO, -DVec3::Z, 0.0, 100.0), Some(7.0));
     let floor = Object {
@@ -224,6 +227,7 @@ fn ray_hits_are_the_crossings_a_root_finder_finds() {
             size: None,
         },
         color: [1.0; 3],
+        translucent: None,
     };
     assert_eq!(
         floor.hit(DVec3::ZERO, DVec3::new(0.0, -1.0, -1.0), 0.0, 100.0),
@@ -257,6 +261,7 @@ fn blockers() -> Vec<Object> {
                 radius: 0.6,
             },
             color: [0.8; 3],
+            translucent: None,
         },
         Object {
             shape: Shape::Box {
@@ -265,6 +270,7 @@ fn blockers() -> Vec<Object> {
                 rotation: DVec3::new(0.0, 30.0, 10.0),
             },
             color: [0.8; 3],
+            translucent: None,
         },
         Object {
             shape: Shape::Plane {
@@ -273,6 +279,7 @@ fn blockers() -> Vec<Object> {
                 size: None,
             },
             color: [0.8; 3],
+            translucent: None,
         },
     ]
 }
@@ -394,6 +401,7 @@ fn a_sphere_under_a_point_source_is_lit_by_lamberts_law_with_the_fields_falloff(
                 radius: r,
             },
             color: albedo,
+            translucent: None,
         }],
         Integrator::Adaptive,
     );
@@ -435,10 +443,12 @@ fn floor_and_sphere(center: DVec3, radius: f64) -> Vec<Object> {
                 size: None,
             },
             color: [1.0; 3],
+            translucent: None,
         },
         Object {
             shape: Shape::Sphere { center, radius },
             color: [1.0; 3],
+            translucent: None,
         },
     ]
 }
@@ -573,6 +583,7 @@ fn a_ring_and_a_curve_soften_their_shadows_and_a_point_keeps_it_hard() {
             radius: r,
         },
         color: [1.0; 3],
+        translucent: None,
     }];
     let sources = Sources {
         points: vec![Point {
@@ -715,6 +726,7 @@ fn sphere_before_the_glow() -> Scene {
                 radius: 0.6,
             },
             color: [0.9, 0.6, 0.3],
+            translucent: None,
         }],
         Integrator::Adaptive,
     );
@@ -1065,6 +1077,7 @@ fn a_travelling_pulse_lights_the_floor_where_it_passes() {
             size: None,
         },
         color: [1.0; 3],
+        translucent: None,
     }];
     let start = DVec3::new(-3.0, -2.0, -1.0);
     let end = DVec3::new(3.0, -2.0, 1.0);
@@ -1218,6 +1231,7 @@ fn a_gltf_meshs_normals_shade_it_smoothly_and_its_base_color_is_its_albedo() {
                 data: std::sync::Arc::new(data),
             }),
             color: [0.8; 3],
+            translucent: None,
         }],
         colors: Colors {
             energy: [1.0; 3],
@@ -1416,6 +1430,7 @@ fn close_light_on_a_coarse_face(every_kind: bool) -> Scene {
             rotation: DVec3::ZERO,
         },
         color: [0.7, 0.8, 0.9],
+        translucent: None,
     }];
     scene
 }
@@ -1676,6 +1691,7 @@ fn a_negative_source_darkens_what_it_lights_with_its_own_shadows_alike_on_both_t
             radius: 0.08,
         },
         color: [0.9; 3],
+        translucent: None,
     });
     let l = lit(scene.lit_inputs());
     let (albedo, ce) = (scene.objects[0].color, scene.colors.energy);

@@ -537,7 +537,11 @@ fn objects() -> impl Strategy<Value = Vec<energywave::objects::Object>> {
         }),
     ];
     prop::collection::vec(
-        (shape, color()).prop_map(|(shape, color)| Object { shape, color }),
+        (shape, color()).prop_map(|(shape, color)| Object {
+            shape,
+            color,
+            translucent: None,
+        }),
         0..3,
     )
 }

@@ -256,8 +256,12 @@ impl SceneRenderer {
                     occlusion_query_set: None,
                     multiview_mask: None,
                 });
-                self.objects
-                    .draw(queue, &mut pass, view_proj, !self.holdout);
+                self.objects.draw(
+                    queue,
+                    &mut pass,
+                    (view_proj, setup.eye().as_vec3().to_array()),
+                    !self.holdout,
+                );
             }
             // The particles' smoke behind the billboard's plane over the background and the objects, its rays
             // ended by the objects; the smoke in front of the plane goes over the glow.

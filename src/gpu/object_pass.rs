@@ -27,11 +27,14 @@ pub mod gpu_data {
         pub view_proj: [[f32; 4]; 4], // 0
         pub energy: [f32; 3],         // 64
         pub ambient: f32,             // 76
+        pub eye: [f32; 3],            // 80: the camera, for a translucent surface's exit Fresnel
+        pub pad0: f32,                // 92
     }
-    const _: () = assert!(size_of::<ObjectParams>() == 80);
+    const _: () = assert!(size_of::<ObjectParams>() == 96);
 
-    /// One vertex (attributes 0 to 4 of `vs_main`): world position, normal, albedo and the shadow factors of
-    /// the light of positive and of negative sources (`objects::lighting::Shade::shadow`).
+    /// One vertex (attributes 0 to 6 of `vs_main`): world position, normal, albedo and the shadow factors of
+    /// the light of positive and of negative sources (`objects::lighting::Shade::shadow`); on a translucent
+    /// object, the light it scatters out and its index of refraction (0 on an opaque one).
     #[repr(C)]
     #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
     pub struct ObjectVertex {
@@ -40,8 +43,10 @@ pub mod gpu_data {
         pub albedo: [f32; 3],      // 24
         pub shadow: [f32; 3],      // 36
         pub shadow_dark: [f32; 3], // 48
+        pub subsurface: [f32; 3],  // 60
+        pub eta: f32,              // 72
     }
-    const _: () = assert!(size_of::<ObjectVertex>() == 60);
+    const _: () = assert!(size_of::<ObjectVertex>() == 76);
 }
 
 use gpu_data::{ObjectParams, ObjectVertex};
@@ -181,7 +186,7 @@ impl ObjectPass {
                         step_mode: wgpu::VertexStepMode::Vertex,
                         attributes: &wgpu::vertex_attr_array![
                             0 => Float32x3, 1 => Float32x3, 2 => Float32x3, 3 => Float32x3,
-                            4 => Float32x3
+                            4 => Float32x3, 5 => Float32x3, 6 => Float32
                         ],
                     })],
                     topology: wgpu::PrimitiveTopology::TriangleList,
@@ -241,6 +246,8 @@ impl ObjectPass {
                 albedo: f(light.albedo[k]),
                 shadow: f(light.shadow[k][0]),
                 shadow_dark: f(light.shadow[k][1]),
+                subsurface: f(light.subsurface[k]),
+                eta: light.eta[k] as f32,
             })
             .collect();
         self.vertices = Some(
@@ -295,12 +302,12 @@ impl ObjectPass {
     /// Draws the prepared triangles into `pass` (which has a `DEPTH_FORMAT` depth attachment, and a
     /// `DEPTH_VALUE_FORMAT` color attachment beside the frame's for the depth the billboard reads) with the
     /// projection `view_proj` (written before the submit that runs the pass): their colors and depth, or their
-    /// depth alone where not `color`.
+    /// depth alone where not `color`; `eye` is the camera's place.
     pub fn draw(
         &self,
         queue: &wgpu::Queue,
         pass: &mut wgpu::RenderPass<'_>,
-        view_proj: [[f32; 4]; 4],
+        (view_proj, eye): ([[f32; 4]; 4], [f32; 3]),
         color: bool,
     ) {
         let (Some(vertices), Some(indices), Some(bind_group), Some(pipelines)) = (
@@ -321,6 +328,8 @@ impl ObjectPass {
                 view_proj,
                 energy: self.energy,
                 ambient: AMBIENT as f32,
+                eye,
+                pad0: 0.0,
             }),
         );
         pass.set_pipeline(&pipelines[!color as usize]);

@@ -29,6 +29,8 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use super::tessellate::Surface;
+use super::translucent::fresnel_transmittance;
+use super::translucent::light::Scattered;
 use super::{Object, Shape, blocked};
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
 
@@ -392,8 +394,14 @@ pub struct VertexLights {
     pub albedo: Vec<[f64; 3]>,
     /// The share of the direct light the shadows leave, of either sign (`Shade::shadow`).
     pub shadow: Vec<Split>,
-    /// The lit color there (`shaded`): what the per-pixel shading gives at the vertex itself.
+    /// The lit color there (`shaded`): what the per-pixel shading gives at the vertex itself (a translucent
+    /// object's seen head on).
     pub colors: Vec<[f64; 3]>,
+    /// A translucent object's vertex: the light it scatters out before the exit's Fresnel and its tint
+    /// (`translucent::light::Scattered::at`); zero on an opaque one.
+    pub subsurface: Vec<[f64; 3]>,
+    /// A translucent object's relative index of refraction; 0 on an opaque one.
+    pub eta: Vec<f64>,
 }
 
 /// Lights every vertex of `surface`, splitting the triangles a shadow's edge crosses (`SHADOW_REFINEMENTS`
@@ -471,14 +479,53 @@ pub fn light_surface(
         })
         .collect();
     let shadow: Vec<Split> = shades.iter().map(Shade::shadow).collect();
-    let colors = (albedo.iter().zip(&shadow).zip(&shades))
-        .map(|((a, s), shade)| shaded(*a, *s, shade.direct))
+    // The translucent objects' light, carried through them from their surface voxels.
+    let scattered: Vec<Option<Scattered>> = objects
+        .iter()
+        .map(|o| Scattered::of(o, &lights, objects))
+        .collect();
+    let eta: Vec<f64> = (surface.object.iter())
+        .map(|&o| {
+            objects[o as usize]
+                .translucent
+                .as_ref()
+                .map_or(0.0, |t| t.eta)
+        })
+        .collect();
+    let subsurface: Vec<[f64; 3]> = (0..shades.len())
+        .into_par_iter()
+        .map(|k| match &scattered[surface.object[k] as usize] {
+            Some(s) => s.at(surface.positions[k], surface.normals[k]),
+            None => [0.0; 3],
+        })
+        .collect();
+    let colors = (0..shades.len())
+        .map(|k| match eta[k] > 0.0 {
+            true => shaded_translucent(albedo[k], subsurface[k], eta[k], 1.0),
+            false => shaded(albedo[k], shadow[k], shades[k].direct),
+        })
         .collect();
     VertexLights {
         albedo,
         shadow,
         colors,
+        subsurface,
+        eta,
     }
+}
+
+/// The color of a translucent object's surface point of `albedo` (its tint), scattered light `subsurface`
+/// (`VertexLights::subsurface`) and index `eta`, seen at `cos_view` to its normal: what leaves through the
+/// exit's Fresnel, `albedo F_t(eta, w_out) (AMBIENT + subsurface)` (the ambient light as it scatters through
+/// too). `shaders/objects.wgsl` shades every pixel of a translucent object by the same formula.
+pub fn shaded_translucent(
+    albedo: [f64; 3],
+    subsurface: [f64; 3],
+    eta: f64,
+    cos_view: f64,
+) -> [f64; 3] {
+    let t = fresnel_transmittance(eta, cos_view);
+    std::array::from_fn(|c| albedo[c] * t * (AMBIENT + subsurface[c]))
 }
 
 /// An edge by the places of its ends (to 1e-9, in either order): where two grids meet (a box's faces, a

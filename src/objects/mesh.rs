@@ -163,6 +163,42 @@ impl MeshData {
         self.hit_triangle(o, d, t_min, t_max).map(|(t, _)| t)
     }
 
+    /// Whether `p` lies inside the mesh: an odd number of crossings of its surface along a ray (a direction
+    /// off every axis and diagonal, so that it seldom grazes an edge; each crossing counted once).
+    pub fn contains(&self, p: DVec3) -> bool {
+        let d = DVec3::new(0.573_218_4, 0.661_083_9, 0.484_723_1);
+        let mut t = 0.0;
+        let mut crossings = 0u32;
+        while let Some(next) = self.hit(p, d, t, f64::INFINITY) {
+            crossings += 1;
+            // Past the crossing by a relative step, so that the same triangle is not met again.
+            t = next + 1e-9 * (1.0 + next);
+            if crossings > 10_000 {
+                break;
+            }
+        }
+        crossings % 2 == 1
+    }
+
+    /// The edges of the mesh that do not join exactly two triangles (by their ends' places, to 1e-9): none for
+    /// a closed surface, which has an inside.
+    pub fn open_edges(&self) -> usize {
+        let key = |p: DVec3| (p * 1e9).round().to_array().map(|x| x as i64);
+        let mut count = std::collections::HashMap::new();
+        for t in &self.triangles {
+            for k in 0..3 {
+                let (a, b) = (key(t[k]), key(t[(k + 1) % 3]));
+                if a == b {
+                    continue;
+                }
+                *count
+                    .entry(if a < b { (a, b) } else { (b, a) })
+                    .or_insert(0u32) += 1;
+            }
+        }
+        count.values().filter(|&&n| n != 2).count()
+    }
+
     /// `hit`, with the index of the triangle met (in `triangles`).
     pub fn hit_triangle(&self, o: DVec3, d: DVec3, t_min: f64, t_max: f64) -> Option<(f64, usize)> {
         if self.nodes.is_empty() {

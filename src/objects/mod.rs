@@ -13,6 +13,7 @@ pub mod clip;
 pub mod lighting;
 pub mod mesh;
 pub mod tessellate;
+pub mod translucent;
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -26,7 +27,11 @@ pub use mesh::MeshData;
 pub struct Object {
     pub shape: Shape,
     /// The albedo, each channel in 0..1: the share of the light that reaches it that the surface sends back.
+    /// For a translucent object, the tint of the light it scatters.
     pub color: [f64; 3],
+    /// A translucent material (`translucent`): light enters, is carried through the inside and leaves
+    /// elsewhere; `None` for an opaque surface.
+    pub translucent: Option<Box<translucent::Translucent>>,
 }
 
 /// The shapes an object takes.
@@ -124,6 +129,72 @@ impl Object {
             Shape::Sphere { center, .. } | Shape::Box { center, .. } => *center,
             Shape::Plane { point, .. } => *point,
             Shape::Mesh(m) => m.translation,
+        }
+    }
+
+    /// Whether `p` lies inside the object (a plane has no inside): a mesh's by the parity of its surface's
+    /// crossings along a ray (a closed mesh's; an open one's as far as that holds).
+    pub fn contains(&self, p: DVec3) -> bool {
+        match &self.shape {
+            Shape::Sphere { center, radius } => (p - *center).length_squared() < radius * radius,
+            Shape::Box {
+                center,
+                size,
+                rotation,
+            } => {
+                let q = rotation_matrix(*rotation).transpose() * (p - *center);
+                q.abs().cmplt(*size * 0.5).all()
+            }
+            Shape::Plane { .. } => false,
+            Shape::Mesh(m) => {
+                let (inverse, _) = m.inverse();
+                m.data.contains(inverse * (p - m.translation))
+            }
+        }
+    }
+
+    /// The object's frame: its center and its rotation (a sphere's none), in which a translucent object's inner
+    /// region is placed.
+    pub fn frame(&self) -> (DVec3, DMat3) {
+        match &self.shape {
+            Shape::Sphere { center, .. } => (*center, DMat3::IDENTITY),
+            Shape::Box {
+                center, rotation, ..
+            } => (*center, rotation_matrix(*rotation)),
+            Shape::Plane { point, .. } => (*point, DMat3::IDENTITY),
+            Shape::Mesh(m) => (m.translation, rotation_matrix(m.rotation)),
+        }
+    }
+
+    /// The object's axis-aligned bounds in the world: none for a plane.
+    pub fn bounds(&self) -> Option<(DVec3, DVec3)> {
+        match &self.shape {
+            Shape::Sphere { center, radius } => Some((*center - *radius, *center + *radius)),
+            Shape::Box {
+                center,
+                size,
+                rotation,
+            } => {
+                let r = rotation_matrix(*rotation);
+                let half =
+                    (r.x_axis.abs() * size.x + r.y_axis.abs() * size.y + r.z_axis.abs() * size.z)
+                        * 0.5;
+                Some((*center - half, *center + half))
+            }
+            Shape::Plane { .. } => None,
+            Shape::Mesh(m) => {
+                let (_, forward) = m.inverse();
+                let mut lo = DVec3::INFINITY;
+                let mut hi = DVec3::NEG_INFINITY;
+                for t in &m.data.triangles {
+                    for p in t {
+                        let w = forward * *p + m.translation;
+                        lo = lo.min(w);
+                        hi = hi.max(w);
+                    }
+                }
+                (lo.cmple(hi).all()).then_some((lo, hi))
+            }
         }
     }
 

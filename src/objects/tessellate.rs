@@ -224,6 +224,7 @@ mod tests {
                     radius: 0.5,
                 },
                 color,
+                translucent: None,
             },
             Object {
                 shape: Shape::Box {
@@ -232,6 +233,7 @@ mod tests {
                     rotation: DVec3::new(10.0, 20.0, 30.0),
                 },
                 color,
+                translucent: None,
             },
             Object {
                 shape: Shape::Plane {
@@ -240,6 +242,7 @@ mod tests {
                     size: None,
                 },
                 color,
+                translucent: None,
             },
             Object {
                 shape: Shape::Plane {
@@ -248,6 +251,7 @@ mod tests {
                     size: Some(4.0),
                 },
                 color,
+                translucent: None,
             },
         ]
     }

@@ -11,7 +11,7 @@
 use glam::DVec3;
 
 /// A value noise on the integer lattice with its gradient: `(value, d/dx, d/dy, d/dz)`, the value in [-1, 1].
-fn noise_with_gradient(p: DVec3, seed: u64) -> (f64, DVec3) {
+pub(crate) fn noise_with_gradient(p: DVec3, seed: u64) -> (f64, DVec3) {
     let base = p.floor();
     let f = p - base;
     let (ix, iy, iz) = (base.x as i64, base.y as i64, base.z as i64);

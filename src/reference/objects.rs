@@ -6,7 +6,7 @@
 
 use glam::DVec3;
 
-use crate::objects::lighting::{Lights, shaded};
+use crate::objects::lighting::{Lights, shaded, shaded_translucent};
 use crate::objects::mesh::{MeshData, triangle_barycentric};
 use crate::objects::{Lit, lit};
 use crate::scene::Scene;
@@ -55,6 +55,17 @@ impl ObjectImage {
             .sum::<DVec3>()
             .normalize_or_zero();
         let light = &self.lit.light;
+        let eta = light.eta[corners[0] as usize];
+        if eta > 0.0 {
+            // A translucent object: its scattered light through the exit's Fresnel toward the eye.
+            let cos_view = match n != DVec3::ZERO {
+                true => n.dot(-dir.normalize()).abs(),
+                false => 1.0,
+            };
+            let subsurface = mix(&|k| light.subsurface[k]);
+            let color = shaded_translucent(mix(&|k| light.albedo[k]), subsurface, eta, cos_view);
+            return Some((t, color));
+        }
         let direct = self.lights.direct(eye + dir * t, n);
         let shadow = [0, 1].map(|s| mix(&|k| light.shadow[k][s]));
         Some((t, shaded(mix(&|k| light.albedo[k]), shadow, direct)))

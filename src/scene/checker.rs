@@ -19,6 +19,11 @@ impl Checker<'_, '_> {
         self.problems.push(self.locator.problem(path, message));
     }
 
+    /// How many problems were noted so far.
+    pub(super) fn problem_count(&self) -> usize {
+        self.problems.len()
+    }
+
     pub(super) fn finite(&mut self, path: &FieldPath, x: f64) -> bool {
         if x.is_finite() {
             true

@@ -198,6 +198,51 @@ pub(crate) struct ObjectFile {
     pub scale: Option<ValueFile>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub color: Option<[f64; 3]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub translucent: Option<TranslucentFile>,
+}
+
+/// `[objects.translucent]`: a translucent material (checked in `scene::translucent_file`).
+#[derive(Debug, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct TranslucentFile {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub extinction: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub eta: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub resolution: Option<i64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub inner: Option<InnerFile>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub noise: Option<NoiseFile>,
+}
+
+/// `[objects.translucent.inner]`: a region of another extinction.
+#[derive(Debug, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct InnerFile {
+    pub shape: String,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub center: Option<[f64; 3]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub radius: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub size: Option<ValueFile>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub extinction: Option<f64>,
+}
+
+/// `[objects.translucent.noise]`: a noise that varies the extinction.
+#[derive(Debug, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct NoiseFile {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scale: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub amount: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub seed: Option<u64>,
 }
 
 /// `[[particles]]`: a particle set, from a PLY file or an emitter; which keys it takes depends on which

@@ -15,6 +15,7 @@ pub mod limits;
 mod live;
 mod objects_file;
 mod particles_file;
+mod translucent_file;
 mod validate;
 
 pub use life_file::MAX_RATE;

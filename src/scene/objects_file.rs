@@ -167,7 +167,16 @@ pub(super) fn check_objects(c: &mut Checker<'_, '_>, file: &SceneFile, base: &Pa
                 }
             }
         };
-        out.push(Object { shape, color });
+        let mut object = Object {
+            shape,
+            color,
+            translucent: None,
+        };
+        if let Some(t) = &o.translucent {
+            object.translucent =
+                super::translucent_file::check(c, &path.key("translucent"), t, &object);
+        }
+        out.push(object);
     }
     out
 }
@@ -244,6 +253,7 @@ pub(super) fn write(objects: &[Object]) -> Vec<ObjectFile> {
             let mut f = ObjectFile {
                 shape: o.kind().name().to_owned(),
                 color: Some(o.color),
+                translucent: o.translucent.as_deref().map(super::translucent_file::write),
                 ..ObjectFile::default()
             };
             match &o.shape {

@@ -222,6 +222,7 @@ impl Edit {
                 scene.objects.push(Object {
                     shape,
                     color: DEFAULT_ALBEDO,
+                    translucent: None,
                 });
             }
             Edit::InsertObject(object) => scene.objects.push(object),

@@ -438,6 +438,7 @@ impl ViewerApp {
                         data: std::sync::Arc::new(data),
                     }),
                     color: crate::scene::DEFAULT_ALBEDO,
+                    translucent: None,
                 };
                 self.apply(Action::Edit(Edit::InsertObject(object)));
             }

@@ -1,0 +1,465 @@
+//! Translucent objects (METHOD.md section 11): the voxel number map and its table against closed forms and a
+//! brute-force f64 reference (converging as the voxels shrink), the Fresnel equations, energy, a cavity against
+//! the depth-map estimate, and bad input.
+
+use std::sync::Arc;
+
+use energywave::objects::lighting::Lights;
+use energywave::objects::mesh::MeshData;
+use energywave::objects::translucent::light::{
+    Irradiance, Scattered, irradiance, leaving, prepared,
+};
+use energywave::objects::translucent::reference::{Estimate, Reference};
+use energywave::objects::translucent::table::{Table, thickness};
+use energywave::objects::translucent::voxels::Voxels;
+use energywave::objects::translucent::{
+    Inner, InnerShape, Medium, Translucent, fresnel_transmittance,
+};
+use energywave::objects::{MeshObject, Object, Shape};
+use energywave::scene::Scene;
+use glam::DVec3;
+
+fn scene(name: &str) -> Scene {
+    Scene::load(std::path::Path::new(&format!("assets/scenes/{name}.toml")))
+        .expect("the preset loads")
+}
+
+fn material(extinction: f64, resolution: u32) -> Option<Box<Translucent>> {
+    Some(Box::new(Translucent {
+        extinction,
+        eta: 1.4,
+        inner: None,
+        noise: None,
+        resolution: Some(resolution),
+    }))
+}
+
+/// The poster's cube (side 1.2) with a clear spherical cavity of radius 0.4 at its center.
+fn cavity_cube(extinction: f64, resolution: u32) -> Object {
+    let mut m = material(extinction, resolution).unwrap();
+    m.inner = Some(Inner {
+        shape: InnerShape::Sphere {
+            center: DVec3::ZERO,
+            radius: 0.4,
+        },
+        extinction: 0.0,
+    });
+    Object {
+        shape: Shape::Box {
+            center: DVec3::ZERO,
+            size: DVec3::splat(1.2),
+            rotation: DVec3::ZERO,
+        },
+        color: [1.0; 3],
+        translucent: Some(m),
+    }
+}
+
+fn sphere(extinction: f64, resolution: u32) -> Object {
+    Object {
+        shape: Shape::Sphere {
+            center: DVec3::new(0.1, -0.2, 0.3),
+            radius: 0.7,
+        },
+        color: [1.0; 3],
+        translucent: material(extinction, resolution),
+    }
+}
+
+/// A closed L-shaped prism (not convex): the outline (0,0) (2,0) (2,1) (1,1) (1,2) (0,2) (0,1), z from 0 to 1,
+/// every triangle wound counter-clockwise seen from outside, centered at the origin.
+fn l_prism(extinction: f64, resolution: u32) -> Object {
+    let outline = [
+        (0.0, 0.0),
+        (2.0, 0.0),
+        (2.0, 1.0),
+        (1.0, 1.0),
+        (1.0, 2.0),
+        (0.0, 2.0),
+        (0.0, 1.0),
+    ];
+    let c = DVec3::new(0.8, 0.8, 0.5);
+    let p = |(x, y): (f64, f64), z: f64| DVec3::new(x, y, z) - c;
+    let mut triangles = Vec::new();
+    // The caps: the lower rectangle as a fan from (0,0) through (2,0) (2,1) (1,1) (0,1), the upper square apart.
+    let caps = [
+        [(0.0, 0.0), (2.0, 0.0), (2.0, 1.0)],
+        [(0.0, 0.0), (2.0, 1.0), (1.0, 1.0)],
+        [(0.0, 0.0), (1.0, 1.0), (0.0, 1.0)],
+        [(0.0, 1.0), (1.0, 1.0), (1.0, 2.0)],
+        [(0.0, 1.0), (1.0, 2.0), (0.0, 2.0)],
+    ];
+    for t in caps {
+        triangles.push([p(t[0], 1.0), p(t[1], 1.0), p(t[2], 1.0)]);
+        triangles.push([p(t[0], 0.0), p(t[2], 0.0), p(t[1], 0.0)]);
+    }
+    for k in 0..outline.len() {
+        let (a, b) = (outline[k], outline[(k + 1) % outline.len()]);
+        triangles.push([p(a, 0.0), p(b, 0.0), p(b, 1.0)]);
+        triangles.push([p(a, 0.0), p(b, 1.0), p(a, 1.0)]);
+    }
+    let data = MeshData::new(triangles);
+    assert_eq!(data.open_edges(), 0, "the prism is closed");
+    Object {
+        shape: Shape::Mesh(MeshObject {
+            path: "l_prism.glb".into(),
+            translation: DVec3::ZERO,
+            rotation: DVec3::ZERO,
+            scale: DVec3::ONE,
+            data: Arc::new(data),
+        }),
+        color: [1.0; 3],
+        translucent: material(extinction, resolution),
+    }
+}
+
+/// The poster's light: a ring beside the object's -x face.
+fn ring_scene(object: Object) -> Scene {
+    let mut s = scene("translucent_cavity");
+    s.objects = vec![object];
+    s
+}
+
+fn lights(s: &Scene) -> Lights {
+    Lights::new(&s.sources, s.colors.palette(), s.integration.epsilon)
+}
+
+#[test]
+fn optical_thickness_matches_closed_forms() {
+    let sigma = 1.7;
+    // A uniform slab: through a box's opposite faces, a slanted path's length.
+    let slab = Object {
+        shape: Shape::Box {
+            center: DVec3::ZERO,
+            size: DVec3::new(1.0, 0.5, 1.0),
+            rotation: DVec3::ZERO,
+        },
+        color: [1.0; 3],
+        translucent: material(sigma, 32),
+    };
+    let m = Medium::of(&slab).unwrap();
+    let (a, b) = (DVec3::new(-0.3, -0.25, 0.1), DVec3::new(0.2, 0.25, -0.2));
+    let exact = sigma * (b - a).length();
+    assert!((m.optical_thickness(a, b, 1) - exact).abs() < 1e-12 * exact);
+    // Beyond the slab the path gathers nothing: the same from outside to outside.
+    let (a2, b2) = (a + (a - b) * 2.0, b + (b - a) * 3.0);
+    assert!((m.optical_thickness(a2, b2, 1) - exact).abs() < 1e-9 * exact);
+    // A sphere's chord: 2 sqrt(r^2 - d^2) at distance d from the center.
+    let ball = sphere(sigma, 32);
+    let m = Medium::of(&ball).unwrap();
+    let center = DVec3::new(0.1, -0.2, 0.3);
+    for d in [0.0, 0.3, 0.6, 0.69] {
+        let from = center + DVec3::new(-5.0, d, 0.0);
+        let to = center + DVec3::new(5.0, d, 0.0);
+        let chord = 2.0 * (0.49f64 - d * d).sqrt();
+        let tau = m.optical_thickness(from, to, 1);
+        assert!((tau - sigma * chord).abs() < 1e-9, "chord at {d}: {tau}");
+    }
+    // Through the cavity, where sigma_t = 0: the cube's 1.2 less the cavity's 0.8.
+    let cube = cavity_cube(sigma, 32);
+    let m = Medium::of(&cube).unwrap();
+    let tau = m.optical_thickness(DVec3::new(-1.0, 0.0, 0.0), DVec3::new(1.0, 0.0, 0.0), 1);
+    assert!((tau - sigma * 0.4).abs() < 1e-9, "{tau}");
+    // Off the cavity's axis, at height h: 1.2 - 2 sqrt(0.16 - h^2).
+    let h = 0.25;
+    let tau = m.optical_thickness(DVec3::new(-1.0, h, 0.0), DVec3::new(1.0, h, 0.0), 1);
+    assert!((tau - sigma * (1.2 - 2.0 * (0.16f64 - h * h).sqrt())).abs() < 1e-9);
+
+    // The voxels' thickness converges to the same values as the voxels shrink: the mean error over segments
+    // between points spread over the cube's faces (a single segment's error is not monotone: one grazing the
+    // cavity crosses its staircase of voxels for a long way at some resolutions and not at others).
+    let points: Vec<DVec3> = (0..64)
+        .map(|k| {
+            let u = |j: u32| ((k as f64 + 0.5) * (0.618_034 * j as f64 + 0.1)).fract() - 0.5;
+            let axis = k % 3;
+            let sign = if k % 2 == 0 { 1.0 } else { -1.0 };
+            let mut p = DVec3::new(u(1), u(2), u(3)) * 1.2;
+            p[axis] = 0.6 * sign;
+            p
+        })
+        .collect();
+    let mut last = f64::INFINITY;
+    for resolution in [12, 24, 48] {
+        let v = Voxels::of(&cavity_cube(sigma, resolution), resolution).unwrap();
+        let mut sum = 0.0;
+        let mut count = 0;
+        for (k, &from) in points.iter().enumerate() {
+            for &to in &points[k + 1..] {
+                sum += (thickness(&v, from, to) - m.optical_thickness(from, to, 1)).abs();
+                count += 1;
+            }
+        }
+        let mean = sum / count as f64;
+        println!("resolution {resolution}: mean |tau - exact| {mean:.5}");
+        assert!(
+            mean < last * 0.75,
+            "the voxels' error shrinks: {mean} after {last}"
+        );
+        last = mean;
+    }
+    assert!(last < 0.01 * sigma, "{last}");
+}
+
+#[test]
+fn fresnel_transmittance_matches_the_fresnel_equations() {
+    for eta in [1.0f64 / 1.5, 1.31, 1.5, 2.4] {
+        // Head on: 1 - ((eta - 1) / (eta + 1))^2.
+        let r0 = ((eta - 1.0) / (eta + 1.0)).powi(2);
+        assert!((fresnel_transmittance(eta, 1.0) - (1.0 - r0)).abs() < 1e-12);
+        // Every angle: the sine and tangent forms, rs = -sin(i - t) / sin(i + t), rp = tan(i - t) / tan(i + t).
+        for k in 1..90 {
+            let i = (k as f64).to_radians();
+            let sin_t = i.sin() / eta;
+            let ft = fresnel_transmittance(eta, i.cos());
+            if sin_t >= 1.0 {
+                assert_eq!(
+                    ft, 0.0,
+                    "total internal reflection at {k} degrees, eta {eta}"
+                );
+                continue;
+            }
+            let t = sin_t.asin();
+            let rs = -(i - t).sin() / (i + t).sin();
+            let rp = (i - t).tan() / (i + t).tan();
+            let expected = 1.0 - 0.5 * (rs * rs + rp * rp);
+            assert!(
+                (ft - expected).abs() < 1e-12,
+                "{k} degrees, eta {eta}: {ft} against {expected}"
+            );
+        }
+        // At Brewster's angle the p wave passes whole: F_r = rs^2 / 2.
+        if eta > 1.0 {
+            let b = eta.atan();
+            let t = (b.sin() / eta).asin();
+            let rs = (b - t).sin() / (b + t).sin();
+            assert!((fresnel_transmittance(eta, b.cos()) - (1.0 - 0.5 * rs * rs)).abs() < 1e-12);
+        }
+        // Grazing: nothing enters.
+        assert!(fresnel_transmittance(eta, 0.0) < 1e-12);
+    }
+}
+
+/// The light leaving every surface voxel, its power: `sum_l A_l pi S_l` (before the exit's Fresnel, which lets
+/// out less), against what enters, `sum_k E_k A_k`.
+fn powers(object: &Object) -> (f64, f64) {
+    let s = ring_scene(object.clone());
+    let lights = lights(&s);
+    let p = prepared(object).unwrap();
+    let medium = Medium::of(object).unwrap();
+    let light = irradiance(&medium, &p.voxels, &lights, &s.objects);
+    let out = leaving(&p, &light);
+    let area = |k: usize| p.voxels.surface[k].area;
+    let entering: f64 = (0..out.len()).map(|k| light.entering[k][0] * area(k)).sum();
+    let leaving: f64 = (0..out.len())
+        .map(|l| out[l][0] * area(l) * std::f64::consts::PI)
+        .sum();
+    (entering, leaving)
+}
+
+#[test]
+fn no_more_light_leaves_than_enters() {
+    for extinction in [0.0, 0.5, 3.0, 30.0] {
+        let (entering, leaving) = powers(&cavity_cube(extinction, 12));
+        println!("extinction {extinction}: entering {entering:.5}, leaving {leaving:.5}");
+        assert!(entering > 0.1);
+        // All of it leaves (the inside does not absorb; the tint does), and never more.
+        assert!(leaving <= entering * (1.0 + 1e-9));
+        assert!(leaving >= entering * (1.0 - 1e-9));
+    }
+    // Through the exit's Fresnel, less: its hemispherical mean is below 1.
+    let (eta, n): (f64, usize) = (1.4, 2000);
+    let mean: f64 = (0..n)
+        .map(|k| {
+            // cos^2 uniform in [0, 1]: the cosine-weighted hemisphere.
+            let c = ((k as f64 + 0.5) / n as f64).sqrt();
+            fresnel_transmittance(eta, c)
+        })
+        .sum::<f64>()
+        / n as f64;
+    assert!(mean < 1.0 && mean > 0.8, "{mean}");
+}
+
+/// The table's light at points of the object's drawn surface against the reference's, relative RMS over the
+/// points.
+fn error_against_reference(
+    object: &Object,
+    reference: &Reference<'_>,
+    points: &[(DVec3, DVec3)],
+) -> f64 {
+    let s = ring_scene(object.clone());
+    let lights = lights(&s);
+    let scattered = Scattered::of(object, &lights, &s.objects).unwrap();
+    let mut num = 0.0;
+    let mut den = 0.0;
+    for &(x, n) in points {
+        let got = scattered.at(x, n)[0];
+        let want = reference.leaving(x, n, Estimate::Exact)[0];
+        num += (got - want).powi(2);
+        den += want * want;
+    }
+    (num / den).sqrt()
+}
+
+/// Points of a box's faces (side 1.2 around the origin), away from its edges, with their normals.
+fn cube_points() -> Vec<(DVec3, DVec3)> {
+    let mut out = Vec::new();
+    for axis in 0..3 {
+        for sign in [-1.0, 1.0] {
+            let n = DVec3::AXES[axis] * sign;
+            let (u, v) = (DVec3::AXES[(axis + 1) % 3], DVec3::AXES[(axis + 2) % 3]);
+            for (a, b) in [(0.0, 0.0), (0.3, -0.2), (-0.35, 0.35), (0.4, 0.1)] {
+                out.push((n * 0.6 + u * a + v * b, n));
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn the_table_converges_to_the_reference_on_the_posters_cube() {
+    let extinction = 1.5;
+    let fine = cavity_cube(extinction, 8);
+    let s = ring_scene(fine.clone());
+    let lights = lights(&s);
+    let reference = Reference::new(&fine, &s.objects, &lights, 0.06);
+    let points = cube_points();
+    let mut errors = Vec::new();
+    for resolution in [8, 12, 16, 24] {
+        let e = error_against_reference(&cavity_cube(extinction, resolution), &reference, &points);
+        println!("cube with a cavity, {resolution}^3: relative RMS error {e:.4}");
+        errors.push(e);
+    }
+    assert!(errors.windows(2).all(|w| w[1] < w[0]), "{errors:?}");
+    assert!(errors[errors.len() - 1] < 0.01, "{errors:?}");
+}
+
+#[test]
+fn the_table_converges_to_the_reference_on_a_concave_mesh() {
+    let extinction = 1.0;
+    let base = l_prism(extinction, 8);
+    let s = ring_scene(base.clone());
+    let lights = lights(&s);
+    let reference = Reference::new(&base, &s.objects, &lights, 0.1);
+    // Points on the prism's faces: the caps, the outer sides and the sides of the inner corner, which see each
+    // other across the outside (light carried between them only through the inside).
+    let c = DVec3::new(0.8, 0.8, 0.5);
+    let at = |x: f64, y: f64, z: f64| DVec3::new(x, y, z) - c;
+    let points = vec![
+        (at(0.5, 0.5, 1.0), DVec3::Z),
+        (at(1.5, 0.5, 1.0), DVec3::Z),
+        (at(0.5, 1.5, 1.0), DVec3::Z),
+        (at(0.5, 0.5, 0.0), -DVec3::Z),
+        (at(1.5, 0.4, 0.0), -DVec3::Z),
+        (at(2.0, 0.5, 0.5), DVec3::X),
+        (at(1.0, 1.5, 0.5), DVec3::X),
+        (at(1.5, 1.0, 0.5), DVec3::Y),
+        (at(0.5, 2.0, 0.5), DVec3::Y),
+        (at(0.0, 0.5, 0.5), -DVec3::X),
+        (at(0.0, 1.5, 0.5), -DVec3::X),
+        (at(1.0, 0.0, 0.5), -DVec3::Y),
+    ];
+    let mut errors = Vec::new();
+    for resolution in [8, 12, 16, 24] {
+        let e = error_against_reference(&l_prism(extinction, resolution), &reference, &points);
+        println!("L-shaped prism, {resolution} a side: relative RMS error {e:.4}");
+        errors.push(e);
+    }
+    assert!(errors.windows(2).all(|w| w[1] < w[0]), "{errors:?}");
+    assert!(errors[errors.len() - 1] < 0.05, "{errors:?}");
+}
+
+#[test]
+fn the_cavity_lets_light_through_where_a_depth_map_sees_a_solid_cube() {
+    // The ring lights the -x face; on the far face (+x) the point behind the cavity gets the light that crossed
+    // it, the corner beside it light that crossed the solid cube.
+    let extinction = 3.0;
+    let cube = cavity_cube(extinction, 24);
+    let s = ring_scene(cube.clone());
+    let lights = lights(&s);
+    let reference = Reference::new(&cube, &s.objects, &lights, 0.06);
+    let behind = (DVec3::new(0.6, 0.0, 0.0), DVec3::X);
+    let beside = (DVec3::new(0.6, 0.45, 0.45), DVec3::X);
+    let ratio = |f: &dyn Fn((DVec3, DVec3)) -> f64| f(behind) / f(beside);
+    let exact = ratio(&|(x, n)| reference.leaving(x, n, Estimate::Exact)[0]);
+    let depth_map = ratio(&|(x, n)| reference.leaving(x, n, Estimate::DepthMap)[0]);
+    let scattered = Scattered::of(&cube, &lights, &s.objects).unwrap();
+    let table = ratio(&|(x, n)| scattered.at(x, n)[0]);
+    println!(
+        "behind the cavity over beside it: reference {exact:.3}, table {table:.3}, depth map {depth_map:.3}"
+    );
+    assert!(
+        exact > 1.5,
+        "the cavity brightens the far face behind it: {exact}"
+    );
+    assert!(
+        (table / exact - 1.0).abs() < 0.15,
+        "the table: {table} against {exact}"
+    );
+    assert!(
+        (depth_map / exact - 1.0).abs() > 0.3,
+        "the depth map misses it: {depth_map} against {exact}"
+    );
+}
+
+#[test]
+fn the_table_is_symmetric_and_numbers_every_surface_voxel_once() {
+    let object = sphere(2.0, 10);
+    let v = Voxels::of(&object, 10).unwrap();
+    let t = Table::of(&v);
+    assert_eq!(t.tau.len(), v.surface.len() * (v.surface.len() + 1) / 2);
+    assert_eq!(
+        t.bytes(),
+        energywave::objects::translucent::voxels::table_bytes(v.surface.len())
+    );
+    for (k, s) in v.surface.iter().enumerate() {
+        assert_eq!(v.number[s.voxel], k as u32);
+        assert_eq!(t.get(k, k), 0.0);
+    }
+    let numbered = v.number.iter().filter(|&&n| n != u32::MAX).count();
+    assert_eq!(numbered, v.surface.len());
+    // The surface's area, whatever the resolution: the sphere's 4 pi r^2 (its pieces flat, within 0.1 %).
+    let area = 4.0 * std::f64::consts::PI * 0.49;
+    assert!((v.area / area - 1.0).abs() < 1e-3, "{}", v.area);
+    for (k, l) in [(0, 5), (3, 40), (17, 2), (v.surface.len() - 1, 0)] {
+        assert_eq!(t.get(k, l), t.get(l, k));
+        let exact = thickness(&v, v.surface[k].position, v.surface[l].position) as f32;
+        assert!((t.get(k, l) - exact).abs() <= 1e-6 * exact.max(1.0));
+    }
+}
+
+#[test]
+fn a_source_inside_lights_the_surface_from_within() {
+    // A point at the center of a sphere of extinction sigma: every surface point gets its term b / r, dimmed by
+    // exp(-sigma r), and lets it out: S = b / r exp(-sigma r) / pi (no entry, no Fresnel on the way in).
+    let mut s = scene("translucent_cavity");
+    s.sources.tori.clear();
+    s.sources.points.push(energywave::field::Point {
+        position: DVec3::new(0.1, -0.2, 0.3),
+        coefficient: 0.8,
+        look: Default::default(),
+    });
+    let sigma = 1.2;
+    let ball = sphere(sigma, 16);
+    s.objects = vec![ball.clone()];
+    let lights = lights(&s);
+    let p = prepared(&ball).unwrap();
+    let medium = Medium::of(&ball).unwrap();
+    let Irradiance { entering, inside } = irradiance(&medium, &p.voxels, &lights, &s.objects);
+    assert!(entering.iter().all(|e| e[0] == 0.0));
+    let color = s.colors.palette().color_of(&Default::default());
+    for (k, v) in p.voxels.surface.iter().enumerate() {
+        let r = (v.position - DVec3::new(0.1, -0.2, 0.3)).length();
+        let want = 0.8 / r * (-sigma * r).exp() * color[0];
+        // The voxels' thickness against the exact one: within the grid's half voxel at the surface.
+        assert!(
+            (inside[k][0] / want - 1.0).abs() < 0.12,
+            "{} against {want}",
+            inside[k][0]
+        );
+    }
+    let reference = Reference::new(&ball, &s.objects, &lights, 0.05);
+    let x = DVec3::new(0.1, -0.2, 0.3) + DVec3::Y * 0.7;
+    let got = reference.leaving(x, DVec3::Y, Estimate::Exact)[0];
+    let want = 0.8 / 0.7 * (-sigma * 0.7f64).exp() * color[0] / std::f64::consts::PI;
+    assert!((got / want - 1.0).abs() < 1e-9, "{got} against {want}");
+}
