@@ -50,6 +50,10 @@ pub struct FrameSetup<'a> {
     pub term_tolerance: f64,
     /// The texels' clips at `resolution`, worked out when first asked for.
     clips: OnceLock<Option<Arc<Vec<f32>>>>,
+    /// Whether the translucent objects end the texels' rays too (`front`): the glow in front of them.
+    front: bool,
+    /// The objects that end the texels' rays: the opaque ones, or every one (`front`).
+    clip_objects: OnceLock<Vec<crate::objects::Object>>,
     /// The scene's particles and their light, worked out when first asked for.
     particles: OnceLock<Option<Arc<LitParticles>>>,
 }
@@ -90,8 +94,53 @@ impl<'a> FrameSetup<'a> {
             integration,
             terms,
             clips: OnceLock::new(),
+            front: false,
+            clip_objects: OnceLock::new(),
             particles: OnceLock::new(),
         }
+    }
+
+    /// This frame with the translucent objects ending the texels' rays as the opaque ones do: the glow in front
+    /// of them, which the glow behind them, seen through them, is blended with (`transmittances_at`).
+    pub fn front(&self) -> FrameSetup<'a> {
+        let mut f = FrameSetup::new(self.scene, self.billboard);
+        f.resolution = self.resolution;
+        f.front = true;
+        f
+    }
+
+    /// Whether the scene has translucent objects, through which the glow is seen.
+    pub fn translucent(&self) -> bool {
+        !self.front && self.scene.objects.iter().any(|o| o.translucent.is_some())
+    }
+
+    /// The objects that end the texels' rays: the opaque ones; every one in the `front` frame.
+    pub fn clip_objects(&self) -> &[crate::objects::Object] {
+        match self.front {
+            true => &self.scene.objects,
+            false => self.clip_objects.get_or_init(|| {
+                (self.scene.objects.iter())
+                    .filter(|o| o.translucent.is_none())
+                    .cloned()
+                    .collect()
+            }),
+        }
+    }
+
+    /// The share of each texel's glow that crosses the translucent objects to the eye, at `w` texels a side
+    /// (`objects::clip::transmittances`); none without translucent objects.
+    pub fn transmittances_at(&self, w: u32) -> Option<Arc<Vec<f32>>> {
+        if !self.translucent() {
+            return None;
+        }
+        crate::objects::clip::shared_transmittances(
+            &self.scene.objects,
+            self.clip_objects(),
+            self.eye(),
+            &self.billboard,
+            self.reach,
+            w,
+        )
     }
 
     /// The frame of `scene` in a picture of `aspect` (width / height), its billboard placed as the scene says
@@ -175,7 +224,7 @@ impl<'a> FrameSetup<'a> {
             return clips.clone();
         }
         shared_clip_fractions(
-            &self.scene.objects,
+            self.clip_objects(),
             self.eye(),
             &self.billboard,
             self.reach,

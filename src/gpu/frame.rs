@@ -74,6 +74,8 @@ pub struct SceneRenderer {
     glare: GlarePass,
     objects: ObjectPass,
     particles: ParticlePass,
+    /// The glow seen through translucent objects.
+    through: super::through_pass::ThroughPass,
     /// The objects hide the glow but are not drawn: the glow alone with them as a holdout, to layer over a
     /// render of the same scene made elsewhere.
     holdout: bool,
@@ -91,6 +93,7 @@ impl SceneRenderer {
             glare: GlarePass::new(device),
             objects: ObjectPass::new(device),
             particles: ParticlePass::new(device),
+            through: super::through_pass::ThroughPass::new(device),
             holdout: false,
             unclamped: false,
             threshold_preview: None,
@@ -179,6 +182,18 @@ impl SceneRenderer {
         let aspect = w as f64 / h as f64;
         let (scene, billboard) = (setup.scene, setup.billboard);
         let layers = crate::gpu::field_pass::layers_of(scene);
+        // Where translucent objects stand, the glow behind them seen through them.
+        let seen = (self.through)
+            .encode(
+                device,
+                queue,
+                encoder,
+                setup,
+                brightness,
+                (resolution, layers),
+            )?
+            .cloned();
+        let brightness = seen.as_ref().unwrap_or(brightness);
         checked(device, || {
             // The glare, where the scene has one, adds to the field before the blend.
             let brightness = match &scene.glare {

@@ -15,6 +15,7 @@ mod headless;
 pub mod object_pass;
 pub mod particle_pass;
 pub mod shaders;
+pub mod through_pass;
 mod upsample;
 
 pub use billboard_pass::{BillboardRenderer, billboard_params, view_projection};

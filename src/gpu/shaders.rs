@@ -13,6 +13,8 @@ use std::collections::BTreeSet;
 pub const BILLBOARD_PASS: &str = include_str!("../../shaders/billboard.wgsl");
 /// The glare pass (`gpu::glare_pass`).
 pub const GLARE_PASS: &str = include_str!("../../shaders/glare.wgsl");
+/// The glow seen through translucent objects (`gpu::through_pass`).
+pub const THROUGH_PASS: &str = include_str!("../../shaders/through.wgsl");
 /// The smooth upsampling of the viewer's low-resolution preview field.
 pub const UPSAMPLE_PASS: &str = include_str!("../../shaders/upsample.wgsl");
 /// The running mean of jittered frames.
@@ -26,7 +28,7 @@ pub const BLIT_PASS: &str = include_str!("../../shaders/blit.wgsl");
 pub const CONSTANTS: &str = "shared/constants.wgsl";
 
 /// Every WGSL file but the generated one, by its path under `shaders/`.
-pub const FILES: [(&str, &str); 20] = [
+pub const FILES: [(&str, &str); 21] = [
     (
         "shared/field.wgsl",
         include_str!("../../shaders/shared/field.wgsl"),
@@ -79,6 +81,7 @@ pub const FILES: [(&str, &str); 20] = [
     ),
     ("billboard.wgsl", BILLBOARD_PASS),
     ("glare.wgsl", GLARE_PASS),
+    ("through.wgsl", THROUGH_PASS),
     ("upsample.wgsl", UPSAMPLE_PASS),
     ("average.wgsl", AVERAGE_PASS),
     ("grid.wgsl", GRID_PASS),

@@ -48,6 +48,74 @@ pub fn clip_fractions(
     Some(out)
 }
 
+/// The share of the glow of each texel of a `w` x `w` billboard that crosses the translucent objects among
+/// `objects` on its way to the eye (`translucent::transmittance` along the texel's ray, from the eye to where
+/// the glow ends: the first opaque surface among `opaque`, or the ray's end), row-major from the top; none
+/// without translucent objects.
+pub fn transmittances(
+    objects: &[Object],
+    opaque: &[Object],
+    eye: DVec3,
+    billboard: &Billboard,
+    reach: Reach,
+    w: u32,
+) -> Option<Vec<f64>> {
+    if !objects.iter().any(|o| o.translucent.is_some()) {
+        return None;
+    }
+    let mut out = vec![1.0; (w as usize) * (w as usize)];
+    out.par_chunks_mut(w as usize)
+        .enumerate()
+        .for_each(|(j, row)| {
+            for (i, t) in row.iter_mut().enumerate() {
+                let s = billboard.texel_center(i as u32, j as u32, w);
+                let end = first_hit(opaque, eye, s - eye, 0.0, reach.nu).map_or(reach.nu, |h| h.1);
+                *t = super::translucent::transmittance(objects, eye, eye + (s - eye) * end);
+            }
+        });
+    Some(out)
+}
+
+/// `transmittances` in f32, kept for the last few frames' keys as the clips are.
+pub fn shared_transmittances(
+    objects: &[Object],
+    opaque: &[Object],
+    eye: DVec3,
+    billboard: &Billboard,
+    reach: Reach,
+    w: u32,
+) -> Option<Arc<Vec<f32>>> {
+    if !objects.iter().any(|o| o.translucent.is_some()) {
+        return None;
+    }
+    static CACHE: Mutex<Vec<(ClipKey, Arc<Vec<f32>>)>> = Mutex::new(Vec::new());
+    let key = ClipKey {
+        objects: objects.to_vec(),
+        eye,
+        billboard: *billboard,
+        nu: reach.nu,
+        w,
+    };
+    if let Ok(cache) = CACHE.lock()
+        && let Some((_, t)) = cache.iter().find(|(k, _)| *k == key)
+    {
+        return Some(t.clone());
+    }
+    let t: Arc<Vec<f32>> = Arc::new(
+        transmittances(objects, opaque, eye, billboard, reach, w)?
+            .into_iter()
+            .map(|c| c as f32)
+            .collect(),
+    );
+    if let Ok(mut cache) = CACHE.lock() {
+        if cache.len() >= 4 {
+            cache.remove(0);
+        }
+        cache.push((key, t.clone()));
+    }
+    Some(t)
+}
+
 /// What a frame's clips depend on.
 #[derive(Clone, Debug, PartialEq)]
 struct ClipKey {

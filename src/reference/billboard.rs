@@ -218,7 +218,7 @@ fn compose(
     // Held out, the objects are not drawn but still hide the glow in front of them.
     let objects = ObjectImage::of(scene);
     let clips = clip_fractions(
-        &scene.objects,
+        setup.clip_objects(),
         scene.camera.eye,
         billboard,
         reach,
@@ -230,8 +230,10 @@ fn compose(
     let smoke =
         super::particles::SmokeImage::of(setup, [width, height], texture.resolution, |x, y| {
             let dir = (scene.camera).pixel_ray(x as f64 + 0.5, y as f64 + 0.5, width, height);
-            let hit = objects.as_ref().and_then(|o| o.hit(scene.camera.eye, dir));
-            hit.map_or(f64::INFINITY, |(t, _)| t * dir.dot(forward))
+            let hit = objects
+                .as_ref()
+                .and_then(|o| o.hit_opaque(scene.camera.eye, dir));
+            hit.map_or(f64::INFINITY, |t| t * dir.dot(forward))
         });
     let glared = scene.glare.map(|g| super::glare::apply(texture, &g));
     let texture = glared.as_ref().unwrap_or(texture);
@@ -244,8 +246,14 @@ fn compose(
                 let dir = scene
                     .camera
                     .pixel_ray(x as f64 + 0.5, y as f64 + 0.5, width, height);
-                let hit = objects.as_ref().and_then(|o| o.hit(scene.camera.eye, dir));
-                let under = match hit {
+                let seen = objects.as_ref().and_then(|o| o.hit(scene.camera.eye, dir));
+                // What ends the glow: the first opaque surface (the glow behind a translucent one is seen
+                // through it, `field_pass::render_brightness`).
+                let hit = objects
+                    .as_ref()
+                    .and_then(|o| o.hit_opaque(scene.camera.eye, dir))
+                    .map(|t| (t, ()));
+                let under = match seen {
                     Some((_, [r, g, b])) if drawn => [r, g, b, 1.0],
                     _ => clear,
                 };
@@ -255,7 +263,9 @@ fn compose(
                 let under = super::particles::smoke_over(back, under);
                 *out = under;
                 if let Some((u, v)) = billboard.hit(scene.camera.eye, dir) {
-                    let (b, tint) = match (&objects, hit) {
+                    // Only the opaque objects end the glow (`setup.clip_objects`); without them, none.
+                    let ends = clips.as_ref().map(|_| ());
+                    let (b, tint) = match (&ends, hit) {
                         (None, _) => (
                             sample_bilinear(&texture.values, texture.resolution, u, v),
                             std::array::from_fn(|c| {

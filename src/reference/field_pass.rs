@@ -118,8 +118,50 @@ pub struct BrightnessTexture {
     pub tint: Vec<[f64; 3]>,
 }
 
-/// Integrates B and the tint for every texel of the frame's billboard (METHOD.md section 3).
+/// Integrates B and the tint for every texel of the frame's billboard (METHOD.md section 3). Where the scene has
+/// translucent objects, the glow behind them is seen through them: `B = B_front + T (B_behind - B_front)`, the
+/// texel's glow up to the first object of any kind, and up to the first opaque one, blended by the share `T`
+/// that crosses the translucent objects (`objects::clip::transmittances`); the tint alike.
 pub fn render_brightness(setup: &FrameSetup) -> BrightnessTexture {
+    let behind = render_clipped(setup);
+    if !setup.translucent() {
+        return behind;
+    }
+    let front = render_clipped(&setup.front());
+    let scene = setup.scene;
+    let opaque = setup.clip_objects();
+    let w = setup.resolution;
+    let t = crate::objects::clip::transmittances(
+        &scene.objects,
+        opaque,
+        setup.eye(),
+        &setup.billboard,
+        setup.reach,
+        w,
+    )
+    .expect("translucent objects");
+    see_through(&front, &behind, &t)
+}
+
+/// `front + t (behind - front)`, texel by texel, B and tint.
+pub fn see_through(
+    front: &BrightnessTexture,
+    behind: &BrightnessTexture,
+    t: &[f64],
+) -> BrightnessTexture {
+    let mix = |a: f64, b: f64, t: f64| a + t * (b - a);
+    BrightnessTexture {
+        resolution: behind.resolution,
+        values: (0..t.len())
+            .map(|k| mix(front.values[k], behind.values[k], t[k]))
+            .collect(),
+        tint: (0..t.len())
+            .map(|k| std::array::from_fn(|c| mix(front.tint[k][c], behind.tint[k][c], t[k])))
+            .collect(),
+    }
+}
+
+fn render_clipped(setup: &FrameSetup) -> BrightnessTexture {
     let w = setup.resolution;
     let n = (w as usize) * (w as usize);
     let mut values = vec![0.0; n];
@@ -172,7 +214,7 @@ fn texel_ray(setup: &FrameSetup, i: u32, j: u32) -> TexelRay {
     let e = ray_end(s, eye, reach.nu);
     let xi = (setup.integration.jitter).map_or(0.5, |seed| jitter_offset(seed, i, j, w));
     let settings = setup.integration.clone();
-    let c = clip_fraction(&setup.scene.objects, eye, s, reach.nu);
+    let c = clip_fraction(setup.clip_objects(), eye, s, reach.nu);
     if c < 1.0 && c > 0.0 {
         return TexelRay {
             s,

@@ -15,6 +15,8 @@ use crate::scene::Scene;
 pub struct ObjectImage {
     lit: Lit,
     mesh: MeshData,
+    /// The opaque objects' triangles alone, where some object is translucent: what ends the glow.
+    opaque: Option<MeshData>,
     lights: Lights,
 }
 
@@ -26,11 +28,27 @@ impl ObjectImage {
         }
         let lit = lit(scene.lit_inputs());
         let p = &lit.surface.positions;
-        let triangles = (lit.surface.indices.chunks_exact(3))
+        let triangles: Vec<[DVec3; 3]> = (lit.surface.indices.chunks_exact(3))
             .map(|t| [p[t[0] as usize], p[t[1] as usize], p[t[2] as usize]])
             .collect();
+        let translucent = |t: &[u32]| {
+            let o = lit.surface.object[t[0] as usize] as usize;
+            scene.objects[o].translucent.is_some()
+        };
+        let opaque = scene
+            .objects
+            .iter()
+            .any(|o| o.translucent.is_some())
+            .then(|| {
+                let kept = (lit.surface.indices.chunks_exact(3).zip(&triangles))
+                    .filter(|(t, _)| !translucent(t))
+                    .map(|(_, tri)| *tri)
+                    .collect();
+                MeshData::new(kept)
+            });
         Some(ObjectImage {
             mesh: MeshData::new(triangles),
+            opaque,
             lit,
             lights: Lights::new(
                 &scene.sources,
@@ -38,6 +56,15 @@ impl ObjectImage {
                 scene.integration.epsilon,
             ),
         })
+    }
+
+    /// Where (in units of `dir`) the ray from `eye` along `dir` first meets an opaque object's triangle: where
+    /// its glow ends (the translucent objects let it through).
+    pub fn hit_opaque(&self, eye: DVec3, dir: DVec3) -> Option<f64> {
+        match &self.opaque {
+            Some(mesh) => mesh.hit(eye, dir, 0.0, f64::INFINITY),
+            None => self.mesh.hit(eye, dir, 0.0, f64::INFINITY),
+        }
     }
 
     /// Where (in units of `dir`) the ray from `eye` along `dir` first meets a triangle, and its lit color there.

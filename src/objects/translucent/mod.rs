@@ -267,6 +267,78 @@ impl<'a> Medium<'a> {
     }
 }
 
+/// The outward unit normal of `object`'s surface at its point `p` (a sphere's, a box's face's, a mesh's
+/// triangle's nearest `p` along `dir`, the ray that met it there).
+fn normal_at(object: &Object, p: DVec3, dir: DVec3) -> DVec3 {
+    match &object.shape {
+        super::Shape::Sphere { center, .. } => (p - *center).normalize_or(DVec3::Y),
+        super::Shape::Box {
+            center,
+            size,
+            rotation,
+        } => {
+            let r = super::rotation_matrix(*rotation);
+            let q = r.transpose() * (p - *center);
+            let scaled = q / (*size * 0.5);
+            let axis = scaled.abs().max_position();
+            let mut n = DVec3::ZERO;
+            n[axis] = scaled[axis].signum();
+            r * n
+        }
+        super::Shape::Plane { normal, .. } => *normal,
+        super::Shape::Mesh(m) => {
+            let (inverse, forward) = m.inverse();
+            let o = inverse * (p - m.translation);
+            let d = inverse * dir;
+            // The triangle the ray meets nearest p: from a little before it.
+            match m.data.hit_triangle(o - d * 1e-6, d, 0.0, f64::INFINITY) {
+                Some((_, k)) => {
+                    let t = &m.data.triangles[k];
+                    let n = forward.inverse().transpose() * (t[1] - t[0]).cross(t[2] - t[0]);
+                    n.normalize_or(DVec3::Y)
+                }
+                None => -dir.normalize_or(DVec3::Y),
+            }
+        }
+    }
+}
+
+/// The share of light that crosses the translucent objects among `objects` along the segment `from -> to`
+/// (a texel's ray from the eye to where its glow ends): at every surface it crosses, the Fresnel transmittance
+/// at its angle there, and between, `exp(-tau)` (`Medium::optical_thickness`). 1 where it crosses none.
+pub fn transmittance(objects: &[Object], from: DVec3, to: DVec3) -> f64 {
+    let d = to - from;
+    let mut t = 1.0;
+    for o in objects {
+        let Some(medium) = Medium::of(o) else {
+            continue;
+        };
+        let hits = {
+            let mut out = Vec::new();
+            let mut at = 0.0;
+            while let Some(next) = o.hit(from, d, at, 1.0) {
+                out.push(next);
+                at = next + 1e-12;
+                if out.len() > 10_000 {
+                    break;
+                }
+            }
+            out
+        };
+        if hits.is_empty() {
+            continue;
+        }
+        let eta = medium.material().eta;
+        for &h in &hits {
+            let p = from + d * h;
+            let cos = normal_at(o, p, d).dot(d.normalize()).abs();
+            t *= fresnel_transmittance(eta, cos);
+        }
+        t *= (-medium.optical_thickness(from, to, 64)).exp();
+    }
+    t
+}
+
 /// The unpolarised Fresnel transmittance `F_t = 1 - F_r` of light crossing, at `cos_outside` (the cosine of its
 /// angle to the normal on the outside), into or out of a medium of relative index `eta`: the Fresnel equations,
 /// exact (`1 - F_r` with `F_r` the mean of the s and p reflectances), 0 past the critical angle where `eta < 1`.

@@ -1,0 +1,32 @@
+// The glow seen through translucent objects: each texel's glow up to the first surface of any object (front)
+// and up to the first opaque one (the field the frame integrates, behind), blended by the share t of the glow
+// that crosses the translucent objects to the eye: front + t (behind - front), every layer (B, then the tint).
+// One layer a z. Rust side: src/gpu/through_pass.rs. CPU twin: reference::field_pass::see_through.
+
+struct ThroughParams {
+    resolution: u32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
+}
+
+@group(0) @binding(0) var<storage, read> through: ThroughParams;
+// Each texel's share t, rows from the top (objects::clip::transmittances).
+@group(0) @binding(1) var<storage, read> shares: array<f32>;
+@group(0) @binding(2) var front: texture_2d_array<f32>;
+@group(0) @binding(3) var behind: texture_2d_array<f32>;
+@group(0) @binding(4) var output: texture_storage_2d_array<r32float, write>;
+
+@compute @workgroup_size(8, 8)
+fn see_through(@builtin(global_invocation_id) id: vec3<u32>) {
+    let w = through.resolution;
+    if id.x >= w || id.y >= w {
+        return;
+    }
+    let p = vec2<i32>(id.xy);
+    let layer = i32(id.z);
+    let t = shares[id.y * w + id.x];
+    let a = textureLoad(front, p, layer, 0).x;
+    let b = textureLoad(behind, p, layer, 0).x;
+    textureStore(output, p, layer, vec4<f32>(a + t * (b - a), 0.0, 0.0, 1.0));
+}

@@ -1,0 +1,146 @@
+//! The glow seen through translucent objects (`shaders/through.wgsl`): the frame's field ends its texels' rays
+//! at the first opaque surface; this pass integrates the glow in front of the translucent ones (a field of the
+//! same frame whose rays end at the first surface of any object, `FrameSetup::front`) and blends the two by the
+//! share of the glow that crosses the translucent objects, `front + t (behind - front)`. Its field is kept
+//! while its inputs do not change, as every field pass's is.
+
+use super::context::{
+    ClipBuffer, GpuError, checked, compute_pass, field_storage_entry, field_texture,
+    field_texture_layers, loaded_field_entry, storage_buffer_entry,
+};
+use super::field_pass::{FieldInputs, FieldRenderer};
+use super::shaders;
+use crate::frame::FrameSetup;
+
+/// Rust mirror of `ThroughParams` in `shaders/through.wgsl`.
+pub mod gpu_data {
+    use bytemuck::{Pod, Zeroable};
+
+    #[repr(C)]
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+    pub struct ThroughParams {
+        pub resolution: u32, // 0
+        pub pad0: u32,       // 4
+        pub pad1: u32,       // 8
+        pub pad2: u32,       // 12
+    }
+    const _: () = assert!(size_of::<ThroughParams>() == 16);
+}
+
+use gpu_data::ThroughParams;
+
+/// The front field, the blend's pipeline and its output.
+pub struct ThroughPass {
+    front: FieldRenderer,
+    pipeline: wgpu::ComputePipeline,
+    layout: wgpu::BindGroupLayout,
+    params: wgpu::Buffer,
+    shares: ClipBuffer,
+    output: Option<(wgpu::Texture, wgpu::TextureView)>,
+}
+
+impl ThroughPass {
+    pub fn new(device: &wgpu::Device) -> Self {
+        let (pipeline, layout) = compute_pass(
+            device,
+            "through",
+            shaders::THROUGH_PASS,
+            "see_through",
+            &[
+                storage_buffer_entry(0),
+                storage_buffer_entry(1),
+                loaded_field_entry(2),
+                loaded_field_entry(3),
+                field_storage_entry(4, wgpu::StorageTextureAccess::WriteOnly),
+            ],
+        );
+        Self {
+            front: FieldRenderer::new(device),
+            pipeline,
+            layout,
+            params: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("energywave.through.params"),
+                size: size_of::<ThroughParams>() as u64,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            shares: ClipBuffer::new(device, "energywave.through.shares"),
+            output: None,
+        }
+    }
+
+    /// The front field, for inspection.
+    pub fn front(&self) -> &FieldRenderer {
+        &self.front
+    }
+
+    /// Records the glow of `setup` seen through its translucent objects over `behind` (its field, `resolution`
+    /// texels a side, `layers` layers) and returns the view of the blend; `None` where the scene has no
+    /// translucent objects (the field is the frame's as it is).
+    pub fn encode(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+        setup: &FrameSetup,
+        behind: &wgpu::TextureView,
+        (resolution, layers): (u32, u32),
+    ) -> Result<Option<&wgpu::TextureView>, GpuError> {
+        let Some(shares) = setup.transmittances_at(resolution) else {
+            return Ok(None);
+        };
+        let mut front = setup.front();
+        front.resolution = resolution;
+        let inputs = FieldInputs::of(&front);
+        if !self.front.shows(&inputs) {
+            self.front.prepare(device, queue, &inputs)?;
+            checked(device, || self.front.encode(encoder))?;
+        }
+        let front_view = self.front.view().expect("prepared above").clone();
+        let stale = self.output.as_ref().is_none_or(|(t, _)| {
+            t.width() != resolution
+                || t.depth_or_array_layers() != field_texture_layers(device, layers)
+        });
+        if stale {
+            self.output = Some(field_texture(
+                device,
+                "energywave.through.output",
+                resolution,
+                layers,
+            ));
+        }
+        self.shares.upload(device, queue, &shares);
+        queue.write_buffer(
+            &self.params,
+            0,
+            bytemuck::bytes_of(&ThroughParams {
+                resolution,
+                ..Default::default()
+            }),
+        );
+        let (_, output) = self.output.as_ref().expect("made above");
+        let entry = |binding, resource| wgpu::BindGroupEntry { binding, resource };
+        let tex = wgpu::BindingResource::TextureView;
+        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("energywave.through.bind_group"),
+            layout: &self.layout,
+            entries: &[
+                entry(0, self.params.as_entire_binding()),
+                entry(1, self.shares.binding()),
+                entry(2, tex(&front_view)),
+                entry(3, tex(behind)),
+                entry(4, tex(output)),
+            ],
+        });
+        let groups = resolution.div_ceil(8);
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("energywave.through.pass"),
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        pass.dispatch_workgroups(groups, groups, layers);
+        drop(pass);
+        Ok(Some(output))
+    }
+}
