@@ -463,3 +463,249 @@ fn a_source_inside_lights_the_surface_from_within() {
     let want = 0.8 / 0.7 * (-sigma * 0.7f64).exp() * color[0] / std::f64::consts::PI;
     assert!((got / want - 1.0).abs() < 1e-9, "{got} against {want}");
 }
+
+fn gpu() -> std::sync::MutexGuard<'static, energywave::gpu::HeadlessRenderer> {
+    use std::sync::{Mutex, OnceLock};
+    static GPU: OnceLock<Mutex<energywave::gpu::HeadlessRenderer>> = OnceLock::new();
+    GPU.get_or_init(|| {
+        Mutex::new(
+            energywave::gpu::HeadlessRenderer::new().expect("a GPU adapter (lavapipe in CI)"),
+        )
+    })
+    .lock()
+    .unwrap_or_else(|e| e.into_inner())
+}
+
+/// Both presets, drawn by the GPU and by the f64 twin: the translucent objects' scattered light, the glow seen
+/// through them, opaque, transparent and held out.
+#[test]
+fn the_presets_compose_alike_on_the_gpu_and_the_cpu() {
+    use energywave::frame::FrameSetup;
+    use energywave::reference::{self, Backdrop};
+    for name in ["translucent_cavity", "crystal_beam"] {
+        let mut scene = scene(name);
+        scene.billboard.resolution = 64;
+        let (w, h) = (96, 72);
+        let bb = scene.place_billboard(w as f64 / h as f64);
+        let setup = FrameSetup::new(&scene, bb);
+        let tex = reference::render_brightness(&setup);
+        // The glow through the objects differs from the glow they would clip: the see-through is in the field.
+        let clipped = reference::render_brightness(&setup.front());
+        let through = (tex.values.iter().zip(&clipped.values))
+            .filter(|(a, b)| (*a - *b).abs() > 1e-3)
+            .count();
+        assert!(through > 50, "{name}: {through} texels see through");
+        let mut g = gpu();
+        for (backdrop, transparent, holdout) in [
+            (Backdrop::Opaque, false, false),
+            (Backdrop::Transparent, true, false),
+            (Backdrop::Holdout, true, true),
+        ] {
+            let cpu = reference::compose_frame_over(&setup, &tex, (w, h), backdrop);
+            g.set_holdout(holdout);
+            let frame = g.render(&scene, w, h, transparent).unwrap();
+            g.set_holdout(false);
+            let off = (cpu.iter().zip(&frame.pixels))
+                .filter(|(c, p)| {
+                    (0..4).any(|k| {
+                        (c[k].clamp(0.0, 1.0) - (p[k] as f64).clamp(0.0, 1.0)).abs() > 4.0 / 255.0
+                    })
+                })
+                .count();
+            // Off by more than a few 8-bit steps only where a pixel's center lies on an object's edge.
+            assert!(
+                off * 50 <= cpu.len(),
+                "{name} {backdrop:?}: {off} pixels differ"
+            );
+            let lit = cpu.iter().filter(|p| p[0] + p[1] + p[2] > 0.05).count();
+            assert!(
+                lit * 4 > cpu.len(),
+                "{name} {backdrop:?}: the picture is dark"
+            );
+        }
+    }
+}
+
+fn invalid(text: &str) -> String {
+    match Scene::parse(text, std::path::Path::new("bad.toml")) {
+        Err(e) => e.to_string(),
+        Ok(_) => panic!("accepted: {text}"),
+    }
+}
+
+#[test]
+fn translucent_materials_are_checked_with_located_errors_and_saved_back() {
+    let head = "[[points]]\nposition = [0.0, 0.0, 0.0]\ncoefficient = 1.0\n";
+    let cube = "[[objects]]\nshape = \"box\"\nsize = 1.0\n";
+    for (body, field, says) in [
+        (
+            "[objects.translucent]\neta = 0.0\n",
+            "objects[0].translucent.eta",
+            "out of range",
+        ),
+        (
+            "[objects.translucent]\neta = -1.3\n",
+            "objects[0].translucent.eta",
+            "out of range",
+        ),
+        (
+            "[objects.translucent]\nextinction = -2.0\n",
+            "objects[0].translucent.extinction",
+            "out of range",
+        ),
+        (
+            "[objects.translucent]\nresolution = 1\n",
+            "objects[0].translucent.resolution",
+            "out of range",
+        ),
+        (
+            "[objects.translucent]\nresolution = 240\n",
+            "objects[0].translucent.resolution",
+            "MiB allowed",
+        ),
+        (
+            "[objects.translucent.inner]\nshape = \"cone\"\nradius = 0.2\n",
+            "objects[0].translucent.inner.shape",
+            "not an inner shape",
+        ),
+        (
+            "[objects.translucent.inner]\nshape = \"sphere\"\nradius = -0.2\n",
+            "objects[0].translucent.inner.radius",
+            "positive",
+        ),
+        (
+            "[objects.translucent.noise]\nscale = 0.0\n",
+            "objects[0].translucent.noise.scale",
+            "positive",
+        ),
+        (
+            "[objects.translucent]\ncolour = 1.0\n",
+            "objects[0].translucent",
+            "unknown field",
+        ),
+    ] {
+        let e = invalid(&format!("{head}{cube}{body}"));
+        assert!(e.contains(field) && e.contains(says), "{body}: {e}");
+    }
+    // The table too large says which resolution fits.
+    let e = invalid(&format!(
+        "{head}{cube}[objects.translucent]\nresolution = 240\n"
+    ));
+    assert!(e.contains("voxels a side or fewer fit"), "{e}");
+    // A plane has no inside.
+    let e = invalid(&format!(
+        "{head}[[objects]]\nshape = \"plane\"\n[objects.translucent]\nextinction = 1.0\n"
+    ));
+    assert!(
+        e.contains("objects[0].translucent") && e.contains("no inside"),
+        "{e}"
+    );
+    // Saved and read back whole.
+    let text = format!(
+        "{head}{cube}[objects.translucent]\nextinction = 1.5\neta = 1.5\nresolution = 12\n\
+         [objects.translucent.inner]\nshape = \"box\"\ncenter = [0.1, 0.0, 0.0]\nsize = [0.2, 0.3, 0.4]\nextinction = 0.5\n\
+         [objects.translucent.noise]\nscale = 0.2\namount = 0.4\nseed = 3\n"
+    );
+    let scene = Scene::parse(&text, std::path::Path::new("ok.toml")).unwrap();
+    let t = scene.objects[0].translucent.as_deref().unwrap();
+    assert_eq!((t.extinction, t.eta, t.resolution), (1.5, 1.5, Some(12)));
+    let again = Scene::parse(&scene.to_toml(), std::path::Path::new("ok.toml")).unwrap();
+    assert_eq!(again.objects, scene.objects);
+}
+
+/// An open mesh (a tetrahedron missing a face) has no inside: the command line says so, exits 2 and writes
+/// nothing.
+#[test]
+fn an_open_mesh_and_a_bad_material_fail_on_the_command_line() {
+    let dir =
+        std::env::temp_dir().join(format!("energywave-translucent-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    // A glTF of three triangles of a tetrahedron: open.
+    let p: [[f32; 3]; 4] = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, 0.0, 1.0],
+    ];
+    let indices: [u16; 9] = [0, 2, 1, 0, 1, 3, 0, 3, 2];
+    let mut bin: Vec<u8> = p.iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
+    bin.extend(indices.iter().flat_map(|i| i.to_le_bytes()));
+    while bin.len() % 4 != 0 {
+        bin.push(0);
+    }
+    std::fs::write(dir.join("open.bin"), &bin).unwrap();
+    let gltf = format!(
+        r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0}}],
+"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"indices":1}}]}}],
+"buffers":[{{"uri":"open.bin","byteLength":{}}}],
+"bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":48}},{{"buffer":0,"byteOffset":48,"byteLength":18}}],
+"accessors":[{{"bufferView":0,"componentType":5126,"count":4,"type":"VEC3","min":[0,0,0],"max":[1,1,1]}},
+{{"bufferView":1,"componentType":5123,"count":9,"type":"SCALAR"}}]}}"#,
+        bin.len()
+    );
+    std::fs::write(dir.join("open.gltf"), gltf).unwrap();
+    let head = "[[points]]\nposition = [0.0, 0.0, 0.0]\ncoefficient = 1.0\n";
+    for (body, field, says) in [
+        (
+            "[[objects]]\nshape = \"mesh\"\npath = \"open.gltf\"\n[objects.translucent]\nextinction = 1.0\n",
+            "objects[0].translucent",
+            "not closed",
+        ),
+        (
+            "[[objects]]\nshape = \"sphere\"\nradius = 1.0\n[objects.translucent]\neta = 0.0\n",
+            "objects[0].translucent.eta",
+            "out of range",
+        ),
+    ] {
+        let scene = dir.join("s.toml");
+        std::fs::write(&scene, format!("{head}{body}")).unwrap();
+        let out = dir.join("out.png");
+        let run = std::process::Command::new(env!("CARGO_BIN_EXE_energywave"))
+            .args([
+                "render",
+                scene.to_str().unwrap(),
+                "-o",
+                out.to_str().unwrap(),
+            ])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&run.stderr);
+        assert_eq!(run.status.code(), Some(2), "{err}");
+        assert!(
+            err.contains(field) && err.contains(says) && err.contains("s.toml"),
+            "{err}"
+        );
+        assert!(!out.exists());
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn extinction_and_eta_are_keyable() {
+    use energywave::animation::{Parameter, TranslucentField};
+    let p = Parameter::parse("objects[0].translucent.extinction").unwrap();
+    assert_eq!(p, Parameter::Translucent(0, TranslucentField::Extinction));
+    assert_eq!(p.to_string(), "objects[0].translucent.extinction");
+    let mut text = std::fs::read_to_string("assets/scenes/translucent_cavity.toml").unwrap();
+    text.push_str(
+        "\n[animation]\nframes = 10\nframe_rate = 10\n[[animation.tracks]]\nparameter = \"objects[0].translucent.extinction\"\n\
+         keys = [{ frame = 0, value = 0.5 }, { frame = 9, value = 3.0 }]\n",
+    );
+    let scene = Scene::parse(&text, std::path::Path::new("assets/scenes/keyed.toml")).unwrap();
+    let at = |f: f64| {
+        scene.at_frame(f).objects[0]
+            .translucent
+            .as_ref()
+            .unwrap()
+            .extinction
+    };
+    assert!(
+        (at(0.0) - 0.5).abs() < 1e-12
+            && (at(9.0) - 3.0).abs() < 1e-12
+            && at(4.0) > 0.5
+            && at(4.0) < 3.0
+    );
+    let bad = text.replace("value = 3.0", "value = -3.0");
+    let e = invalid(&bad);
+    assert!(e.contains("out of range"), "{e}");
+}

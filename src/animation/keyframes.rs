@@ -138,6 +138,8 @@ pub enum Parameter {
     /// `objects[i].rotation`, `.radius`, `.size`, `.scale`, `.normal`: the rest of an object's transform, where
     /// its shape has it
     ObjectShape(usize, ShapeField),
+    /// `objects[i].translucent.extinction`, `.eta`: a translucent object's material
+    Translucent(usize, TranslucentField),
     /// `particles[i].rate`, `.center`, ...: a particle set's emitter setting, where its emitter has it
     Particles(usize, ParticleField),
 }
@@ -264,6 +266,27 @@ impl ShapeField {
     }
 }
 
+/// The settings of a translucent object's material that can be keyed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TranslucentField {
+    /// Its extinction coefficient.
+    Extinction,
+    /// Its relative index of refraction.
+    Eta,
+}
+
+impl TranslucentField {
+    pub const ALL: [TranslucentField; 2] = [TranslucentField::Extinction, TranslucentField::Eta];
+
+    /// Its name in a scene file.
+    pub fn key(self) -> &'static str {
+        match self {
+            TranslucentField::Extinction => "extinction",
+            TranslucentField::Eta => "eta",
+        }
+    }
+}
+
 /// The integration settings that can be keyed (the division count is an integer and cannot).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum IntegrationSetting {
@@ -292,7 +315,8 @@ points[i].color and points[i].intensity (any kind of source), curves[i].color_se
 integration.decay_length, integration.alpha, integration.beta, integration.epsilon, colors.cutoff, \
 objects[i].position (a sphere's or box's center, a plane's point, a mesh's translation), objects[i].color, \
 objects[i].rotation (a box or a mesh), objects[i].radius (a sphere), objects[i].size (a box), \
-objects[i].scale (a mesh), objects[i].normal (a plane), particles[i].rate, particles[i].center, \
+objects[i].scale (a mesh), objects[i].normal (a plane), objects[i].translucent.extinction, \
+objects[i].translucent.eta (a translucent object), particles[i].rate, particles[i].center, \
 particles[i].radius, particles[i].spread, particles[i].color, particles[i].albedo, particles[i].acceleration, \
 particles[i].drag, particles[i].turbulence";
 
@@ -334,6 +358,12 @@ impl Parameter {
                 ("position" | "center" | "point" | "translation", None),
             ] => Parameter::ObjectPosition(*i),
             [("objects", Some(i)), ("color", None)] => Parameter::ObjectColor(*i),
+            [("objects", Some(i)), ("translucent", None), (name, None)] => Parameter::Translucent(
+                *i,
+                (TranslucentField::ALL.into_iter())
+                    .find(|f| f.key() == *name)
+                    .ok_or_else(err)?,
+            ),
             [("objects", Some(i)), (name, None)] => Parameter::ObjectShape(
                 *i,
                 (ShapeField::ALL.into_iter())
@@ -405,6 +435,7 @@ impl Parameter {
             | Parameter::ObjectPosition(_)
             | Parameter::ObjectColor(_)
             | Parameter::ObjectShape(..)
+            | Parameter::Translucent(..)
             | Parameter::Particles(..)
             | Parameter::Integration(_) => None,
             Parameter::Position(k, i)
@@ -446,6 +477,9 @@ impl fmt::Display for Parameter {
             Parameter::ObjectPosition(i) => write!(f, "objects[{i}].position"),
             Parameter::ObjectColor(i) => write!(f, "objects[{i}].color"),
             Parameter::ObjectShape(i, field) => write!(f, "objects[{i}].{}", field.key()),
+            Parameter::Translucent(i, field) => {
+                write!(f, "objects[{i}].translucent.{}", field.key())
+            }
             Parameter::Particles(i, field) => write!(f, "particles[{i}].{}", field.key()),
             Parameter::SourceColor(k, i) => write!(f, "{}[{i}].color", k.key()),
             Parameter::Intensity(k, i) => write!(f, "{}[{i}].intensity", k.key()),

@@ -11,7 +11,7 @@ pub mod pulse;
 
 pub use keyframes::{
     IntegrationSetting, Key, PARAMETER_FORMS, Parameter, ParticleField, ShapeField, SourceKind,
-    Track, Value,
+    Track, TranslucentField, Value,
 };
 pub use pulse::Pulse;
 

@@ -133,6 +133,9 @@ pub(super) fn validate(
                 Parameter::ObjectPosition(_) | Parameter::ObjectColor(_) => {
                     "names an object the scene does not have"
                 }
+                Parameter::Translucent(..) => {
+                    "names an object the scene does not have, or one that is not translucent (give it an [objects.translucent])"
+                }
                 Parameter::Particles(_, field) => &*format!(
                     "names a particle set the scene does not have, or one without a {} (the sets with one: {})",
                     field.key(),
@@ -289,6 +292,25 @@ fn check_value(c: &mut Checker<'_, '_>, path: &FieldPath, parameter: &Parameter,
         }
         (Parameter::EnergyIntensity | Parameter::Intensity(..), Value::Number(x)) => {
             c.intensity(path, x);
+        }
+        (Parameter::Translucent(_, field), Value::Number(x)) => {
+            use crate::animation::TranslucentField as F;
+            let (ok, what) = match field {
+                F::Extinction => (
+                    (0.0..=super::translucent_file::MAX_EXTINCTION).contains(&x),
+                    "0 (clear) to 1e4 per unit of length",
+                ),
+                F::Eta => (x > 0.0 && x <= 10.0, "in (0, 10]"),
+            };
+            if c.finite(path, x) && !ok {
+                c.fail(
+                    path,
+                    format!(
+                        "{x} is out of range: objects[i].translucent.{} must be {what}",
+                        field.key()
+                    ),
+                );
+            }
         }
         (Parameter::Cutoff, Value::Number(x)) if !(0.0..=crate::scene::MAX_CUTOFF).contains(&x) => {
             c.fail(

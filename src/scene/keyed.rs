@@ -67,6 +67,13 @@ impl Parameter {
                     _ => return None,
                 }
             }
+            Parameter::Translucent(i, field) => {
+                let t = scene.objects.get(i)?.translucent.as_ref()?;
+                Value::Number(match field {
+                    crate::animation::TranslucentField::Extinction => t.extinction,
+                    crate::animation::TranslucentField::Eta => t.eta,
+                })
+            }
             Parameter::Particles(i, field) => particle_field(scene.particles.get(i)?, field)?,
             Parameter::Integration(k) => Value::Number(match k {
                 IntegrationSetting::DecayLength => scene.integration.decay_length,
@@ -164,6 +171,19 @@ impl Parameter {
             (Parameter::ObjectColor(i), Value::Vector(c)) => {
                 if let Some(o) = scene.objects.get_mut(*i) {
                     o.color = c.map(|x| x.clamp(0.0, 1.0));
+                }
+            }
+            (Parameter::Translucent(i, field), Value::Number(x)) => {
+                // Kept valid between keys and from outside: an extinction at least 0, an index above 0.
+                if let Some(t) = scene
+                    .objects
+                    .get_mut(*i)
+                    .and_then(|o| o.translucent.as_mut())
+                {
+                    match field {
+                        crate::animation::TranslucentField::Extinction => t.extinction = x.max(0.0),
+                        crate::animation::TranslucentField::Eta => t.eta = x.max(1e-3),
+                    }
                 }
             }
             (Parameter::ObjectShape(i, field), value) => {

@@ -66,7 +66,12 @@ pub(super) fn objects_section(ui: &mut Ui, cx: &Context, out: &mut Edits<'_>) {
                 object.center(),
             );
             shape_editor(ui, out, i, object);
-            color_field(ui, out, "albedo", Parameter::ObjectColor(i), object.color);
+            let label = match object.translucent {
+                Some(_) => "tint",
+                None => "albedo",
+            };
+            color_field(ui, out, label, Parameter::ObjectColor(i), object.color);
+            translucent_editor(ui, out, i, object);
         });
     }
 }
@@ -166,6 +171,119 @@ fn shape_editor(ui: &mut Ui, out: &mut Edits<'_>, i: usize, object: &Object) {
                 lengths(ui, "scale", v)
             });
         }
+    }
+}
+
+/// A translucent material (`objects::translucent`): the switch, the keyable extinction and index of refraction
+/// with their key buttons, the voxels' resolution and an inner region, which replace the object whole
+/// (`Edit::SetObject`).
+fn translucent_editor(ui: &mut Ui, out: &mut Edits<'_>, i: usize, object: &Object) {
+    use crate::animation::{TranslucentField, Value};
+    use crate::objects::translucent::{DEFAULT_RESOLUTION, Inner, InnerShape, Translucent};
+    if object.kind() == ShapeKind::Plane {
+        return;
+    }
+    let mut o = object.clone();
+    let mut on = o.translucent.is_some();
+    if ui
+        .checkbox(&mut on, "translucent")
+        .on_hover_text(
+            "Light enters it, crosses the inside and leaves elsewhere; the glow behind it shows through",
+        )
+        .changed()
+    {
+        o.translucent = on.then(|| Box::new(Translucent::default()));
+        out.push(Action::Edit(Edit::SetObject(i, o)));
+        return;
+    }
+    let Some(t) = object.translucent.as_deref() else {
+        return;
+    };
+    let key = |field| Parameter::Translucent(i, field);
+    for (field, label, value, range, hover) in [
+        (
+            TranslucentField::Extinction,
+            "extinction",
+            t.extinction,
+            0.0..=1e4,
+            "sigma_t, per unit of length: how far light travels inside (0: clear)",
+        ),
+        (
+            TranslucentField::Eta,
+            "eta",
+            t.eta,
+            0.05..=10.0,
+            "The relative index of refraction: ice 1.31, glass 1.5",
+        ),
+    ] {
+        ui.horizontal(|ui| {
+            let mut x = value;
+            let response = labelled(
+                ui,
+                label,
+                DragValue::new(&mut x)
+                    .range(range)
+                    .speed(0.01)
+                    .max_decimals(3),
+            )
+            .on_hover_text(hover);
+            if response.changed() && x != value {
+                out.push(Action::set_number(key(field), x));
+            }
+            out.key_button(ui, key(field), Value::Number(value), response.rect);
+        });
+    }
+    let mut m = t.clone();
+    let mut changed = false;
+    ui.horizontal(|ui| {
+        let mut auto = m.resolution.is_none();
+        if ui
+            .checkbox(&mut auto, "auto voxels")
+            .on_hover_text(format!(
+                "Voxels along the longest side: {DEFAULT_RESOLUTION}, or fewer where the table would not fit"
+            ))
+            .changed()
+        {
+            m.resolution = (!auto).then_some(DEFAULT_RESOLUTION);
+            changed = true;
+        }
+        if let Some(r) = &mut m.resolution {
+            changed |= labelled(ui, "voxels", DragValue::new(r).range(4..=96))
+                .on_hover_text("The table grows as the fourth power: 48 takes 16 times the memory of 24")
+                .changed();
+        }
+    });
+    ui.horizontal(|ui| {
+        let mut cavity = m.inner.is_some();
+        if ui
+            .checkbox(&mut cavity, "inner sphere")
+            .on_hover_text("A region of another extinction inside, placed from the object's center: 0 for a cavity")
+            .changed()
+        {
+            m.inner = cavity.then(|| Inner {
+                shape: InnerShape::Sphere {
+                    center: DVec3::ZERO,
+                    radius: 0.25,
+                },
+                extinction: 0.0,
+            });
+            changed = true;
+        }
+        if let Some(inner) = &mut m.inner {
+            if let InnerShape::Sphere { radius, .. } = &mut inner.shape {
+                changed |= length(ui, "radius", radius);
+            }
+            changed |= labelled(
+                ui,
+                "extinction",
+                DragValue::new(&mut inner.extinction).range(0.0..=1e4).speed(0.01),
+            )
+            .changed();
+        }
+    });
+    if changed && m != *t {
+        o.translucent = Some(Box::new(m));
+        out.push(Action::Edit(Edit::SetObject(i, o)));
     }
 }
 
