@@ -23,6 +23,7 @@ mod particles;
 mod plain;
 mod report;
 mod timing;
+mod translucent;
 mod viewer_frames;
 
 pub use equal_error::*;
@@ -31,6 +32,7 @@ pub use particles::*;
 pub use plain::*;
 pub use report::*;
 pub use timing::*;
+pub use translucent::*;
 use viewer_frames::viewer_frames;
 pub use viewer_frames::{OpenViewer, TimedViewer, VIEWER_SIZE};
 
@@ -93,6 +95,8 @@ pub enum Section {
     Particles,
     /// Live particle sets: playing, scrubbing and rendering them.
     Live,
+    /// Translucent objects: the table's precomputation, relighting, frames.
+    Translucent,
 }
 
 /// Which sections run.
@@ -104,6 +108,7 @@ pub struct Sections {
     pub viewer: bool,
     pub particles: bool,
     pub live: bool,
+    pub translucent: bool,
 }
 
 impl Sections {
@@ -115,6 +120,7 @@ impl Sections {
         viewer: true,
         particles: true,
         live: true,
+        translucent: true,
     };
 
     /// Only those listed; every section for an empty list.
@@ -129,6 +135,7 @@ impl Sections {
             viewer: list.contains(&Section::Viewer),
             particles: list.contains(&Section::Particles),
             live: list.contains(&Section::Live),
+            translucent: list.contains(&Section::Translucent),
         }
     }
 }
@@ -338,6 +345,18 @@ pub fn run(
     } else {
         Vec::new()
     };
+    let translucent = if options.sections.translucent {
+        progress(
+            "translucent objects: the table at 32, 64 and 128 voxels a side; frames at 1280 x 720",
+        );
+        Some(translucent_rows(
+            options.warmup(),
+            options.frames(),
+            options.quick,
+        )?)
+    } else {
+        None
+    };
 
     Ok(Report {
         adapter,
@@ -352,6 +371,7 @@ pub fn run(
         equal_error,
         particles,
         live,
+        translucent,
         compile,
         total_seconds: start.elapsed().as_secs_f64(),
     })
@@ -505,6 +525,21 @@ mod tests {
                 bare: Timing::of(vec![70.0]),
                 frame_rate: 30.0,
             }],
+            translucent: Some((
+                vec![TranslucentRow {
+                    case: "cube with a cavity".into(),
+                    resolution: 64,
+                    surface_voxels: 24_576,
+                    table_mb: 1208.0,
+                    precompute_ms: None,
+                    relight_ms: None,
+                }],
+                TranslucentFrames {
+                    still: Timing::of(vec![90.0]),
+                    orbit: Timing::of(vec![700.0]),
+                    opaque_orbit: Timing::of(vec![400.0]),
+                },
+            )),
             equal_error: vec![EqualErrorRow {
                 scene: "mixed".into(),
                 resolution: 256,
@@ -611,6 +646,12 @@ mod tests {
             table.contains("live particle sets") && table.contains("10,000 alive"),
             "{table}"
         );
+        assert_eq!(json["translucent"][0][0]["surface_voxels"], 24_576);
+        assert_eq!(json["translucent"][1]["orbit"]["median_ms"], 700.0);
+        assert!(
+            table.contains("translucent objects") && table.contains("refused"),
+            "{table}"
+        );
         assert_eq!(json["options"]["quick"], true);
         // A run of some sections prints only theirs.
         let only = Report {
@@ -619,6 +660,7 @@ mod tests {
             viewer: None,
             particles: Vec::new(),
             live: Vec::new(),
+            translucent: None,
             ..report
         };
         let table = only.table();

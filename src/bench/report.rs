@@ -101,6 +101,8 @@ pub struct Report {
     pub particles: Vec<super::ParticleRow>,
     /// Live particle sets: playback, scrubbing and rendering.
     pub live: Vec<super::LiveRow>,
+    /// Translucent objects: the table per resolution, and frames.
+    pub translucent: Option<(Vec<super::TranslucentRow>, super::TranslucentFrames)>,
     /// What each structure's specialised pipelines took to compile, in milliseconds.
     pub compile: Vec<CompileTime>,
     pub total_seconds: f64,
@@ -341,6 +343,41 @@ impl Report {
                     1e3 / r.frame_rate,
                 );
             }
+        }
+        if let Some((rows, frames)) = &self.translucent {
+            let _ = writeln!(
+                s,
+                "\ntranslucent objects: the voxel number map's table (surface voxels N, N (N + 1) / 2 f32), its precomputation (voxels, table, spread) and a relight (irradiance and the sum over the table), wall ms; refused past {} MiB",
+                crate::objects::translucent::MAX_TABLE_BYTES >> 20
+            );
+            let _ = writeln!(
+                s,
+                "{:<30} {:>6} {:>10} {:>10} {:>14} {:>11}",
+                "object", "voxels", "surface", "table MB", "precompute ms", "relight ms"
+            );
+            let ms = |x: Option<f64>| x.map_or("refused".to_owned(), |x| format!("{x:.0}"));
+            for r in rows {
+                let _ = writeln!(
+                    s,
+                    "{:<30} {:>6} {:>10} {:>10.1} {:>14} {:>11}",
+                    r.case,
+                    r.resolution,
+                    r.surface_voxels,
+                    r.table_mb,
+                    ms(r.precompute_ms),
+                    ms(r.relight_ms),
+                );
+            }
+            let t = |x: &super::Timing| {
+                format!("{:.1} ({:.0}..{:.0})", x.median_ms, x.min_ms, x.max_ms)
+            };
+            let _ = writeln!(
+                s,
+                "frames of translucent_cavity.toml at 1280 x 720 (wall ms, median (min..max)): still {}, orbiting {}, orbiting with the cube opaque {}",
+                t(&frames.still),
+                t(&frames.orbit),
+                t(&frames.opaque_orbit)
+            );
         }
         if !self.equal_error.is_empty() {
             let _ = writeln!(

@@ -122,6 +122,28 @@ impl SceneRenderer {
         &self.particles
     }
 
+    /// Records the glow of `setup` seen through its translucent objects over `field` (`layers` layers, the
+    /// setup's resolution); whether it has any (then `through_texture` holds the blend).
+    pub fn see_through(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+        setup: &FrameSetup,
+        field: &wgpu::TextureView,
+        layers: u32,
+    ) -> Result<bool, GpuError> {
+        let size = (setup.resolution, layers);
+        Ok((self.through)
+            .encode(device, queue, encoder, setup, field, size)?
+            .is_some())
+    }
+
+    /// The last blend of the glow seen through translucent objects.
+    pub fn through_texture(&self) -> Option<&wgpu::Texture> {
+        self.through.output()
+    }
+
     /// The field pass, for inspection (dispatch count, texture) and for the brightness alone.
     pub fn field(&self) -> &FieldRenderer {
         &self.field

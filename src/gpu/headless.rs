@@ -19,6 +19,8 @@ pub struct Frame {
 pub struct HeadlessRenderer {
     pub ctx: GpuContext,
     renderer: SceneRenderer,
+    /// The last `brightness` read the glow seen through translucent objects (`tint` reads the same).
+    read_through: bool,
 }
 
 impl HeadlessRenderer {
@@ -37,7 +39,11 @@ impl HeadlessRenderer {
     /// A renderer on an existing context.
     pub fn from_context(ctx: GpuContext) -> Self {
         let renderer = SceneRenderer::new(&ctx.device);
-        Self { ctx, renderer }
+        Self {
+            ctx,
+            renderer,
+            read_through: false,
+        }
     }
 
     /// The field pass, for inspection (dispatch count, texture).
@@ -76,9 +82,19 @@ impl HeadlessRenderer {
             label: Some("energywave.field.encoder"),
         });
         field.encode(&mut encoder);
+        // Where translucent objects stand, the glow behind them seen through them, as a frame shows it.
+        let view = field.view().expect("prepared above").clone();
+        let layers = crate::gpu::field_pass::layers_of(setup.scene);
+        let through =
+            self.renderer
+                .see_through(device, queue, &mut encoder, setup, &view, layers)?;
         self.ctx.checked(|| queue.submit([encoder.finish()]))?;
-        let texture = self.renderer.field().texture().expect("prepared above");
+        let texture = match through {
+            true => self.renderer.through_texture().expect("blended above"),
+            false => self.renderer.field().texture().expect("prepared above"),
+        };
         let bytes = self.ctx.read_texture(texture, 4)?;
+        self.read_through = through;
         Ok(bytemuck::cast_slice(&bytes).to_vec())
     }
 
@@ -86,7 +102,13 @@ impl HeadlessRenderer {
     /// scene and billboard: zero where every source has the scene's color (the pass writes B alone then).
     pub fn tint(&self) -> Result<Vec<[f32; 3]>, GpuError> {
         let field = self.renderer.field();
-        let texture = field.texture().expect("brightness renders first");
+        let texture = match self.read_through {
+            true => self
+                .renderer
+                .through_texture()
+                .expect("brightness renders first"),
+            false => field.texture().expect("brightness renders first"),
+        };
         if field.layers() == 1 {
             let w = texture.width() as usize;
             return Ok(vec![[0.0; 3]; w * w]);

@@ -69,6 +69,11 @@ impl ThroughPass {
         }
     }
 
+    /// The last blend's texture.
+    pub fn output(&self) -> Option<&wgpu::Texture> {
+        self.output.as_ref().map(|(t, _)| t)
+    }
+
     /// The front field, for inspection.
     pub fn front(&self) -> &FieldRenderer {
         &self.front

@@ -34,6 +34,12 @@ pub fn converged_reference(scene: &Scene, stride: u32) -> (Vec<f64>, ReferenceSt
         .flat_map(|j| (0..w).step_by(stride as usize).map(move |i| (i, j)))
         .collect();
     let field = s.sources.field();
+    let opaque: Vec<crate::objects::Object> = (s.objects.iter())
+        .filter(|o| o.translucent.is_none())
+        .cloned()
+        .collect();
+    let translucent = opaque.len() < s.objects.len();
+    let opaque = &opaque[..];
     let out: Vec<(f64, u64)> = texels
         .par_iter()
         .map(|&(i, j)| {
@@ -46,8 +52,8 @@ pub fn converged_reference(scene: &Scene, stride: u32) -> (Vec<f64>, ReferenceSt
             let span = reach.stretch;
             // Up to the first surface the ray meets past the billboard (none before it: hidden), at depth
             // t = keep, the integrals over [0, keep] written over [0, 1] by t = keep u.
-            let keep = match first_hit(
-                &s.objects,
+            let keep_of = |objects: &[crate::objects::Object]| match first_hit(
+                objects,
                 s.camera.eye,
                 p - s.camera.eye,
                 0.0,
@@ -56,38 +62,61 @@ pub fn converged_reference(scene: &Scene, stride: u32) -> (Vec<f64>, ReferenceSt
                 None => 1.0,
                 Some((_, tau)) => ((tau - 1.0) * plane / (span * i.decay_length)).clamp(0.0, 1.0),
             };
-            if keep == 0.0 {
-                return (0.0, 0);
+            let b_of = |keep: f64| -> (f64, u64) {
+                if keep == 0.0 {
+                    return (0.0, 0);
+                }
+                let at = |t: f64| p + per_depth * (keep * t * span * i.decay_length);
+                let zeta = |t: f64| zeta(keep * t * span, i.alpha, i.beta);
+                let span = keep * span;
+                match i.decay {
+                    Decay::Distance => simpson_refined(
+                        |t| field.psi(at(t), i.epsilon) * zeta(t) * span,
+                        REFERENCE_DIVISIONS,
+                        REFERENCE_TOLERANCE,
+                        REFERENCE_MAX_DEPTH,
+                    ),
+                    // Each term the root of its own integral J of the square. An error dJ costs dJ / (2 sqrt(J))
+                    // of B, so J is refined to the tolerance times sqrt(J) (J first estimated unrefined), and at
+                    // least to its square (|sqrt(x) - sqrt(y)| <= sqrt(|x - y|)). The root takes the sign of the
+                    // term's coefficient back (the square dropped it): a negative source subtracts.
+                    Decay::Rms => (0..s.sources.len())
+                        .map(|k| {
+                            let f =
+                                |t: f64| (field.term(k, at(t), i.epsilon) * zeta(t)).powi(2) * span;
+                            let rough = simpson(f, REFERENCE_DIVISIONS);
+                            let tolerance = (REFERENCE_TOLERANCE * rough.max(0.0).sqrt())
+                                .max(REFERENCE_TOLERANCE * REFERENCE_TOLERANCE);
+                            let (sq, n) = simpson_refined(
+                                f,
+                                REFERENCE_DIVISIONS,
+                                tolerance,
+                                REFERENCE_MAX_DEPTH,
+                            );
+                            (
+                                sq.max(0.0).sqrt().copysign(s.sources.coefficient(k)),
+                                n + REFERENCE_DIVISIONS as u64 + 1,
+                            )
+                        })
+                        .fold((0.0, 0), |(b, n), (x, m)| (b + x, n + m)),
+                }
+            };
+            // Only opaque objects end the glow; the glow behind translucent ones is seen through them
+            // (`reference::field_pass::render_brightness`): the glow up to the first surface of any object
+            // and up to the first opaque one, blended by the share that crosses them.
+            let behind = keep_of(opaque);
+            if !translucent {
+                return b_of(behind);
             }
-            let at = |t: f64| p + per_depth * (keep * t * span * i.decay_length);
-            let zeta = |t: f64| zeta(keep * t * span, i.alpha, i.beta);
-            let span = keep * span;
-            match i.decay {
-                Decay::Distance => simpson_refined(
-                    |t| field.psi(at(t), i.epsilon) * zeta(t) * span,
-                    REFERENCE_DIVISIONS,
-                    REFERENCE_TOLERANCE,
-                    REFERENCE_MAX_DEPTH,
-                ),
-                // Each term the root of its own integral J of the square. An error dJ costs dJ / (2 sqrt(J)) of B,
-                // so J is refined to the tolerance times sqrt(J) (J first estimated unrefined), and at least to its
-                // square (|sqrt(x) - sqrt(y)| <= sqrt(|x - y|)). The root takes the sign of the term's coefficient
-                // back (the square dropped it): a negative source subtracts.
-                Decay::Rms => (0..s.sources.len())
-                    .map(|k| {
-                        let f = |t: f64| (field.term(k, at(t), i.epsilon) * zeta(t)).powi(2) * span;
-                        let rough = simpson(f, REFERENCE_DIVISIONS);
-                        let tolerance = (REFERENCE_TOLERANCE * rough.max(0.0).sqrt())
-                            .max(REFERENCE_TOLERANCE * REFERENCE_TOLERANCE);
-                        let (sq, n) =
-                            simpson_refined(f, REFERENCE_DIVISIONS, tolerance, REFERENCE_MAX_DEPTH);
-                        (
-                            sq.max(0.0).sqrt().copysign(s.sources.coefficient(k)),
-                            n + REFERENCE_DIVISIONS as u64 + 1,
-                        )
-                    })
-                    .fold((0.0, 0), |(b, n), (x, m)| (b + x, n + m)),
-            }
+            let front = keep_of(&s.objects);
+            let end = 1.0 + behind * span * i.decay_length / plane;
+            let t = crate::objects::translucent::transmittance(
+                &s.objects,
+                s.camera.eye,
+                s.camera.eye + (p - s.camera.eye) * end,
+            );
+            let ((bf, nf), (bb, nb)) = (b_of(front), b_of(behind));
+            (bf + t * (bb - bf), nf + nb)
         })
         .collect();
     // Without refinement, a texel spends the n + 1 samples and 2 more a pair of intervals, to check them.
