@@ -183,9 +183,11 @@ fn texel_at(at: vec2<i32>) -> vec4<f32> {
 fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     var field: vec4<f32>;
     if OBJECTS {
-        // An object in front of the billboard hides the glow at this pixel.
-        let d = bitcast<f32>(textureLoad(depth, vec2<i32>(in.position.xy), 0).r);
-        if d < in.position.z {
+        // An opaque object in front of the billboard hides the glow at this pixel; a translucent one (the depth's
+        // lowest bit set, shaders/objects.wgsl) lets through the glow the field blended for it.
+        let bits = textureLoad(depth, vec2<i32>(in.position.xy), 0).r;
+        let d = bitcast<f32>(bits & ~1u);
+        if d < in.position.z && (bits & 1u) == 0u {
             field = vec4<f32>(0.0);
         } else {
             // The pixel's own clip: where along S -> E its ray meets the object behind the billboard (1: none).

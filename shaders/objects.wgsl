@@ -64,7 +64,11 @@ fn fs_main(in: VertexOut) -> FragmentOut {
     load_scalars();
     let l = length(in.normal);
     let n = select(vec3<f32>(0.0), in.normal / l, l > 0.0);
-    let depth = bitcast<u32>(in.position.z);
+    // The depth's bits, the lowest one a flag: set on a translucent surface (the glow is seen through it: the
+    // billboard does not let it hide the glow, only guide the glow's edge), clear on an opaque one. One unit in
+    // the last place of the depth, which nothing reads that finely.
+    let bits = bitcast<u32>(in.position.z);
+    let depth = select(bits & ~1u, bits | 1u, in.eta > 0.0);
     if in.eta > 0.0 {
         // A translucent surface: the light its voxels scatter out, through the exit's Fresnel toward the eye
         // (objects::lighting::shaded_translucent).

@@ -148,8 +148,10 @@ fn splat(@builtin(global_invocation_id) gid: vec3<u32>) {
     var until = 3.0e38;
     if params.objects != 0u {
         let at = vec2<u32>((vec2<f32>(gid.xy) + 0.5) * vec2<f32>(params.frame) / vec2<f32>(params.size));
-        let d = bitcast<f32>(textureLoad(depth, vec2<i32>(min(at, params.frame - 1u)), 0).r);
-        if d < 1.0 {
+        // A translucent surface (the depth's lowest bit set, shaders/objects.wgsl) does not end the smoke.
+        let bits = textureLoad(depth, vec2<i32>(min(at, params.frame - 1u)), 0).r;
+        let d = bitcast<f32>(bits);
+        if d < 1.0 && (bits & 1u) == 0u {
             until = view_depth(d);
         }
     }

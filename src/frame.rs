@@ -127,6 +127,21 @@ impl<'a> FrameSetup<'a> {
         }
     }
 
+    /// The clips at `w` texels a side up to the first surface of any object, opaque or translucent: what the
+    /// billboard matches each pixel's own surface against (`clips_at` without translucent objects).
+    pub fn surface_clips_at(&self, w: u32) -> Option<Arc<Vec<f32>>> {
+        match self.translucent() {
+            true => shared_clip_fractions(
+                &self.scene.objects,
+                self.eye(),
+                &self.billboard,
+                self.reach,
+                w,
+            ),
+            false => self.clips_at(w),
+        }
+    }
+
     /// The share of each texel's glow that crosses the translucent objects to the eye, at `w` texels a side
     /// (`objects::clip::transmittances`); none without translucent objects.
     pub fn transmittances_at(&self, w: u32) -> Option<Arc<Vec<f32>>> {

@@ -336,9 +336,11 @@ impl SceneRenderer {
                 params.mode |= crate::gpu::billboard_pass::THRESHOLD_PREVIEW;
                 params.energy[3] = threshold as f32;
             }
-            // Where objects stand, the billboard reads the clips of the texture it shows (`resolution`).
+            // Where objects stand, the billboard reads the clips of the texture it shows (`resolution`), up to the
+            // first surface of any object: a translucent one's edge guides the glow blended for it as an opaque
+            // one's edge guides the glow it ends.
             let clips = match objects {
-                true => setup.clips_at(resolution),
+                true => setup.surface_clips_at(resolution),
                 false => None,
             };
             self.billboard.draw(

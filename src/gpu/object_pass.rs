@@ -103,9 +103,9 @@ impl Structure {
 pub struct ObjectPass {
     module: wgpu::ShaderModule,
     pipeline_layout: wgpu::PipelineLayout,
-    /// For each structure met so far, color and depth; depth alone (a holdout); color and depth without the
-    /// depth's copy (the translucent objects, which do not end the glow). The first two write the depth's copy.
-    pipelines: std::collections::HashMap<Structure, [wgpu::RenderPipeline; 3]>,
+    /// For each structure met so far, color and depth; depth alone (a holdout). Each writes the depth's copy
+    /// too (a translucent surface's with its lowest bit set: `shaders/objects.wgsl`).
+    pipelines: std::collections::HashMap<Structure, [wgpu::RenderPipeline; 2]>,
     /// The structure of the scene last prepared.
     structure: Structure,
     layout: wgpu::BindGroupLayout,
@@ -115,9 +115,6 @@ pub struct ObjectPass {
     vertices: Option<wgpu::Buffer>,
     indices: Option<wgpu::Buffer>,
     count: u32,
-    /// The indices of the opaque objects' triangles come first, `opaque` of them; the translucent objects'
-    /// after, drawn over them.
-    opaque: u32,
     /// The scene's energy color Ce, its intensity applied.
     energy: [f32; 3],
     /// What the buffers were lit from.
@@ -165,21 +162,19 @@ impl ObjectPass {
             vertices: None,
             indices: None,
             count: 0,
-            opaque: 0,
             energy: [0.0; 3],
             key: None,
         }
     }
 
-    /// The pipelines for `structure`: color and depth, depth alone, color and depth without the depth's copy.
+    /// The pipelines for `structure`: color and depth, depth alone.
     fn build_pipelines(
         &self,
         device: &wgpu::Device,
         structure: Structure,
-    ) -> [wgpu::RenderPipeline; 3] {
+    ) -> [wgpu::RenderPipeline; 2] {
         let constants = structure.constants();
-        let (all, none) = (wgpu::ColorWrites::ALL, wgpu::ColorWrites::empty());
-        [(all, all), (none, all), (all, none)].map(|(write_mask, copy_mask)| {
+        [wgpu::ColorWrites::ALL, wgpu::ColorWrites::empty()].map(|write_mask| {
             render_pipeline(
                 device,
                 RenderPipelineSpec {
@@ -206,7 +201,7 @@ impl ObjectPass {
                         Some(wgpu::ColorTargetState {
                             format: DEPTH_VALUE_FORMAT,
                             blend: None,
-                            write_mask: copy_mask,
+                            write_mask: wgpu::ColorWrites::ALL,
                         }),
                     ],
                     depth: Some(wgpu::DepthStencilState {
@@ -262,22 +257,10 @@ impl ObjectPass {
                 usage: wgpu::BufferUsages::VERTEX,
             }),
         );
-        // The opaque objects' triangles first: the translucent ones, drawn after, leave the depth's copy (which
-        // ends the glow) to what lies behind them.
-        let translucent = |t: &[u32]| {
-            let o = surface.object[t[0] as usize] as usize;
-            scene.objects[o].translucent.is_some()
-        };
-        let (opaque, clear): (Vec<&[u32]>, Vec<&[u32]>) = surface
-            .indices
-            .chunks_exact(3)
-            .partition(|t| !translucent(t));
-        self.opaque = 3 * opaque.len() as u32;
-        let indices: Vec<u32> = opaque.into_iter().chain(clear).flatten().copied().collect();
         self.indices = Some(
             device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("energywave.objects.indices"),
-                contents: bytemuck::cast_slice(&indices),
+                contents: bytemuck::cast_slice(&surface.indices),
                 usage: wgpu::BufferUsages::INDEX,
             }),
         );
@@ -353,11 +336,6 @@ impl ObjectPass {
         pass.set_bind_group(0, bind_group, &[]);
         pass.set_vertex_buffer(0, vertices.slice(..));
         pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
-        pass.draw_indexed(0..self.opaque, 0, 0..1);
-        // The translucent objects: held out, nothing (they do not hide the glow, which crosses them).
-        if color && self.count > self.opaque {
-            pass.set_pipeline(&pipelines[2]);
-            pass.draw_indexed(self.opaque..self.count, 0, 0..1);
-        }
+        pass.draw_indexed(0..self.count, 0, 0..1);
     }
 }

@@ -217,8 +217,14 @@ fn compose(
     };
     // Held out, the objects are not drawn but still hide the glow in front of them.
     let objects = ObjectImage::of(scene);
+    // The clips the billboard matches each pixel's own surface against: up to the first surface of any object
+    // (a translucent one's edge guides the glow blended for it as an opaque one's guides the glow it ends).
+    let surfaces = match setup.translucent() {
+        true => &scene.objects[..],
+        false => setup.clip_objects(),
+    };
     let clips = clip_fractions(
-        setup.clip_objects(),
+        surfaces,
         scene.camera.eye,
         billboard,
         reach,
@@ -246,15 +252,11 @@ fn compose(
                 let dir = scene
                     .camera
                     .pixel_ray(x as f64 + 0.5, y as f64 + 0.5, width, height);
-                let seen = objects.as_ref().and_then(|o| o.hit(scene.camera.eye, dir));
-                // What ends the glow: the first opaque surface (the glow behind a translucent one is seen
-                // through it, `field_pass::render_brightness`).
                 let hit = objects
                     .as_ref()
-                    .and_then(|o| o.hit_opaque(scene.camera.eye, dir))
-                    .map(|t| (t, ()));
-                let under = match seen {
-                    Some((_, [r, g, b])) if drawn => [r, g, b, 1.0],
+                    .and_then(|o| o.hit_surface(scene.camera.eye, dir));
+                let under = match hit {
+                    Some((_, [r, g, b], _)) if drawn => [r, g, b, 1.0],
                     _ => clear,
                 };
                 let [front, back] = smoke
@@ -272,8 +274,9 @@ fn compose(
                                 sample_bilinear_by(texture.resolution, u, v, |k| texture.tint[k][c])
                             }),
                         ),
-                        // An object in front of the billboard hides the glow at this pixel.
-                        (Some(_), Some((t, _)))
+                        // An opaque object in front of the billboard hides the glow at this pixel (a
+                        // translucent one lets through the glow blended for it).
+                        (Some(_), Some((t, _, false)))
                             if t < billboard_distance(billboard, scene.camera.eye, dir) =>
                         {
                             (0.0, [0.0; 3])
@@ -281,7 +284,7 @@ fn compose(
                         (Some(_), hit) => {
                             // The pixel's own clip: where along S -> E its ray meets the object behind the
                             // billboard (1: none).
-                            let clip = hit.map_or(1.0, |(t, _)| {
+                            let clip = hit.map_or(1.0, |(t, _, _)| {
                                 let tau = t / billboard_distance(billboard, scene.camera.eye, dir);
                                 ((tau - 1.0) / (reach.nu - 1.0)).clamp(0.0, 1.0)
                             });

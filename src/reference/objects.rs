@@ -69,6 +69,11 @@ impl ObjectImage {
 
     /// Where (in units of `dir`) the ray from `eye` along `dir` first meets a triangle, and its lit color there.
     pub fn hit(&self, eye: DVec3, dir: DVec3) -> Option<(f64, [f64; 3])> {
+        self.hit_surface(eye, dir).map(|(t, color, _)| (t, color))
+    }
+
+    /// `hit`, and whether the surface met is a translucent object's.
+    pub fn hit_surface(&self, eye: DVec3, dir: DVec3) -> Option<(f64, [f64; 3], bool)> {
         let (t, k) = self.mesh.hit_triangle(eye, dir, 0.0, f64::INFINITY)?;
         let corners = &self.lit.surface.indices[3 * k..3 * k + 3];
         let (_, w) = triangle_barycentric(&self.mesh.triangles[k], eye, dir)?;
@@ -91,10 +96,10 @@ impl ObjectImage {
             };
             let subsurface = mix(&|k| light.subsurface[k]);
             let color = shaded_translucent(mix(&|k| light.albedo[k]), subsurface, eta, cos_view);
-            return Some((t, color));
+            return Some((t, color, true));
         }
         let direct = self.lights.direct(eye + dir * t, n);
         let shadow = [0, 1].map(|s| mix(&|k| light.shadow[k][s]));
-        Some((t, shaded(mix(&|k| light.albedo[k]), shadow, direct)))
+        Some((t, shaded(mix(&|k| light.albedo[k]), shadow, direct), false))
     }
 }
