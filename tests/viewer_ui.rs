@@ -907,3 +907,33 @@ fn a_live_set_is_added_edited_keyed_and_played_in_the_viewer() {
         h.state().report().error
     );
 }
+
+#[test]
+fn an_object_made_translucent_in_the_panel_lets_the_glow_through_and_undoes() {
+    let mut h = harness(light_scene());
+    click_first(&mut h, "+ sphere");
+    let opaque = viewport_pixels(&mut h);
+    assert!(h.state().scene().objects[0].translucent.is_none());
+    common::viewer::click_label(&mut h, "translucent");
+    let t = h.state().scene().objects[0].translucent.clone();
+    assert!(t.is_some(), "the switch makes it translucent");
+    // Its extinction edited: one undo step like every edit.
+    let extinction = h.get_by_role_and_label(Role::SpinButton, "extinction");
+    extinction.set_value_accesskit(0.5);
+    h.run();
+    let t = h.state().scene().objects[0].translucent.clone().unwrap();
+    assert_eq!(t.extinction, 0.5);
+    // The glow behind the sphere shows through it now: the picture changes.
+    let clear = viewport_pixels(&mut h);
+    let changed = (opaque.iter().zip(&clear))
+        .filter(|(p, q)| (0..3).any(|c| (p[c] as i32 - q[c] as i32).abs() > 16))
+        .count();
+    assert!(changed * 100 > opaque.len(), "the glow shows through: {changed} pixels changed");
+    undo(&mut h);
+    assert_eq!(
+        h.state().scene().objects[0].translucent.as_ref().unwrap().extinction,
+        energywave::objects::translucent::Translucent::default().extinction
+    );
+    undo(&mut h);
+    assert!(h.state().scene().objects[0].translucent.is_none());
+}
