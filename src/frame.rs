@@ -127,6 +127,34 @@ impl<'a> FrameSetup<'a> {
         }
     }
 
+    /// The `front` frame's clips: up to the first surface of any object where the texel's ray crosses a
+    /// translucent one, else 0 (the blend `front + t (behind - front)` does not read the glow in front where
+    /// `t = 1`, so those texels integrate nothing: the front field costs only the translucent objects' texels).
+    fn front_clips_at(&self, w: u32) -> Option<Arc<Vec<f32>>> {
+        let (eye, billboard, reach) = (self.eye(), &self.billboard, self.reach);
+        let all = shared_clip_fractions(&self.scene.objects, eye, billboard, reach, w)?;
+        let opaque: Vec<crate::objects::Object> = (self.scene.objects.iter())
+            .filter(|o| o.translucent.is_none())
+            .cloned()
+            .collect();
+        let shares = crate::objects::clip::shared_transmittances(
+            &self.scene.objects,
+            &opaque,
+            eye,
+            billboard,
+            reach,
+            w,
+        );
+        let Some(shares) = shares else {
+            return Some(all);
+        };
+        Some(Arc::new(
+            (all.iter().zip(shares.iter()))
+                .map(|(&c, &t)| if t < 1.0 { c } else { 0.0 })
+                .collect(),
+        ))
+    }
+
     /// The clips at `w` texels a side up to the first surface of any object, opaque or translucent: what the
     /// billboard matches each pixel's own surface against (`clips_at` without translucent objects).
     pub fn surface_clips_at(&self, w: u32) -> Option<Arc<Vec<f32>>> {
@@ -237,6 +265,9 @@ impl<'a> FrameSetup<'a> {
             && let Some(clips) = self.clips.get()
         {
             return clips.clone();
+        }
+        if self.front {
+            return self.front_clips_at(w);
         }
         shared_clip_fractions(
             self.clip_objects(),

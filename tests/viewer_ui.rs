@@ -928,10 +928,17 @@ fn an_object_made_translucent_in_the_panel_lets_the_glow_through_and_undoes() {
     let changed = (opaque.iter().zip(&clear))
         .filter(|(p, q)| (0..3).any(|c| (p[c] as i32 - q[c] as i32).abs() > 16))
         .count();
-    assert!(changed * 100 > opaque.len(), "the glow shows through: {changed} pixels changed");
+    assert!(
+        changed * 100 > opaque.len(),
+        "the glow shows through: {changed} pixels changed"
+    );
     undo(&mut h);
     assert_eq!(
-        h.state().scene().objects[0].translucent.as_ref().unwrap().extinction,
+        h.state().scene().objects[0]
+            .translucent
+            .as_ref()
+            .unwrap()
+            .extinction,
         energywave::objects::translucent::Translucent::default().extinction
     );
     undo(&mut h);
