@@ -200,6 +200,20 @@ fn rust_mirrors_match_the_wgsl_layouts() {
         size_of::<CurveSegment>(),
         fields!(CurveSegment: c2, pad0, c1, pad1, c0, pad2),
     );
+    let through = parse_and_validate("through", shaders::THROUGH_PASS);
+    check_struct(
+        &through,
+        "ThroughParams",
+        size_of::<energywave::gpu::through_pass::gpu_data::ThroughParams>(),
+        fields!(energywave::gpu::through_pass::gpu_data::ThroughParams: resolution, pad0, pad1, pad2),
+    );
+    let tau = parse_and_validate("tau_table", shaders::TAU_TABLE_PASS);
+    check_struct(
+        &tau,
+        "TauParams",
+        size_of::<energywave::gpu::tau_table::gpu_data::TauParams>(),
+        fields!(energywave::gpu::tau_table::gpu_data::TauParams: origin, side, dims, n, k0, rows, base, pad0),
+    );
     let grid = parse_and_validate("grid", shaders::GRID_PASS);
     check_struct(
         &grid,

@@ -709,3 +709,30 @@ fn extinction_and_eta_are_keyable() {
     let e = invalid(&bad);
     assert!(e.contains("out of range"), "{e}");
 }
+
+/// The table filled on the GPU (f32, `gpu::tau_table`) against its CPU twin (f64, then f32), on the poster's
+/// cube and the concave prism.
+#[test]
+fn the_gpu_fills_the_table_as_its_cpu_twin_does() {
+    let g = gpu();
+    for (name, object, resolution) in [
+        ("cube with a cavity", cavity_cube(1.5, 12), 12),
+        ("L-shaped prism", l_prism(1.0, 10), 10),
+    ] {
+        let v = Voxels::of(&object, resolution).unwrap();
+        let cpu = Table::of(&v);
+        let gpu_table = energywave::gpu::tau_table::tau_table(&g.ctx, &v).unwrap();
+        assert_eq!(gpu_table.n, cpu.n);
+        assert_eq!(gpu_table.tau.len(), cpu.tau.len());
+        let largest = cpu.tau.iter().fold(0.0f32, |a, &b| a.max(b));
+        let worst = (cpu.tau.iter().zip(&gpu_table.tau))
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0f32, f32::max);
+        println!(
+            "{name}: {} surface voxels, largest tau {largest}, worst |gpu - cpu| {worst:e}",
+            cpu.n
+        );
+        assert!(largest > 1.0, "{name}: {largest}");
+        assert!(worst <= 1e-4 * largest, "{name}: {worst} of {largest}");
+    }
+}

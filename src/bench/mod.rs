@@ -533,6 +533,8 @@ mod tests {
                     table_mb: 1208.0,
                     precompute_ms: None,
                     relight_ms: None,
+                    table_cpu_ms: None,
+                    table_gpu_ms: None,
                 }],
                 TranslucentFrames {
                     still: Timing::of(vec![90.0]),

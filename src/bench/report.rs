@@ -352,20 +352,29 @@ impl Report {
             );
             let _ = writeln!(
                 s,
-                "{:<30} {:>6} {:>10} {:>10} {:>14} {:>11}",
-                "object", "voxels", "surface", "table MB", "precompute ms", "relight ms"
+                "{:<30} {:>6} {:>10} {:>10} {:>14} {:>11} {:>13} {:>13}",
+                "object",
+                "voxels",
+                "surface",
+                "table MB",
+                "precompute ms",
+                "relight ms",
+                "table CPU ms",
+                "table GPU ms"
             );
             let ms = |x: Option<f64>| x.map_or("refused".to_owned(), |x| format!("{x:.0}"));
             for r in rows {
                 let _ = writeln!(
                     s,
-                    "{:<30} {:>6} {:>10} {:>10.1} {:>14} {:>11}",
+                    "{:<30} {:>6} {:>10} {:>10.1} {:>14} {:>11} {:>13} {:>13}",
                     r.case,
                     r.resolution,
                     r.surface_voxels,
                     r.table_mb,
                     ms(r.precompute_ms),
                     ms(r.relight_ms),
+                    ms(r.table_cpu_ms),
+                    ms(r.table_gpu_ms),
                 );
             }
             let t = |x: &super::Timing| {

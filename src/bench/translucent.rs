@@ -35,6 +35,9 @@ pub struct TranslucentRow {
     pub precompute_ms: Option<f64>,
     /// Lighting the surface voxels and summing over the table, in ms.
     pub relight_ms: Option<f64>,
+    /// The table alone on the CPU (every core) and on the GPU (`gpu::tau_table`), in ms.
+    pub table_cpu_ms: Option<f64>,
+    pub table_gpu_ms: Option<f64>,
 }
 
 /// Whole frames at 1280 x 720.
@@ -121,6 +124,7 @@ pub fn translucent_rows(
         preset.colors.palette(),
         preset.integration.epsilon,
     );
+    let gpu_ctx = HeadlessRenderer::new()?;
     let mut rows = Vec::new();
     for (name, object) in [
         ("cube with a cavity".to_owned(), cube.clone()),
@@ -137,13 +141,23 @@ pub fn translucent_rows(
                 table_mb: bytes as f64 / 1e6,
                 precompute_ms: None,
                 relight_ms: None,
+                table_cpu_ms: None,
+                table_gpu_ms: None,
             };
             if bytes <= MAX_TABLE_BYTES && !(quick && resolution > 32) {
                 let t = Instant::now();
                 let voxels = Voxels::of(&object, resolution).expect("a closed object");
+                let v = t.elapsed().as_secs_f64() * 1e3;
+                let t = Instant::now();
                 let table = Table::of(&voxels);
+                let c = t.elapsed().as_secs_f64() * 1e3;
+                let t = Instant::now();
                 let spread = spread(&voxels, &table);
-                row.precompute_ms = Some(t.elapsed().as_secs_f64() * 1e3);
+                row.precompute_ms = Some(v + c + t.elapsed().as_secs_f64() * 1e3);
+                row.table_cpu_ms = Some(c);
+                let t = Instant::now();
+                std::hint::black_box(crate::gpu::tau_table::tau_table(&gpu_ctx.ctx, &voxels)?);
+                row.table_gpu_ms = Some(t.elapsed().as_secs_f64() * 1e3);
                 let prepared = Prepared {
                     voxels,
                     table,

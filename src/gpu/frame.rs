@@ -256,7 +256,7 @@ impl SceneRenderer {
             }
             // The objects with depth (a holdout: their depth alone), which the billboard reads to hide the glow
             // in front of them pixel by pixel.
-            let objects = self.objects.prepare(device, setup);
+            let objects = self.objects.prepare(device, queue, setup);
             if objects {
                 let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                     label: Some("energywave.frame.objects"),

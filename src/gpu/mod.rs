@@ -15,6 +15,7 @@ mod headless;
 pub mod object_pass;
 pub mod particle_pass;
 pub mod shaders;
+pub mod tau_table;
 pub mod through_pass;
 mod upsample;
 

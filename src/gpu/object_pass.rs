@@ -218,7 +218,12 @@ impl ObjectPass {
 
     /// Lights and uploads `scene`'s objects and sources where they or their colors changed since the last
     /// call. Returns whether there is anything to draw.
-    pub fn prepare(&mut self, device: &wgpu::Device, setup: &FrameSetup) -> bool {
+    pub fn prepare(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        setup: &FrameSetup,
+    ) -> bool {
         let scene = setup.scene;
         if scene.objects.is_empty() {
             self.count = 0;
@@ -236,6 +241,15 @@ impl ObjectPass {
         if !self.pipelines.contains_key(&self.structure) {
             let built = self.build_pipelines(device, self.structure);
             self.pipelines.insert(self.structure, built);
+        }
+        // A real GPU fills the translucent objects' tables (kept, so that `lit` finds them).
+        if super::tau_table::fills_tables(&device.adapter_info()) {
+            for o in scene.objects.iter().filter(|o| o.translucent.is_some()) {
+                let fill = |v: &crate::objects::translucent::voxels::Voxels| {
+                    super::tau_table::table_on(device, queue, v).ok()
+                };
+                crate::objects::translucent::light::prepared_with(o, &fill);
+            }
         }
         let Lit { surface, light } = lit(scene.lit_inputs());
         let f = |v: [f64; 3]| v.map(|x| x as f32);

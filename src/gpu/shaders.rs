@@ -15,6 +15,8 @@ pub const BILLBOARD_PASS: &str = include_str!("../../shaders/billboard.wgsl");
 pub const GLARE_PASS: &str = include_str!("../../shaders/glare.wgsl");
 /// The glow seen through translucent objects (`gpu::through_pass`).
 pub const THROUGH_PASS: &str = include_str!("../../shaders/through.wgsl");
+/// The optical-thickness table of a translucent object (`gpu::tau_table`).
+pub const TAU_TABLE_PASS: &str = include_str!("../../shaders/tau_table.wgsl");
 /// The smooth upsampling of the viewer's low-resolution preview field.
 pub const UPSAMPLE_PASS: &str = include_str!("../../shaders/upsample.wgsl");
 /// The running mean of jittered frames.
@@ -28,7 +30,7 @@ pub const BLIT_PASS: &str = include_str!("../../shaders/blit.wgsl");
 pub const CONSTANTS: &str = "shared/constants.wgsl";
 
 /// Every WGSL file but the generated one, by its path under `shaders/`.
-pub const FILES: [(&str, &str); 21] = [
+pub const FILES: [(&str, &str); 22] = [
     (
         "shared/field.wgsl",
         include_str!("../../shaders/shared/field.wgsl"),
@@ -82,6 +84,7 @@ pub const FILES: [(&str, &str); 21] = [
     ("billboard.wgsl", BILLBOARD_PASS),
     ("glare.wgsl", GLARE_PASS),
     ("through.wgsl", THROUGH_PASS),
+    ("tau_table.wgsl", TAU_TABLE_PASS),
     ("upsample.wgsl", UPSAMPLE_PASS),
     ("average.wgsl", AVERAGE_PASS),
     ("grid.wgsl", GRID_PASS),

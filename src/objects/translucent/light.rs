@@ -32,6 +32,15 @@ pub struct Prepared {
 /// `object`'s voxels and table, kept for the last few objects asked for: editing a source or orbiting the
 /// camera relights the voxels without voxelising again.
 pub fn prepared(object: &Object) -> Option<Arc<Prepared>> {
+    prepared_with(object, &|voxels| Some(Table::of(voxels)))
+}
+
+/// `prepared`, the table filled by `fill` where it is not kept yet (a GPU's, `gpu::tau_table`), by the CPU
+/// where `fill` gives none.
+pub fn prepared_with(
+    object: &Object,
+    fill: &dyn Fn(&Voxels) -> Option<Table>,
+) -> Option<Arc<Prepared>> {
     object.translucent.as_ref()?;
     static CACHE: Mutex<Vec<(Object, Arc<Prepared>)>> = Mutex::new(Vec::new());
     let key = Object {
@@ -46,7 +55,7 @@ pub fn prepared(object: &Object) -> Option<Arc<Prepared>> {
     let start = std::time::Instant::now();
     let resolution = resolution_of(object).ok()?;
     let voxels = Voxels::of(object, resolution).ok()?;
-    let table = Table::of(&voxels);
+    let table = fill(&voxels).unwrap_or_else(|| Table::of(&voxels));
     let spread = spread(&voxels, &table);
     let p = Arc::new(Prepared {
         voxels,
