@@ -630,7 +630,7 @@ fn an_open_mesh_and_a_bad_material_fail_on_the_command_line() {
     let indices: [u16; 9] = [0, 2, 1, 0, 1, 3, 0, 3, 2];
     let mut bin: Vec<u8> = p.iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
     bin.extend(indices.iter().flat_map(|i| i.to_le_bytes()));
-    while bin.len() % 4 != 0 {
+    while !bin.len().is_multiple_of(4) {
         bin.push(0);
     }
     std::fs::write(dir.join("open.bin"), &bin).unwrap();

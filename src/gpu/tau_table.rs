@@ -109,7 +109,11 @@ pub fn table_on(
         mapped_at_creation: false,
     });
     // Bands of whole rows within the device's storage binding (and 64 MiB, so that the read back is in pieces).
-    let limit = (device.limits().max_storage_buffer_binding_size as u64).min(64 << 20) / 4;
+    let limit = device
+        .limits()
+        .max_storage_buffer_binding_size
+        .min(64 << 20)
+        / 4;
     let mut tau = Vec::with_capacity(total);
     let mut k0 = 0;
     while k0 < n {

@@ -88,35 +88,14 @@ pub fn shared_transmittances(
     if !objects.iter().any(|o| o.translucent.is_some()) {
         return None;
     }
-    static CACHE: Mutex<Vec<(ClipKey, Arc<Vec<f32>>)>> = Mutex::new(Vec::new());
-    let key = ClipKey {
-        objects: objects.to_vec(),
-        eye,
-        billboard: *billboard,
-        nu: reach.nu,
-        w,
-    };
-    if let Ok(cache) = CACHE.lock()
-        && let Some((_, t)) = cache.iter().find(|(k, _)| *k == key)
-    {
-        return Some(t.clone());
-    }
-    let t: Arc<Vec<f32>> = Arc::new(
-        transmittances(objects, opaque, eye, billboard, reach, w)?
-            .into_iter()
-            .map(|c| c as f32)
-            .collect(),
-    );
-    if let Ok(mut cache) = CACHE.lock() {
-        if cache.len() >= 4 {
-            cache.remove(0);
-        }
-        cache.push((key, t.clone()));
-    }
-    Some(t)
+    static CACHE: Kept = Mutex::new(Vec::new());
+    let key = ClipKey::of(objects, eye, billboard, reach, w);
+    kept(&CACHE, key, || {
+        transmittances(objects, opaque, eye, billboard, reach, w)
+    })
 }
 
-/// What a frame's clips depend on.
+/// What a frame's clips (and transmittances) depend on.
 #[derive(Clone, Debug, PartialEq)]
 struct ClipKey {
     objects: Vec<Object>,
@@ -124,6 +103,42 @@ struct ClipKey {
     billboard: Billboard,
     nu: f64,
     w: u32,
+}
+
+impl ClipKey {
+    fn of(objects: &[Object], eye: DVec3, billboard: &Billboard, reach: Reach, w: u32) -> ClipKey {
+        ClipKey {
+            objects: objects.to_vec(),
+            eye,
+            billboard: *billboard,
+            nu: reach.nu,
+            w,
+        }
+    }
+}
+
+/// The last few keys and what was made of them.
+type Kept = Mutex<Vec<(ClipKey, Arc<Vec<f32>>)>>;
+
+/// What `make` gives for `key` (in f64), in f32, kept in `cache` for the last four keys.
+fn kept(
+    cache: &Kept,
+    key: ClipKey,
+    make: impl FnOnce() -> Option<Vec<f64>>,
+) -> Option<Arc<Vec<f32>>> {
+    if let Ok(cache) = cache.lock()
+        && let Some((_, v)) = cache.iter().find(|(k, _)| *k == key)
+    {
+        return Some(v.clone());
+    }
+    let v: Arc<Vec<f32>> = Arc::new(make()?.into_iter().map(|c| c as f32).collect());
+    if let Ok(mut cache) = cache.lock() {
+        if cache.len() >= 4 {
+            cache.remove(0);
+        }
+        cache.push((key, v.clone()));
+    }
+    Some(v)
 }
 
 /// `clip_fractions` in f32, kept for the last few frames' keys: the field pass and the billboard pass of a
@@ -138,30 +153,9 @@ pub fn shared_clip_fractions(
     if objects.is_empty() {
         return None;
     }
-    static CACHE: Mutex<Vec<(ClipKey, Arc<Vec<f32>>)>> = Mutex::new(Vec::new());
-    let key = ClipKey {
-        objects: objects.to_vec(),
-        eye,
-        billboard: *billboard,
-        nu: reach.nu,
-        w,
-    };
-    if let Ok(cache) = CACHE.lock()
-        && let Some((_, clips)) = cache.iter().find(|(k, _)| *k == key)
-    {
-        return Some(clips.clone());
-    }
-    let clips: Arc<Vec<f32>> = Arc::new(
-        clip_fractions(objects, eye, billboard, reach, w)?
-            .into_iter()
-            .map(|c| c as f32)
-            .collect(),
-    );
-    if let Ok(mut cache) = CACHE.lock() {
-        if cache.len() >= 4 {
-            cache.remove(0);
-        }
-        cache.push((key, clips.clone()));
-    }
-    Some(clips)
+    static CACHE: Kept = Mutex::new(Vec::new());
+    let key = ClipKey::of(objects, eye, billboard, reach, w);
+    kept(&CACHE, key, || {
+        clip_fractions(objects, eye, billboard, reach, w)
+    })
 }

@@ -124,8 +124,8 @@ pub fn light_at(
         }
         if medium.object().contains(light.from) {
             let dim = light.strength * (-thickness.tau(light.from, x)).exp();
-            for c in 0..3 {
-                inside[c] += light.color[c] * dim;
+            for (sum, color) in inside.iter_mut().zip(light.color) {
+                *sum += color * dim;
             }
             continue;
         }
@@ -140,8 +140,8 @@ pub fn light_at(
         }
         let seen = lights.visibility(objects, x + n * lift, n, k, light.from);
         let e = light.strength * cos * fresnel_transmittance(eta, cos) * seen;
-        for c in 0..3 {
-            entering[c] += light.color[c] * e;
+        for (sum, color) in entering.iter_mut().zip(light.color) {
+            *sum += color * e;
         }
     }
     (entering, inside)
@@ -241,8 +241,8 @@ impl Scattered {
                         }
                         let w = (1.0 - (s.position - x).length() / radius).max(0.0).powi(2);
                         weight += w;
-                        for ch in 0..3 {
-                            sum[ch] += w * self.leaving[number as usize][ch];
+                        for (sum, s) in sum.iter_mut().zip(self.leaving[number as usize]) {
+                            *sum += w * s;
                         }
                     }
                 }

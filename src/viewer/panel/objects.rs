@@ -260,7 +260,7 @@ fn translucent_editor(ui: &mut Ui, out: &mut Edits<'_>, i: usize, object: &Objec
             .on_hover_text("A region of another extinction inside, placed from the object's center: 0 for a cavity")
             .changed()
         {
-            m.inner = cavity.then(|| Inner {
+            m.inner = cavity.then_some(Inner {
                 shape: InnerShape::Sphere {
                     center: DVec3::ZERO,
                     radius: 0.25,
