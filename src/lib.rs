@@ -3,6 +3,7 @@
 //! - [`field`]: the energy field psi and its sources, in f64 (the reference the GPU is checked against);
 //! - [`integrate`]: how a scene integrates along a texel's ray: the integrator, its settings, the decay zeta;
 //! - [`geometry`]: the camera, the billboard and its rays;
+//! - [`noise`]: value noise with its gradient (the turbulence of live particles, the density of translucent objects);
 //! - [`objects`]: spheres, boxes, planes and glTF meshes that hide the glow and are lit by it;
 //! - [`particles`]: particle sets (smoke, dust, sparks): the particle, its kernel and the kernel's integrals;
 //! - [`animation`]: time in scenes: the travelling pulse (thesis eq. 5.1) and keyframes;
@@ -28,6 +29,7 @@ pub mod frame;
 pub mod geometry;
 pub mod gpu;
 pub mod integrate;
+pub mod noise;
 pub mod objects;
 pub mod output;
 pub mod particles;

@@ -736,3 +736,38 @@ fn the_gpu_fills_the_table_as_its_cpu_twin_does() {
         assert!(worst <= 1e-4 * largest, "{name}: {worst} of {largest}");
     }
 }
+
+/// A clear object (extinction 0) spreads what enters evenly: every surface voxel lets out `P / (pi A)`, `P` the
+/// power entering, `A` the surface's area. A source of negative coefficient darkens by exactly what the positive
+/// one of the same size lightens (the light is linear in the sources).
+#[test]
+fn a_clear_object_glows_evenly_and_a_negative_source_darkens_by_as_much() {
+    let object = cavity_cube(0.0, 10);
+    let s = ring_scene(object.clone());
+    let lights_of = |s: &Scene| lights(s);
+    let p = prepared(&object).unwrap();
+    let medium = Medium::of(&object).unwrap();
+    let light = irradiance(&medium, &p.voxels, &lights_of(&s), &s.objects);
+    let out = leaving(&p, &light);
+    let power: f64 = (0..out.len())
+        .map(|k| light.entering[k][0] * p.voxels.surface[k].area)
+        .sum();
+    let even = power / (std::f64::consts::PI * p.voxels.area);
+    assert!(even > 0.0);
+    for v in &out {
+        assert!((v[0] / even - 1.0).abs() < 1e-9, "{} against {even}", v[0]);
+    }
+    // The ring's coefficient negated: every voxel's light negated.
+    let mut dark = s.clone();
+    dark.sources.tori[0].coefficient = -dark.sources.tori[0].coefficient;
+    let light = irradiance(&medium, &p.voxels, &lights_of(&dark), &dark.objects);
+    let negated = leaving(&p, &light);
+    for (a, b) in out.iter().zip(&negated) {
+        assert!(
+            (a[0] + b[0]).abs() <= 1e-12 * a[0].abs().max(1.0),
+            "{} and {}",
+            a[0],
+            b[0]
+        );
+    }
+}

@@ -348,6 +348,8 @@ mod tests {
                 "particles.wgsl",
                 "billboard.wgsl",
                 "glare.wgsl",
+                "through.wgsl",
+                "tau_table.wgsl",
                 "upsample.wgsl",
                 "average.wgsl",
                 "grid.wgsl",

@@ -19,6 +19,16 @@ impl Checker<'_, '_> {
         self.problems.push(self.locator.problem(path, message));
     }
 
+    /// `x` a positive length, at most `MAX_COORDINATE`; `what` names it in the message.
+    pub(super) fn positive(&mut self, path: &FieldPath, x: f64, what: &str) {
+        if self.finite(path, x) && !(x > 0.0 && x <= MAX_COORDINATE) {
+            self.fail(
+                path,
+                format!("{x} is out of range: {what} must be positive"),
+            );
+        }
+    }
+
     /// How many problems were noted so far.
     pub(super) fn problem_count(&self) -> usize {
         self.problems.len()

@@ -80,7 +80,7 @@ pub(super) fn check_objects(c: &mut Checker<'_, '_>, file: &SceneFile, base: &Pa
                     .center
                     .map_or(DVec3::ZERO, |a| c.position(&path.key("center"), a));
                 let radius = required(c, &path, "radius", o.radius);
-                positive(c, &path.key("radius"), radius, "a sphere's radius");
+                c.positive(&path.key("radius"), radius, "a sphere's radius");
                 Shape::Sphere { center, radius }
             }
             ShapeKind::Box => {
@@ -114,7 +114,7 @@ pub(super) fn check_objects(c: &mut Checker<'_, '_>, file: &SceneFile, base: &Pa
                 let size = match &o.size {
                     None => None,
                     Some(ValueFile::Number(x)) => {
-                        positive(c, &path.key("size"), *x, "a finite plane's side length");
+                        c.positive(&path.key("size"), *x, "a finite plane's side length");
                         Some(*x)
                     }
                     Some(ValueFile::Vector(_)) => {
@@ -192,15 +192,6 @@ fn required(c: &mut Checker<'_, '_>, path: &FieldPath, key: &'static str, x: Opt
             c.fail(path, format!("missing {key}"));
             1.0
         }
-    }
-}
-
-pub(super) fn positive(c: &mut Checker<'_, '_>, path: &FieldPath, x: f64, what: &str) {
-    if c.finite(path, x) && !(x > 0.0 && x <= MAX_COORDINATE) {
-        c.fail(
-            path,
-            format!("{x} is out of range: {what} must be positive"),
-        );
     }
 }
 

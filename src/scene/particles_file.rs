@@ -10,7 +10,6 @@ use super::MAX_COORDINATE;
 use super::checker::Checker;
 use super::file::{FieldPath, ParticlesFile, SceneFile, SlicesFile, ValueFile};
 use super::life_file::{self, span};
-use super::objects_file::positive;
 use crate::field::Sources;
 use crate::particles::emit::{Emitter, EmitterKind, EmitterShape, Span};
 use crate::particles::ply::{self, Defaults, MAX_PARTICLES};
@@ -116,12 +115,7 @@ pub(super) fn check_particles(
                     None => DEFAULTS.radius,
                     Some(v) => one_number(c, &path.key("particle_radius"), v, "radius"),
                 };
-                positive(
-                    c,
-                    &path.key("particle_radius"),
-                    radius,
-                    "a particle's radius",
-                );
+                c.positive(&path.key("particle_radius"), radius, "a particle's radius");
                 let density = match &f.density {
                     None => DEFAULTS.density,
                     Some(v) => one_number(c, &path.key("density"), v, "density"),
@@ -367,7 +361,7 @@ fn shape(
     Some(match kind {
         EmitterKind::Sphere => {
             let radius = f.radius.unwrap_or(1.0);
-            positive(c, &path.key("radius"), radius, "the emitter's radius");
+            c.positive(&path.key("radius"), radius, "the emitter's radius");
             EmitterShape::Sphere { center, radius }
         }
         EmitterKind::Box => {

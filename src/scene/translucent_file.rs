@@ -132,12 +132,7 @@ fn inner(c: &mut Checker<'_, '_>, path: &FieldPath, f: &InnerFile) -> Option<Inn
                 c.fail(path, "missing radius");
                 return None;
             };
-            super::objects_file::positive(
-                c,
-                &path.key("radius"),
-                radius,
-                "an inner sphere's radius",
-            );
+            c.positive(&path.key("radius"), radius, "an inner sphere's radius");
             InnerShape::Sphere { center, radius }
         }
         "box" => {
@@ -185,7 +180,7 @@ fn inner(c: &mut Checker<'_, '_>, path: &FieldPath, f: &InnerFile) -> Option<Inn
 
 fn noise(c: &mut Checker<'_, '_>, path: &FieldPath, f: &NoiseFile) -> Noise {
     let scale = f.scale.unwrap_or(0.25);
-    super::objects_file::positive(c, &path.key("scale"), scale, "a noise's scale");
+    c.positive(&path.key("scale"), scale, "a noise's scale");
     let amount = f.amount.unwrap_or(0.5);
     let p = path.key("amount");
     if c.finite(&p, amount) && !(0.0..=4.0).contains(&amount) {

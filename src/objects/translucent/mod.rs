@@ -182,7 +182,7 @@ impl<'a> Medium<'a> {
         };
         match &m.noise {
             Some(n) if base > 0.0 => {
-                let (v, _) = crate::particles::curl::noise_with_gradient(p / n.scale, n.seed);
+                let (v, _) = crate::noise::noise_with_gradient(p / n.scale, n.seed);
                 base * (1.0 + n.amount * v).max(0.0)
             }
             _ => base,
