@@ -1,5 +1,5 @@
 //! Translucent objects lit by the wave: the voxel number map of Mochida, Okamoto, Kubo and Morishima (2016),
-//! METHOD.md section 11.
+//! docs/METHOD.md section 10.
 //!
 //! Light that reaches a translucent object's surface at `x_in` enters it through the Fresnel transmittance, is
 //! carried through the inside, dimmed by the optical thickness `tau = integral of sigma_t` of the straight path,
@@ -20,6 +20,10 @@
 //!   triangles reads from the voxels near it;
 //! - `reference`: the same model in f64 without voxels or table (fine surface samples, `tau` along exact
 //!   segments), and the depth-map estimate it is compared with.
+//!
+//! The glow is seen through the objects: only opaque objects end the texels' rays, and the glow behind a
+//! translucent one is dimmed by `transmittance` along the ray (`gpu::through_pass`, its f64 twin in
+//! `reference::field_pass`); the medium is closed (`Medium::holds`).
 //!
 //! Two readings of ours, said here once. The poster's `R_d = exp(-tau)` has no unit of 1 / area: summed over the
 //! surface as given, an object twice the size would glow four times as bright, and the light leaving would
