@@ -6,7 +6,6 @@
 mod common;
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use energywave::particles::{Origin, gather};
 use energywave::scene::Scene;
@@ -345,21 +344,9 @@ fn the_command_line_refuses_a_bad_ply_with_status_2_and_writes_nothing() {
         "[[points]]\nposition = [0, 0, 0]\ncoefficient = 1\n\n[[particles]]\nfile = \"cloud.ply\"\n",
     )
     .unwrap();
-    let out = dir.join("out.png");
-    let o = Command::new(env!("CARGO_BIN_EXE_energywave"))
-        .args([
-            "render",
-            scene.to_str().unwrap(),
-            "-o",
-            out.to_str().unwrap(),
-        ])
-        .output()
-        .unwrap();
-    let e = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(2), "{e}");
+    let e = common::render_refused(&scene, &dir.join("out.png"));
     assert!(
         e.contains("scene.toml:6:") && e.contains("particles[0].file") && e.contains("cut short"),
         "{e}"
     );
-    assert!(!out.exists());
 }

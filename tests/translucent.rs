@@ -2,6 +2,8 @@
 //! brute-force f64 reference (converging as the voxels shrink), the Fresnel equations, energy, a cavity against
 //! the depth-map estimate, and bad input.
 
+mod common;
+
 use std::sync::Arc;
 
 use energywave::objects::lighting::Lights;
@@ -659,23 +661,11 @@ fn an_open_mesh_and_a_bad_material_fail_on_the_command_line() {
     ] {
         let scene = dir.join("s.toml");
         std::fs::write(&scene, format!("{head}{body}")).unwrap();
-        let out = dir.join("out.png");
-        let run = std::process::Command::new(env!("CARGO_BIN_EXE_energywave"))
-            .args([
-                "render",
-                scene.to_str().unwrap(),
-                "-o",
-                out.to_str().unwrap(),
-            ])
-            .output()
-            .unwrap();
-        let err = String::from_utf8_lossy(&run.stderr);
-        assert_eq!(run.status.code(), Some(2), "{err}");
+        let err = common::render_refused(&scene, &dir.join("out.png"));
         assert!(
             err.contains(field) && err.contains(says) && err.contains("s.toml"),
             "{err}"
         );
-        assert!(!out.exists());
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -36,16 +36,9 @@ pub fn clip_fractions(
     if objects.is_empty() {
         return None;
     }
-    let mut out = vec![1.0; (w as usize) * (w as usize)];
-    out.par_chunks_mut(w as usize)
-        .enumerate()
-        .for_each(|(j, row)| {
-            for (i, c) in row.iter_mut().enumerate() {
-                let s = billboard.texel_center(i as u32, j as u32, w);
-                *c = clip_fraction(objects, eye, s, reach.nu);
-            }
-        });
-    Some(out)
+    Some(per_texel(billboard, w, |s| {
+        clip_fraction(objects, eye, s, reach.nu)
+    }))
 }
 
 /// The share of the glow of each texel of a `w` x `w` billboard that crosses the translucent objects among
@@ -63,17 +56,10 @@ pub fn transmittances(
     if !objects.iter().any(|o| o.translucent.is_some()) {
         return None;
     }
-    let mut out = vec![1.0; (w as usize) * (w as usize)];
-    out.par_chunks_mut(w as usize)
-        .enumerate()
-        .for_each(|(j, row)| {
-            for (i, t) in row.iter_mut().enumerate() {
-                let s = billboard.texel_center(i as u32, j as u32, w);
-                let end = first_hit(opaque, eye, s - eye, 0.0, reach.nu).map_or(reach.nu, |h| h.1);
-                *t = super::translucent::transmittance(objects, eye, eye + (s - eye) * end);
-            }
-        });
-    Some(out)
+    Some(per_texel(billboard, w, |s| {
+        let end = first_hit(opaque, eye, s - eye, 0.0, reach.nu).map_or(reach.nu, |h| h.1);
+        super::translucent::transmittance(objects, eye, eye + (s - eye) * end)
+    }))
 }
 
 /// `transmittances` in f32, kept for the last few frames' keys as the clips are.
@@ -93,6 +79,19 @@ pub fn shared_transmittances(
     kept(&CACHE, key, || {
         transmittances(objects, opaque, eye, billboard, reach, w)
     })
+}
+
+/// `f` at the center of every texel of a `w` x `w` billboard, row-major from the top, on every core.
+fn per_texel(billboard: &Billboard, w: u32, f: impl Fn(DVec3) -> f64 + Sync) -> Vec<f64> {
+    let mut out = vec![1.0; (w as usize) * (w as usize)];
+    out.par_chunks_mut(w as usize)
+        .enumerate()
+        .for_each(|(j, row)| {
+            for (i, c) in row.iter_mut().enumerate() {
+                *c = f(billboard.texel_center(i as u32, j as u32, w));
+            }
+        });
+    out
 }
 
 /// What a frame's clips (and transmittances) depend on.

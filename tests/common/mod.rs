@@ -110,3 +110,21 @@ pub fn shipped() -> Vec<(String, Scene)> {
 pub fn shipped_scene(name: &str) -> Scene {
     Scene::load(&scenes_dir().join(name)).unwrap()
 }
+
+/// Runs `energywave render scene -o out` and checks that it refused the scene: exit status 2 and nothing
+/// written. Returns what it said on standard error.
+pub fn render_refused(scene: &Path, out: &Path) -> String {
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_energywave"))
+        .args([
+            "render",
+            scene.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&run.stderr).into_owned();
+    assert_eq!(run.status.code(), Some(2), "{err}");
+    assert!(!out.exists(), "{} written", out.display());
+    err
+}
