@@ -1,7 +1,8 @@
-// The glow seen through translucent objects: each texel's glow up to the first surface of any object (front)
-// and up to the first opaque one (the field the frame integrates, behind), blended by the share t of the glow
-// that crosses the translucent objects to the eye: front + t (behind - front), every layer (B, then the tint).
-// One layer a z. Rust side: src/gpu/through_pass.rs. CPU twin: reference::field_pass::see_through.
+// The glow seen through translucent objects: each texel's glow up to the first surface of any object (front),
+// up to the last translucent surface it crosses (exit) and up to the first opaque one (the field the frame
+// integrates, behind), blended by the shares of the glow inside and past the translucent objects that reach the
+// eye: front + inside (exit - front) + behind (behind - exit), every layer (B, then the tint). One layer a z.
+// Rust side: src/gpu/through_pass.rs. CPU twin: reference::field_pass::see_through.
 
 struct ThroughParams {
     resolution: u32,
@@ -11,11 +12,13 @@ struct ThroughParams {
 }
 
 @group(0) @binding(0) var<storage, read> through: ThroughParams;
-// Each texel's share t, rows from the top (objects::clip::transmittances).
+// Each texel's exit clip and shares inside and behind, three numbers, rows from the top
+// (objects::clip::crossings).
 @group(0) @binding(1) var<storage, read> shares: array<f32>;
 @group(0) @binding(2) var front: texture_2d_array<f32>;
 @group(0) @binding(3) var behind: texture_2d_array<f32>;
 @group(0) @binding(4) var output: texture_storage_2d_array<r32float, write>;
+@group(0) @binding(5) var exit: texture_2d_array<f32>;
 
 @compute @workgroup_size(8, 8)
 fn see_through(@builtin(global_invocation_id) id: vec3<u32>) {
@@ -25,8 +28,10 @@ fn see_through(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let p = vec2<i32>(id.xy);
     let layer = i32(id.z);
-    let t = shares[id.y * w + id.x];
+    let k = 3u * (id.y * w + id.x);
     let a = textureLoad(front, p, layer, 0).x;
+    let x = textureLoad(exit, p, layer, 0).x;
     let b = textureLoad(behind, p, layer, 0).x;
-    textureStore(output, p, layer, vec4<f32>(a + t * (b - a), 0.0, 0.0, 1.0));
+    let value = a + shares[k + 1u] * (x - a) + shares[k + 2u] * (b - x);
+    textureStore(output, p, layer, vec4<f32>(value, 0.0, 0.0, 1.0));
 }

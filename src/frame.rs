@@ -34,6 +34,17 @@ pub struct Term {
     pub intensity: f64,
 }
 
+/// Where a frame's texels' rays end (`FrameSetup::front`, `FrameSetup::exit`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Ends {
+    /// At the first opaque surface: the frame itself.
+    Opaque,
+    /// At the first surface of any object.
+    Front,
+    /// At the last translucent surface crossed, where one is.
+    Exit,
+}
+
 /// What every renderer of one frame of `scene` reads (see the module's documentation).
 #[derive(Debug)]
 pub struct FrameSetup<'a> {
@@ -50,9 +61,9 @@ pub struct FrameSetup<'a> {
     pub term_tolerance: f64,
     /// The texels' clips at `resolution`, worked out when first asked for.
     clips: OnceLock<Option<Arc<Vec<f32>>>>,
-    /// Whether the translucent objects end the texels' rays too (`front`): the glow in front of them.
-    front: bool,
-    /// The objects that end the texels' rays: the opaque ones, or every one (`front`).
+    /// Where the texels' rays end: at the first opaque surface, or (`front`, `exit`) at translucent ones.
+    ends: Ends,
+    /// The opaque objects.
     clip_objects: OnceLock<Vec<crate::objects::Object>>,
     /// The scene's particles and their light, worked out when first asked for.
     particles: OnceLock<Option<Arc<LitParticles>>>,
@@ -94,31 +105,41 @@ impl<'a> FrameSetup<'a> {
             integration,
             terms,
             clips: OnceLock::new(),
-            front: false,
+            ends: Ends::Opaque,
             clip_objects: OnceLock::new(),
             particles: OnceLock::new(),
         }
     }
 
     /// This frame with the translucent objects ending the texels' rays as the opaque ones do: the glow in front
-    /// of them, which the glow behind them, seen through them, is blended with (`transmittances_at`).
+    /// of them, which the glow inside and behind them, seen through them, is blended with (`crossings_at`).
     pub fn front(&self) -> FrameSetup<'a> {
+        self.with_ends(Ends::Front)
+    }
+
+    /// This frame with the texels' rays that cross translucent objects ending at the last surface of one they
+    /// cross: the glow up to there, in front of and inside them (`crossings_at`).
+    pub fn exit(&self) -> FrameSetup<'a> {
+        self.with_ends(Ends::Exit)
+    }
+
+    fn with_ends(&self, ends: Ends) -> FrameSetup<'a> {
         let mut f = FrameSetup::new(self.scene, self.billboard);
         f.resolution = self.resolution;
-        f.front = true;
+        f.ends = ends;
         f
     }
 
     /// Whether the scene has translucent objects, through which the glow is seen.
     pub fn translucent(&self) -> bool {
-        !self.front && self.scene.objects.iter().any(|o| o.translucent.is_some())
+        self.ends == Ends::Opaque && self.scene.objects.iter().any(|o| o.translucent.is_some())
     }
 
-    /// The objects that end the texels' rays: the opaque ones; every one in the `front` frame.
+    /// The opaque objects, which end the texels' rays (every object does in the `front` frame).
     pub fn clip_objects(&self) -> &[crate::objects::Object] {
-        match self.front {
-            true => &self.scene.objects,
-            false => self.clip_objects.get_or_init(|| {
+        match self.ends {
+            Ends::Front => &self.scene.objects,
+            _ => self.clip_objects.get_or_init(|| {
                 (self.scene.objects.iter())
                     .filter(|o| o.translucent.is_none())
                     .cloned()
@@ -127,30 +148,24 @@ impl<'a> FrameSetup<'a> {
         }
     }
 
-    /// The `front` frame's clips: up to the first surface of any object where the texel's ray crosses a
-    /// translucent one, else 0 (the blend `front + t (behind - front)` does not read the glow in front where
-    /// `t = 1`, so those texels integrate nothing: the front field costs only the translucent objects' texels).
-    fn front_clips_at(&self, w: u32) -> Option<Arc<Vec<f32>>> {
+    /// The `front` and `exit` frames' clips, where the texel's ray crosses a translucent object (its first
+    /// surface of any object, its last translucent surface), else 0: the blend (`crossings_at`) does not read
+    /// their glow where the ray crosses none, so those texels integrate nothing and these fields cost only the
+    /// translucent objects' texels.
+    fn crossing_clips_at(&self, w: u32) -> Option<Arc<Vec<f32>>> {
         let (eye, billboard, reach) = (self.eye(), &self.billboard, self.reach);
-        let all = shared_clip_fractions(&self.scene.objects, eye, billboard, reach, w)?;
-        let opaque: Vec<crate::objects::Object> = (self.scene.objects.iter())
-            .filter(|o| o.translucent.is_none())
-            .cloned()
-            .collect();
-        let shares = crate::objects::clip::shared_transmittances(
-            &self.scene.objects,
-            &opaque,
-            eye,
-            billboard,
-            reach,
-            w,
-        );
-        let Some(shares) = shares else {
-            return Some(all);
+        let all = shared_clip_fractions(&self.scene.objects, eye, billboard, reach, w);
+        let Some(x) = self.with_ends(Ends::Opaque).crossings_at(w) else {
+            return all;
         };
+        let crossed = |k: usize| x[3 * k + 1] < 1.0 || x[3 * k + 2] < 1.0;
         Some(Arc::new(
-            (all.iter().zip(shares.iter()))
-                .map(|(&c, &t)| if t < 1.0 { c } else { 0.0 })
+            (0..x.len() / 3)
+                .map(|k| match (crossed(k), self.ends) {
+                    (false, _) => 0.0,
+                    (true, Ends::Exit) => x[3 * k],
+                    (true, _) => all.as_ref().map_or(1.0, |a| a[k]),
+                })
                 .collect(),
         ))
     }
@@ -170,15 +185,18 @@ impl<'a> FrameSetup<'a> {
         }
     }
 
-    /// The share of each texel's glow that crosses the translucent objects to the eye, at `w` texels a side
-    /// (`objects::clip::transmittances`); none without translucent objects.
-    pub fn transmittances_at(&self, w: u32) -> Option<Arc<Vec<f32>>> {
+    /// How each texel's ray crosses the translucent objects, at `w` texels a side, three numbers a texel
+    /// (`objects::clip::crossings`: the exit's clip, the shares of the glow inside and behind that reach the
+    /// eye); none without translucent objects. The glow a texel shows is
+    /// `B_front + inside (B_exit - B_front) + behind (B - B_exit)`.
+    pub fn crossings_at(&self, w: u32) -> Option<Arc<Vec<f32>>> {
         if !self.translucent() {
             return None;
         }
-        crate::objects::clip::shared_transmittances(
+        crate::objects::clip::shared_crossings(
             &self.scene.objects,
             self.clip_objects(),
+            (&self.scene.sources, self.integration.epsilon),
             self.eye(),
             &self.billboard,
             self.reach,
@@ -266,8 +284,8 @@ impl<'a> FrameSetup<'a> {
         {
             return clips.clone();
         }
-        if self.front {
-            return self.front_clips_at(w);
+        if self.ends != Ends::Opaque {
+            return self.crossing_clips_at(w);
         }
         shared_clip_fractions(
             self.clip_objects(),

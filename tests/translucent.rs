@@ -761,3 +761,89 @@ fn a_clear_object_glows_evenly_and_a_negative_source_darkens_by_as_much() {
         );
     }
 }
+
+/// A point glowing at the center of a translucent sphere, seen through it: the glow the renderers blend
+/// (`B_front + inside (B_exit - B_front) + behind (B - B_exit)`, the shares from `translucent::crossing`)
+/// against the exact integral of the transmittance times the glow along each ray, `integral T psi zeta ds`, both
+/// by fine Simpson on the same rays, so that the see-through model alone differs. Dimming the glow inside by the
+/// whole crossing (the two-field blend) is far off; the psi-weighted share is close.
+#[test]
+fn a_source_inside_shows_through_as_the_exact_transmittance_weighted_glow() {
+    use energywave::frame::FrameSetup;
+    use energywave::integrate::zeta;
+    use energywave::objects::translucent::{crossing, transmittance};
+    let mut s = scene("translucent_cavity");
+    s.sources.tori.clear();
+    s.sources.points.push(energywave::field::Point {
+        position: DVec3::ZERO,
+        coefficient: 0.6,
+        look: Default::default(),
+    });
+    s.objects = vec![Object {
+        shape: Shape::Sphere {
+            center: DVec3::ZERO,
+            radius: 0.6,
+        },
+        color: [1.0; 3],
+        translucent: material(1.5, 12),
+    }];
+    s.camera.eye = DVec3::new(0.0, 0.3, 4.0);
+    s.camera.target = DVec3::ZERO;
+    let setup = FrameSetup::placed(&s, 1.0);
+    let (eye, nu) = (s.camera.eye, setup.reach.nu);
+    let (alpha, beta) = (setup.integration.alpha, setup.integration.beta);
+    let eps = s.integration.epsilon;
+    let field = s.sources.field();
+    let simpson = |f: &dyn Fn(f64) -> f64, a: f64, b: f64| -> f64 {
+        let n = 20_000;
+        let h = (b - a) / n as f64;
+        (0..=n)
+            .map(|k| {
+                let w = if k == 0 || k == n {
+                    1.0
+                } else if k % 2 == 1 {
+                    4.0
+                } else {
+                    2.0
+                };
+                w * f(a + k as f64 * h)
+            })
+            .sum::<f64>()
+            * h
+            / 3.0
+    };
+    let w = 64;
+    let mut worst: [f64; 2] = [0.0; 2];
+    for (i, j) in [(33, 32), (36, 30), (40, 35), (30, 38), (44, 32)] {
+        let p = setup.billboard.texel_center(i, j, w);
+        let end = eye + (p - eye) * nu;
+        let at = |u: f64| p + (end - p) * u;
+        let glow = |u: f64| field.psi(at(u), eps) * zeta(u, alpha, beta);
+        let exact = simpson(
+            &|u| transmittance(&s.objects, eye, at(u)) * glow(u),
+            0.0,
+            1.0,
+        );
+        let psi = |x: DVec3| field.psi(x, eps);
+        let x = crossing(&s.objects, eye, p, nu, &psi).expect("the ray crosses the sphere");
+        let clip = |t: f64| ((t - 1.0) / (nu - 1.0)).clamp(0.0, 1.0);
+        let first = s.objects[0].hit(eye, p - eye, 0.0, nu).unwrap();
+        let (ca, cx) = (clip(first), clip(x.exit));
+        let b = |c: f64| simpson(&glow, 0.0, c);
+        let (ba, bx, bb) = (b(ca), b(cx), b(1.0));
+        let model = ba + x.inside * (bx - ba) + x.behind * (bb - bx);
+        let two_fields = ba + x.behind * (bb - ba);
+        let errors = [
+            (model / exact - 1.0).abs(),
+            (two_fields / exact - 1.0).abs(),
+        ];
+        println!(
+            "texel ({i}, {j}): exact {exact:.5}, blended {model:.5} ({:.2} %), dimmed by the whole crossing {two_fields:.5} ({:.1} %)",
+            100.0 * errors[0],
+            100.0 * errors[1]
+        );
+        worst = [worst[0].max(errors[0]), worst[1].max(errors[1])];
+    }
+    assert!(worst[0] < 0.06, "{worst:?}");
+    assert!(worst[1] > 4.0 * worst[0], "{worst:?}");
+}

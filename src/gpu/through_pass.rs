@@ -1,8 +1,9 @@
 //! The glow seen through translucent objects (`shaders/through.wgsl`): the frame's field ends its texels' rays
-//! at the first opaque surface; this pass integrates the glow in front of the translucent ones (a field of the
-//! same frame whose rays end at the first surface of any object, `FrameSetup::front`) and blends the two by the
-//! share of the glow that crosses the translucent objects, `front + t (behind - front)`. Its field is kept
-//! while its inputs do not change, as every field pass's is.
+//! at the first opaque surface; this pass integrates the glow in front of the translucent ones and up to the
+//! last translucent surface crossed (fields of the same frame, `FrameSetup::front` and `FrameSetup::exit`, only
+//! on the texels whose rays cross one) and blends the three by the shares of the glow inside and behind that
+//! reach the eye, `front + inside (exit - front) + behind (behind_field - exit)`. Its fields are kept while
+//! their inputs do not change, as every field pass's is.
 
 use super::context::{
     ClipBuffer, GpuError, checked, compute_pass, field_storage_entry, field_texture,
@@ -29,9 +30,10 @@ pub mod gpu_data {
 
 use gpu_data::ThroughParams;
 
-/// The front field, the blend's pipeline and its output.
+/// The front and exit fields, the blend's pipeline and its output.
 pub struct ThroughPass {
     front: FieldRenderer,
+    exit: FieldRenderer,
     pipeline: wgpu::ComputePipeline,
     layout: wgpu::BindGroupLayout,
     params: wgpu::Buffer,
@@ -52,10 +54,12 @@ impl ThroughPass {
                 loaded_field_entry(2),
                 loaded_field_entry(3),
                 field_storage_entry(4, wgpu::StorageTextureAccess::WriteOnly),
+                loaded_field_entry(5),
             ],
         );
         Self {
             front: FieldRenderer::new(device),
+            exit: FieldRenderer::new(device),
             pipeline,
             layout,
             params: device.create_buffer(&wgpu::BufferDescriptor {
@@ -91,17 +95,22 @@ impl ThroughPass {
         behind: &wgpu::TextureView,
         (resolution, layers): (u32, u32),
     ) -> Result<Option<&wgpu::TextureView>, GpuError> {
-        let Some(shares) = setup.transmittances_at(resolution) else {
+        let Some(shares) = setup.crossings_at(resolution) else {
             return Ok(None);
         };
-        let mut front = setup.front();
-        front.resolution = resolution;
-        let inputs = FieldInputs::of(&front);
-        if !self.front.shows(&inputs) {
-            self.front.prepare(device, queue, &inputs)?;
-            checked(device, || self.front.encode(encoder))?;
+        let mut views = Vec::new();
+        for (field, mut at) in [
+            (&mut self.front, setup.front()),
+            (&mut self.exit, setup.exit()),
+        ] {
+            at.resolution = resolution;
+            let inputs = FieldInputs::of(&at);
+            if !field.shows(&inputs) {
+                field.prepare(device, queue, &inputs)?;
+                checked(device, || field.encode(encoder))?;
+            }
+            views.push(field.view().expect("prepared above").clone());
         }
-        let front_view = self.front.view().expect("prepared above").clone();
         let stale = self.output.as_ref().is_none_or(|(t, _)| {
             t.width() != resolution
                 || t.depth_or_array_layers() != field_texture_layers(device, layers)
@@ -132,9 +141,10 @@ impl ThroughPass {
             entries: &[
                 entry(0, self.params.as_entire_binding()),
                 entry(1, self.shares.binding()),
-                entry(2, tex(&front_view)),
+                entry(2, tex(&views[0])),
                 entry(3, tex(behind)),
                 entry(4, tex(output)),
+                entry(5, tex(&views[1])),
             ],
         });
         let groups = resolution.div_ceil(8);

@@ -41,13 +41,16 @@ pub fn clip_fractions(
     }))
 }
 
-/// The share of the glow of each texel of a `w` x `w` billboard that crosses the translucent objects among
-/// `objects` on its way to the eye (`translucent::transmittance` along the texel's ray, from the eye to where
-/// the glow ends: the first opaque surface among `opaque`, or the ray's end), row-major from the top; none
-/// without translucent objects.
-pub fn transmittances(
+/// How each texel's ray of a `w` x `w` billboard crosses the translucent objects among `objects`
+/// (`translucent::crossing`, its glow ending at the first of `opaque` or the ray's end; `sources` and `epsilon`
+/// weigh the glow inside), row-major from the top, three numbers a texel: the share of the ray S -> E before the
+/// last translucent surface crossed (the clip of the glow up to it), and the shares of the glow inside and past
+/// it that reach the eye. A texel that crosses none has 0, 1, 1. None without translucent objects.
+#[allow(clippy::too_many_arguments)]
+pub fn crossings(
     objects: &[Object],
     opaque: &[Object],
+    (sources, epsilon): (&crate::field::Sources, f64),
     eye: DVec3,
     billboard: &Billboard,
     reach: Reach,
@@ -56,16 +59,35 @@ pub fn transmittances(
     if !objects.iter().any(|o| o.translucent.is_some()) {
         return None;
     }
-    Some(per_texel(billboard, w, |s| {
-        let end = first_hit(opaque, eye, s - eye, 0.0, reach.nu).map_or(reach.nu, |h| h.1);
-        super::translucent::transmittance(objects, eye, eye + (s - eye) * end)
-    }))
+    let field = sources.field();
+    let psi = |p: DVec3| field.psi(p, epsilon);
+    let mut out = vec![0.0; 3 * (w as usize) * (w as usize)];
+    out.par_chunks_mut(3 * w as usize)
+        .enumerate()
+        .for_each(|(j, row)| {
+            for (i, c) in row.chunks_exact_mut(3).enumerate() {
+                let s = billboard.texel_center(i as u32, j as u32, w);
+                let end = first_hit(opaque, eye, s - eye, 0.0, reach.nu).map_or(reach.nu, |h| h.1);
+                let x = super::translucent::crossing(objects, eye, s, end, &psi);
+                c.copy_from_slice(&match x {
+                    None => [0.0, 1.0, 1.0],
+                    Some(x) => [
+                        ((x.exit - 1.0) / (reach.nu - 1.0)).clamp(0.0, 1.0),
+                        x.inside,
+                        x.behind,
+                    ],
+                });
+            }
+        });
+    Some(out)
 }
 
-/// `transmittances` in f32, kept for the last few frames' keys as the clips are.
-pub fn shared_transmittances(
+/// `crossings` in f32, kept for the last few frames' keys as the clips are.
+#[allow(clippy::too_many_arguments)]
+pub fn shared_crossings(
     objects: &[Object],
     opaque: &[Object],
+    (sources, epsilon): (&crate::field::Sources, f64),
     eye: DVec3,
     billboard: &Billboard,
     reach: Reach,
@@ -74,10 +96,22 @@ pub fn shared_transmittances(
     if !objects.iter().any(|o| o.translucent.is_some()) {
         return None;
     }
-    static CACHE: Kept = Mutex::new(Vec::new());
-    let key = ClipKey::of(objects, eye, billboard, reach, w);
+    static CACHE: Kept<(ClipKey, crate::field::Sources, f64)> = Mutex::new(Vec::new());
+    let key = (
+        ClipKey::of(objects, eye, billboard, reach, w),
+        sources.clone(),
+        epsilon,
+    );
     kept(&CACHE, key, || {
-        transmittances(objects, opaque, eye, billboard, reach, w)
+        crossings(
+            objects,
+            opaque,
+            (sources, epsilon),
+            eye,
+            billboard,
+            reach,
+            w,
+        )
     })
 }
 
@@ -117,12 +151,12 @@ impl ClipKey {
 }
 
 /// The last few keys and what was made of them.
-type Kept = Mutex<Vec<(ClipKey, Arc<Vec<f32>>)>>;
+type Kept<K> = Mutex<Vec<(K, Arc<Vec<f32>>)>>;
 
 /// What `make` gives for `key` (in f64), in f32, kept in `cache` for the last four keys.
-fn kept(
-    cache: &Kept,
-    key: ClipKey,
+fn kept<K: PartialEq>(
+    cache: &Kept<K>,
+    key: K,
     make: impl FnOnce() -> Option<Vec<f64>>,
 ) -> Option<Arc<Vec<f32>>> {
     if let Ok(cache) = cache.lock()
@@ -152,7 +186,7 @@ pub fn shared_clip_fractions(
     if objects.is_empty() {
         return None;
     }
-    static CACHE: Kept = Mutex::new(Vec::new());
+    static CACHE: Kept<ClipKey> = Mutex::new(Vec::new());
     let key = ClipKey::of(objects, eye, billboard, reach, w);
     kept(&CACHE, key, || {
         clip_fractions(objects, eye, billboard, reach, w)

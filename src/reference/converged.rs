@@ -101,22 +101,29 @@ pub fn converged_reference(scene: &Scene, stride: u32) -> (Vec<f64>, ReferenceSt
                         .fold((0.0, 0), |(b, n), (x, m)| (b + x, n + m)),
                 }
             };
-            // Only opaque objects end the glow; the glow behind translucent ones is seen through them
-            // (`reference::field_pass::render_brightness`): the glow up to the first surface of any object
-            // and up to the first opaque one, blended by the share that crosses them.
+            // Only opaque objects end the glow; the glow inside and behind translucent ones is seen through them
+            // (`reference::field_pass::render_brightness`): the glow up to the first surface of any object, up
+            // to the last translucent surface crossed and up to the first opaque one, blended by the shares of
+            // the glow inside and behind that reach the eye.
             let behind = keep_of(opaque);
             if !translucent {
                 return b_of(behind);
             }
-            let front = keep_of(&s.objects);
             let end = 1.0 + behind * span * i.decay_length / plane;
-            let t = crate::objects::translucent::transmittance(
-                &s.objects,
-                s.camera.eye,
-                s.camera.eye + (p - s.camera.eye) * end,
-            );
-            let ((bf, nf), (bb, nb)) = (b_of(front), b_of(behind));
-            (bf + t * (bb - bf), nf + nb)
+            let psi = |x: glam::DVec3| field.psi(x, i.epsilon);
+            let Some(x) =
+                crate::objects::translucent::crossing(&s.objects, s.camera.eye, p, end, &psi)
+            else {
+                return b_of(behind);
+            };
+            let exit = ((x.exit - 1.0) * plane / (span * i.decay_length)).clamp(0.0, 1.0);
+            let (bf, nf) = b_of(keep_of(&s.objects));
+            let (bx, nx) = b_of(exit);
+            let (bb, nb) = b_of(behind);
+            (
+                bf + x.inside * (bx - bf) + x.behind * (bb - bx),
+                nf + nx + nb,
+            )
         })
         .collect();
     // Without refinement, a texel spends the n + 1 samples and 2 more a pair of intervals, to check them.

@@ -119,49 +119,58 @@ pub struct BrightnessTexture {
 }
 
 /// Integrates B and the tint for every texel of the frame's billboard (METHOD.md section 3). Where the scene has
-/// translucent objects, the glow behind them is seen through them: `B = B_front + T (B_behind - B_front)`, the
-/// texel's glow up to the first object of any kind, and up to the first opaque one, blended by the share `T`
-/// that crosses the translucent objects (`objects::clip::transmittances`); the tint alike.
+/// translucent objects, the glow inside and behind them is seen through them:
+/// `B = B_front + inside (B_exit - B_front) + behind (B - B_exit)`, the texel's glow up to the first surface of
+/// any object, up to the last translucent surface it crosses and up to the first opaque one, blended by the
+/// shares of the glow inside and behind that reach the eye (`objects::clip::crossings`); the tint alike.
 pub fn render_brightness(setup: &FrameSetup) -> BrightnessTexture {
-    let behind = render_clipped(setup);
+    let behind = render_clipped(setup, None);
     if !setup.translucent() {
         return behind;
     }
-    let front = render_clipped(&setup.front());
-    let scene = setup.scene;
-    let opaque = setup.clip_objects();
-    let w = setup.resolution;
-    let t = crate::objects::clip::transmittances(
-        &scene.objects,
-        opaque,
+    let x = crate::objects::clip::crossings(
+        &setup.scene.objects,
+        setup.clip_objects(),
+        (&setup.scene.sources, setup.integration.epsilon),
         setup.eye(),
         &setup.billboard,
         setup.reach,
-        w,
+        setup.resolution,
     )
     .expect("translucent objects");
-    see_through(&front, &behind, &t)
+    let exits: Vec<f64> = x.chunks_exact(3).map(|c| c[0]).collect();
+    let front = render_clipped(&setup.front(), None);
+    let exit = render_clipped(setup, Some(&exits));
+    see_through([&front, &exit, &behind], &x)
 }
 
-/// `front + t (behind - front)`, texel by texel, B and tint.
+/// `front + inside (exit - front) + behind (behind_field - exit)`, texel by texel, B and tint, with each
+/// texel's shares `crossings[3 k + 1]` and `[3 k + 2]` (`objects::clip::crossings`).
 pub fn see_through(
-    front: &BrightnessTexture,
-    behind: &BrightnessTexture,
-    t: &[f64],
+    [front, exit, behind]: [&BrightnessTexture; 3],
+    crossings: &[f64],
 ) -> BrightnessTexture {
-    let mix = |a: f64, b: f64, t: f64| a + t * (b - a);
+    let n = crossings.len() / 3;
+    let mix = |k: usize, a: f64, x: f64, b: f64| {
+        a + crossings[3 * k + 1] * (x - a) + crossings[3 * k + 2] * (b - x)
+    };
     BrightnessTexture {
         resolution: behind.resolution,
-        values: (0..t.len())
-            .map(|k| mix(front.values[k], behind.values[k], t[k]))
+        values: (0..n)
+            .map(|k| mix(k, front.values[k], exit.values[k], behind.values[k]))
             .collect(),
-        tint: (0..t.len())
-            .map(|k| std::array::from_fn(|c| mix(front.tint[k][c], behind.tint[k][c], t[k])))
+        tint: (0..n)
+            .map(|k| {
+                std::array::from_fn(|c| {
+                    mix(k, front.tint[k][c], exit.tint[k][c], behind.tint[k][c])
+                })
+            })
             .collect(),
     }
 }
 
-fn render_clipped(setup: &FrameSetup) -> BrightnessTexture {
+/// The texture of `setup`, each texel's ray ending at its own surface, or at `clips[k]` where given.
+fn render_clipped(setup: &FrameSetup, clips: Option<&[f64]>) -> BrightnessTexture {
     let w = setup.resolution;
     let n = (w as usize) * (w as usize);
     let mut values = vec![0.0; n];
@@ -172,7 +181,8 @@ fn render_clipped(setup: &FrameSetup) -> BrightnessTexture {
         .enumerate()
         .for_each(|(j, (row, tint_row))| {
             for (i, (out, tint_out)) in row.iter_mut().zip(tint_row).enumerate() {
-                let ray = texel_ray(setup, i as u32, j as u32);
+                let clip = clips.map(|c| c[j * w as usize + i]);
+                let ray = texel_ray_clipped(setup, i as u32, j as u32, clip);
                 if ray.hidden {
                     continue;
                 }
@@ -209,12 +219,17 @@ struct TexelRay {
 /// The ray of texel `(i, j)` of the frame, up to the first surface of the scene's objects (`objects::clip`, in
 /// f64 at the texel itself): the shortened ray with the decay mapped onto it.
 fn texel_ray(setup: &FrameSetup, i: u32, j: u32) -> TexelRay {
+    texel_ray_clipped(setup, i, j, None)
+}
+
+/// `texel_ray`, its clip `clip` where given.
+fn texel_ray_clipped(setup: &FrameSetup, i: u32, j: u32, clip: Option<f64>) -> TexelRay {
     let (w, eye, reach) = (setup.resolution, setup.eye(), setup.reach);
     let s: DVec3 = setup.billboard.texel_center(i, j, w);
     let e = ray_end(s, eye, reach.nu);
     let xi = (setup.integration.jitter).map_or(0.5, |seed| jitter_offset(seed, i, j, w));
     let settings = setup.integration.clone();
-    let c = clip_fraction(setup.clip_objects(), eye, s, reach.nu);
+    let c = clip.unwrap_or_else(|| clip_fraction(setup.clip_objects(), eye, s, reach.nu));
     if c < 1.0 && c > 0.0 {
         return TexelRay {
             s,

@@ -343,6 +343,77 @@ pub fn transmittance(objects: &[Object], from: DVec3, to: DVec3) -> f64 {
     t
 }
 
+/// How a texel's ray crosses the translucent objects: the ray `eye + t (s - eye)`, its glow from the billboard
+/// (`t = 1`) to where it ends (`end`: the first opaque surface, or the ray's end).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Crossing {
+    /// `t` of the last translucent surface crossed before `end`.
+    pub exit: f64,
+    /// The share of the glow between the first translucent surface (or the billboard, if later) and `exit` that
+    /// reaches the eye: the transmittance along the ray averaged over that stretch, weighted by `|psi|` there
+    /// (`CROSSING_SAMPLES` midpoints), so that a source inside an object is dimmed by the path from where it
+    /// glows, not by the whole crossing.
+    pub inside: f64,
+    /// The share of the glow past `exit` that reaches the eye (`transmittance` to `end`).
+    pub behind: f64,
+}
+
+/// Samples of the glow inside the translucent objects along a texel's ray (`Crossing::inside`).
+pub const CROSSING_SAMPLES: usize = 16;
+
+/// How the texel ray from `eye` through `s` crosses the translucent objects among `objects` before `end`;
+/// `psi` the field, which weighs the glow inside. `None` where it crosses none.
+pub fn crossing(
+    objects: &[Object],
+    eye: DVec3,
+    s: DVec3,
+    end: f64,
+    psi: &dyn Fn(DVec3) -> f64,
+) -> Option<Crossing> {
+    let d = s - eye;
+    let (mut first, mut exit) = (f64::INFINITY, f64::NEG_INFINITY);
+    for o in objects.iter().filter(|o| o.translucent.is_some()) {
+        let mut at = 0.0;
+        let mut n = 0;
+        while let Some(t) = o.hit(eye, d, at, end) {
+            first = first.min(t);
+            exit = exit.max(t);
+            at = t + 1e-12 * (1.0 + t);
+            n += 1;
+            if n > 10_000 {
+                break;
+            }
+        }
+    }
+    if !exit.is_finite() {
+        return None;
+    }
+    let at = |t: f64| eye + d * t;
+    let behind = transmittance(objects, eye, at(end));
+    let (a, b) = (first.max(1.0), exit);
+    let inside = if b > a {
+        let h = (b - a) / CROSSING_SAMPLES as f64;
+        let (mut sum, mut weight) = (0.0, 0.0);
+        for i in 0..CROSSING_SAMPLES {
+            let p = at(a + (i as f64 + 0.5) * h);
+            let w = psi(p).abs();
+            sum += w * transmittance(objects, eye, p);
+            weight += w;
+        }
+        match weight > 0.0 {
+            true => sum / weight,
+            false => transmittance(objects, eye, at(0.5 * (a + b))),
+        }
+    } else {
+        behind
+    };
+    Some(Crossing {
+        exit,
+        inside,
+        behind,
+    })
+}
+
 /// The unpolarised Fresnel transmittance `F_t = 1 - F_r` of light crossing, at `cos_outside` (the cosine of its
 /// angle to the normal on the outside), into or out of a medium of relative index `eta`: the Fresnel equations,
 /// exact (`1 - F_r` with `F_r` the mean of the s and p reflectances), 0 past the critical angle where `eta < 1`.
