@@ -690,13 +690,7 @@ fn the_floor_preset_composes_alike_on_the_gpu_and_the_cpu_opaque_transparent_and
         let frame = g.render(&scene, w, h, transparent).unwrap();
         g.set_holdout(false);
         // Off by more than a few 8-bit steps only where a pixel's center lies on an object's edge.
-        let off = (cpu.iter().zip(&frame.pixels))
-            .filter(|(c, p)| {
-                (0..4).any(|k| {
-                    (c[k].clamp(0.0, 1.0) - (p[k] as f64).clamp(0.0, 1.0)).abs() > 4.0 / 255.0
-                })
-            })
-            .count();
+        let off = common::pixels_off(&cpu, &frame.pixels);
         assert!(off * 100 <= cpu.len(), "{backdrop:?}: {off} pixels differ");
         let alpha0 = cpu.iter().filter(|p| p[3] == 0.0).count();
         match backdrop {

@@ -507,13 +507,7 @@ fn the_presets_compose_alike_on_the_gpu_and_the_cpu() {
             g.set_holdout(holdout);
             let frame = g.render(&scene, w, h, transparent).unwrap();
             g.set_holdout(false);
-            let off = (cpu.iter().zip(&frame.pixels))
-                .filter(|(c, p)| {
-                    (0..4).any(|k| {
-                        (c[k].clamp(0.0, 1.0) - (p[k] as f64).clamp(0.0, 1.0)).abs() > 4.0 / 255.0
-                    })
-                })
-                .count();
+            let off = common::pixels_off(&cpu, &frame.pixels);
             // Off by more than a few 8-bit steps only where a pixel's center lies on an object's edge.
             assert!(
                 off * 50 <= cpu.len(),

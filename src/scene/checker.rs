@@ -4,7 +4,7 @@
 use glam::DVec3;
 
 use super::error::Problem;
-use super::file::{FieldPath, Locator};
+use super::file::{FieldPath, Locator, ValueFile};
 use super::{MAX_COORDINATE, MAX_INTENSITY};
 use crate::field::Look;
 
@@ -27,6 +27,32 @@ impl Checker<'_, '_> {
                 format!("{x} is out of range: {what} must be positive"),
             );
         }
+    }
+
+    /// A vector of three positive lengths, or one length for all three (`what` names it).
+    pub(super) fn lengths(&mut self, path: &FieldPath, v: &ValueFile, what: &str) -> DVec3 {
+        let v = match v {
+            ValueFile::Number(x) => DVec3::splat(*x),
+            ValueFile::Vector(a) if a.len() == 3 => DVec3::new(a[0], a[1], a[2]),
+            ValueFile::Vector(a) => {
+                self.fail(
+                    path,
+                    format!(
+                        "{} numbers: {what} is [x, y, z] or one number for all three",
+                        a.len()
+                    ),
+                );
+                return DVec3::ONE;
+            }
+        };
+        if !v.is_finite() || v.min_element() <= 0.0 || v.max_element() > MAX_COORDINATE {
+            self.fail(
+                path,
+                format!("{:?}: {what} must be positive numbers", v.to_array()),
+            );
+            return DVec3::ONE;
+        }
+        v
     }
 
     /// How many problems were noted so far.

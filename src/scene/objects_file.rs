@@ -6,7 +6,6 @@ use std::sync::Arc;
 
 use glam::DVec3;
 
-use super::MAX_COORDINATE;
 use super::checker::Checker;
 use super::file::{FieldPath, ObjectFile, SceneFile, ValueFile};
 use crate::objects::{MeshData, MeshObject, Object, Shape, ShapeKind};
@@ -92,7 +91,7 @@ pub(super) fn check_objects(c: &mut Checker<'_, '_>, file: &SceneFile, base: &Pa
                         c.fail(&path, "a box needs its size: [x, y, z], its side lengths");
                         DVec3::ONE
                     }
-                    Some(v) => vector_or_scalar(c, &path.key("size"), v, "a box's side lengths"),
+                    Some(v) => c.lengths(&path.key("size"), v, "a box's side lengths"),
                 };
                 let rotation = o
                     .rotation
@@ -137,7 +136,7 @@ pub(super) fn check_objects(c: &mut Checker<'_, '_>, file: &SceneFile, base: &Pa
                     .map_or(DVec3::ZERO, |a| angles(c, &path.key("rotation"), a));
                 let scale = match &o.scale {
                     None => DVec3::ONE,
-                    Some(v) => vector_or_scalar(c, &path.key("scale"), v, "a mesh's scale"),
+                    Some(v) => c.lengths(&path.key("scale"), v, "a mesh's scale"),
                 };
                 let Some(file_path) = &o.path else {
                     c.fail(
@@ -193,32 +192,6 @@ fn required(c: &mut Checker<'_, '_>, path: &FieldPath, key: &'static str, x: Opt
             1.0
         }
     }
-}
-
-/// A vector of three positive lengths, or one length for all three.
-fn vector_or_scalar(c: &mut Checker<'_, '_>, path: &FieldPath, v: &ValueFile, what: &str) -> DVec3 {
-    let v = match v {
-        ValueFile::Number(x) => DVec3::splat(*x),
-        ValueFile::Vector(a) if a.len() == 3 => DVec3::new(a[0], a[1], a[2]),
-        ValueFile::Vector(a) => {
-            c.fail(
-                path,
-                format!(
-                    "{} numbers: {what} is [x, y, z] or one number for all three",
-                    a.len()
-                ),
-            );
-            return DVec3::ONE;
-        }
-    };
-    if !v.is_finite() || v.min_element() <= 0.0 || v.max_element() > MAX_COORDINATE {
-        c.fail(
-            path,
-            format!("{:?}: {what} must be positive numbers", v.to_array()),
-        );
-        return DVec3::ONE;
-    }
-    v
 }
 
 /// Rotation angles in degrees, finite.

@@ -142,26 +142,14 @@ fn inner(c: &mut Checker<'_, '_>, path: &FieldPath, f: &InnerFile) -> Option<Inn
                     "an inner box has no radius (its keys: center, size, extinction)",
                 );
             }
-            let size = match &f.size {
-                Some(ValueFile::Number(x)) => DVec3::splat(*x),
-                Some(ValueFile::Vector(a)) if a.len() == 3 => DVec3::new(a[0], a[1], a[2]),
-                _ => {
-                    c.fail(
-                        &path.key("size"),
-                        "an inner box needs its size: [x, y, z] or one number",
-                    );
-                    return None;
-                }
-            };
-            if !size.is_finite() || size.min_element() <= 0.0 {
+            let Some(size) = &f.size else {
                 c.fail(
                     &path.key("size"),
-                    format!(
-                        "{:?}: an inner box's sides must be positive",
-                        size.to_array()
-                    ),
+                    "an inner box needs its size: [x, y, z] or one number",
                 );
-            }
+                return None;
+            };
+            let size = c.lengths(&path.key("size"), size, "an inner box's side lengths");
             InnerShape::Box { center, size }
         }
         other => {

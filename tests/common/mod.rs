@@ -128,3 +128,15 @@ pub fn render_refused(scene: &Path, out: &Path) -> String {
     assert!(!out.exists(), "{} written", out.display());
     err
 }
+
+/// How many pixels of a GPU frame differ from the CPU twin's by more than 4 8-bit steps in some channel (each
+/// clamped to 0..1, as the display shows it): those whose center lies on an object's edge, where a rasterised
+/// triangle and a ray cast may disagree.
+pub fn pixels_off(cpu: &[[f64; 4]], gpu: &[[f32; 4]]) -> usize {
+    (cpu.iter().zip(gpu))
+        .filter(|(c, p)| {
+            (0..4)
+                .any(|k| (c[k].clamp(0.0, 1.0) - (p[k] as f64).clamp(0.0, 1.0)).abs() > 4.0 / 255.0)
+        })
+        .count()
+}
