@@ -24,6 +24,7 @@ pub mod animation;
 pub mod bench;
 pub mod cli;
 pub mod export;
+pub mod farm;
 pub mod field;
 pub mod frame;
 pub mod geometry;

@@ -154,28 +154,52 @@ pub fn write_rgba(
         let encoded = encode_exr(path, width, height, pixels, alpha != Alpha::Opaque)?;
         return write_atomically(path, &encoded);
     }
-    let bytes: Vec<u8> = pixels
+    write_png8(
+        path,
+        width,
+        height,
+        &encode_rgba8(pixels, alpha),
+        alpha != Alpha::Opaque,
+    )
+}
+
+/// RGBA display values (premultiplied where transparent, as the transparent export makes them) to the 8-bit
+/// RGBA a PNG, a GIF or a video frame holds, clamped to [0, 1] and rounded: the color straight or premultiplied
+/// as `alpha` says, alpha 255 where opaque.
+pub fn encode_rgba8(pixels: &[[f64; 4]], alpha: Alpha) -> Vec<u8> {
+    pixels
         .iter()
         .flat_map(|&p| {
             let p = match alpha {
+                Alpha::Opaque => [p[0], p[1], p[2], 1.0],
                 Alpha::Straight if p[3] > 0.0 => [p[0] / p[3], p[1] / p[3], p[2] / p[3], p[3]],
                 Alpha::Straight => [0.0; 4],
-                _ => p,
+                Alpha::Premultiplied => p,
             };
-            let channels = if alpha == Alpha::Opaque { 3 } else { 4 };
-            p.into_iter()
-                .take(channels)
-                .map(|c| (c.clamp(0.0, 1.0) * 255.0).round() as u8)
-                .collect::<Vec<_>>()
+            p.map(|c| (c.clamp(0.0, 1.0) * 255.0).round() as u8)
         })
-        .collect();
-    let img = if alpha == Alpha::Opaque {
-        image::DynamicImage::ImageRgb8(
-            image::RgbImage::from_raw(width, height, bytes).expect("size matches"),
+        .collect()
+}
+
+/// Writes 8-bit RGBA (rows from the top) as a PNG: RGBA with `alpha`, else RGB (the alpha bytes dropped).
+pub fn write_png8(
+    path: &Path,
+    width: u32,
+    height: u32,
+    rgba: &[u8],
+    alpha: bool,
+) -> Result<(), OutputError> {
+    let img = if alpha {
+        image::DynamicImage::ImageRgba8(
+            image::RgbaImage::from_raw(width, height, rgba.to_vec()).expect("size matches"),
         )
     } else {
-        image::DynamicImage::ImageRgba8(
-            image::RgbaImage::from_raw(width, height, bytes).expect("size matches"),
+        let rgb = rgba
+            .chunks_exact(4)
+            .flat_map(|p| [p[0], p[1], p[2]])
+            .collect();
+        image::DynamicImage::ImageRgb8(
+            image::RgbImage::from_raw(width, height, rgb).expect("size matches"),
         )
     };
     let encoded = encode(path, img, image::ImageFormat::Png)?;

@@ -3,6 +3,9 @@
 //! Exit status: 0 on success, 2 when the input is at fault (a bad scene, flag value or output path), 1 for
 //! anything else. Every input is checked before any rendering starts.
 
+mod assemble;
+mod farm;
+mod interrupt;
 mod render;
 
 use std::path::{Path, PathBuf};
@@ -33,8 +36,99 @@ pub enum Command {
     View(ViewArgs),
     /// Render the scene's camera view to an image file.
     Render(RenderArgs),
+    /// Join a rendered PNG sequence (a farm's chunks) into the GIF, sprite sheet or video one `render` makes.
+    Assemble(AssembleArgs),
+    /// Render a sequence on a render farm: write (and submit) its jobs.
+    #[command(subcommand)]
+    Farm(FarmCommand),
     /// Time the field pass on the papers' grid, deformation, and whole viewer frames.
     Bench(BenchArgs),
+}
+
+#[derive(Debug, clap::Args)]
+pub struct AssembleArgs {
+    /// Scene file (TOML) the frames were rendered from (its frame count and rate); the embedded default scene
+    /// without one.
+    pub scene: Option<PathBuf>,
+    /// The rendered frames: a PNG sequence, its run of # the frame number (`frames/beam_####.png`).
+    #[arg(short, long)]
+    pub input: PathBuf,
+    /// The joined file: a .gif, a video (.mp4, .webm), or with `--sheet` a sprite sheet .png (its layout beside
+    /// it as .json).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Which frames (as `render --frames`); every frame of the scene's animation by default. Missing ones are
+    /// named, and nothing is written.
+    #[arg(long, value_parser = FrameSpec::parse)]
+    pub frames: Option<FrameSpec>,
+    /// The frames' color is premultiplied by their alpha (they were rendered with `--premultiplied`).
+    #[arg(long)]
+    pub premultiplied: bool,
+    /// Join the frames into a sprite sheet (as `render --sheet`).
+    #[arg(long)]
+    pub sheet: bool,
+    /// Columns of the sprite sheet (default: as square as it gets).
+    #[arg(long, requires = "sheet")]
+    pub columns: Option<u32>,
+    /// Transparent pixels between the sheet's cells.
+    #[arg(long, default_value_t = 0, requires = "sheet")]
+    pub padding: u32,
+    /// Round the sheet's width and height up to powers of two.
+    #[arg(long, requires = "sheet")]
+    pub power_of_two: bool,
+    /// Print what is joined and where it went.
+    #[arg(short, long)]
+    pub verbose: bool,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum FarmCommand {
+    /// Write Slurm job scripts for a sequence: a job array of chunks of frames and an assembly job after it;
+    /// `--submit` queues them with sbatch.
+    Slurm(SlurmArgs),
+}
+
+#[derive(Debug, clap::Args)]
+pub struct SlurmArgs {
+    /// Scene file (TOML), on a file system every machine of the farm sees.
+    pub scene: PathBuf,
+    /// The frames: a PNG or EXR sequence, a run of # the frame number (`renders/beam_####.png`), on a shared
+    /// file system.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Which frames of the scene's animation (as `render --frames`); all of them by default.
+    #[arg(long, value_parser = FrameSpec::parse)]
+    pub frames: Option<FrameSpec>,
+    /// Frames per chunk: per array task.
+    #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u32).range(1..))]
+    pub chunk_size: u32,
+    /// Join the frames, once every chunk is done, into this .gif, .mp4, .webm, or sprite sheet .png.
+    #[arg(long)]
+    pub assemble: Option<PathBuf>,
+    /// The folder the job's scripts and logs go into (default: `NAME.slurm` beside the frames, NAME the scene's
+    /// file name without its extension).
+    #[arg(long)]
+    pub job_dir: Option<PathBuf>,
+    /// One more `#SBATCH` option for both jobs, as `--sbatch=--partition=gpu` (repeat it: `--gres=gpu:1`,
+    /// `--time=2:00:00`, `--account=fx`).
+    #[arg(long, allow_hyphen_values = true)]
+    pub sbatch: Vec<String>,
+    /// Tries of a chunk that fails with status 1 (a crash, a lost device) before its task fails; status 2 (bad
+    /// input) is never tried again.
+    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=100))]
+    pub tries: u32,
+    /// At most this many chunks at once.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    pub max_parallel: Option<u32>,
+    /// The energywave executable the machines run (default: this one).
+    #[arg(long)]
+    pub executable: Option<PathBuf>,
+    /// Queue the jobs with sbatch (else only write them; `submit.sh` queues them).
+    #[arg(long)]
+    pub submit: bool,
+    /// More flags for every chunk's `render`, after `--` (`-- --size 1920x1080 --transparent`).
+    #[arg(last = true)]
+    pub render_args: Vec<String>,
 }
 
 #[derive(Debug, clap::Args)]
@@ -277,6 +371,8 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         None => view(&ViewArgs::default()),
         Some(Command::View(args)) => view(&args),
         Some(Command::Render(args)) => render::render(&args),
+        Some(Command::Assemble(args)) => assemble::assemble(&args),
+        Some(Command::Farm(FarmCommand::Slurm(args))) => farm::slurm(&args),
         Some(Command::Bench(args)) => bench(&args),
     }
 }

@@ -42,6 +42,7 @@ fn check_device_limits(
 }
 
 pub(super) fn render(args: &RenderArgs) -> Result<(), CliError> {
+    super::interrupt::watch();
     let target = Target::for_output(
         &args.output,
         args.sheet.then_some(export::SheetOptions {
@@ -123,7 +124,9 @@ pub(super) fn render(args: &RenderArgs) -> Result<(), CliError> {
     let frames = export::frames_to_render(args.frames.as_ref(), &target, scene.frame_count())?;
     if args.fit {
         scene.camera.fov_y_degrees =
-            export::fit::fit_field_of_view(&scene, frames.clone(), args.size).map_err(|e| {
+            // Over the whole animation, whichever frames this command renders: the chunks of an export split
+            // between machines frame the effect alike.
+            export::fit::fit_field_of_view(&scene, 0..scene.frame_count(), args.size).map_err(|e| {
                 let name = args
                     .scene
                     .as_ref()
@@ -142,11 +145,13 @@ pub(super) fn render(args: &RenderArgs) -> Result<(), CliError> {
             frames.len()
         )));
     }
-    let mut scene = scene.at_frame(frames.start as f64);
     let (width, height) = args.size;
     let hdr = target.is_exr();
     let mut renderer = Renderer::new(args, hdr)?;
-    follow_pixel_density(&mut scene, frames.start, args, &renderer);
+    let mut scene = scene;
+    follow_pixel_density(&mut scene, args, &renderer);
+    let scene = scene.at_frame(frames.start as f64);
+    specialise(&mut renderer, &scene);
     let setup = FrameSetup::placed(&scene, width as f64 / height as f64);
     let billboard = setup.billboard;
     let name = args
@@ -197,15 +202,28 @@ pub(super) fn render(args: &RenderArgs) -> Result<(), CliError> {
 }
 
 /// Unless `--resolution` or the scene fixes W, the billboard takes the texels the frame's size needs
-/// (`Scene::resolution_for`, within the device's limit), from the frame the export starts at; a B-only EXR
-/// (`--brightness`, W x W whatever the size) keeps the scene's.
-fn follow_pixel_density(scene: &mut Scene, start: u32, args: &RenderArgs, renderer: &Renderer) {
+/// (`Scene::resolution_for`, within the device's limit) at the animation's first frame, whichever frames are
+/// rendered: frame N has the same W in a whole export and in any chunk of it. A B-only EXR (`--brightness`,
+/// W x W whatever the size) keeps the scene's.
+fn follow_pixel_density(scene: &mut Scene, args: &RenderArgs, renderer: &Renderer) {
     if args.resolution.is_some() || args.brightness {
         return;
     }
     scene.billboard.resolution = scene
-        .at_frame(start as f64)
+        .at_frame(0.0)
         .resolution_for(args.size, renderer.texture_limit());
+}
+
+/// An animation of more than a few frames gets the GPU's pipelines specialised to its structure (they pay for
+/// their compile after a few frames), decided by the animation's length, not by how many frames this command
+/// renders: the specialised and the generic pass differ in their last bits, and frame N must come out the same
+/// in a whole export and in any chunk of it, down to the byte.
+fn specialise(renderer: &mut Renderer, scene: &Scene) {
+    if let Renderer::Gpu(gpu) = renderer
+        && scene.frame_count() > 4
+    {
+        gpu.set_specialise(crate::gpu::Specialise::Blocking);
+    }
 }
 
 /// Where the command's pictures are made, chosen once from `--backend`: the GPU, set up for the command's
@@ -305,14 +323,9 @@ fn render_frames(
     }
     let mut renderer = Renderer::new(args, hdr)?;
     let mut scene = scene.clone();
-    follow_pixel_density(&mut scene, frames.start, args, &renderer);
+    follow_pixel_density(&mut scene, args, &renderer);
     let scene = &scene;
-    // Many frames of one structure: its specialised pipelines pay for their compile after a few.
-    if let Renderer::Gpu(gpu) = &mut renderer
-        && frames.len() > 4
-    {
-        gpu.set_specialise(crate::gpu::Specialise::Blocking);
-    }
+    specialise(&mut renderer, scene);
     if args.verbose {
         if let Renderer::Gpu(gpu) = &renderer {
             eprintln!("adapter: {}", gpu.ctx.adapter_summary());
@@ -346,6 +359,10 @@ fn render_frames(
             output::write_brightness_exr(&path, at.billboard.resolution, &values)?;
             written.push(path);
             progress.frame_done(frame);
+            if super::interrupt::asked() {
+                written.iter().for_each(|p| drop(std::fs::remove_file(p)));
+                return Err(export::ExportError::Cancelled.into());
+            }
         }
         written
     } else {
@@ -358,7 +375,10 @@ fn render_frames(
             |at| renderer.compose(at, (width, height), backdrop(args), hdr),
             |_, frame| {
                 progress.frame_done(frame);
-                std::ops::ControlFlow::Continue(())
+                match super::interrupt::asked() {
+                    true => std::ops::ControlFlow::Break(()),
+                    false => std::ops::ControlFlow::Continue(()),
+                }
             },
         )?
     };

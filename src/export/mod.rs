@@ -8,6 +8,7 @@
 //! cancelled, fails or is interrupted leaves the destination as it found it (an earlier export of the same
 //! names whole).
 
+pub mod assemble;
 pub mod fit;
 pub mod progress;
 pub mod sheet;
@@ -35,6 +36,18 @@ pub enum ExportError {
     Target { path: PathBuf, why: String },
     #[error("{0}")]
     Output(#[from] OutputError),
+    /// Frames to join are not there: a chunk did not render (or not yet).
+    #[error(
+        "{}: {count} of the {of} frames are missing: {frames}; render them (energywave render --frames A-B, \
+         for each range) and assemble again",
+        pattern.display()
+    )]
+    Missing {
+        pattern: PathBuf,
+        count: u32,
+        of: u32,
+        frames: String,
+    },
     /// Stopped before the last frame; nothing it wrote is left, and nothing that was there is changed.
     #[error("cancelled: nothing written")]
     Cancelled,
@@ -44,7 +57,10 @@ impl ExportError {
     /// True when the request is at fault (exit status 2).
     pub fn is_input_error(&self) -> bool {
         match self {
-            ExportError::Frames { .. } | ExportError::Target { .. } => true,
+            // A missing chunk: assembling again does not help until it is rendered.
+            ExportError::Frames { .. }
+            | ExportError::Target { .. }
+            | ExportError::Missing { .. } => true,
             ExportError::Output(e) => e.is_input_error(),
             ExportError::Cancelled => false,
         }
@@ -62,11 +78,19 @@ pub struct FrameSpec {
 
 impl FrameSpec {
     /// Parses `A..B` (frames A to B - 1, so that `0..50` and `50..100` split an export in two), `A..=B`
-    /// (A to B), `A..` (A to the end), `..B`, `..` or a single frame `A`.
+    /// (A to B), `A..` (A to the end), `..B`, `..`, a single frame `A`, or `A-B` (A to B: the range
+    /// expression of render farm managers' chunks: Open Job Description's, Flamenco's, Afanasy's).
     pub fn parse(s: &str) -> Result<FrameSpec, String> {
         let err = || {
+            if s.contains(',') {
+                return format!(
+                    "{s:?} is a list of frames: give one contiguous range (A..B, A..=B or A-B); a farm \
+                     manager's chunks must be contiguous (Open Job Description: rangeConstraint: CONTIGUOUS)"
+                );
+            }
             format!(
-                "{s:?} is not a frame range: use A..B (frames A to B-1), A..=B, A.., ..B or one frame number A"
+                "{s:?} is not a frame range: use A..B (frames A to B-1), A..=B or A-B (A to B), A.., ..B or \
+                 one frame number A"
             )
         };
         let num = |t: &str| -> Result<Option<u32>, String> {
@@ -82,6 +106,10 @@ impl FrameSpec {
             (num(a)?, Some(b.checked_add(1).ok_or_else(err)?))
         } else if let Some((a, b)) = s.split_once("..") {
             (num(a)?, num(b)?)
+        } else if let Some((a, b)) = s.split_once('-') {
+            // Both ends given: "-3" and "3-" are no ranges (a frame number is never negative).
+            let (a, b) = (num(a)?.ok_or_else(err)?, num(b)?.ok_or_else(err)?);
+            (Some(a), Some(b.checked_add(1).ok_or_else(err)?))
         } else {
             let a = num(s)?.ok_or_else(err)?;
             (Some(a), Some(a.checked_add(1).ok_or_else(err)?))
@@ -283,17 +311,6 @@ pub fn gif_delay(k: u32, frame_rate: f64) -> u32 {
     (end(k + 1) - end(k)).max(1) as u32
 }
 
-/// Display values in [0, 1] to 8 bits, as the PNG writer rounds them.
-pub fn to_rgba8(pixels: &[[f64; 4]], alpha: bool) -> Vec<u8> {
-    pixels
-        .iter()
-        .flat_map(|p| {
-            let a = if alpha { p[3] } else { 1.0 };
-            [p[0], p[1], p[2], a].map(|c| (c.clamp(0.0, 1.0) * 255.0).round() as u8)
-        })
-        .collect()
-}
-
 /// A byte buffer the GIF encoder writes into and the sink reads back when the encoder is done.
 #[derive(Clone, Default)]
 struct SharedBuffer(std::rc::Rc<std::cell::RefCell<Vec<u8>>>);
@@ -326,7 +343,8 @@ pub struct FrameSink {
     gif: Option<(image::codecs::gif::GifEncoder<SharedBuffer>, SharedBuffer)>,
     /// Frames in the GIF so far (their delays add up to the frame rate's time).
     gif_frames: u32,
-    sheet: Option<(SheetLayout, Vec<[f64; 4]>)>,
+    /// The sheet's layout and its 8-bit RGBA, as its PNG holds it.
+    sheet: Option<(SheetLayout, Vec<u8>)>,
     video: Option<video::VideoWriter>,
     /// A sequence's frames, written beside the destination until the last is.
     staged: Option<staged::Staged>,
@@ -390,15 +408,15 @@ impl FrameSink {
                 let mut layout =
                     sheet_grid(path, width, height, frames.clone(), options, frame_rate)?;
                 layout.premultiplied = alpha == Alpha::Premultiplied;
-                let pixels = vec![[0.0; 4]; layout.width() as usize * layout.height() as usize];
-                sink.sheet = Some((layout, pixels));
+                let bytes = vec![0; 4 * layout.width() as usize * layout.height() as usize];
+                sink.sheet = Some((layout, bytes));
             }
             _ => {}
         }
         Ok(sink)
     }
 
-    /// Adds the rendered `frame` (RGBA display values, rows from the top).
+    /// Adds the rendered `frame` (RGBA display values, premultiplied where transparent, rows from the top).
     pub fn push(&mut self, frame: u32, pixels: &[[f64; 4]]) -> Result<(), ExportError> {
         let (w, h) = (self.width, self.height);
         match &self.target {
@@ -411,8 +429,41 @@ impl FrameSink {
                 let path = staged.stage(&frame_path(pattern, frame));
                 output::write_rgba(&path, w, h, pixels, self.alpha)?;
             }
+            Target::Gif { .. } | Target::Video { .. } | Target::Sheet { .. } => {
+                let rgba = output::encode_rgba8(pixels, self.encoding());
+                self.push_rgba8(frame, &rgba)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// How this sink's 8-bit frames hold alpha: none in a GIF, straight in a video (255 where opaque), as the
+    /// export says in a PNG.
+    pub fn encoding(&self) -> Alpha {
+        match (&self.target, self.alpha) {
+            (Target::Gif { .. }, _) | (_, Alpha::Opaque) => Alpha::Opaque,
+            (Target::Video { .. }, _) => Alpha::Straight,
+            (_, alpha) => alpha,
+        }
+    }
+
+    /// Adds `frame` as 8-bit RGBA (rows from the top) encoded as `encoding` says: what a PNG frame of the same
+    /// export holds, so that frames rendered apart and joined here make the very file one export makes.
+    pub fn push_rgba8(&mut self, frame: u32, rgba: &[u8]) -> Result<(), ExportError> {
+        let (w, h) = (self.width, self.height);
+        let has_alpha = self.alpha != Alpha::Opaque;
+        match &self.target {
+            Target::Single { path, .. } => {
+                let staged = self.staged.as_mut().expect("made with the target");
+                output::write_png8(&staged.stage(path), w, h, rgba, has_alpha)?;
+            }
+            Target::Sequence { pattern, .. } => {
+                let staged = self.staged.as_mut().expect("made with the target");
+                let path = staged.stage(&frame_path(pattern, frame));
+                output::write_png8(&path, w, h, rgba, has_alpha)?;
+            }
             Target::Gif { path } => {
-                let rgba = image::RgbaImage::from_raw(w, h, to_rgba8(pixels, false))
+                let rgba = image::RgbaImage::from_raw(w, h, rgba.to_vec())
                     .expect("the frame's size matches");
                 let delay = image::Delay::from_numer_denom_ms(
                     10 * gif_delay(self.gif_frames, self.frame_rate),
@@ -430,16 +481,15 @@ impl FrameSink {
                 self.video
                     .as_mut()
                     .expect("made with the target")
-                    .push(pixels)?;
+                    .push_rgba8(rgba)?;
             }
             Target::Sheet { .. } => {
                 let (layout, sheet) = self.sheet.as_mut().expect("made with the target");
                 let (x0, y0) = layout.cell(frame - self.frames.start);
-                let sheet_w = layout.width() as usize;
+                let (row, sheet_row) = (4 * w as usize, 4 * layout.width() as usize);
                 for y in 0..h as usize {
-                    let row = &pixels[y * w as usize..(y + 1) * w as usize];
-                    let at = (y0 as usize + y) * sheet_w + x0 as usize;
-                    sheet[at..at + w as usize].copy_from_slice(row);
+                    let at = (y0 as usize + y) * sheet_row + 4 * x0 as usize;
+                    sheet[at..at + row].copy_from_slice(&rgba[y * row..(y + 1) * row]);
                 }
             }
         }
@@ -477,12 +527,13 @@ impl FrameSink {
                 self.written.push(v.finish()?);
             }
             Target::Sheet { path, .. } => {
-                let (layout, pixels) = self.sheet.take().expect("made with the target");
+                let (layout, rgba) = self.sheet.take().expect("made with the target");
                 let staged = self.staged.as_mut().expect("made with the target");
                 // Cells past the last frame stay transparent (black in an opaque sheet). The sheet and its layout
                 // move into place together: never a new sheet beside an old layout.
                 let (w, h) = (layout.width(), layout.height());
-                output::write_rgba(&staged.stage(path), w, h, &pixels, self.alpha)?;
+                let alpha = self.alpha != Alpha::Opaque;
+                output::write_png8(&staged.stage(path), w, h, &rgba, alpha)?;
                 let json = staged.stage(&sheet::layout_path(path));
                 output::write_atomically(&json, layout.to_json().as_bytes())?;
             }
@@ -547,10 +598,17 @@ mod tests {
         assert_eq!(r("..5", 100), Some(0..5));
         assert_eq!(r("..", 100), Some(0..100));
         assert_eq!(r("7", 100), Some(7..8));
+        // A farm manager's chunk: inclusive.
+        assert_eq!(r("10-19", 100), Some(10..20));
+        assert_eq!(r("99-99", 100), Some(99..100));
+        assert_eq!(r("5-4", 100), None);
+        assert_eq!(r("90-100", 100), None);
         assert_eq!(r("0..101", 100), None);
         assert_eq!(r("5..5", 100), None);
         assert_eq!(r("1", 1), None);
-        for bad in ["", "a..b", "-1..3", "3..-1", "1...2", "..=", "1..2..3"] {
+        for bad in [
+            "", "a..b", "-1..3", "3..-1", "1...2", "..=", "1..2..3", "-3", "3-", "1-2-3", "1-5,8",
+        ] {
             assert!(FrameSpec::parse(bad).is_err(), "{bad}");
         }
     }

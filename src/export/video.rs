@@ -120,6 +120,9 @@ impl VideoWriter {
                 "0",
             ]),
         };
+        // No random identifiers (WebM's segment UID) nor version strings: the same frames make the same file,
+        // whether one export or `assemble` of a farm's chunks wrote it.
+        command.args(["-fflags", "+bitexact"]);
         command.args(["-f", container.format()]).arg(&partial);
         let mut child = command
             .stdin(Stdio::piped())
@@ -143,26 +146,19 @@ impl VideoWriter {
     /// Sends one frame: RGBA display values, premultiplied where transparent (as the transparent export makes
     /// them), rows from the top.
     pub fn push(&mut self, pixels: &[[f64; 4]]) -> Result<(), ExportError> {
-        let alpha = self.alpha;
-        let bytes: Vec<u8> = pixels
-            .iter()
-            .flat_map(|p| {
-                // Video alpha is straight.
-                let a = if alpha { p[3] } else { 1.0 };
-                let c = |x: f64| {
-                    let x = if alpha && a > 0.0 { x / a } else { x };
-                    (x.clamp(0.0, 1.0) * 255.0).round() as u8
-                };
-                [
-                    c(p[0]),
-                    c(p[1]),
-                    c(p[2]),
-                    (a.clamp(0.0, 1.0) * 255.0).round() as u8,
-                ]
-            })
-            .collect();
+        // Video alpha is straight.
+        let alpha = match self.alpha {
+            true => crate::output::Alpha::Straight,
+            false => crate::output::Alpha::Opaque,
+        };
+        self.push_rgba8(&crate::output::encode_rgba8(pixels, alpha))
+    }
+
+    /// Sends one frame as 8-bit RGBA, straight alpha (255 where opaque), rows from the top: what a PNG frame
+    /// of the same export holds.
+    pub fn push_rgba8(&mut self, rgba: &[u8]) -> Result<(), ExportError> {
         let stdin = self.stdin.as_mut().expect("open until finish");
-        if stdin.write_all(&bytes).is_err() {
+        if stdin.write_all(rgba).is_err() {
             // ffmpeg stopped: its message says why.
             return Err(self.failure());
         }
