@@ -66,6 +66,7 @@ impl MeshData {
         let mut triangles = Vec::new();
         let mut normals: Vec<Option<[DVec3; 3]>> = Vec::new();
         let mut base_colors = Vec::new();
+        let mut materials = false;
         let scene = document
             .default_scene()
             .or_else(|| document.scenes().next());
@@ -100,6 +101,7 @@ impl MeshData {
                         .pbr_metallic_roughness()
                         .base_color_factor();
                     let base = [0, 1, 2].map(|c| linear_to_srgb(base[c] as f64));
+                    materials |= primitive.material().index().is_some();
                     let indices: Vec<u32> = match reader.read_indices() {
                         Some(i) => i.into_u32().collect(),
                         None => (0..positions.len() as u32).collect(),
@@ -136,7 +138,8 @@ impl MeshData {
         {
             data.normals = normals.into_iter().flatten().collect();
         }
-        if base_colors.iter().any(|c| *c != [1.0; 3]) {
+        // Base colors where the file gives materials (glTF's default material, without one, is white).
+        if materials {
             data.base_colors = base_colors;
         }
         Ok(data)

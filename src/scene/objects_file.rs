@@ -69,10 +69,7 @@ pub(super) fn check_objects(c: &mut Checker<'_, '_>, file: &SceneFile, base: &Pa
                 );
             }
         }
-        let color = match o.color {
-            Some(a) => c.color(&path.key("color"), a),
-            None => DEFAULT_ALBEDO,
-        };
+        let given_color = o.color.map(|a| c.color(&path.key("color"), a));
         let shape = match kind {
             ShapeKind::Sphere => {
                 let center = o
@@ -166,6 +163,12 @@ pub(super) fn check_objects(c: &mut Checker<'_, '_>, file: &SceneFile, base: &Pa
                 }
             }
         };
+        // A mesh whose file gives its materials' base colors takes them as they are (a mesh made in Blender
+        // looks as it did there); `color` tints them.
+        let color = given_color.unwrap_or(match &shape {
+            Shape::Mesh(m) if !m.data.base_colors.is_empty() => [1.0; 3],
+            _ => DEFAULT_ALBEDO,
+        });
         let mut object = Object {
             shape,
             color,
