@@ -23,6 +23,7 @@
 pub mod animation;
 pub mod bench;
 pub mod cli;
+pub mod engine;
 pub mod export;
 pub mod farm;
 pub mod field;

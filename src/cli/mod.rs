@@ -38,6 +38,8 @@ pub enum Command {
     Render(RenderArgs),
     /// Join a rendered PNG sequence (a farm's chunks) into the GIF, sprite sheet or video one `render` makes.
     Assemble(AssembleArgs),
+    /// Write the effect as a shader a game engine runs: GLSL 4.50 and ES 3.00, HLSL and MSL, with its uniforms.
+    Shader(ShaderArgs),
     /// Render a sequence on a render farm: write (and submit) its jobs.
     #[command(subcommand)]
     Farm(FarmCommand),
@@ -79,6 +81,21 @@ pub struct AssembleArgs {
     /// Print what is joined and where it went.
     #[arg(short, long)]
     pub verbose: bool,
+}
+
+#[derive(Debug, clap::Args)]
+pub struct ShaderArgs {
+    /// Scene file (TOML); the embedded default scene without one.
+    pub scene: Option<PathBuf>,
+    /// The folder the shader's files go into (made if needed).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// The files' name stem: NAME.vert, NAME.glow.frag, NAME.hlsl, NAME.uniforms.json...
+    #[arg(long, default_value = "effect")]
+    pub name: String,
+    /// The frame the uniforms' view is set for (the scene's camera in a WIDTHxHEIGHT picture).
+    #[arg(long, default_value = "1920x1080", value_parser = parse_size)]
+    pub size: (u32, u32),
 }
 
 #[derive(Debug, Subcommand)]
@@ -372,9 +389,44 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Some(Command::View(args)) => view(&args),
         Some(Command::Render(args)) => render::render(&args),
         Some(Command::Assemble(args)) => assemble::assemble(&args),
+        Some(Command::Shader(args)) => shader(&args),
         Some(Command::Farm(FarmCommand::Slurm(args))) => farm::slurm(&args),
         Some(Command::Bench(args)) => bench(&args),
     }
+}
+
+/// `shader`: the effect for game engines (`crate::engine`).
+fn shader(args: &ShaderArgs) -> Result<(), CliError> {
+    let scene = load_scene(args.scene.as_deref())?;
+    let name = &args.name;
+    if name.is_empty()
+        || !name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
+    {
+        return Err(CliError::Usage(format!(
+            "--name {name:?}: letters, digits, - and _ only (it names the files)"
+        )));
+    }
+    let (w, h) = args.size;
+    let input = |e: crate::engine::EngineError| match e.is_input_error() {
+        true => CliError::Usage(format!(
+            "{}: {e}",
+            args.scene
+                .as_ref()
+                .map_or("the default scene".into(), |p| p.display().to_string())
+        )),
+        false => CliError::Unavailable(e.to_string()),
+    };
+    let effect = crate::engine::EffectShader::of(&scene, w as f64 / h as f64).map_err(input)?;
+    let (written, warning) = effect.write(&args.output, name).map_err(input)?;
+    if let Some(w) = warning {
+        eprintln!("warning: {w}");
+    }
+    for path in &written {
+        eprintln!("wrote {}", path.display());
+    }
+    Ok(())
 }
 
 /// Loads the scene file, or the embedded default scene.

@@ -5,7 +5,7 @@
 mod billboard_pass;
 mod blit_pass;
 mod context;
-mod field_pass;
+pub(crate) mod field_pass;
 mod formats;
 mod frame;
 mod frame_average;

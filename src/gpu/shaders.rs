@@ -30,7 +30,7 @@ pub const BLIT_PASS: &str = include_str!("../../shaders/blit.wgsl");
 pub const CONSTANTS: &str = "shared/constants.wgsl";
 
 /// Every WGSL file but the generated one, by its path under `shaders/`.
-pub const FILES: [(&str, &str); 22] = [
+pub const FILES: [(&str, &str); 24] = [
     (
         "shared/field.wgsl",
         include_str!("../../shaders/shared/field.wgsl"),
@@ -68,6 +68,14 @@ pub const FILES: [(&str, &str); 22] = [
         include_str!("../../shaders/adaptive_curves/scan.wgsl"),
     ),
     ("simpson.wgsl", include_str!("../../shaders/simpson.wgsl")),
+    (
+        "engine/globals.wgsl",
+        include_str!("../../shaders/engine/globals.wgsl"),
+    ),
+    (
+        "engine/effect.wgsl",
+        include_str!("../../shaders/engine/effect.wgsl"),
+    ),
     (
         "adaptive_smooth.wgsl",
         include_str!("../../shaders/adaptive_smooth.wgsl"),
@@ -293,11 +301,16 @@ pub fn all_modules() -> Vec<(&'static str, String)> {
         .iter()
         .flat_map(|(_, text)| text.lines().filter_map(import_of))
         .collect();
-    FILES
+    // The effect shader for game engines is composed for a scene (`crate::engine`): the default scene's.
+    let mut modules: Vec<(&'static str, String)> = FILES
         .iter()
-        .filter(|(path, _)| !imported.contains(path))
+        .filter(|(path, _)| !imported.contains(path) && !path.starts_with("engine/"))
         .map(|(path, _)| (*path, compose(path)))
-        .collect()
+        .collect();
+    let effect = crate::engine::EffectShader::of(&crate::scene::Scene::default_scene(), 1.0)
+        .expect("the default scene makes an engine shader");
+    modules.push(("engine/effect.wgsl", effect.wgsl));
+    modules
 }
 
 #[cfg(test)]

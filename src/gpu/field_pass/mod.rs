@@ -15,9 +15,10 @@ use gpu_data::*;
 mod pack;
 mod pipelines;
 
+pub(crate) use gpu_data::FieldParams;
 use pack::*;
 pub use pack::{FieldInputs, layers_of};
-pub(crate) use pack::{SOURCE_BINDINGS, source_bindings, storage_buffer_init};
+pub(crate) use pack::{SOURCE_BINDINGS, frame_bindings, source_bindings, storage_buffer_init};
 use pipelines::*;
 pub use pipelines::{Specialise, Structure};
 /// The field pass: its pipelines, the GPU memory a frame's field is integrated in, and how far the uploaded

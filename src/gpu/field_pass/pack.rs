@@ -380,6 +380,14 @@ pub(crate) fn source_bindings(setup: &FrameSetup) -> (FieldParams, [Vec<u8>; 9])
     (p.params, bytes)
 }
 
+/// What the field pass reads for a whole frame (params with the view, the rays and the integrator, and the
+/// contents of `SOURCE_BINDINGS`), for the effect shader of game engines (`crate::engine`).
+pub(crate) fn frame_bindings(setup: &FrameSetup) -> (FieldParams, [Vec<u8>; 9]) {
+    let p = pack(setup);
+    let (_, bytes) = source_bindings(setup);
+    (p.params, bytes)
+}
+
 /// A storage buffer holding `bytes` (never empty: WebGPU refuses zero-sized bindings, so an empty list still
 /// binds one zeroed element of the largest struct, CurvePiece's 80 bytes).
 pub(crate) fn storage_buffer_init(
