@@ -3,7 +3,7 @@
 //! chunk stopped by its scheduler leaves nothing; `assemble` joins the chunks' frames into the very GIF, video
 //! and sprite sheet one export makes, and names the frames that are missing; `farm slurm` writes job scripts
 //! that render their chunk and try again only when trying again can help. (The scripts under a real Slurm, and
-//! Open Job Description's template under openjd, are in tests/farm_tools.rs.)
+//! Open Job Description's template under openjd, are in tests/farm_slurm.rs and tests/farm_openjd.rs.)
 
 mod common;
 

@@ -146,7 +146,13 @@ fn fs_brightness(in: VertexOut) -> @location(0) vec4<f32> {
 // B <= 1. Unclamped above: an HDR target keeps the glow of B > 1.
 @fragment
 fn fs_glow(in: VertexOut) -> @location(0) vec4<f32> {
-    var field = brightness_at(in.world);
+    return glow_at(in.world);
+}
+
+// fs_glow's value at the billboard's point s_point: what an engine's own shader calls (a Unity Custom Function,
+// an Unreal Custom node) with the fragment's world position on its quad.
+fn glow_at(s_point: vec3<f32>) -> vec4<f32> {
+    var field = brightness_at(s_point);
     let c = effect.view.cutoff;
     let fade = select(1.0, smoothstep(c, 2.0 * c, abs(field.x)), c > 0.0);
     field = field * fade;

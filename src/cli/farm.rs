@@ -130,7 +130,9 @@ pub(super) fn slurm(args: &SlurmArgs) -> Result<(), CliError> {
     let plan = plan(args)?;
     let name = stem(&args.scene);
     let dir: PathBuf = match &args.job_dir {
-        Some(d) => d.clone(),
+        // Absolute, as the scripts name their logs and each other from wherever they run.
+        Some(d) => farm::absolute(d)
+            .map_err(|e| CliError::Usage(format!("--job-dir {}: {e}", d.display())))?,
         None => crate::output::parent_dir(&plan.pattern).join(format!("{name}.slurm")),
     };
     let options = slurm::Options {

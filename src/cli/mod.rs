@@ -252,7 +252,8 @@ pub struct RenderArgs {
     #[arg(short, long)]
     pub verbose: bool,
     /// Frames of the scene's animation: `A..B` (A to B-1, so `0..50` and `50..100` split an export between
-    /// two machines), `A..=B`, `A..`, `..B`, or one frame `A`. Default: every frame for a sequence (an
+    /// two machines), `A..=B` or `A-B` (A to B, as render farm managers write a chunk), `A..`, `..B`, or one
+    /// frame `A`. Default: every frame for a sequence (an
     /// output such as `dir/name_####.png`), a `.gif` or `--sheet`; frame 0 for a single image.
     #[arg(long, value_parser = FrameSpec::parse)]
     pub frames: Option<FrameSpec>,

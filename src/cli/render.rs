@@ -181,11 +181,18 @@ pub(super) fn render(args: &RenderArgs) -> Result<(), CliError> {
         check_device_limits(gpu, args, &scene, &name)?;
     }
     let start = Instant::now();
+    // A signal during the render (a scheduler stopping the job): nothing written.
+    let stopped = || match super::interrupt::asked() {
+        true => Err(CliError::Export(export::ExportError::Cancelled)),
+        false => Ok(()),
+    };
     if args.brightness {
         let values = renderer.brightness(&setup)?;
+        stopped()?;
         output::write_brightness_exr(&args.output, scene.billboard.resolution, &values)?;
     } else {
         let pixels = renderer.compose(&scene, (width, height), backdrop(args), hdr)?;
+        stopped()?;
         output::write_rgba(&args.output, width, height, &pixels, alpha)?;
     }
     if args.verbose {

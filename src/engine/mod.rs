@@ -66,8 +66,25 @@ pub struct EffectShader {
     pub uniforms: Vec<u8>,
     /// The view part alone (`layout[0]`), to set again as the camera moves.
     pub view: View,
+    /// What a game needs to place the billboard and the rays again as its camera moves.
+    pub placement: Placement,
     module: naga::Module,
     info: naga::valid::ModuleInfo,
+}
+
+/// The scene's numbers behind the view's values (`geometry::place_billboard`, `geometry::ray_reach`,
+/// `Integration::on_ray`), for a game that moves the camera: docs/engines/README.md gives the formulas.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Placement {
+    /// The sources' bounds: their center and half diagonal.
+    pub bounds_center: [f64; 3],
+    pub bounds_radius: f64,
+    /// The decay length in world units, and the scene's decay alpha and beta over it.
+    pub decay_length: f64,
+    pub alpha: f64,
+    pub beta: f64,
+    /// The scene's own stretch factor (1 unless the integration sets it).
+    pub stretch: f64,
 }
 
 /// Why a scene makes no engine shader.
@@ -263,6 +280,18 @@ impl EffectShader {
             pad0: 0.0,
             pad1: 0.0,
         };
+        let (lo, hi) = scene
+            .sources
+            .bounds()
+            .unwrap_or((scene.camera.target, scene.camera.target));
+        let placement = Placement {
+            bounds_center: ((lo + hi) * 0.5).to_array(),
+            bounds_radius: (hi - lo).length() * 0.5,
+            decay_length: scene.integration.decay_length,
+            alpha: scene.integration.alpha,
+            beta: scene.integration.beta,
+            stretch: scene.integration.stretch,
+        };
         let mut uniforms = bytemuck::bytes_of(&view).to_vec();
         let mut layout = vec![Member {
             name: "view",
@@ -307,6 +336,7 @@ impl EffectShader {
             layout,
             uniforms,
             view,
+            placement,
             module,
             info,
         })
@@ -410,6 +440,7 @@ impl EffectShader {
             bytes: usize,
             view: Vec<(&'static str, usize)>,
             members: &'a [Member],
+            placement: Placement,
         }
         let view = vec![
             ("view_proj", 0),
@@ -432,6 +463,7 @@ impl EffectShader {
             bytes: self.uniforms.len(),
             view,
             members: &self.layout,
+            placement: self.placement,
         };
         serde_json::to_string_pretty(&layout).expect("plain data")
     }
