@@ -12,7 +12,10 @@
 //! - [`reference`]: the f64 CPU renderer, one module for each GPU pass it twins, named alike;
 //! - [`gpu`]: the same on the GPU: WGSL compute and render passes, headless or in the viewer;
 //! - [`output`]: PNG and EXR files, written atomically;
-//! - [`export`]: frame sequences, GIFs and sprite sheets of an animation, with a progress bar;
+//! - [`export`]: frame sequences, GIFs and sprite sheets of an animation, with a progress bar, and `assemble`,
+//!   which joins frames rendered apart;
+//! - [`farm`]: a sequence in chunks as jobs of a render farm's scheduler (Slurm);
+//! - [`engine`]: the effect as a shader a game engine runs (GLSL, HLSL, MSL by naga);
 //! - [`viewer`]: the interactive viewer (winit, egui, the same GPU passes);
 //! - [`bench`]: the papers' speed grid and other benchmarks;
 //! - [`cli`]: the `energywave` command line.

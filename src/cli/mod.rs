@@ -411,6 +411,9 @@ fn shader(args: &ShaderArgs) -> Result<(), CliError> {
     }
     let (w, h) = args.size;
     let input = |e: crate::engine::EngineError| match e.is_input_error() {
+        true if matches!(e, crate::engine::EngineError::Folder { .. }) => {
+            CliError::Usage(format!("--output {e}"))
+        }
         true => CliError::Usage(format!(
             "{}: {e}",
             args.scene

@@ -14,6 +14,9 @@ use crate::gpu::field_pass::{FieldParams, frame_bindings};
 use crate::integrate::Decay;
 use crate::scene::Scene;
 
+/// The file the effect's module imports for its structure, written for each scene (`compose`).
+pub const STRUCTURE: &str = "engine/structure.wgsl";
+
 /// The largest uniform block written: what Direct3D 11 (a constant buffer's 4,096 float4), Metal and desktop GL
 /// drivers all take.
 pub const MAX_BLOCK_BYTES: usize = 65536;
@@ -105,6 +108,11 @@ pub enum EngineError {
         target: &'static str,
         message: String,
     },
+    #[error("{}: cannot be made a folder for the shader's files: {source}", path.display())]
+    Folder {
+        path: PathBuf,
+        source: std::io::Error,
+    },
     #[error("{}: {source}", path.display())]
     Io {
         path: PathBuf,
@@ -117,7 +125,9 @@ impl EngineError {
     pub fn is_input_error(&self) -> bool {
         matches!(
             self,
-            EngineError::TooLarge { .. } | EngineError::TooManyDivisions { .. }
+            EngineError::TooLarge { .. }
+                | EngineError::TooManyDivisions { .. }
+                | EngineError::Folder { .. }
         )
     }
 }
@@ -191,7 +201,7 @@ pub fn compose(structure: &str) -> String {
     use crate::gpu::shaders;
     let lookup = |path: &str| -> Option<String> {
         let text = match path {
-            "engine/structure.wgsl" => return Some(structure.to_owned()),
+            STRUCTURE => return Some(structure.to_owned()),
             // The field pass's bindings: the uniform block instead.
             "shared/field_pass.wgsl" => {
                 return Some("#import shared/curve.wgsl\n#import engine/globals.wgsl\n".to_owned());
@@ -476,7 +486,7 @@ impl EffectShader {
         dir: &Path,
         name: &str,
     ) -> Result<(Vec<PathBuf>, Option<String>), EngineError> {
-        std::fs::create_dir_all(dir).map_err(|source| EngineError::Io {
+        std::fs::create_dir_all(dir).map_err(|source| EngineError::Folder {
             path: dir.to_owned(),
             source,
         })?;
@@ -498,15 +508,20 @@ impl EffectShader {
         files.push((format!("{name}.metal"), self.msl()?.into()));
         files.push((format!("{name}.uniforms.json"), self.layout_json().into()));
         files.push((format!("{name}.uniforms.bin"), self.uniforms.clone()));
-        let mut written = Vec::new();
-        for (file, bytes) in files {
-            let path = dir.join(file);
-            crate::output::write_atomically(&path, &bytes).map_err(|e| EngineError::Io {
-                path: path.clone(),
-                source: std::io::Error::other(e.to_string()),
-            })?;
-            written.push(path);
+        // Into a folder beside them first, then moved into place together: a failure leaves the files of an
+        // earlier export whole, never a new stage beside an old block.
+        let io = |path: &Path, e: crate::output::OutputError| EngineError::Io {
+            path: path.to_owned(),
+            source: std::io::Error::other(e.to_string()),
+        };
+        let first = dir.join(&files[0].0);
+        let mut staged =
+            crate::export::staged::Staged::beside(&first).map_err(|e| io(&first, e))?;
+        for (file, bytes) in &files {
+            let path = staged.stage(&dir.join(file));
+            crate::output::write_atomically(&path, bytes).map_err(|e| io(&path, e))?;
         }
+        let written = staged.commit().map_err(|e| io(dir, e))?;
         let warning = (self.uniforms.len() > ES_BLOCK_BYTES).then(|| {
             format!(
                 "the uniform block is {} bytes: GLSL ES 3.0 guarantees {ES_BLOCK_BYTES} (WebGL 2 and some phones \

@@ -12,7 +12,7 @@ pub mod assemble;
 pub mod fit;
 pub mod progress;
 pub mod sheet;
-mod staged;
+pub(crate) mod staged;
 pub mod video;
 
 use std::ops::{ControlFlow, Range};
