@@ -8,28 +8,9 @@
 mod common;
 
 use std::path::{Path, PathBuf};
+
+use common::{SMALL_FRAMES as SMALL, names, sparks as scene};
 use std::process::{Command, Output};
-
-/// Sparks thrown by a travelling pulse: live particles simulated from frame 0, so frame N depends on every
-/// frame before it.
-fn scene() -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("assets/scenes/pulse_sparks.toml")
-        .display()
-        .to_string()
-}
-
-/// Small, quick frames.
-const SMALL: [&str; 8] = [
-    "--size",
-    "64x48",
-    "--resolution",
-    "40",
-    "--integrator",
-    "simpson",
-    "--divisions",
-    "40",
-];
 
 fn bin() -> Command {
     let mut c = Command::new(env!("CARGO_BIN_EXE_energywave"));
@@ -64,16 +45,6 @@ fn refused(o: &Output) -> String {
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(!err.contains("panicked"), "{err}");
     err
-}
-
-/// Every entry of `dir` (hidden ones included), sorted.
-fn names(dir: &Path) -> Vec<String> {
-    let mut v: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    v.sort();
-    v
 }
 
 fn bytes(path: &Path) -> Vec<u8> {

@@ -10,23 +10,7 @@ use std::path::Path;
 use std::process::{Command, Output};
 use std::time::{Duration, Instant};
 
-const SMALL: [&str; 8] = [
-    "--size",
-    "64x48",
-    "--resolution",
-    "40",
-    "--integrator",
-    "simpson",
-    "--divisions",
-    "40",
-];
-
-fn scene() -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("assets/scenes/pulse_sparks.toml")
-        .display()
-        .to_string()
-}
+use common::{SMALL_FRAMES as SMALL, sparks as scene};
 
 fn run(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_energywave"))

@@ -140,3 +140,31 @@ pub fn pixels_off(cpu: &[[f64; 4]], gpu: &[[f32; 4]]) -> usize {
         })
         .count()
 }
+
+/// Every entry of `dir` (hidden ones included), by name, sorted.
+pub fn names(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
+/// The farm tests' scene: sparks thrown by a travelling pulse, live particles simulated from frame 0, so frame
+/// N depends on every frame before it.
+pub fn sparks() -> String {
+    scenes_dir().join("pulse_sparks.toml").display().to_string()
+}
+
+/// The farm tests' small, quick frames: `render` flags.
+pub const SMALL_FRAMES: [&str; 8] = [
+    "--size",
+    "64x48",
+    "--resolution",
+    "40",
+    "--integrator",
+    "simpson",
+    "--divisions",
+    "40",
+];
