@@ -95,8 +95,8 @@ fn the_shader_files_hold_a_valid_module_and_the_block_its_layout_describes() {
     if let Some(p) = s.sources.points.first() {
         let o = member("points")["offset"].as_u64().unwrap() as usize;
         let f: &[f32] = bytemuck::cast_slice(&bytes[o..o + 16]);
-        for k in 0..3 {
-            assert!((f[k] as f64 - p.position[k]).abs() < 1e-6);
+        for (got, want) in f.iter().zip(p.position.to_array()) {
+            assert!((*got as f64 - want).abs() < 1e-6);
         }
         assert!((f[3] as f64 - p.coefficient).abs() < 1e-6);
     }

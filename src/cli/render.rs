@@ -148,7 +148,6 @@ pub(super) fn render(args: &RenderArgs) -> Result<(), CliError> {
     let (width, height) = args.size;
     let hdr = target.is_exr();
     let mut renderer = Renderer::new(args, hdr)?;
-    let mut scene = scene;
     follow_pixel_density(&mut scene, args, &renderer);
     let scene = scene.at_frame(frames.start as f64);
     specialise(&mut renderer, &scene);
