@@ -1,6 +1,7 @@
 //! Round trips with Blender (Debian's `blender`, run headless): a glTF scene Blender exports (nested transforms,
-//! flat and smooth normals, base colors) loads as Blender has it; the transparent PNG and EXR frames of a sequence
-//! composited over a plate by Blender's compositor (Alpha Over) are the viewer's blend over that background; and
+//! flat and smooth normals, base colors) loads as Blender has it; transparent PNG and EXR sequences composited over
+//! a plate by Blender's compositor (Alpha Over, the sequence read as Blender's image sequence and rendered as an
+//! animation) are the viewer's blend over that background, frame by frame; and
 //! a Blender camera set from ours (docs/blender/camera.py) sees an object where we draw it. The scripts are those
 //! docs/blender/ gives users. Needs `--features blender` (CI turns it on).
 #![cfg(feature = "blender")]
@@ -209,26 +210,26 @@ fn blender_puts_our_transparent_png_and_exr_frames_over_a_plate_as_the_viewer_bl
             energywave::output::Alpha::Opaque,
         )
         .unwrap();
-        for frame in [10, 11] {
-            let want = image::open(dir.join(format!("want{k}_{frame:04}.exr")))
-                .unwrap()
-                .to_rgb32f();
-            let glow = image::open(dir.join(format!("glow_{frame:04}.exr")))
-                .unwrap()
-                .to_rgba32f();
-            for ext in ["exr", "png"] {
-                let input = dir.join(format!("glow_{frame:04}.{ext}"));
-                let out = dir.join(format!("over{k}_{frame}_{ext}.exr"));
-                blender(
-                    &[],
-                    "alpha_over.py",
-                    &[
-                        plate.to_str().unwrap(),
-                        input.to_str().unwrap(),
-                        out.to_str().unwrap(),
-                    ],
-                );
-                let got = image::open(&out).unwrap().to_rgba32f();
+        for ext in ["exr", "png"] {
+            // The sequence composited as Blender composites one: an image sequence, rendered as an animation.
+            let input = dir.join(format!("glow_####.{ext}"));
+            let out = dir.join(format!("over{k}_{ext}_####.exr"));
+            blender(
+                &[],
+                "alpha_over.py",
+                &[
+                    plate.to_str().unwrap(),
+                    input.to_str().unwrap(),
+                    out.to_str().unwrap(),
+                    "--frames",
+                    "10-11",
+                ],
+            );
+            for frame in [10, 11] {
+                let open = |name: String| image::open(dir.join(name)).unwrap();
+                let want = open(format!("want{k}_{frame:04}.exr")).to_rgb32f();
+                let glow = open(format!("glow_{frame:04}.exr")).to_rgba32f();
+                let got = open(format!("over{k}_{ext}_{frame:04}.exr")).to_rgba32f();
                 let mut worst = 0.0f32;
                 for (x, y, p) in got.enumerate_pixels() {
                     // B > 1 cannot be alpha: the blend is the viewer's wherever B <= 1.

@@ -1,6 +1,12 @@
 """Composite a transparent energywave frame over a plate in Blender's compositor (Alpha Over node).
 
     blender -b --factory-startup --python-exit-code 1 --python alpha_over.py -- PLATE FG OUT [--premultiplied]
+    blender -b --factory-startup --python-exit-code 1 --python alpha_over.py -- PLATE FG_####.png OUT_####.png \
+        --frames A-B [--premultiplied]
+
+The second form composites a sequence as Blender does one: FG loaded as an image sequence (its run of # the
+frame number, as `energywave render` names a sequence), the scene's frames A to B rendered as an animation, the
+compositor writing OUT with each frame's number in place of its run of #.
 
 Run it with `--python-exit-code 1` (before `--python`): Blender 3.4 otherwise exits 0 after an uncaught
 Python exception (a missing input, a failed export); `sys.exit(message)` in the script exits 1 either way.
@@ -52,11 +58,25 @@ def main(argv):
     args = argv[argv.index("--") + 1:] if "--" in argv else []
     premultiplied_png = "--premultiplied" in args
     args = [a for a in args if a != "--premultiplied"]
+    frames = None
+    if "--frames" in args:
+        k = args.index("--frames")
+        first, _, last = args[k + 1].partition("-")
+        frames = (int(first), int(last))
+        del args[k : k + 2]
     if len(args) != 3:
         sys.exit(
-            "usage: blender -b --factory-startup --python-exit-code 1 --python alpha_over.py -- PLATE FG OUT [--premultiplied]"
+            "usage: blender -b --factory-startup --python-exit-code 1 --python alpha_over.py -- PLATE FG OUT [--premultiplied]\n"
+            "       ... -- PLATE FG_####.png OUT_####.png --frames A-B [--premultiplied]"
         )
     plate_path, fg_path, out_path = (os.path.abspath(a) for a in args)
+    if ("#" in os.path.basename(fg_path)) != (frames is not None):
+        sys.exit("alpha_over.py: a sequence (FG with a run of #) goes with --frames A-B, and only a sequence")
+
+    def numbered(pattern, frame):
+        name = os.path.basename(pattern)
+        run = name.count("#")
+        return os.path.join(os.path.dirname(pattern), name.replace("#" * run, f"{frame:0{run}d}"))
 
     scene = bpy.context.scene
     for obj in list(scene.objects):
@@ -70,9 +90,12 @@ def main(argv):
         return image, exr
 
     plate, _ = load(plate_path)
-    fg, fg_exr = load(fg_path)
+    fg, fg_exr = load(numbered(fg_path, frames[0]) if frames else fg_path)
     if tuple(fg.size) != tuple(plate.size):
         sys.exit(f"alpha_over.py: FG is {tuple(fg.size)}, the plate {tuple(plate.size)}")
+    if frames:
+        # After the size is read: a sequence's image has none of its own.
+        fg.source = "SEQUENCE"
 
     render = scene.render
     render.resolution_x, render.resolution_y = plate.size[0], plate.size[1]
@@ -111,6 +134,14 @@ def main(argv):
     plate_node.image = plate
     fg_node = tree.nodes.new("CompositorNodeImage")
     fg_node.image = fg
+    if frames:
+        # Scene frame f shows the sequence's file f: the node's frames start with the scene's, offset to the
+        # first file's number.
+        first, last = frames
+        scene.frame_start, scene.frame_end = first, last
+        fg_node.frame_duration = last - first + 1
+        fg_node.frame_start = first
+        fg_node.frame_offset = first - 1
     over = tree.nodes.new("CompositorNodeAlphaOver")
     # The Image node hands on an 8-bit PNG's colour straight, an EXR's associated (see above).
     over.use_premultiply = not fg_exr and not premultiplied_png
@@ -124,10 +155,18 @@ def main(argv):
 
     render.filepath = out_path
     render.use_file_extension = False
-    bpy.ops.render.render(write_still=True)
-    if not os.path.exists(out_path):
-        sys.exit(f"alpha_over.py: Blender wrote no {out_path}")
-    print(f"alpha_over.py: wrote {out_path} (Convert Premultiplied {'on' if over.use_premultiply else 'off'})")
+    if frames:
+        bpy.ops.render.render(animation=True)
+        written = [numbered(out_path, f) for f in range(frames[0], frames[1] + 1)]
+    else:
+        bpy.ops.render.render(write_still=True)
+        written = [out_path]
+    for path in written:
+        if not os.path.exists(path):
+            sys.exit(f"alpha_over.py: Blender wrote no {path}")
+    print(
+        f"alpha_over.py: wrote {', '.join(written)} (Convert Premultiplied {'on' if over.use_premultiply else 'off'})"
+    )
 
 
 main(sys.argv)
