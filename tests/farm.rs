@@ -140,8 +140,9 @@ fn a_chunk_stopped_or_failing_halfway_leaves_no_file() {
         );
         std::thread::sleep(std::time::Duration::from_millis(20));
     }
-    let term = Command::new("kill")
-        .args(["-TERM", &child.id().to_string()])
+    // The shell's own kill: no procps needed.
+    let term = Command::new("sh")
+        .args(["-c", &format!("kill -TERM {}", child.id())])
         .status()
         .unwrap();
     assert!(term.success());
