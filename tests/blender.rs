@@ -230,18 +230,8 @@ fn blender_puts_our_transparent_png_and_exr_frames_over_a_plate_as_the_viewer_bl
                 let want = open(format!("want{k}_{frame:04}.exr")).to_rgb32f();
                 let glow = open(format!("glow_{frame:04}.exr")).to_rgba32f();
                 let got = open(format!("over{k}_{ext}_{frame:04}.exr")).to_rgba32f();
-                let mut worst = 0.0f32;
-                for (x, y, p) in got.enumerate_pixels() {
-                    // B > 1 cannot be alpha: the blend is the viewer's wherever B <= 1.
-                    if glow.get_pixel(x, y)[3] >= 0.999 {
-                        continue;
-                    }
-                    let w = want.get_pixel(x, y);
-                    for c in 0..3 {
-                        worst = worst.max((p[c] - w[c]).abs());
-                    }
-                    compared += 1;
-                }
+                let (worst, pixels) = common::over_error(&got, &want, &glow);
+                compared += pixels;
                 eprintln!("frame {frame} ({ext}) over {background:?}: within {worst:.2e}");
                 assert!(
                     worst <= 2.0 / 255.0,

@@ -601,18 +601,8 @@ fn a_compositor_puts_the_transparent_exr_and_png_over_a_plate_as_the_viewer_blen
                 out.to_str().unwrap(),
             ]);
             let got = image::open(&out).unwrap().to_rgba32f();
-            let mut worst = 0.0f32;
-            for (x, y, p) in got.enumerate_pixels() {
-                // B > 1 cannot be alpha: the comparison holds wherever B <= 1.
-                if glow.get_pixel(x, y)[3] >= 0.999 {
-                    continue;
-                }
-                let w = want.get_pixel(x, y);
-                for c in 0..3 {
-                    worst = worst.max((p[c] - w[c]).abs());
-                }
-                compared += 1;
-            }
+            let (worst, pixels) = common::over_error(&got, &want, &glow);
+            compared += pixels;
             assert!(
                 worst <= tolerance,
                 "{} over {background:?}: off by {worst} from the viewer's blend",

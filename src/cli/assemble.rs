@@ -7,14 +7,7 @@ use crate::export::{self, Progress, Target};
 
 pub(super) fn assemble(args: &AssembleArgs) -> Result<(), CliError> {
     super::interrupt::watch();
-    let target = Target::for_output(
-        &args.output,
-        args.sheet.then_some(export::SheetOptions {
-            columns: args.columns,
-            padding: args.padding,
-            power_of_two: args.power_of_two,
-        }),
-    )?;
+    let target = Target::for_output(&args.output, args.layout.options(args.sheet))?;
     let scene = load_scene(args.scene.as_deref())?;
     let range = export::frames_to_render(args.frames.as_ref(), &target, scene.frame_count())?;
     let frame_rate = scene

@@ -69,15 +69,8 @@ pub struct AssembleArgs {
     /// Join the frames into a sprite sheet (as `render --sheet`).
     #[arg(long)]
     pub sheet: bool,
-    /// Columns of the sprite sheet (default: as square as it gets).
-    #[arg(long, requires = "sheet")]
-    pub columns: Option<u32>,
-    /// Transparent pixels between the sheet's cells.
-    #[arg(long, default_value_t = 0, requires = "sheet")]
-    pub padding: u32,
-    /// Round the sheet's width and height up to powers of two.
-    #[arg(long, requires = "sheet")]
-    pub power_of_two: bool,
+    #[command(flatten)]
+    pub layout: SheetLayoutArgs,
     /// Print what is joined and where it went.
     #[arg(short, long)]
     pub verbose: bool,
@@ -261,6 +254,13 @@ pub struct RenderArgs {
     /// output, with its layout as JSON beside it (same name, `.json`).
     #[arg(long, conflicts_with = "brightness")]
     pub sheet: bool,
+    #[command(flatten)]
+    pub layout: SheetLayoutArgs,
+}
+
+/// A sprite sheet's layout, for `render --sheet` and `assemble --sheet` alike.
+#[derive(Debug, Default, clap::Args)]
+pub struct SheetLayoutArgs {
     /// Columns of the sprite sheet (default: as square as it gets).
     #[arg(long, requires = "sheet")]
     pub columns: Option<u32>,
@@ -270,6 +270,17 @@ pub struct RenderArgs {
     /// Round the sheet's width and height up to powers of two (for engines and GPUs that want them).
     #[arg(long, requires = "sheet")]
     pub power_of_two: bool,
+}
+
+impl SheetLayoutArgs {
+    /// The layout, where `sheet` asks for a sheet.
+    pub fn options(&self, sheet: bool) -> Option<crate::export::SheetOptions> {
+        sheet.then_some(crate::export::SheetOptions {
+            columns: self.columns,
+            padding: self.padding,
+            power_of_two: self.power_of_two,
+        })
+    }
 }
 
 /// The renderer behind `render`.

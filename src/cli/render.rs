@@ -43,14 +43,7 @@ fn check_device_limits(
 
 pub(super) fn render(args: &RenderArgs) -> Result<(), CliError> {
     super::interrupt::watch();
-    let target = Target::for_output(
-        &args.output,
-        args.sheet.then_some(export::SheetOptions {
-            columns: args.columns,
-            padding: args.padding,
-            power_of_two: args.power_of_two,
-        }),
-    )?;
+    let target = Target::for_output(&args.output, args.layout.options(args.sheet))?;
     let alpha = output::Alpha::of(args.transparent, args.premultiplied);
     let format = match &target {
         Target::Single { format, .. } | Target::Sequence { format, .. } => *format,

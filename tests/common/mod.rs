@@ -168,3 +168,25 @@ pub const SMALL_FRAMES: [&str; 8] = [
     "--divisions",
     "40",
 ];
+
+/// A transparent glow composited "over" a plate (`got`) against the viewer's own blend on that background
+/// (`want`): the largest difference of a channel, and how many pixels were compared: those where the glow's B
+/// is at most 1 (its alpha below 0.999), where "over" is the viewer's blend (B > 1 cannot be alpha).
+pub fn over_error(
+    got: &image::Rgba32FImage,
+    want: &image::Rgb32FImage,
+    glow: &image::Rgba32FImage,
+) -> (f32, usize) {
+    let (mut worst, mut compared) = (0.0f32, 0);
+    for (x, y, p) in got.enumerate_pixels() {
+        if glow.get_pixel(x, y)[3] >= 0.999 {
+            continue;
+        }
+        let w = want.get_pixel(x, y);
+        for c in 0..3 {
+            worst = worst.max((p[c] - w[c]).abs());
+        }
+        compared += 1;
+    }
+    (worst, compared)
+}
