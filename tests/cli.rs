@@ -125,6 +125,39 @@ fn view_without_a_display_points_to_render() {
     assert_eq!(o.status.code(), Some(2));
 }
 
+/// Without a driver (Vulkan's loader pointed at no driver, no other backend tried): one line that names the
+/// packages for Vulkan and for GL and the CPU renderer, exit status 1, nothing written, no backtrace.
+#[test]
+fn render_without_a_driver_says_what_to_install() {
+    let dir = tmpdir("no-driver");
+    let out = dir.join("frame.png");
+    let o = bin()
+        .args(["render", "-o", out.to_str().unwrap(), "--size", "16x16"])
+        .env("WGPU_BACKEND", "vulkan")
+        .env("VK_ICD_FILENAMES", dir.join("none.json"))
+        .env("VK_DRIVER_FILES", dir.join("none.json"))
+        .output()
+        .unwrap();
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    let line = (err.lines())
+        .find(|l| l.starts_with("energywave: "))
+        .unwrap_or_else(|| panic!("no message: {err}"));
+    for wanted in [
+        "no GPU driver found (tried Vulkan)",
+        "mesa-vulkan-drivers libvulkan1",
+        "libegl1 libegl-mesa0 libgl1-mesa-dri",
+        "--backend cpu",
+    ] {
+        assert!(line.contains(wanted), "{wanted:?} not in {line:?}");
+    }
+    assert!(
+        !err.contains("panicked") && !err.contains("backtrace"),
+        "{err}"
+    );
+    assert!(!out.exists());
+}
+
 #[test]
 fn render_writes_the_composed_frame() {
     let dir = tmpdir("frame");

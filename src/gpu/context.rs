@@ -6,8 +6,9 @@ use std::sync::{Arc, Mutex};
 /// Why GPU work could not be done.
 #[derive(Debug, thiserror::Error)]
 pub enum GpuError {
+    /// No driver for any backend tried: one line that says what to install, for Vulkan and for GL.
     #[error(
-        "no GPU adapter found (tried {backends}); install Mesa's Vulkan driver (Debian: apt-get install mesa-vulkan-drivers libvulkan1), or render on the CPU with --backend cpu"
+        "no GPU driver found (tried {backends}): install Mesa's, for Vulkan `apt-get install mesa-vulkan-drivers libvulkan1` or for GL `apt-get install libegl1 libegl-mesa0 libgl1-mesa-dri` (Debian's packages), or render on the CPU: energywave render --backend cpu"
     )]
     NoAdapter { backends: String },
     #[error("WGPU_ADAPTER_NAME={wanted:?} matches no adapter; available: {available}")]
@@ -39,6 +40,27 @@ pub enum GpuError {
 }
 
 impl GpuError {
+    /// No adapter on any of `backends`.
+    pub fn no_adapter(backends: wgpu::Backends) -> Self {
+        let names = [
+            (wgpu::Backends::VULKAN, "Vulkan"),
+            (wgpu::Backends::GL, "GL"),
+            (wgpu::Backends::METAL, "Metal"),
+            (wgpu::Backends::DX12, "DirectX 12"),
+            (wgpu::Backends::BROWSER_WEBGPU, "WebGPU"),
+        ];
+        let tried: Vec<&str> = (names.iter())
+            .filter(|(b, _)| backends.contains(*b))
+            .map(|(_, name)| *name)
+            .collect();
+        GpuError::NoAdapter {
+            backends: match tried.is_empty() {
+                true => "no backend".into(),
+                false => tried.join(", "),
+            },
+        }
+    }
+
     /// True when the user's request is at fault (a size beyond the device's limits), not the machine.
     pub fn is_input_error(&self) -> bool {
         matches!(
@@ -442,9 +464,7 @@ impl GpuContext {
             .filter(|a| surface.is_none_or(|s| a.is_surface_supported(s)))
             .collect();
         if adapters.is_empty() {
-            return Err(GpuError::NoAdapter {
-                backends: format!("{backends:?}"),
-            });
+            return Err(GpuError::no_adapter(backends));
         }
         if let Ok(wanted) = std::env::var("WGPU_ADAPTER_NAME") {
             let available = adapters

@@ -138,9 +138,19 @@ impl Gfx {
             wgpu::Instance::new(wgpu::InstanceDescriptor::new_with_display_handle_from_env(
                 Box::new(event_loop.owned_display_handle()),
             ));
-        let surface = instance
-            .create_surface(window.clone())
-            .map_err(|e| ViewerError::Window(e.to_string()))?;
+        // Without a driver no backend can make a surface: say what to install rather than wgpu's "failed to
+        // create surface for any enabled backend".
+        let surface = match instance.create_surface(window.clone()) {
+            Ok(surface) => surface,
+            Err(e) => {
+                let backends = wgpu::Backends::from_env().unwrap_or(wgpu::Backends::all());
+                let adapters = pollster::block_on(instance.enumerate_adapters(backends));
+                return Err(match adapters.is_empty() {
+                    true => GpuError::no_adapter(backends).into(),
+                    false => ViewerError::Window(e.to_string()),
+                });
+            }
+        };
         let ctx = pollster::block_on(GpuContext::with_instance(instance, Some(&surface)))?;
         let size = window.inner_size();
         let mut config = surface
