@@ -8,6 +8,7 @@
 //! - [`particles`]: particle sets (smoke, dust, sparks): the particle, its kernel and the kernel's integrals;
 //! - [`animation`]: time in scenes: the travelling pulse (thesis eq. 5.1) and keyframes;
 //! - [`scene`]: TOML scene files, validated field by field;
+//! - [`background`]: work resolved off the caller's thread, the newest request first (the viewer's preparation);
 //! - [`frame`]: a frame's resolved setup (billboard, reach, terms, clips), worked out once for every renderer;
 //! - [`reference`]: the f64 CPU renderer, one module for each GPU pass it twins, named alike;
 //! - [`gpu`]: the same on the GPU: WGSL compute and render passes, headless or in the viewer;
@@ -24,6 +25,7 @@
 //! circle (tests/module_graph.rs checks both): a new module goes after what it uses.
 
 pub mod animation;
+pub mod background;
 pub mod bench;
 pub mod cli;
 pub mod engine;

@@ -161,14 +161,11 @@ fn the_viewers_glare_is_never_a_stale_one() {
     let mut settle_and_check = |v: &mut OffscreenViewer, what: &str| {
         for _ in 0..40 {
             v.frame().unwrap();
-            if !v.app.report().wants_frame() {
+            if v.app.report().settled() {
                 break;
             }
         }
-        assert!(
-            !v.app.report().wants_frame(),
-            "{what}: the picture is whole"
-        );
+        assert!(v.app.report().settled(), "{what}: the picture is whole");
         let [vw, vh] = v.app.viewport_px();
         let want = fresh.render(&v.app.frame_scene(), vw, vh, false).unwrap();
         let shown = common::viewer::shown_viewport(v, 800);

@@ -1337,7 +1337,7 @@ fn the_viewport_softens_object_silhouettes_and_copies_everything_else_exactly() 
     v.app.view_mut().progressive = false;
     for _ in 0..10 {
         v.frame().unwrap();
-        if !v.app.report().wants_frame() {
+        if v.app.report().settled() {
             break;
         }
     }

@@ -139,7 +139,7 @@ fn a_field_integrated_in_bands_is_the_field_integrated_at_once() {
 fn settle(v: &mut OffscreenViewer) -> u32 {
     for k in 0..200 {
         v.frame().unwrap();
-        if !v.app.report().wants_frame() {
+        if v.app.report().settled() {
             return k + 1;
         }
     }

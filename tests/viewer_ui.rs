@@ -58,13 +58,13 @@ fn editing_a_value_changes_the_scene_and_the_image() {
     assert!(diff > 2.0, "the image changed (mean difference {diff})");
     // Colors change the image without touching the field (once a coarse field shown while editing is refined).
     for _ in 0..100 {
-        if !h.state().report().wants_frame() {
+        if h.state().report().settled() {
             break;
         }
         h.step();
         viewport_pixels(&mut h);
     }
-    assert!(!h.state().report().wants_frame(), "the picture is whole");
+    assert!(h.state().report().settled(), "the picture is whole");
     let after = viewport_pixels(&mut h);
     let renders = h.state().report().field_renders;
     h.state_mut().scene_mut().colors.energy = [1.0, 0.3, 0.1];

@@ -537,7 +537,7 @@ impl crate::bench::TimedViewer for OffscreenViewer {
     }
 
     fn wants_frame(&self) -> bool {
-        self.app.report().wants_frame()
+        !self.app.report().settled()
     }
 
     fn preview(&self) -> Option<u32> {

@@ -87,17 +87,41 @@ pub struct SceneRenderer {
 
 impl SceneRenderer {
     pub fn new(device: &wgpu::Device) -> Self {
+        let field = FieldRenderer::new(device);
         Self {
-            field: FieldRenderer::new(device),
+            through: super::through_pass::ThroughPass::new(device, &field.shaders()),
+            field,
             billboard: BillboardRenderer::new(device, FRAME_FORMAT),
             glare: GlarePass::new(device),
             objects: ObjectPass::new(device),
             particles: ParticlePass::new(device),
-            through: super::through_pass::ThroughPass::new(device),
             holdout: false,
             unclamped: false,
             threshold_preview: None,
         }
+    }
+
+    /// Works out what takes long, the objects' light (with their translucent tables) and the particles' light,
+    /// on threads of their own from now on (the viewer): a frame waits for it a moment, then draws stand-ins
+    /// (the objects unshadowed, the particles it drew before) until it is ready; `preparing` says what is.
+    pub fn prepare_in_background(&mut self) {
+        self.objects.light_in_background();
+        self.particles.light_in_background();
+    }
+
+    /// What is being worked out on the background threads, for the status line; `None` when the frames show
+    /// everything as it is.
+    pub fn preparing(&self) -> Option<String> {
+        let parts: Vec<&str> = (self.objects.busy().into_iter())
+            .chain(self.particles.busy().then_some("the particles' light"))
+            .collect();
+        (!parts.is_empty()).then(|| parts.join(", "))
+    }
+
+    /// Waits until what is being worked out is ready (a screenshot shows the scene as it is).
+    pub fn wait_prepared(&self) {
+        self.objects.wait();
+        self.particles.wait();
     }
 
     /// Dims the glow whose B is at or below `threshold` (the glare's, while the viewer's panel edits it), so that

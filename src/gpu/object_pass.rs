@@ -11,10 +11,12 @@ use super::context::{
 use super::field_pass::{SOURCE_BINDINGS, source_bindings, storage_buffer_init};
 use super::formats::{DEPTH_FORMAT, DEPTH_VALUE_FORMAT, FRAME_FORMAT};
 use super::shaders::object_module_source;
+use crate::background::{Latest, Poll};
 use crate::frame::FrameSetup;
 use crate::objects::lighting::AMBIENT;
-use crate::objects::{Lit, LitKey, lit};
+use crate::objects::{Lit, LitKey, Object, lit, unshadowed};
 use crate::scene::Scene;
+use std::sync::Arc;
 
 /// Rust mirrors of `shaders/objects.wgsl` (keep in sync; `tests/gpu_layout.rs` checks them).
 pub mod gpu_data {
@@ -117,9 +119,18 @@ pub struct ObjectPass {
     count: u32,
     /// The scene's energy color Ce, its intensity applied.
     energy: [f32; 3],
-    /// What the buffers were lit from.
+    /// What the buffers were lit from (`None` while they hold a stand-in, `drawn` alone).
     key: Option<LitKey>,
+    /// The objects the buffers hold, lit or not.
+    drawn: Option<Vec<crate::objects::Object>>,
+    /// Where the objects' light (and their translucent tables) is worked out on a thread of its own (the
+    /// viewer's, `light_in_background`); `None`: before the frame records (renders and exports).
+    background: Option<Latest<LitKey, Lit>>,
 }
+
+/// How long a frame waits for the objects' light being worked out before it draws a stand-in: a few spheres'
+/// and boxes' is ready within it, translucent tables and large meshes are not.
+const WAIT: std::time::Duration = std::time::Duration::from_millis(30);
 
 /// `ObjectParams`' binding, after the field's.
 const PARAMS_BINDING: u32 = 14;
@@ -164,6 +175,8 @@ impl ObjectPass {
             count: 0,
             energy: [0.0; 3],
             key: None,
+            drawn: None,
+            background: None,
         }
     }
 
@@ -228,6 +241,7 @@ impl ObjectPass {
         if scene.objects.is_empty() {
             self.count = 0;
             self.key = None;
+            self.drawn = None;
             return false;
         }
         if self
@@ -242,16 +256,62 @@ impl ObjectPass {
             let built = self.build_pipelines(device, self.structure);
             self.pipelines.insert(self.structure, built);
         }
-        // A real GPU fills the translucent objects' tables (kept, so that `lit` finds them).
-        if super::tau_table::fills_tables(&device.adapter_info()) {
-            for o in scene.objects.iter().filter(|o| o.translucent.is_some()) {
-                let fill = |v: &crate::objects::translucent::voxels::Voxels| {
-                    super::tau_table::table_on(device, queue, v).ok()
-                };
-                crate::objects::translucent::light::prepared_with(o, &fill);
+        let lit = match &self.background {
+            None => {
+                fill_tables(device, queue, &scene.objects, None);
+                Arc::new(lit(scene.lit_inputs()))
             }
+            Some(worker) => {
+                let key = LitKey::of(scene.lit_inputs());
+                match worker.request_within(&key, WAIT, || light_job(device, queue, scene)) {
+                    Poll::Ready(lit) => lit,
+                    // These objects drawn already, by older light: kept until the new light is ready, the
+                    // pixels shaded by the sources of now.
+                    Poll::Pending if self.drawn.as_deref() == Some(&scene.objects[..]) => {
+                        self.upload_sources(device, setup);
+                        self.key = None;
+                        return self.count > 0;
+                    }
+                    Poll::Pending => {
+                        self.upload(device, setup, &unshadowed(scene.lit_inputs()));
+                        self.key = None;
+                        return self.count > 0;
+                    }
+                }
+            }
+        };
+        self.upload(device, setup, &lit);
+        self.key = Some(LitKey::of(scene.lit_inputs()));
+        self.count > 0
+    }
+
+    /// Works out the objects' light on a thread of its own from now on: `prepare` waits for it a moment
+    /// (`WAIT`), then draws the objects unshadowed (or with their older light) until it is ready. `busy` says
+    /// while it is not.
+    pub fn light_in_background(&mut self) {
+        self.background = Some(Latest::new("energywave objects' light"));
+    }
+
+    /// What is being worked out for the objects, if anything (they are drawn with a stand-in meanwhile).
+    pub fn busy(&self) -> Option<&'static str> {
+        let translucent = (self.drawn.iter().flatten()).any(|o| o.translucent.is_some());
+        match self.background.as_ref().is_some_and(|w| w.busy()) {
+            false => None,
+            true if translucent => Some("the objects' light and translucent tables"),
+            true => Some("the objects' light and shadows"),
         }
-        let Lit { surface, light } = lit(scene.lit_inputs());
+    }
+
+    /// Waits until the light being worked out is ready (a screenshot must not show the stand-in).
+    pub fn wait(&self) {
+        if let Some(w) = &self.background {
+            w.wait();
+        }
+    }
+
+    /// Uploads `lit` and the scene's sources (the shader shades each pixel by them).
+    fn upload(&mut self, device: &wgpu::Device, setup: &FrameSetup, lit: &Lit) {
+        let Lit { surface, light } = lit;
         let f = |v: [f64; 3]| v.map(|x| x as f32);
         let vertices: Vec<ObjectVertex> = (0..surface.positions.len())
             .map(|k| ObjectVertex {
@@ -278,6 +338,15 @@ impl ObjectPass {
                 usage: wgpu::BufferUsages::INDEX,
             }),
         );
+        self.count = surface.indices.len() as u32;
+        self.drawn = Some(setup.scene.objects.clone());
+        self.upload_sources(device, setup);
+    }
+
+    /// Uploads the scene's sources and colors, which the shader shades each pixel by (and whose structure its
+    /// pipeline is specialised to).
+    fn upload_sources(&mut self, device: &wgpu::Device, setup: &FrameSetup) {
+        let f = |v: [f64; 3]| v.map(|x| x as f32);
         let (field_params, lists) = source_bindings(setup);
         let field_params = storage_buffer_init(
             device,
@@ -307,10 +376,7 @@ impl ObjectPass {
             layout: &self.layout,
             entries: &entries,
         }));
-        self.energy = f(scene.colors.energy_color());
-        self.count = surface.indices.len() as u32;
-        self.key = Some(LitKey::of(scene.lit_inputs()));
-        self.count > 0
+        self.energy = f(setup.scene.colors.energy_color());
     }
 
     /// Draws the prepared triangles into `pass` (which has a `DEPTH_FORMAT` depth attachment, and a
@@ -351,5 +417,63 @@ impl ObjectPass {
         pass.set_vertex_buffer(0, vertices.slice(..));
         pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
         pass.draw_indexed(0..self.count, 0, 0..1);
+    }
+}
+
+/// A real GPU fills the translucent objects' tables (kept, so that `lit` finds them); the CPU fills them
+/// otherwise, in `lit` itself. Stops between objects once `cancel` is raised.
+fn fill_tables(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    objects: &[Object],
+    cancel: Option<&crate::background::Cancel>,
+) {
+    if !super::tau_table::fills_tables(&device.adapter_info()) {
+        return;
+    }
+    for o in objects.iter().filter(|o| o.translucent.is_some()) {
+        if cancel.is_some_and(|c| c.stopped()) {
+            return;
+        }
+        let fill = |v: &crate::objects::translucent::voxels::Voxels| {
+            super::tau_table::table_on(device, queue, v).ok()
+        };
+        crate::objects::translucent::light::prepared_with(o, &fill);
+    }
+}
+
+/// The job that lights `scene`'s objects on the worker's thread: each translucent object's voxels and table
+/// (the longest part), then the surface and its shadows; it stops between those once a newer request cancels
+/// it. A GPU fills the tables where it would before a frame, except on GL, where every call holds the one
+/// context: the CPU fills them there.
+fn light_job(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    scene: &Scene,
+) -> impl FnOnce(&crate::background::Cancel) -> Option<Lit> + Send + 'static {
+    let gpu = (device.adapter_info().backend != wgpu::Backend::Gl)
+        .then(|| (device.clone(), queue.clone()));
+    let objects = scene.objects.clone();
+    let sources = scene.sources.clone();
+    let (palette, epsilon) = (scene.colors.palette(), scene.integration.epsilon);
+    move |cancel| {
+        if let Some((device, queue)) = &gpu {
+            fill_tables(device, queue, &objects, Some(cancel));
+        }
+        for o in objects.iter().filter(|o| o.translucent.is_some()) {
+            if cancel.stopped() {
+                return None;
+            }
+            crate::objects::translucent::light::prepared(o);
+        }
+        if cancel.stopped() {
+            return None;
+        }
+        Some(lit(crate::objects::LitInputs {
+            objects: &objects,
+            sources: &sources,
+            palette,
+            epsilon,
+        }))
     }
 }

@@ -13,9 +13,10 @@ use super::context::{
     storage_buffer_entry, uniform_buffer,
 };
 use super::formats::FRAME_FORMAT;
+use crate::background::{Latest, Poll};
 use crate::frame::FrameSetup;
 use crate::objects::lighting::AMBIENT;
-use crate::particles::light::LitParticles;
+use crate::particles::light::{LitParticles, shared_lit};
 use crate::particles::view::{SmokeView, TILE};
 
 /// Rust mirrors of `shaders/particles.wgsl` (keep in sync; `tests/gpu_layout.rs` checks them).
@@ -93,7 +94,23 @@ pub struct ParticlePass {
     chunks: wgpu::Buffer,
     chunk_stride: u64,
     prepared: Option<Prepared>,
+    /// Where the particles' light is worked out on a thread of its own (the viewer's, `light_in_background`);
+    /// `None`: before the frame records (renders and exports).
+    background: Option<Latest<LightKey, Option<Arc<LitParticles>>>>,
 }
+
+/// What the particles' light depends on (`particles::light::shared_lit`).
+#[derive(Clone, Debug, PartialEq)]
+struct LightKey {
+    sets: Vec<crate::particles::ParticleSet>,
+    sources: crate::field::Sources,
+    palette: crate::field::Palette,
+    epsilon: f64,
+}
+
+/// How long a frame waits for the particles' light being worked out before it draws without it: a small set's,
+/// or a live set's from one frame to the next, is ready within it.
+const WAIT: std::time::Duration = std::time::Duration::from_millis(30);
 
 /// A smoke image read back: per pixel, rows from the top, the front and the back image's (radiance,
 /// transmittance); with the plan it was made by.
@@ -229,6 +246,53 @@ impl ParticlePass {
             chunks: chunk_buffer(device, chunk_stride, 1),
             chunk_stride,
             prepared: None,
+            background: None,
+        }
+    }
+
+    /// Works out the particles' light on a thread of its own from now on: `prepare` waits for it a moment
+    /// (`WAIT`), then draws the particles it drew before (none the first time) until it is ready.
+    pub fn light_in_background(&mut self) {
+        self.background = Some(Latest::new("energywave particles' light"));
+    }
+
+    /// Whether the particles' light is being worked out.
+    pub fn busy(&self) -> bool {
+        self.background.as_ref().is_some_and(|w| w.busy())
+    }
+
+    /// Waits until the light being worked out is ready (a screenshot must not show older particles).
+    pub fn wait(&self) {
+        if let Some(w) = &self.background {
+            w.wait();
+        }
+    }
+
+    /// The frame's lit particles: the setup's own, or those worked out in the background (the ones drawn now
+    /// while they are not ready).
+    fn lit(&self, setup: &FrameSetup) -> Option<Arc<LitParticles>> {
+        let Some(worker) = &self.background else {
+            return setup.particles();
+        };
+        let scene = setup.scene;
+        if scene.particles.is_empty() {
+            return None;
+        }
+        let key = LightKey {
+            sets: scene.particles.clone(),
+            sources: scene.sources.clone(),
+            palette: scene.colors.palette(),
+            epsilon: scene.integration.epsilon,
+        };
+        let job = || {
+            let k = key.clone();
+            move |cancel: &crate::background::Cancel| {
+                (!cancel.stopped()).then(|| shared_lit(&k.sets, &k.sources, k.palette, k.epsilon))
+            }
+        };
+        match worker.request_within(&key, WAIT, job) {
+            Poll::Ready(lit) => (*lit).clone(),
+            Poll::Pending => self.prepared.as_ref().map(|p| p.lit.clone()),
         }
     }
 
@@ -243,7 +307,7 @@ impl ParticlePass {
         frame: [u32; 2],
         resolution: u32,
     ) -> bool {
-        let Some(lit) = setup.particles() else {
+        let Some(lit) = self.lit(setup) else {
             self.prepared = None;
             return false;
         };

@@ -42,7 +42,8 @@ pub struct ThroughPass {
 }
 
 impl ThroughPass {
-    pub fn new(device: &wgpu::Device) -> Self {
+    /// The pass, its two fields drawn with `shaders` (the frame's own field's: no pipeline compiled twice).
+    pub fn new(device: &wgpu::Device, shaders: &std::sync::Arc<super::FieldShaders>) -> Self {
         let (pipeline, layout) = compute_pass(
             device,
             "through",
@@ -58,8 +59,8 @@ impl ThroughPass {
             ],
         );
         Self {
-            front: FieldRenderer::new(device),
-            exit: FieldRenderer::new(device),
+            front: FieldRenderer::with_shaders(device, shaders.clone()),
+            exit: FieldRenderer::with_shaders(device, shaders.clone()),
             pipeline,
             layout,
             params: device.create_buffer(&wgpu::BufferDescriptor {

@@ -514,6 +514,36 @@ pub fn light_surface(
     }
 }
 
+/// The light of `surface`'s vertices before the shadows and the translucent objects' light are worked out: every
+/// vertex in the whole direct light (the shader shades each pixel by the sources all the same), no light carried
+/// through a translucent object (it shows its ambient part). What the viewer draws for the moment it works out
+/// `light_surface` on a thread of its own.
+pub fn unshadowed(surface: &Surface, objects: &[Object]) -> VertexLights {
+    let n = surface.positions.len();
+    let albedo: Vec<[f64; 3]> = (0..n)
+        .map(|k| {
+            let color = objects[surface.object[k] as usize].color;
+            std::array::from_fn(|c| color[c] * surface.tint[k][c])
+        })
+        .collect();
+    let eta: Vec<f64> = (surface.object.iter())
+        .map(|&o| (objects[o as usize].translucent.as_ref()).map_or(0.0, |t| t.eta))
+        .collect();
+    let colors = (0..n)
+        .map(|k| match eta[k] > 0.0 {
+            true => shaded_translucent(albedo[k], [0.0; 3], eta[k], 1.0),
+            false => std::array::from_fn(|c| albedo[k][c] * AMBIENT),
+        })
+        .collect();
+    VertexLights {
+        albedo,
+        shadow: vec![[[1.0; 3]; 2]; n],
+        colors,
+        subsurface: vec![[0.0; 3]; n],
+        eta,
+    }
+}
+
 /// The color of a translucent object's surface point of `albedo` (its tint), scattered light `subsurface`
 /// (`VertexLights::subsurface`) and index `eta`, seen at `cos_view` to its normal: what leaves through the
 /// exit's Fresnel, `albedo F_t(eta, w_out) (AMBIENT + subsurface)` (the ambient light as it scatters through

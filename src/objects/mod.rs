@@ -418,6 +418,15 @@ pub fn focus(sources: &crate::field::Sources) -> (DVec3, f64) {
     }
 }
 
+/// The objects tessellated, unshadowed and without their translucent light (`lighting::unshadowed`): the
+/// moment's stand-in for `lit`, quick to work out.
+pub fn unshadowed(inputs: LitInputs<'_>) -> Lit {
+    let (center, extent) = focus(inputs.sources);
+    let surface = tessellate::Surface::of(inputs.objects, center, extent);
+    let light = lighting::unshadowed(&surface, inputs.objects);
+    Lit { surface, light }
+}
+
 /// The objects tessellated and lit, finer where a shadow's edge crosses them.
 pub fn lit(inputs: LitInputs<'_>) -> Lit {
     let (center, extent) = focus(inputs.sources);

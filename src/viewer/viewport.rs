@@ -50,13 +50,27 @@ pub struct ViewportReport {
     /// The frame just recorded made the picture whole after a coarse one (the UI, drawn before it, still
     /// said otherwise).
     pub refined: bool,
+    /// What is being worked out on a thread of its own (`SceneRenderer::preparing`), the frames drawing
+    /// stand-ins meanwhile.
+    pub preparing: Option<String>,
+    /// The frame just recorded showed what was being prepared, now ready (the UI still said otherwise).
+    pub prepared: bool,
 }
 
 impl ViewportReport {
     /// Whether the viewport wants another frame: to add to its average, to refine a coarse picture, or to let
-    /// the UI show that the picture is whole.
+    /// the UI show that the picture is whole. While something is being prepared the UI asks for frames itself,
+    /// a few a second (`settled` is false).
     pub fn wants_frame(&self) -> bool {
-        self.averaged.is_some_and(|(k, most)| k < most) || self.preview.is_some() || self.refined
+        self.averaged.is_some_and(|(k, most)| k < most)
+            || self.preview.is_some()
+            || self.refined
+            || self.prepared
+    }
+
+    /// Whether the picture shows the scene as it is, whole: nothing to refine, average or prepare.
+    pub fn settled(&self) -> bool {
+        !self.wants_frame() && self.preparing.is_none()
     }
 }
 
@@ -133,14 +147,19 @@ impl ViewportGpu {
         scene_renderer
             .field_mut()
             .set_specialise(Specialise::IfReady);
+        // Nor on the objects' or particles' light: the first frame shows the scene at once, with stand-ins
+        // until they are ready.
+        scene_renderer.prepare_in_background();
+        let shaders = scene_renderer.field().shaders();
         Self {
             scene_renderer,
             grid: GridPass::new(device),
             blit: BlitPass::new(device, target_format),
             targets: None,
             report,
-            // Generic: a coarse field's few texels gain little from a compile of their own.
-            preview: FieldRenderer::new(device),
+            // Generic: a coarse field's few texels gain little from a compile of their own; the full field's
+            // shaders, so that the first frames compile each generic pipeline once.
+            preview: FieldRenderer::with_shaders(device, shaders),
             upsample: Upsample::new(device),
             budget: FrameBudget::default(),
             last_inputs: None,
@@ -212,11 +231,14 @@ impl ViewportGpu {
         } else {
             self.compose(device, queue, encoder, view, &setup, targets, result)
         };
+        let preparing = self.scene_renderer.preparing();
         if result.is_ok() {
-            // The scene is copied only when what the frame shows changed.
-            self.composed = match unchanged {
-                true => shown,
-                false => Some(Composed::of(view, targets.size)),
+            // The scene is copied only when what the frame shows changed; a frame with stand-ins is composed
+            // again, until what they stand for is ready.
+            self.composed = match (unchanged, &preparing) {
+                (_, Some(_)) => None,
+                (true, None) => shown,
+                (false, None) => Some(Composed::of(view, targets.size)),
             };
         }
         if let Ok(mut r) = self.report.lock() {
@@ -226,6 +248,8 @@ impl ViewportGpu {
             r.averaged = self.scene_renderer.field().averaged_frames();
             r.refined = r.preview.is_some() && self.showing_preview.is_none();
             r.preview = self.showing_preview;
+            r.prepared = r.preparing.is_some() && preparing.is_none();
+            r.preparing = preparing;
         }
         result
     }
@@ -400,14 +424,22 @@ impl ViewportGpu {
             });
         }
         let targets = FrameTargets::new(device, view.size);
-        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("energywave.viewport.screenshot"),
-        });
-        let result = self.record_into(device, queue, &mut encoder, view, &targets, false, None);
-        // The frame composed is the screenshot's, not the one the window's targets hold.
-        self.composed = None;
-        result?;
-        queue.submit([encoder.finish()]);
+        // A screenshot shows the scene as it is: what is being prepared is waited for (twice at most: a request
+        // the frame itself made, then one a change made meanwhile would have).
+        for tries in 0.. {
+            let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("energywave.viewport.screenshot"),
+            });
+            let result = self.record_into(device, queue, &mut encoder, view, &targets, false, None);
+            // The frame composed is the screenshot's, not the one the window's targets hold.
+            self.composed = None;
+            result?;
+            if self.scene_renderer.preparing().is_none() || tries == 2 {
+                queue.submit([encoder.finish()]);
+                break;
+            }
+            self.scene_renderer.wait_prepared();
+        }
         read_frame(device, queue, &targets)
     }
 }

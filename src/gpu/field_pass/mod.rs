@@ -20,7 +20,8 @@ use pack::*;
 pub use pack::{FieldInputs, layers_of};
 pub(crate) use pack::{SOURCE_BINDINGS, frame_bindings, source_bindings, storage_buffer_init};
 use pipelines::*;
-pub use pipelines::{Specialise, Structure};
+pub use pipelines::{FieldShaders, Specialise, Structure};
+use std::sync::Arc;
 /// The field pass: its pipelines, the GPU memory a frame's field is integrated in, and how far the uploaded
 /// frame's field has come. All of it outlives a frame; a frame's own data comes in by `prepare` (`FieldInputs`,
 /// packed from the frame's `FrameSetup`).
@@ -68,6 +69,12 @@ struct Progress {
 impl FieldRenderer {
     /// Builds the passes' modules and layouts; their pipelines are built when a scene first needs them.
     pub fn new(device: &wgpu::Device) -> Self {
+        Self::with_shaders(device, FieldShaders::new(device))
+    }
+
+    /// A renderer with its own GPU memory over `shaders`, which other renderers on the device share: a generic
+    /// pipeline compiled for one draws for all.
+    pub fn with_shaders(device: &wgpu::Device, shaders: Arc<FieldShaders>) -> Self {
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("energywave.field.params"),
             size: size_of::<FieldParams>() as u64,
@@ -90,7 +97,7 @@ impl FieldRenderer {
         let chunk_stride = (device.limits().min_storage_buffer_offset_alignment as u64)
             .max(size_of::<Chunk>() as u64);
         Self {
-            pipelines: FieldPipelines::new(device),
+            pipelines: FieldPipelines::new(shaders),
             resources: Resources {
                 params,
                 chunks: chunk_buffer(device, chunk_stride, 1),
@@ -304,7 +311,7 @@ impl FieldRenderer {
         });
         device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("energywave.field.bind_group"),
-            layout: &self.pipelines.layout,
+            layout: self.pipelines.layout(),
             entries: &entries,
         })
     }
@@ -380,6 +387,11 @@ impl FieldRenderer {
         }
         self.progress.dispatches += 1;
         true
+    }
+
+    /// The shaders and generic pipelines this renderer draws with, to share with other renderers on its device.
+    pub fn shaders(&self) -> Arc<FieldShaders> {
+        self.pipelines.shaders.clone()
     }
 
     /// Starts compiling the uploaded scene's specialised pipelines on a thread of their own, if they are not

@@ -4,6 +4,7 @@
 use super::super::context::{field_storage_entry, pass_layouts, storage_buffer_entry};
 use super::super::shaders;
 use crate::frame::FrameSetup;
+use std::sync::{Arc, OnceLock};
 
 use super::gpu_data::*;
 use super::pack::*;
@@ -116,7 +117,6 @@ pub enum Specialise {
 /// The three passes' modules (simpson, adaptive smooth sources, adaptive curves: `shaders::FIELD_PASSES`),
 /// indexed by `Chunk::pipeline`; each holds its one entry point.
 pub(super) type Modules = [wgpu::ShaderModule; 3];
-pub(super) type Pipelines = [wgpu::ComputePipeline; 3];
 /// A structure's specialised pipelines: only its integrator's entry points.
 pub(super) type SpecialisedSet = [Option<wgpu::ComputePipeline>; 3];
 
@@ -145,40 +145,15 @@ pub(super) fn build_pipeline(
     })
 }
 
-/// The generic pipelines of every entry point: without the search for the brightest point of a curve (`search`
-/// false: scenes without the continuous W form compile none of it), or with it.
-pub(super) fn build_pipelines(
-    device: &wgpu::Device,
-    modules: &Modules,
-    layout: &wgpu::PipelineLayout,
-    search: bool,
-) -> Pipelines {
-    let constants: &[(&str, f64)] = if search { &[("SEARCH", 1.0)] } else { &[] };
-    std::array::from_fn(|k| {
-        build_pipeline(
-            device,
-            &modules[k],
-            layout,
-            shaders::FIELD_PASSES[k].0,
-            constants,
-        )
-    })
-}
-
 /// The pipelines of `structure`'s entry points, specialised to it.
-pub(super) fn build_specialised(
-    device: &wgpu::Device,
-    modules: &Modules,
-    layout: &wgpu::PipelineLayout,
-    structure: Structure,
-) -> SpecialisedSet {
+fn build_specialised(shaders: &FieldShaders, structure: Structure) -> SpecialisedSet {
     let constants = structure.constants();
     let mut set: SpecialisedSet = Default::default();
     for &k in structure.entries() {
         set[k] = Some(build_pipeline(
-            device,
-            &modules[k],
-            layout,
+            &shaders.device,
+            &shaders.modules[k],
+            &shaders.pipeline_layout,
             shaders::FIELD_PASSES[k].0,
             &constants,
         ));
@@ -239,16 +214,144 @@ impl SpecialisedPipelines {
     }
 }
 
-/// The field passes' long-lived GPU objects: their modules and layouts, the generic pipelines (built when first
-/// needed) and those specialised to the structures met.
-pub(super) struct FieldPipelines {
+/// The field passes' bind group layout and pipeline layout.
+fn field_layouts(device: &wgpu::Device) -> (wgpu::BindGroupLayout, wgpu::PipelineLayout) {
+    let storage = storage_buffer_entry;
+    pass_layouts(
+        device,
+        "field",
+        &[
+            wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::COMPUTE,
+                // Read-only storage, like the chunks (binding 8): lavapipe specialises a shader for the
+                // values of the uniforms its loops and branches depend on, a compile (and its memory) for
+                // every new scene.
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Storage { read_only: true },
+                    has_dynamic_offset: false,
+                    min_binding_size: wgpu::BufferSize::new(size_of::<FieldParams>() as u64),
+                },
+                count: None,
+            },
+            storage(1),
+            storage(2),
+            storage(3),
+            storage(4),
+            storage(5),
+            storage(6),
+            field_storage_entry(7, wgpu::StorageTextureAccess::ReadWrite),
+            storage(9),
+            storage(10),
+            storage(11),
+            storage(13),
+            field_storage_entry(12, wgpu::StorageTextureAccess::ReadWrite),
+            // A read-only storage buffer rather than a uniform one: lavapipe recompiles a shader for the
+            // values of uniforms that bound its loops (to unroll them), and a chunk's range bounds the term
+            // loop, so every new range meant a new compile (seconds each, minutes for some).
+            wgpu::BindGroupLayoutEntry {
+                binding: 8,
+                visibility: wgpu::ShaderStages::COMPUTE,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Storage { read_only: true },
+                    has_dynamic_offset: true,
+                    min_binding_size: wgpu::BufferSize::new(size_of::<Chunk>() as u64),
+                },
+                count: None,
+            },
+        ],
+    )
+}
+
+/// The field passes' shader modules, layouts and generic pipelines: made once for a device and shared by every
+/// field renderer on it (`FieldRenderer::with_shaders`: the viewer's full, coarse and see-through fields), so
+/// that each generic pipeline is compiled once, when a dispatch first needs that entry point.
+pub struct FieldShaders {
     device: wgpu::Device,
     modules: Modules,
-    pub(super) layout: wgpu::BindGroupLayout,
+    layout: wgpu::BindGroupLayout,
     pipeline_layout: wgpu::PipelineLayout,
-    /// The generic pipelines of the three passes (`shaders::FIELD_PASSES`), indexed by `Chunk::pipeline`: without
-    /// the search for a curve's brightest point, and with it, each built when a scene first needs it.
-    generic: [Option<Pipelines>; 2],
+    /// The generic pipeline of each entry point (`shaders::FIELD_PASSES`, indexed by `Chunk::pipeline`): without
+    /// the search for a curve's brightest point (scenes without the continuous W form compile none of it), and
+    /// with it.
+    generic: [[OnceLock<wgpu::ComputePipeline>; 3]; 2],
+}
+
+impl std::fmt::Debug for FieldShaders {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let built = |g: &[OnceLock<wgpu::ComputePipeline>; 3]| {
+            g.iter().filter(|p| p.get().is_some()).count()
+        };
+        f.debug_struct("FieldShaders")
+            .field(
+                "generic_built",
+                &[built(&self.generic[0]), built(&self.generic[1])],
+            )
+            .finish()
+    }
+}
+
+impl FieldShaders {
+    /// The passes' modules and layouts on `device`; no pipeline yet.
+    pub fn new(device: &wgpu::Device) -> Arc<Self> {
+        let modules: Modules = std::array::from_fn(|k| {
+            device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some(&format!("energywave.field.{}", shaders::FIELD_PASSES[k].0)),
+                source: wgpu::ShaderSource::Wgsl(shaders::field_module_source(k).into()),
+            })
+        });
+        let (layout, pipeline_layout) = field_layouts(device);
+        Arc::new(Self {
+            device: device.clone(),
+            modules,
+            layout,
+            pipeline_layout,
+            generic: Default::default(),
+        })
+    }
+
+    /// The generic pipelines of `entries` (with the brightest-point search or without), each compiled now if it
+    /// is not yet; where several are missing they compile side by side, one thread each (not on GL, where every
+    /// call holds the one context).
+    fn build_generic(
+        &self,
+        search: bool,
+        entries: &[usize],
+    ) -> &[OnceLock<wgpu::ComputePipeline>; 3] {
+        let generic = &self.generic[search as usize];
+        let missing: Vec<usize> = (entries.iter().copied())
+            .filter(|&k| generic[k].get().is_none())
+            .collect();
+        let constants: &[(&str, f64)] = if search { &[("SEARCH", 1.0)] } else { &[] };
+        let build = |k: usize| {
+            generic[k].get_or_init(|| {
+                build_pipeline(
+                    &self.device,
+                    &self.modules[k],
+                    &self.pipeline_layout,
+                    shaders::FIELD_PASSES[k].0,
+                    constants,
+                )
+            });
+        };
+        let gl = self.device.adapter_info().backend == wgpu::Backend::Gl;
+        match missing.split_first() {
+            Some((&first, rest)) if !rest.is_empty() && !gl => std::thread::scope(|scope| {
+                for &k in rest {
+                    scope.spawn(move || build(k));
+                }
+                build(first);
+            }),
+            _ => missing.iter().for_each(|&k| build(k)),
+        }
+        generic
+    }
+}
+
+/// The field pass's pipelines as one renderer uses them: the device's shared shaders and generic pipelines,
+/// and the pipelines specialised to the structures this renderer met.
+pub(super) struct FieldPipelines {
+    pub(super) shaders: Arc<FieldShaders>,
     pub(super) specialise: Specialise,
     pub(super) specialised: SpecialisedPipelines,
 }
@@ -257,7 +360,7 @@ pub(super) struct FieldPipelines {
 /// generic one.
 pub(super) struct DispatchPipelines<'a> {
     specialised: Option<std::sync::Arc<SpecialisedSet>>,
-    generic: Option<&'a Pipelines>,
+    generic: &'a [OnceLock<wgpu::ComputePipeline>; 3],
 }
 
 impl DispatchPipelines<'_> {
@@ -265,94 +368,45 @@ impl DispatchPipelines<'_> {
     pub(super) fn get(&self, k: usize) -> &wgpu::ComputePipeline {
         (self.specialised.as_ref())
             .and_then(|set| set[k].as_ref())
-            .or_else(|| self.generic.map(|g| &g[k]))
+            .or_else(|| self.generic[k].get())
             .expect("the generic pipelines are built where the specialised are not ready")
     }
 }
 
 impl FieldPipelines {
-    /// The passes' modules and layouts; no pipeline yet.
-    pub(super) fn new(device: &wgpu::Device) -> Self {
-        let modules: Modules = std::array::from_fn(|k| {
-            device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some(&format!("energywave.field.{}", shaders::FIELD_PASSES[k].0)),
-                source: wgpu::ShaderSource::Wgsl(shaders::field_module_source(k).into()),
-            })
-        });
-        let storage = storage_buffer_entry;
-        let (layout, pipeline_layout) = pass_layouts(
-            device,
-            "field",
-            &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::COMPUTE,
-                    // Read-only storage, like the chunks (binding 8): lavapipe specialises a shader for the
-                    // values of the uniforms its loops and branches depend on, a compile (and its memory) for
-                    // every new scene.
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Storage { read_only: true },
-                        has_dynamic_offset: false,
-                        min_binding_size: wgpu::BufferSize::new(size_of::<FieldParams>() as u64),
-                    },
-                    count: None,
-                },
-                storage(1),
-                storage(2),
-                storage(3),
-                storage(4),
-                storage(5),
-                storage(6),
-                field_storage_entry(7, wgpu::StorageTextureAccess::ReadWrite),
-                storage(9),
-                storage(10),
-                storage(11),
-                storage(13),
-                field_storage_entry(12, wgpu::StorageTextureAccess::ReadWrite),
-                // A read-only storage buffer rather than a uniform one: lavapipe recompiles a shader for the
-                // values of uniforms that bound its loops (to unroll them), and a chunk's range bounds the term
-                // loop, so every new range meant a new compile (seconds each, minutes for some).
-                wgpu::BindGroupLayoutEntry {
-                    binding: 8,
-                    visibility: wgpu::ShaderStages::COMPUTE,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Storage { read_only: true },
-                        has_dynamic_offset: true,
-                        min_binding_size: wgpu::BufferSize::new(size_of::<Chunk>() as u64),
-                    },
-                    count: None,
-                },
-            ],
-        );
+    /// A renderer's pipelines over `shaders`; nothing specialised yet.
+    pub(super) fn new(shaders: Arc<FieldShaders>) -> Self {
         Self {
-            device: device.clone(),
-            modules,
-            layout,
-            pipeline_layout,
-            generic: [None, None],
+            shaders,
             specialise: Specialise::default(),
             specialised: SpecialisedPipelines::default(),
         }
     }
 
+    pub(super) fn layout(&self) -> &wgpu::BindGroupLayout {
+        &self.shaders.layout
+    }
+
     /// The pipelines that dispatch `chunks` of inputs with these `params`: the specialised ones where
-    /// `specialise` allows and they are ready, the generic ones (built now if they are not yet) for the rest.
+    /// `specialise` allows and they are ready, the generic ones (built now, those of the entry points the chunks
+    /// use, if they are not yet) for the rest.
     pub(super) fn for_dispatch(
         &mut self,
         params: &FieldParams,
         chunks: &[Chunk],
     ) -> DispatchPipelines<'_> {
         let specialised = self.specialised_for(Structure::of(params));
-        let search = params.search != 0;
-        let ready = |k: u32| (specialised.as_ref()).is_some_and(|set| set[k as usize].is_some());
-        if !chunks.iter().all(|c| ready(c.pipeline)) {
-            let (device, modules, layout) = (&self.device, &self.modules, &self.pipeline_layout);
-            self.generic[search as usize]
-                .get_or_insert_with(|| build_pipelines(device, modules, layout, search));
-        }
+        let ready = |k: usize| (specialised.as_ref()).is_some_and(|set| set[k].is_some());
+        let mut entries: Vec<usize> = (chunks.iter())
+            .map(|c| c.pipeline as usize)
+            .filter(|&k| !ready(k))
+            .collect();
+        entries.sort_unstable();
+        entries.dedup();
+        let generic = self.shaders.build_generic(params.search != 0, &entries);
         DispatchPipelines {
             specialised,
-            generic: self.generic[search as usize].as_ref(),
+            generic,
         }
     }
 
@@ -372,12 +426,7 @@ impl FieldPipelines {
             Specialise::IfReady => None,
             Specialise::Blocking => {
                 let start = std::time::Instant::now();
-                let set = build_specialised(
-                    &self.device,
-                    &self.modules,
-                    &self.pipeline_layout,
-                    structure,
-                );
+                let set = build_specialised(&self.shaders, structure);
                 Some(
                     self.specialised
                         .keep(structure, set, start.elapsed().as_secs_f64() * 1e3),
@@ -396,24 +445,19 @@ impl FieldPipelines {
     /// llvmpipe) holds up every frame, and wgpu gives up on the context after 6 s with a panic; the generic
     /// pipelines draw there instead.
     pub(super) fn start_compile(&mut self, structure: Structure) {
-        let device = &self.device;
         if self.specialised.compiling.is_some()
-            || device.adapter_info().backend == wgpu::Backend::Gl
+            || self.shaders.device.adapter_info().backend == wgpu::Backend::Gl
         {
             return;
         }
         let slot = CompileSlot::default();
-        let (device, modules, layout) = (
-            device.clone(),
-            self.modules.clone(),
-            self.pipeline_layout.clone(),
-        );
+        let shaders = self.shaders.clone();
         let out = slot.clone();
         let spawned = std::thread::Builder::new()
             .name("energywave field compile".into())
             .spawn(move || {
                 let start = std::time::Instant::now();
-                let p = build_specialised(&device, &modules, &layout, structure);
+                let p = build_specialised(&shaders, structure);
                 if let Ok(mut slot) = out.lock() {
                     *slot = Some((p, start.elapsed().as_secs_f64() * 1e3));
                 }

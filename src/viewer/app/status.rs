@@ -3,6 +3,12 @@
 
 use super::*;
 
+/// The color of the note of what is being prepared.
+const PREPARING: Color32 = Color32::from_rgb(240, 200, 90);
+
+/// How often the status line looks again while something is being prepared.
+const PREPARING_POLL: std::time::Duration = std::time::Duration::from_millis(50);
+
 /// The color of an error notice.
 const ERROR_NOTICE: Color32 = Color32::from_rgb(255, 110, 90);
 
@@ -88,6 +94,17 @@ impl ViewerApp {
                     "While the view moves, a coarser field sized to hold the frame rate, refined to \
                      the full one within about a second once it holds still (View: fast preview)",
                 );
+            if let Some(what) = self.report().preparing {
+                ui.separator();
+                ui.label(egui::RichText::new(format!("preparing {what}\u{2026}")).color(PREPARING))
+                    .on_hover_text(
+                        "Worked out on a thread of its own: until it is ready the picture shows the objects \
+                         unshadowed (or with their light before the edit) and the particles as they were; \
+                         the next edit starts it anew",
+                    );
+                // The frames that pick it up when it is ready (the viewer draws none of its own when idle).
+                ui.ctx().request_repaint_after(PREPARING_POLL);
+            }
             ui.separator();
             ui.label(self.doc.title());
             if let Some((text, false)) = self.notice() {

@@ -1,0 +1,157 @@
+//! A picture at once: every shipped preset opens in the viewer (offscreen, through the window's own frame code)
+//! to a first frame that shows the scene, not an empty background: close to the picture it settles to, though
+//! coarse, with what takes long to work out (the objects' light and translucent tables, the particles' light)
+//! prepared on a thread of its own while the frames draw stand-ins, and named in the status line until it is
+//! ready. How long the first frame takes is measured by the bench (`energywave bench --only first-picture`), not
+//! asserted here.
+
+mod common;
+
+use energywave::scene::Scene;
+use energywave::viewer::Document;
+use energywave::viewer::offscreen::OffscreenViewer;
+
+const SIZE: [u32; 2] = [800, 500];
+
+/// A viewer on `scene`, its overlays (grid, guides, handles) off: the viewport shows the scene alone.
+fn open(mut scene: Scene) -> OffscreenViewer {
+    // A field that settles quickly on a software rasteriser; the first frame is coarse whatever W is.
+    scene.billboard.resolution = scene.billboard.resolution.min(96);
+    let mut v = OffscreenViewer::new(Document::new(scene, None), SIZE[0], SIZE[1])
+        .expect("a GPU adapter (lavapipe in CI)");
+    v.app.view_mut().show_overlays = false;
+    v
+}
+
+/// The viewport's pixels (RGB, 0-255) and its size.
+fn viewport(v: &OffscreenViewer) -> Vec<[f64; 3]> {
+    (v.viewport_pixels().unwrap().chunks_exact(4))
+        .map(|p| [p[0], p[1], p[2]].map(f64::from))
+        .collect()
+}
+
+/// The mean absolute difference of two pictures of one size, per channel in 0-255.
+fn mean_difference(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
+    assert_eq!(a.len(), b.len());
+    let sum: f64 = (a.iter().zip(b))
+        .map(|(p, q)| (0..3).map(|c| (p[c] - q[c]).abs()).sum::<f64>())
+        .sum();
+    sum / (3 * a.len()) as f64
+}
+
+/// Frames until the picture is whole and nothing is being prepared.
+fn settle(v: &mut OffscreenViewer) {
+    for _ in 0..2000 {
+        if v.app.report().settled() {
+            return;
+        }
+        v.frame().unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    }
+    panic!("the viewer never settled: {:?}", v.app.report());
+}
+
+#[test]
+fn every_shipped_preset_opens_to_a_picture_of_the_scene_in_its_first_frame() {
+    let mut presets = common::shipped();
+    presets.push(("(embedded default)".into(), Scene::default_scene()));
+    let mut failures = Vec::new();
+    for (name, scene) in presets {
+        let background = scene.colors.background.map(|c| c * 255.0);
+        let mut v = open(scene);
+        let start = std::time::Instant::now();
+        v.frame().unwrap();
+        let first_seconds = start.elapsed().as_secs_f64();
+        let first = viewport(&v);
+        let first_report = v.app.report();
+        settle(&mut v);
+        // The size the viewport settles at (the first frame lays the UI out) shows the settled picture.
+        v.frame().unwrap();
+        let settled = viewport(&v);
+        let empty = vec![background; settled.len()];
+        let away = mean_difference(&settled, &empty);
+        eprintln!(
+            "{name}: first frame {:.0} ms{}",
+            first_seconds * 1e3,
+            (first_report.preparing.as_ref()).map_or(String::new(), |p| format!(", preparing {p}"))
+        );
+        if away < 1.0 {
+            failures.push(format!(
+                "{name}: the settled picture is the background ({away:.2}/255 off it)"
+            ));
+            continue;
+        }
+        if first.len() != settled.len() {
+            failures.push(format!(
+                "{name}: the first frame's viewport has {} pixels, the settled one {}",
+                first.len(),
+                settled.len()
+            ));
+            continue;
+        }
+        // Not empty: much nearer the scene's picture than the background is.
+        let off = mean_difference(&first, &settled);
+        if off > 0.35 * away {
+            failures.push(format!(
+                "{name}: the first frame is {off:.2}/255 off the settled picture, which is {away:.2}/255 off the \
+                 empty background"
+            ));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// The translucent preset's tables take seconds on a CPU: its first frame does not wait for them, shows the cube
+/// with a stand-in light and says what is being prepared; once ready, the picture is the one a render that waits
+/// gives, and the note is gone.
+#[test]
+fn a_translucent_preset_draws_at_once_and_its_tables_arrive_later() {
+    let mut v = open(common::shipped_scene("translucent_cavity.toml"));
+    v.frame().unwrap();
+    let first = v.app.report();
+    let what = first
+        .preparing
+        .expect("the first frame says what is being prepared");
+    assert!(what.contains("translucent tables"), "{what}");
+    settle(&mut v);
+    assert!(v.app.report().preparing.is_none());
+    v.frame().unwrap();
+    let shown = viewport(&v);
+    // The viewport rendered again with every preparation waited for (a screenshot's path).
+    let waited: Vec<[f64; 3]> = (v.viewport_image().unwrap().iter())
+        .map(|p| [0, 1, 2].map(|c| (p[c].clamp(0.0, 1.0) as f64 * 255.0).round()))
+        .collect();
+    let off = mean_difference(&shown, &waited);
+    assert!(
+        off < 1.0,
+        "the settled viewport is {off:.2}/255 off a render that waited"
+    );
+}
+
+/// An edit while the objects' light is being worked out starts it anew for the edited scene, and what is shown
+/// once settled is the edited scene's light, not the first request's.
+#[test]
+fn an_edit_while_preparing_is_what_gets_prepared() {
+    let mut v = open(common::shipped_scene("translucent_cavity.toml"));
+    v.frame().unwrap();
+    assert!(v.app.report().preparing.is_some());
+    // A clearer cube: more of the ring's light reaches the far faces.
+    let objects = &mut v.app.scene_mut().objects;
+    let t = objects
+        .iter_mut()
+        .find_map(|o| o.translucent.as_mut())
+        .expect("the preset's cube is translucent");
+    t.extinction *= 0.25;
+    v.frame().unwrap();
+    settle(&mut v);
+    v.frame().unwrap();
+    let shown = viewport(&v);
+    let waited: Vec<[f64; 3]> = (v.viewport_image().unwrap().iter())
+        .map(|p| [0, 1, 2].map(|c| (p[c].clamp(0.0, 1.0) as f64 * 255.0).round()))
+        .collect();
+    let off = mean_difference(&shown, &waited);
+    assert!(
+        off < 1.0,
+        "the settled viewport is {off:.2}/255 off the edited scene's render"
+    );
+}
