@@ -1,5 +1,6 @@
 //! energywave: design and render "energy wave" effects by the method of Watanabe, Abe and Konno (2016).
 //!
+//! - [`background`]: work resolved off the caller's thread, the newest request first (the viewer's preparation);
 //! - [`field`]: the energy field psi and its sources, in f64 (the reference the GPU is checked against);
 //! - [`integrate`]: how a scene integrates along a texel's ray: the integrator, its settings, the decay zeta;
 //! - [`geometry`]: the camera, the billboard and its rays;
@@ -8,7 +9,6 @@
 //! - [`particles`]: particle sets (smoke, dust, sparks): the particle, its kernel and the kernel's integrals;
 //! - [`animation`]: time in scenes: the travelling pulse (thesis eq. 5.1) and keyframes;
 //! - [`scene`]: TOML scene files, validated field by field;
-//! - [`background`]: work resolved off the caller's thread, the newest request first (the viewer's preparation);
 //! - [`frame`]: a frame's resolved setup (billboard, reach, terms, clips), worked out once for every renderer;
 //! - [`reference`]: the f64 CPU renderer, one module for each GPU pass it twins, named alike;
 //! - [`gpu`]: the same on the GPU: WGSL compute and render passes, headless or in the viewer;

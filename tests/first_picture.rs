@@ -2,8 +2,8 @@
 //! to a first frame that shows the scene, not an empty background: close to the picture it settles to, though
 //! coarse, with what takes long to work out (the objects' light and translucent tables, the particles' light)
 //! prepared on a thread of its own while the frames draw stand-ins, and named in the status line until it is
-//! ready. How long the first frame takes is measured by the bench (`energywave bench --only first-picture`), not
-//! asserted here.
+//! ready. How long the first picture takes is measured by `cargo run --release --example first_picture` (and
+//! printed here with `-- --nocapture`), not asserted.
 
 mod common;
 

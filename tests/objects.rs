@@ -1730,3 +1730,53 @@ fn more_sources_of_a_kind_than_the_object_pass_unrolls_light_alike() {
         mean(&one)
     );
 }
+
+/// A color edit relights nothing in the viewer: the last light recolored is the light `lit` works out for the
+/// recolored objects (the same surface, shadows and scattered light; albedo and lit colors to rounding), an
+/// opaque floor and sphere and a translucent sphere beside them alike; anything else changed is not a recolor.
+#[test]
+fn recolored_light_is_the_light_of_the_recolored_objects() {
+    let mut scene = common::shipped_scene("floor.toml");
+    let mut glass = scene.objects[1].clone();
+    glass.shape = Shape::Sphere {
+        center: DVec3::new(1.2, 0.6, 0.4),
+        radius: 0.5,
+    };
+    glass.translucent = Some(Box::new(energywave::objects::translucent::Translucent {
+        extinction: 2.0,
+        eta: 1.4,
+        resolution: Some(8),
+        ..Default::default()
+    }));
+    scene.objects.push(glass);
+    let before = lit(scene.lit_inputs());
+    let key = energywave::objects::LitKey::of(scene.lit_inputs());
+    let mut recolored = scene.clone();
+    recolored.objects[0].color = [0.1, 0.9, 0.3];
+    recolored.objects[1].color = [0.0, 0.4, 1.0];
+    recolored.objects[2].color = [1.0, 0.5, 0.0];
+    assert!(key.matches_but_colors(recolored.lit_inputs()));
+    let want = lit(recolored.lit_inputs());
+    let got = before.recolored(&recolored.objects);
+    assert_eq!(got.surface, want.surface);
+    assert_eq!(got.light.shadow, want.light.shadow);
+    assert_eq!(got.light.subsurface, want.light.subsurface);
+    assert_eq!(got.light.eta, want.light.eta);
+    let close = |a: &[[f64; 3]], b: &[[f64; 3]]| {
+        (a.iter().zip(b))
+            .all(|(p, q)| (0..3).all(|c| (p[c] - q[c]).abs() <= 1e-12 * (1.0 + q[c].abs())))
+    };
+    assert!(close(&got.light.albedo, &want.light.albedo));
+    // The old colors' channels were all nonzero but the sphere's blue: lit colors scaled along exactly there.
+    assert!(close(&got.light.colors, &want.light.colors));
+    // Not a recolor: a moved object, another source.
+    let mut moved = recolored.clone();
+    moved.objects[2].shape = Shape::Sphere {
+        center: DVec3::new(1.3, 0.6, 0.4),
+        radius: 0.5,
+    };
+    assert!(!key.matches_but_colors(moved.lit_inputs()));
+    let mut brighter = recolored.clone();
+    brighter.sources.tori[0].coefficient *= 2.0;
+    assert!(!key.matches_but_colors(brighter.lit_inputs()));
+}

@@ -102,18 +102,19 @@ impl SceneRenderer {
     }
 
     /// Works out what takes long, the objects' light (with their translucent tables) and the particles' light,
-    /// on threads of their own from now on (the viewer): a frame waits for it a moment, then draws stand-ins
-    /// (the objects unshadowed, the particles it drew before) until it is ready; `preparing` says what is.
-    pub fn prepare_in_background(&mut self) {
-        self.objects.light_in_background();
-        self.particles.light_in_background();
+    /// on threads of their own from now on (the viewer): a frame waits for it up to `wait`
+    /// (`object_pass::WAIT` in the viewer: a small scene's is ready within it), then draws stand-ins (the
+    /// objects unshadowed, the particles it drew before) until it is ready; `preparing` says what is.
+    pub fn prepare_in_background(&mut self, wait: std::time::Duration) {
+        self.objects.light_in_background(wait);
+        self.particles.light_in_background(wait);
     }
 
     /// What is being worked out on the background threads, for the status line; `None` when the frames show
     /// everything as it is.
     pub fn preparing(&self) -> Option<String> {
         let parts: Vec<&str> = (self.objects.busy().into_iter())
-            .chain(self.particles.busy().then_some("the particles' light"))
+            .chain(self.particles.busy().then_some("particles' light"))
             .collect();
         (!parts.is_empty()).then(|| parts.join(", "))
     }

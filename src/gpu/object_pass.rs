@@ -123,14 +123,18 @@ pub struct ObjectPass {
     key: Option<LitKey>,
     /// The objects the buffers hold, lit or not.
     drawn: Option<Vec<crate::objects::Object>>,
+    /// The last light worked out whole (the viewer recolors it at once where only the objects' colors change).
+    lit: Option<(LitKey, Arc<Lit>)>,
     /// Where the objects' light (and their translucent tables) is worked out on a thread of its own (the
     /// viewer's, `light_in_background`); `None`: before the frame records (renders and exports).
     background: Option<Latest<LitKey, Lit>>,
+    /// How long a frame waits for the light being worked out before it draws a stand-in.
+    wait: std::time::Duration,
 }
 
-/// How long a frame waits for the objects' light being worked out before it draws a stand-in: a few spheres'
-/// and boxes' is ready within it, translucent tables and large meshes are not.
-const WAIT: std::time::Duration = std::time::Duration::from_millis(30);
+/// How long a viewer's frame waits for the objects' light being worked out before it draws a stand-in: a few
+/// spheres' and boxes' is ready within it, translucent tables and large meshes are not.
+pub const WAIT: std::time::Duration = std::time::Duration::from_millis(30);
 
 /// `ObjectParams`' binding, after the field's.
 const PARAMS_BINDING: u32 = 14;
@@ -176,7 +180,9 @@ impl ObjectPass {
             energy: [0.0; 3],
             key: None,
             drawn: None,
+            lit: None,
             background: None,
+            wait: WAIT,
         }
     }
 
@@ -263,7 +269,14 @@ impl ObjectPass {
             }
             Some(worker) => {
                 let key = LitKey::of(scene.lit_inputs());
-                match worker.request_within(&key, WAIT, || light_job(device, queue, scene)) {
+                // A color edit (a picker dragged) needs no new light: the last one, recolored, is exact.
+                let recolored = (self.lit.as_ref())
+                    .filter(|(k, _)| k.matches_but_colors(scene.lit_inputs()))
+                    .map(|(_, lit)| Poll::Ready(Arc::new(lit.recolored(&scene.objects))));
+                let lit = recolored.unwrap_or_else(|| {
+                    worker.request_within(&key, self.wait, || light_job(device, queue, scene))
+                });
+                match lit {
                     Poll::Ready(lit) => lit,
                     // These objects drawn already, by older light: kept until the new light is ready, the
                     // pixels shaded by the sources of now.
@@ -281,15 +294,20 @@ impl ObjectPass {
             }
         };
         self.upload(device, setup, &lit);
-        self.key = Some(LitKey::of(scene.lit_inputs()));
+        let key = LitKey::of(scene.lit_inputs());
+        if self.background.is_some() {
+            self.lit = Some((key.clone(), lit));
+        }
+        self.key = Some(key);
         self.count > 0
     }
 
-    /// Works out the objects' light on a thread of its own from now on: `prepare` waits for it a moment
-    /// (`WAIT`), then draws the objects unshadowed (or with their older light) until it is ready. `busy` says
-    /// while it is not.
-    pub fn light_in_background(&mut self) {
+    /// Works out the objects' light on a thread of its own from now on: `prepare` waits for it up to `wait`
+    /// (`WAIT` for the viewer), then draws the objects unshadowed (or with their older light) until it is ready.
+    /// `busy` says while it is not.
+    pub fn light_in_background(&mut self, wait: std::time::Duration) {
         self.background = Some(Latest::new("energywave objects' light"));
+        self.wait = wait;
     }
 
     /// What is being worked out for the objects, if anything (they are drawn with a stand-in meanwhile).
@@ -297,8 +315,8 @@ impl ObjectPass {
         let translucent = (self.drawn.iter().flatten()).any(|o| o.translucent.is_some());
         match self.background.as_ref().is_some_and(|w| w.busy()) {
             false => None,
-            true if translucent => Some("the objects' light and translucent tables"),
-            true => Some("the objects' light and shadows"),
+            true if translucent => Some("objects' light, translucent tables"),
+            true => Some("objects' light"),
         }
     }
 

@@ -97,6 +97,8 @@ pub struct ParticlePass {
     /// Where the particles' light is worked out on a thread of its own (the viewer's, `light_in_background`);
     /// `None`: before the frame records (renders and exports).
     background: Option<Latest<LightKey, Option<Arc<LitParticles>>>>,
+    /// How long a frame waits for the light being worked out before it draws without it.
+    wait: std::time::Duration,
 }
 
 /// What the particles' light depends on (`particles::light::shared_lit`).
@@ -107,10 +109,6 @@ struct LightKey {
     palette: crate::field::Palette,
     epsilon: f64,
 }
-
-/// How long a frame waits for the particles' light being worked out before it draws without it: a small set's,
-/// or a live set's from one frame to the next, is ready within it.
-const WAIT: std::time::Duration = std::time::Duration::from_millis(30);
 
 /// A smoke image read back: per pixel, rows from the top, the front and the back image's (radiance,
 /// transmittance); with the plan it was made by.
@@ -247,13 +245,15 @@ impl ParticlePass {
             chunk_stride,
             prepared: None,
             background: None,
+            wait: super::object_pass::WAIT,
         }
     }
 
-    /// Works out the particles' light on a thread of its own from now on: `prepare` waits for it a moment
-    /// (`WAIT`), then draws the particles it drew before (none the first time) until it is ready.
-    pub fn light_in_background(&mut self) {
+    /// Works out the particles' light on a thread of its own from now on: `prepare` waits for it up to `wait`,
+    /// then draws the particles it drew before (none the first time) until it is ready.
+    pub fn light_in_background(&mut self, wait: std::time::Duration) {
         self.background = Some(Latest::new("energywave particles' light"));
+        self.wait = wait;
     }
 
     /// Whether the particles' light is being worked out.
@@ -290,7 +290,7 @@ impl ParticlePass {
                 (!cancel.stopped()).then(|| shared_lit(&k.sets, &k.sources, k.palette, k.epsilon))
             }
         };
-        match worker.request_within(&key, WAIT, job) {
+        match worker.request_within(&key, self.wait, job) {
             Poll::Ready(lit) => (*lit).clone(),
             Poll::Pending => self.prepared.as_ref().map(|p| p.lit.clone()),
         }

@@ -400,6 +400,20 @@ impl LitKey {
         }
     }
 
+    /// Whether `inputs` differ from these at most in the objects' colors: the same surface, shadows and light
+    /// carried through (which the colors do not change), only the albedo new (`Lit::recolored`).
+    pub fn matches_but_colors(&self, inputs: LitInputs<'_>) -> bool {
+        let uncolored = |o: &Object| Object {
+            color: [0.0; 3],
+            ..o.clone()
+        };
+        self.sources == *inputs.sources
+            && self.palette == inputs.palette
+            && self.epsilon == inputs.epsilon
+            && self.objects.len() == inputs.objects.len()
+            && (self.objects.iter().zip(inputs.objects)).all(|(a, b)| uncolored(a) == uncolored(b))
+    }
+
     /// Whether `inputs` would light the objects the same, without cloning them.
     pub fn matches(&self, inputs: LitInputs<'_>) -> bool {
         self.objects == inputs.objects
@@ -415,6 +429,42 @@ pub fn focus(sources: &crate::field::Sources) -> (DVec3, f64) {
     match sources.bounds() {
         Some((lo, hi)) => ((lo + hi) * 0.5, ((hi - lo).length() * 0.5).max(0.1)),
         None => (DVec3::ZERO, 1.0),
+    }
+}
+
+impl Lit {
+    /// This light with the objects' colors of `objects` (the same objects otherwise, `LitKey::matches_but_colors`):
+    /// each vertex's albedo its object's new color times its tint, as `lit` makes it, and its lit color scaled
+    /// along (exactly, except in a channel whose old albedo was 0, which keeps the ambient part alone). The
+    /// shadows and the light scattered through translucent objects do not depend on the colors.
+    pub fn recolored(&self, objects: &[Object]) -> Lit {
+        let surface = &self.surface;
+        let old = &self.light;
+        let albedo: Vec<[f64; 3]> = (0..old.albedo.len())
+            .map(|k| {
+                let color = objects[surface.object[k] as usize].color;
+                std::array::from_fn(|c| color[c] * surface.tint[k][c])
+            })
+            .collect();
+        let colors = (0..albedo.len())
+            .map(|k| match old.eta[k] > 0.0 {
+                true => lighting::shaded_translucent(albedo[k], old.subsurface[k], old.eta[k], 1.0),
+                false => std::array::from_fn(|c| match old.albedo[k][c] != 0.0 {
+                    true => old.colors[k][c] * albedo[k][c] / old.albedo[k][c],
+                    false => albedo[k][c] * lighting::AMBIENT,
+                }),
+            })
+            .collect();
+        Lit {
+            surface: surface.clone(),
+            light: lighting::VertexLights {
+                albedo,
+                shadow: old.shadow.clone(),
+                colors,
+                subsurface: old.subsurface.clone(),
+                eta: old.eta.clone(),
+            },
+        }
     }
 }
 

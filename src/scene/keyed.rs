@@ -402,6 +402,13 @@ impl Scene {
     /// The scene as it is at `frame`: keyed parameters and pulses applied, live particle sets simulated up to
     /// it (`scene::live`; a fractional frame takes the whole frame before it); a clone of the scene if still.
     pub fn at_frame(&self, frame: f64) -> Scene {
+        self.at_frame_unless(frame, &Default::default())
+            .expect("never cancelled")
+    }
+
+    /// `at_frame`, its simulation stopped once `cancel` is raised (then `None`): the viewer simulates on a
+    /// thread of its own, and an edit or another frame asked for cancels what is under way.
+    pub fn at_frame_unless(&self, frame: f64, cancel: &crate::background::Cancel) -> Option<Scene> {
         let mut s = self.clone();
         if let Some(a) = &self.animation {
             a.apply(&mut s, frame);
@@ -413,7 +420,26 @@ impl Scene {
                 } else {
                     0.0
                 };
-                set.live = Some(super::live::particles_at(self, i, whole as u32));
+                set.live = Some(super::live::particles_at(self, i, whole as u32, cancel)?);
+            }
+        }
+        Some(s)
+    }
+
+    /// `at_frame` with each live set's particles as `live` gives them (by the set's index), not simulated:
+    /// the viewer's frame while the simulation of that frame runs on a thread of its own.
+    pub fn at_frame_with(
+        &self,
+        frame: f64,
+        live: impl Fn(usize) -> Option<std::sync::Arc<Vec<crate::particles::Particle>>>,
+    ) -> Scene {
+        let mut s = self.clone();
+        if let Some(a) = &self.animation {
+            a.apply(&mut s, frame);
+        }
+        for (i, set) in s.particles.iter_mut().enumerate() {
+            if set.life().is_some() {
+                set.live = live(i);
             }
         }
         s

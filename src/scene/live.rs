@@ -103,19 +103,31 @@ const STRIDE: u32 = 8;
 
 static KEPT: Mutex<Vec<Kept>> = Mutex::new(Vec::new());
 
-/// The particles of live set `index` of `scene` at `frame`, as the renderers draw them.
-pub(super) fn particles_at(scene: &Scene, index: usize, frame: u32) -> Arc<Vec<Particle>> {
-    let (state, timeline) = reached(scene, index, frame);
-    Arc::new(state.particles(&timeline))
+/// The particles of live set `index` of `scene` at `frame`, as the renderers draw them; `None` once `cancel`
+/// is raised (the states reached so far are kept).
+pub(super) fn particles_at(
+    scene: &Scene,
+    index: usize,
+    frame: u32,
+    cancel: &crate::background::Cancel,
+) -> Option<Arc<Vec<Particle>>> {
+    let (state, timeline) = reached(scene, index, frame, cancel);
+    (state.frame == frame).then(|| Arc::new(state.particles(&timeline)))
 }
 
 /// The state of live set `index` of `scene` at `frame`: from the nearest kept state at or before it.
 pub fn state_at(scene: &Scene, index: usize, frame: u32) -> Arc<State> {
-    reached(scene, index, frame).0
+    reached(scene, index, frame, &Default::default()).0
 }
 
-/// The state of live set `index` of `scene` at `frame`, and the scene as its simulation reads it.
-fn reached(scene: &Scene, index: usize, frame: u32) -> (Arc<State>, SceneTimeline) {
+/// The state of live set `index` of `scene` at `frame`, and the scene as its simulation reads it; an earlier
+/// state where `cancel` stopped it.
+fn reached(
+    scene: &Scene,
+    index: usize,
+    frame: u32,
+    cancel: &crate::background::Cancel,
+) -> (Arc<State>, SceneTimeline) {
     let key = Key::of(scene, index);
     let timeline = SceneTimeline::new(scene, &key);
     let from = KEPT.lock().ok().and_then(|kept| {
@@ -124,7 +136,7 @@ fn reached(scene: &Scene, index: usize, frame: u32) -> (Arc<State>, SceneTimelin
     });
     let mut state = from.unwrap_or_else(|| Arc::new(live::start(&timeline)));
     let mut reached = vec![state.clone()];
-    while state.frame < frame {
+    while state.frame < frame && !cancel.stopped() {
         state = Arc::new(live::advance(&state, &timeline));
         reached.push(state.clone());
     }

@@ -11,6 +11,7 @@ use crate::gpu::{
     BlitPass, FieldInputs, FieldRenderer, FrameTargets, GpuError, GridPass, SceneRenderer,
     Specialise, Upsample, UpsampleClips, checked, read_frame,
 };
+use crate::integrate::Integrator;
 use crate::scene::Scene;
 
 /// Format of the offscreen viewport: half floats, so the blend and the grid keep more than 8 bits.
@@ -91,6 +92,9 @@ pub struct ViewportGpu {
     /// What the frame in `targets` shows besides the field's texels: while neither changes, it is shown again
     /// as it is, not composed anew (a still view costs the copy into the window alone).
     composed: Option<Composed>,
+    /// Whether the scene's field pipelines are being compiled on a thread of their own (its frames drawn by
+    /// Simpson's rule meanwhile: `stand_in`).
+    compiling: bool,
     /// Whether the last frame was still: its field's texels and what it composed the same as the frame's
     /// before. The first still frame composes anyway, so that the frame budget measures what an idle frame
     /// costs; the next ones show it again.
@@ -149,7 +153,7 @@ impl ViewportGpu {
             .set_specialise(Specialise::IfReady);
         // Nor on the objects' or particles' light: the first frame shows the scene at once, with stand-ins
         // until they are ready.
-        scene_renderer.prepare_in_background();
+        scene_renderer.prepare_in_background(crate::gpu::object_pass::WAIT);
         let shaders = scene_renderer.field().shaders();
         Self {
             scene_renderer,
@@ -166,6 +170,7 @@ impl ViewportGpu {
             showing_preview: None,
             composed: None,
             still: false,
+            compiling: false,
         }
     }
 
@@ -217,8 +222,29 @@ impl ViewportGpu {
         shown: Option<Composed>,
     ) -> Result<(), GpuError> {
         let [width, height] = targets.size;
-        let setup = FrameSetup::placed(&view.scene, width as f64 / height as f64);
-        let result = self.integrate(device, queue, encoder, view, &setup, progressive);
+        let aspect = width as f64 / height as f64;
+        let setup = FrameSetup::placed(&view.scene, aspect);
+        let inputs = FieldInputs::of(&setup);
+        // While the scene's field pipelines compile on a thread of their own (the adaptive integrator's take
+        // half a second and more on a software rasteriser), its frames are drawn by Simpson's rule, whose
+        // pipeline compiles in a tenth of that: no frame waits on the compile. Not for screenshots (not
+        // `progressive`), nor on GL, where nothing compiles off this thread.
+        let main = self.scene_renderer.field();
+        self.compiling = progressive
+            && view.scene.integration.integrator == Integrator::Adaptive
+            && !main.compiled_for(&inputs)
+            && main.compile_for_in_background(&inputs);
+        let simpson;
+        let (setup, inputs) = match self.compiling {
+            false => (setup, inputs),
+            true => {
+                simpson = stand_in(&view.scene);
+                let setup = FrameSetup::placed(&simpson, aspect);
+                let inputs = FieldInputs::of(&setup);
+                (setup, inputs)
+            }
+        };
+        let result = self.integrate(device, queue, encoder, view, &setup, inputs, progressive);
         let unchanged = shown.as_ref().is_some_and(|c| c.shows(view, targets.size));
         let still = matches!(&result, Ok((_, _, false))) && unchanged;
         let again = still && self.still;
@@ -231,7 +257,11 @@ impl ViewportGpu {
         } else {
             self.compose(device, queue, encoder, view, &setup, targets, result)
         };
-        let preparing = self.scene_renderer.preparing();
+        let preparing = match (self.compiling, self.scene_renderer.preparing()) {
+            (true, Some(what)) => Some(format!("shaders, {what}")),
+            (true, None) => Some("shaders".into()),
+            (false, what) => what,
+        };
         if result.is_ok() {
             // The scene is copied only when what the frame shows changed; a frame with stand-ins is composed
             // again, until what they stand for is ready.
@@ -302,10 +332,10 @@ impl ViewportGpu {
         encoder: &mut wgpu::CommandEncoder,
         view: &ViewportView,
         setup: &FrameSetup,
+        inputs: FieldInputs,
         progressive: bool,
     ) -> Result<(wgpu::TextureView, u32, bool), GpuError> {
         let scene = setup.scene;
-        let inputs = FieldInputs::of(setup);
         let moved = self.last_inputs.as_ref() != Some(&inputs);
         self.last_inputs = Some(inputs.clone());
         let now = Instant::now();
@@ -399,6 +429,12 @@ impl ViewportGpu {
         Ok((view.clone(), side, fresh))
     }
 
+    /// How long a frame waits for what is prepared on other threads before it draws stand-ins (`WAIT` by
+    /// default; a test that checks what a frame shows after an edit waits as long as it takes).
+    pub fn set_preparation_wait(&mut self, wait: std::time::Duration) {
+        self.scene_renderer.prepare_in_background(wait);
+    }
+
     /// Copies the last recorded frame into egui's render pass (whose viewport egui has set to the callback's
     /// rectangle).
     pub fn paint(&self, pass: &mut wgpu::RenderPass<'static>) {
@@ -442,6 +478,15 @@ impl ViewportGpu {
         }
         read_frame(device, queue, &targets)
     }
+}
+
+/// `scene` integrated by Simpson's rule at its division count (the papers' 200 by default), the rest as it is:
+/// what a frame shows while the adaptive integrator's pipelines compile.
+fn stand_in(scene: &Scene) -> Scene {
+    let mut s = scene.clone();
+    s.integration.integrator = Integrator::Simpson;
+    s.integration.jitter = None;
+    s
 }
 
 /// The ground grid (the plane y = 0) and the axes, scaled to the scene: ten steps each way, the step a power

@@ -14,6 +14,8 @@ use energywave::viewer::{Document, ViewerApp};
 
 pub const SIZE: Vec2 = Vec2::new(1000.0, 700.0);
 pub const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
+/// As long as anything the harness's viewer prepares takes.
+pub const PREPARATION_WAIT: std::time::Duration = std::time::Duration::from_secs(600);
 
 /// The default scene at a resolution and division count that render quickly on a software rasteriser.
 pub fn light_scene() -> Scene {
@@ -30,15 +32,18 @@ pub fn harness(scene: Scene) -> Harness<'static, ViewerApp> {
     let report = Arc::new(Mutex::new(ViewportReport::default()));
     let mut renderer =
         egui_wgpu::Renderer::new(&ctx.device, FORMAT, egui_wgpu::RendererOptions::PREDICTABLE);
-    renderer
-        .callback_resources
-        .insert(ViewportGpu::new(&ctx.device, FORMAT, report.clone()));
-    let app = ViewerApp::new(
+    // The UI tests check what a frame shows after an edit: its frames wait for what the viewer prepares on
+    // other threads (a window's frames wait a moment, then draw stand-ins: tests/first_picture.rs).
+    let mut viewport = ViewportGpu::new(&ctx.device, FORMAT, report.clone());
+    viewport.set_preparation_wait(PREPARATION_WAIT);
+    renderer.callback_resources.insert(viewport);
+    let mut app = ViewerApp::new(
         Document::new(scene, None),
         ctx.adapter_summary(),
         ctx.device.limits().max_texture_dimension_2d,
         report,
     );
+    app.set_preparation_wait(PREPARATION_WAIT);
     let render_state = egui_wgpu::RenderState {
         available_adapters: vec![ctx.adapter.clone()],
         adapter: ctx.adapter,

@@ -389,6 +389,18 @@ impl FieldRenderer {
         true
     }
 
+    /// Whether a dispatch of `inputs` would find its pipelines built, with nothing to compile first.
+    pub fn compiled_for(&self, inputs: &FieldInputs) -> bool {
+        (self.pipelines).ready_for(&inputs.0.params, &inputs.0.chunks)
+    }
+
+    /// Starts compiling on a thread of its own the pipelines a dispatch of `inputs` would compile first
+    /// (`compiled_for` says when they are ready). Returns false where nothing can be compiled off this thread
+    /// (GL): a dispatch compiles them there.
+    pub fn compile_for_in_background(&self, inputs: &FieldInputs) -> bool {
+        (self.pipelines).build_in_background(&inputs.0.params, &inputs.0.chunks)
+    }
+
     /// The shaders and generic pipelines this renderer draws with, to share with other renderers on its device.
     pub fn shaders(&self) -> Arc<FieldShaders> {
         self.pipelines.shaders.clone()

@@ -4,6 +4,7 @@
 use super::super::context::{field_storage_entry, pass_layouts, storage_buffer_entry};
 use super::super::shaders;
 use crate::frame::FrameSetup;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, OnceLock};
 
 use super::gpu_data::*;
@@ -190,6 +191,11 @@ impl SpecialisedPipelines {
         Some(p)
     }
 
+    /// The pipelines of `structure` if ready, the order left as it is.
+    pub(super) fn peek(&self, structure: &Structure) -> Option<std::sync::Arc<SpecialisedSet>> {
+        (self.ready.iter()).find_map(|(s, p)| (s == structure).then(|| p.clone()))
+    }
+
     pub(super) fn keep(
         &mut self,
         structure: Structure,
@@ -275,6 +281,8 @@ pub struct FieldShaders {
     /// the search for a curve's brightest point (scenes without the continuous W form compile none of it), and
     /// with it.
     generic: [[OnceLock<wgpu::ComputePipeline>; 3]; 2],
+    /// Which of them a thread of their own is building (`build_in_background`).
+    building: [[AtomicBool; 3]; 2],
 }
 
 impl std::fmt::Debug for FieldShaders {
@@ -307,7 +315,44 @@ impl FieldShaders {
             layout,
             pipeline_layout,
             generic: Default::default(),
+            building: Default::default(),
         })
+    }
+
+    /// Whether the generic pipelines of `entries` (with the search or without) are built.
+    fn built(&self, search: bool, entries: &[usize]) -> bool {
+        (entries.iter()).all(|&k| self.generic[search as usize][k].get().is_some())
+    }
+
+    /// Starts building the generic pipelines of `entries` that are not built on a thread of their own (one
+    /// thread for them all, unless one is building them already). Returns false on GL, where every call holds
+    /// the one context: nothing is started there, they are built when first dispatched.
+    fn build_in_background(self: &Arc<Self>, search: bool, entries: &[usize]) -> bool {
+        if self.device.adapter_info().backend == wgpu::Backend::Gl {
+            return false;
+        }
+        let building = &self.building[search as usize];
+        let start: Vec<usize> = (entries.iter().copied())
+            .filter(|&k| self.generic[search as usize][k].get().is_none())
+            .filter(|&k| !building[k].swap(true, Ordering::SeqCst))
+            .collect();
+        if start.is_empty() {
+            return true;
+        }
+        let shaders = self.clone();
+        let spawned = std::thread::Builder::new()
+            .name("energywave field compile".into())
+            .spawn(move || {
+                shaders.build_generic(search, &start);
+            });
+        if spawned.is_err() {
+            // Built at the first dispatch instead.
+            entries
+                .iter()
+                .for_each(|&k| building[k].store(false, Ordering::SeqCst));
+            return false;
+        }
+        true
     }
 
     /// The generic pipelines of `entries` (with the brightest-point search or without), each compiled now if it
@@ -387,6 +432,35 @@ impl FieldPipelines {
         &self.shaders.layout
     }
 
+    /// The entry points that dispatch `chunks` and have no specialised pipeline ready (`specialised`).
+    fn generic_entries(specialised: Option<&SpecialisedSet>, chunks: &[Chunk]) -> Vec<usize> {
+        let ready = |k: usize| specialised.is_some_and(|set| set[k].is_some());
+        let mut entries: Vec<usize> = (chunks.iter())
+            .map(|c| c.pipeline as usize)
+            .filter(|&k| !ready(k))
+            .collect();
+        entries.sort_unstable();
+        entries.dedup();
+        entries
+    }
+
+    /// Whether a dispatch of `chunks` with `params` would find its pipelines built (no compile first).
+    pub(super) fn ready_for(&self, params: &FieldParams, chunks: &[Chunk]) -> bool {
+        let specialised = (self.specialise != Specialise::Off)
+            .then(|| self.specialised.peek(&Structure::of(params)))
+            .flatten();
+        let entries = Self::generic_entries(specialised.as_deref(), chunks);
+        self.shaders.built(params.search != 0, &entries)
+    }
+
+    /// Starts building on a thread of its own what a dispatch of `chunks` with `params` would compile first;
+    /// whether it will be ready without a compile on this thread (false on GL).
+    pub(super) fn build_in_background(&self, params: &FieldParams, chunks: &[Chunk]) -> bool {
+        let entries = Self::generic_entries(None, chunks);
+        self.shaders
+            .build_in_background(params.search != 0, &entries)
+    }
+
     /// The pipelines that dispatch `chunks` of inputs with these `params`: the specialised ones where
     /// `specialise` allows and they are ready, the generic ones (built now, those of the entry points the chunks
     /// use, if they are not yet) for the rest.
@@ -396,13 +470,7 @@ impl FieldPipelines {
         chunks: &[Chunk],
     ) -> DispatchPipelines<'_> {
         let specialised = self.specialised_for(Structure::of(params));
-        let ready = |k: usize| (specialised.as_ref()).is_some_and(|set| set[k].is_some());
-        let mut entries: Vec<usize> = (chunks.iter())
-            .map(|c| c.pipeline as usize)
-            .filter(|&k| !ready(k))
-            .collect();
-        entries.sort_unstable();
-        entries.dedup();
+        let entries = Self::generic_entries(specialised.as_deref(), chunks);
         let generic = self.shaders.build_generic(params.search != 0, &entries);
         DispatchPipelines {
             specialised,

@@ -26,6 +26,7 @@ use super::recent::RecentFiles;
 use super::timeline::{self, ExportJob, Playback};
 use super::viewport::{ViewportCallback, ViewportReport, ViewportView};
 use crate::animation::SourceKind;
+use crate::background::{Latest, Poll};
 use crate::geometry::Camera;
 use crate::integrate::Integrator;
 use crate::scene::Scene;
@@ -86,6 +87,9 @@ struct Notice {
 }
 
 /// The viewer's state.
+/// How long a frame waits for its live particle sets' simulation before it shows the particles last simulated.
+const LIVE_WAIT: std::time::Duration = std::time::Duration::from_millis(30);
+
 pub struct ViewerApp {
     doc: Document,
     history: History,
@@ -136,6 +140,14 @@ pub struct ViewerApp {
     animation_form: AnimationForm,
     /// An export running beside the UI.
     export_job: Option<ExportJob>,
+    /// The live particle sets simulated up to the frame shown, on a thread of their own (a scrub far into a
+    /// dense set steps the simulation for seconds): the scene at a frame, by the document's scene and the frame.
+    live: Latest<(Scene, u32), Scene>,
+    /// The live sets' particles last simulated, each set's by its index: what a frame shows while the
+    /// simulation of its own runs.
+    live_shown: Mutex<Vec<Option<Arc<Vec<crate::particles::Particle>>>>>,
+    /// How long a frame waits for the simulation (`LIVE_WAIT`).
+    live_wait: std::time::Duration,
 }
 
 const SAVE: KeyboardShortcut = KeyboardShortcut::new(Modifiers::COMMAND, Key::S);
@@ -190,16 +202,57 @@ impl ViewerApp {
             playback: Playback::default(),
             animation_form: AnimationForm::default(),
             export_job: None,
+            live: Latest::new("energywave live particles"),
+            live_shown: Mutex::new(Vec::new()),
+            live_wait: LIVE_WAIT,
         }
     }
 
-    /// The scene as shown: the document's scene at the current frame of its animation.
+    /// The scene as shown: the document's scene at the current frame of its animation. Its live particle sets
+    /// are simulated on a thread of their own: a frame waits for them a moment (`LIVE_WAIT`: a frame of
+    /// playback, or a short scrub, is ready within it), then shows the particles last simulated until they are
+    /// ready; another frame or an edit cancels the simulation under way.
     pub fn frame_scene(&self) -> Scene {
-        if self.doc.scene.is_animated() {
-            self.doc.scene.at_frame(self.playback.frame as f64)
-        } else {
-            self.doc.scene.clone()
+        let scene = &self.doc.scene;
+        if !scene.is_animated() {
+            return scene.clone();
         }
+        let frame = self.playback.frame;
+        if !scene.particles.iter().any(|p| p.life().is_some()) {
+            return scene.at_frame(frame as f64);
+        }
+        let key = (scene.clone(), frame);
+        let job = || {
+            let (scene, frame) = key.clone();
+            move |cancel: &crate::background::Cancel| scene.at_frame_unless(frame as f64, cancel)
+        };
+        match self.live.request_within(&key, self.live_wait, job) {
+            Poll::Ready(shown) => {
+                if let Ok(mut kept) = self.live_shown.lock() {
+                    *kept = shown.particles.iter().map(|p| p.live.clone()).collect();
+                }
+                (*shown).clone()
+            }
+            Poll::Pending => {
+                let kept = self
+                    .live_shown
+                    .lock()
+                    .map(|k| k.clone())
+                    .unwrap_or_default();
+                scene.at_frame_with(frame as f64, |i| kept.get(i).cloned().flatten())
+            }
+        }
+    }
+
+    /// How long a frame waits for its live sets' simulation before it shows older particles (`LIVE_WAIT` by
+    /// default; a test that checks the particles of a frame waits as long as it takes).
+    pub fn set_preparation_wait(&mut self, wait: std::time::Duration) {
+        self.live_wait = wait;
+    }
+
+    /// What the app itself is preparing on a thread of its own (the live sets' simulation), for the status line.
+    pub fn preparing(&self) -> Option<&'static str> {
+        self.live.busy().then_some("particle simulation")
     }
 
     /// Playback, the transport bar and any export running: once per frame, before the rest of the UI.

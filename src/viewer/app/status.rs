@@ -59,7 +59,8 @@ impl ViewerApp {
         Some(v[v.len() / 2])
     }
 
-    /// The status line: frame time, adapter, billboard and integrator, the file, and a notice; an error notice
+    /// The status line: frame time, what is being prepared, adapter, billboard and integrator, the file, and a
+    /// notice; an error notice
     /// whole beneath it.
     pub(super) fn status_bar(&mut self, ui: &mut egui::Ui) {
         ui.horizontal(|ui| {
@@ -69,6 +70,21 @@ impl ViewerApp {
                 }
                 _ => ui.monospace("   -- ms     -- FPS"),
             };
+            let preparing = match (self.preparing(), self.report().preparing) {
+                (Some(a), Some(b)) => Some(format!("{a}, {b}")),
+                (a, b) => a.map(String::from).or(b),
+            };
+            if let Some(what) = preparing {
+                ui.separator();
+                ui.label(egui::RichText::new(format!("preparing {what}\u{2026}")).color(PREPARING))
+                    .on_hover_text(
+                        "Worked out on a thread of its own: until it is ready the picture shows the objects \
+                         unshadowed (or with their light before the edit) and the particles as they were; \
+                         the next edit starts it anew",
+                    );
+                // The frames that pick it up when it is ready (the viewer draws none of its own when idle).
+                ui.ctx().request_repaint_after(PREPARING_POLL);
+            }
             ui.separator();
             ui.label(&self.adapter);
             ui.separator();
@@ -94,17 +110,6 @@ impl ViewerApp {
                     "While the view moves, a coarser field sized to hold the frame rate, refined to \
                      the full one within about a second once it holds still (View: fast preview)",
                 );
-            if let Some(what) = self.report().preparing {
-                ui.separator();
-                ui.label(egui::RichText::new(format!("preparing {what}\u{2026}")).color(PREPARING))
-                    .on_hover_text(
-                        "Worked out on a thread of its own: until it is ready the picture shows the objects \
-                         unshadowed (or with their light before the edit) and the particles as they were; \
-                         the next edit starts it anew",
-                    );
-                // The frames that pick it up when it is ready (the viewer draws none of its own when idle).
-                ui.ctx().request_repaint_after(PREPARING_POLL);
-            }
             ui.separator();
             ui.label(self.doc.title());
             if let Some((text, false)) = self.notice() {
