@@ -4,7 +4,9 @@
 //!
 //! One worker thread per `Latest`, one job at a time. A request for another key cancels the job under way (it
 //! stops at its next check, `Cancel::stopped`) and replaces any request queued behind it: a burst of edits
-//! works out the last one, not each in turn. Only the result of the newest request is kept.
+//! works out the last one, not each in turn. Only the result of the newest request is kept. The job and its
+//! parallel loops (rayon) run on threads of the worker's own at a lower priority than the caller's, so that the
+//! frames drawn meanwhile keep the cores (on a software rasteriser, the GPU's work is threads on them too).
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Condvar, Mutex};
@@ -181,8 +183,27 @@ where
     }
 }
 
-/// The worker: the queued job, one at a time, until the owner is gone.
-fn work<K: Clone, V>(shared: &(Mutex<State<K, V>>, Condvar)) {
+/// Lowers the calling thread's priority (Linux: its nice value, per thread), so that a job leaves the cores to
+/// the frames; elsewhere it runs at the priority it has.
+fn lower_priority() {
+    #[cfg(target_os = "linux")]
+    // SAFETY: gettid and setpriority take no pointers; setpriority on this thread's own id changes its nice
+    // value alone, and a failure (not permitted) leaves it as it was.
+    unsafe {
+        let tid = libc::syscall(libc::SYS_gettid) as libc::id_t;
+        libc::setpriority(libc::PRIO_PROCESS, tid, 10);
+    }
+}
+
+/// The worker: the queued job, one at a time, until the owner is gone; its parallel loops on a pool of its own,
+/// every thread at a lower priority.
+fn work<K: Clone, V: Send>(shared: &(Mutex<State<K, V>>, Condvar)) {
+    lower_priority();
+    let pool = rayon::ThreadPoolBuilder::new()
+        .thread_name(|k| format!("energywave background {k}"))
+        .start_handler(|_| lower_priority())
+        .build()
+        .ok();
     let (lock, wake) = shared;
     loop {
         let (key, job, cancel) = {
@@ -202,7 +223,10 @@ fn work<K: Clone, V>(shared: &(Mutex<State<K, V>>, Condvar)) {
                 };
             }
         };
-        let value = job(&cancel);
+        let value = match &pool {
+            Some(pool) => pool.install(|| job(&cancel)),
+            None => job(&cancel),
+        };
         let Ok(mut state) = lock.lock() else { return };
         state.running = None;
         if let Some(v) = value.filter(|_| !cancel.stopped()) {

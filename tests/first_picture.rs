@@ -155,3 +155,48 @@ fn an_edit_while_preparing_is_what_gets_prepared() {
         "the settled viewport is {off:.2}/255 off the edited scene's render"
     );
 }
+
+/// A scrub far into a dense live set (10,000 particles alive) shows the frame at once, with the particles last
+/// simulated, while the simulation runs on a thread of its own; a second scrub before it ends cancels it; once
+/// done, the frame shown is the scene simulated up to the frame asked for last, exactly.
+#[test]
+fn a_scrub_into_a_dense_live_set_does_not_wait_for_its_simulation() {
+    let text = format!(
+        "{}\n[[particles]]\nemitter = \"box\"\ncenter = [0.0, -1.0, 0.0]\nsize = [5.0, 0.5, 2.0]\n\
+         particle_radius = [0.04, 0.08]\ndensity = [2.0, 4.0]\ncolor = [0.7, 0.7, 0.75]\nseed = 1\n\n\
+         [particles.life]\nrate = 5000.0\nlifetime = 2.0\nspeed = [0.5, 1.0]\ndirection = [0.0, 1.0, 0.0]\n\
+         cone = 40.0\nacceleration = [0.0, -0.5, 0.0]\ndrag = 0.5\n\n[particles.life.turbulence]\nscale = 0.8\n\
+         strength = 0.5\nspeed = 1.0\n\n[animation]\nframe_rate = 30.0\nframes = 200\n",
+        energywave::scene::DEFAULT_SCENE_TOML
+    );
+    let scene = Scene::parse(&text, std::path::Path::new("dense live set")).unwrap();
+    let mut v = open(scene.clone());
+    v.frame().unwrap();
+    let at_start = v.app.frame_scene().particles[0].live.clone();
+    v.app.seek(190);
+    let shown = v.app.frame_scene();
+    assert_eq!(
+        v.app.preparing(),
+        Some("particle simulation"),
+        "190 frames of 10,000 particles are simulated on a thread of their own"
+    );
+    assert_eq!(
+        shown.particles[0].live, at_start,
+        "the particles last simulated are shown meanwhile"
+    );
+    // The scene's other animated parts are at the frame asked for at once.
+    assert_eq!(shown.sources, scene.at_frame(190.0).sources);
+    v.app.seek(120);
+    for _ in 0..3000 {
+        v.frame().unwrap();
+        if v.app.preparing().is_none() {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    assert!(v.app.preparing().is_none(), "the simulation ends");
+    let shown = v.app.frame_scene();
+    let want = scene.at_frame(120.0);
+    assert!(want.particles[0].live.as_ref().unwrap().len() > 5000);
+    assert_eq!(shown.particles[0].live, want.particles[0].live);
+}

@@ -485,6 +485,7 @@ impl ViewportGpu {
 fn stand_in(scene: &Scene) -> Scene {
     let mut s = scene.clone();
     s.integration.integrator = Integrator::Simpson;
+    s.integration.divisions = s.integration.divisions.min(64);
     s.integration.jitter = None;
     s
 }

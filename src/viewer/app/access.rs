@@ -73,6 +73,12 @@ impl ViewerApp {
         &self.playback
     }
 
+    /// Goes to `frame` of the animation (clamped to it), as the scrubber does.
+    pub fn seek(&mut self, frame: u32) {
+        let frames = self.doc.scene.frame_count();
+        self.playback.seek(frame, frames);
+    }
+
     /// Shows the animation's next frame (around its end), as playback does when the viewer keeps up with the
     /// animation's rate; returns that rate, or none without an animation.
     pub fn step_animation(&mut self) -> Option<f64> {
