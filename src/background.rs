@@ -357,7 +357,7 @@ mod tests {
             }
         });
         for _ in 0..5 {
-            assert!(matches!(ready(&l, &1), None));
+            assert!(ready(&l, &1).is_none());
         }
         release.send(()).unwrap();
         l.wait();

@@ -325,6 +325,8 @@ impl ViewportGpu {
     /// when it shows the scene (or, with `progressive` off, always: it is integrated whole now), else what the
     /// frame budget allows (`progressive::FrameBudget::plan`), a coarse field upsampled while the view moves
     /// and bands of the full one once it holds still.
+    // The GPU handles, the frame's view, setup and inputs are all distinct.
+    #[allow(clippy::too_many_arguments)]
     fn integrate(
         &mut self,
         device: &wgpu::Device,
