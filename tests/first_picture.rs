@@ -113,19 +113,24 @@ fn a_translucent_preset_draws_at_once_and_its_tables_arrive_later() {
         .preparing
         .expect("the first frame says what is being prepared");
     assert!(what.contains("translucent tables"), "{what}");
-    settle(&mut v);
+    let (off, _) = settled_against_waited(&mut v);
     assert!(v.app.report().preparing.is_none());
-    v.frame().unwrap();
-    let shown = viewport(&v);
-    // The viewport rendered again with every preparation waited for (a screenshot's path).
-    let waited: Vec<[f64; 3]> = (v.viewport_image().unwrap().iter())
-        .map(|p| [0, 1, 2].map(|c| (p[c].clamp(0.0, 1.0) as f64 * 255.0).round()))
-        .collect();
-    let off = mean_difference(&shown, &waited);
     assert!(
         off < 1.0,
         "the settled viewport is {off:.2}/255 off a render that waited"
     );
+}
+
+/// Settles `v`, then compares its viewport with the viewport rendered again with every preparation waited for
+/// (a screenshot's path): the mean difference, and the waited picture.
+fn settled_against_waited(v: &mut OffscreenViewer) -> (f64, Vec<[f64; 3]>) {
+    settle(v);
+    v.frame().unwrap();
+    let shown = viewport(v);
+    let waited: Vec<[f64; 3]> = (v.viewport_image().unwrap().iter())
+        .map(|p| [0, 1, 2].map(|c| (p[c].clamp(0.0, 1.0) as f64 * 255.0).round()))
+        .collect();
+    (mean_difference(&shown, &waited), waited)
 }
 
 /// An edit while the objects' light is being worked out starts it anew for the edited scene, and what is shown
@@ -136,23 +141,26 @@ fn an_edit_while_preparing_is_what_gets_prepared() {
     v.frame().unwrap();
     assert!(v.app.report().preparing.is_some());
     // A clearer cube: more of the ring's light reaches the far faces.
-    let objects = &mut v.app.scene_mut().objects;
-    let t = objects
-        .iter_mut()
-        .find_map(|o| o.translucent.as_mut())
-        .expect("the preset's cube is translucent");
-    t.extinction *= 0.25;
+    fn extinction(v: &mut OffscreenViewer) -> &mut f64 {
+        let objects = &mut v.app.scene_mut().objects;
+        let t = objects.iter_mut().find_map(|o| o.translucent.as_mut());
+        &mut t.expect("the preset's cube is translucent").extinction
+    }
+    let before = *extinction(&mut v);
+    *extinction(&mut v) = 0.25 * before;
     v.frame().unwrap();
-    settle(&mut v);
-    v.frame().unwrap();
-    let shown = viewport(&v);
-    let waited: Vec<[f64; 3]> = (v.viewport_image().unwrap().iter())
-        .map(|p| [0, 1, 2].map(|c| (p[c].clamp(0.0, 1.0) as f64 * 255.0).round()))
-        .collect();
-    let off = mean_difference(&shown, &waited);
+    let (off, edited) = settled_against_waited(&mut v);
     assert!(
         off < 1.0,
         "the settled viewport is {off:.2}/255 off the edited scene's render"
+    );
+    // And the edit shows: the scene before it renders otherwise.
+    *extinction(&mut v) = before;
+    let (_, unedited) = settled_against_waited(&mut v);
+    let edit = mean_difference(&edited, &unedited);
+    assert!(
+        edit > 3.0 * off.max(0.3),
+        "the edit changes the picture by {edit:.2}/255"
     );
 }
 

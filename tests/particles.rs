@@ -490,3 +490,51 @@ fn the_glow_behind_the_smoke_is_dimmed_by_it_and_the_glow_in_front_is_not() {
     );
     assert!(errors[2] < 1e-4, "{errors:?}");
 }
+
+/// The viewer's stand-in light (no shadows between particles) is the shadowed light where nothing stands
+/// between a particle and the sources, and never less: on paper 002_'s cloud, every particle at least as lit
+/// and its far side much brighter than in its own shadow; a lone particle dimmed by its own ball alone, every
+/// channel by the same factor (one light).
+#[test]
+fn unshadowed_particle_light_bounds_the_shadowed_light() {
+    use energywave::particles::light::{light_particles, light_particles_unshadowed};
+    let scene = common::shipped_scene("paper_cloud.toml");
+    let lights = energywave::objects::lighting::Lights::new(
+        &scene.sources,
+        scene.colors.palette(),
+        scene.integration.epsilon,
+    );
+    let particles = energywave::particles::gather(&scene.particles, &scene.sources);
+    assert!(particles.len() >= 500);
+    let shadowed = light_particles(&lights, &particles);
+    let open = light_particles_unshadowed(&lights, &particles);
+    let mut darker = 0;
+    for (s, o) in shadowed.iter().zip(&open) {
+        for c in 0..3 {
+            assert!(
+                o.iso[c] >= s.iso[c] - 1e-12 * o.iso[c].abs(),
+                "{} < {}",
+                o.iso[c],
+                s.iso[c]
+            );
+        }
+        darker += (s.iso[0] < 0.5 * o.iso[0]) as usize;
+    }
+    assert!(
+        darker > particles.len() / 10,
+        "{darker} particles in the cloud's own shadow"
+    );
+    let alone = &particles[..1];
+    let (s, o) = (
+        light_particles(&lights, alone),
+        light_particles_unshadowed(&lights, alone),
+    );
+    let ratio = s[0].iso[0] / o[0].iso[0];
+    assert!(ratio > 0.5 && ratio <= 1.0, "{ratio}");
+    for c in 0..3 {
+        assert!((s[0].iso[c] - ratio * o[0].iso[c]).abs() < 1e-12);
+        for k in 0..6 {
+            assert!((s[0].m[c][k] - ratio * o[0].m[c][k]).abs() < 1e-12);
+        }
+    }
+}

@@ -16,7 +16,8 @@ use super::formats::FRAME_FORMAT;
 use crate::background::{Latest, Poll};
 use crate::frame::FrameSetup;
 use crate::objects::lighting::AMBIENT;
-use crate::particles::light::{LitParticles, shared_lit};
+use crate::objects::lighting::Lights;
+use crate::particles::light::{LitParticles, light_particles_unshadowed, shared_lit};
 use crate::particles::view::{SmokeView, TILE};
 
 /// Rust mirrors of `shaders/particles.wgsl` (keep in sync; `tests/gpu_layout.rs` checks them).
@@ -250,7 +251,8 @@ impl ParticlePass {
     }
 
     /// Works out the particles' light on a thread of its own from now on: `prepare` waits for it up to `wait`,
-    /// then draws the particles it drew before (none the first time) until it is ready.
+    /// then draws the particles it drew before (the first time, lit as if they shadowed nothing) until it is
+    /// ready.
     pub fn light_in_background(&mut self, wait: std::time::Duration) {
         self.background = Some(Latest::new("energywave particles' light"));
         self.wait = wait;
@@ -292,7 +294,17 @@ impl ParticlePass {
         };
         match worker.request_within(&key, self.wait, job) {
             Poll::Ready(lit) => (*lit).clone(),
-            Poll::Pending => self.prepared.as_ref().map(|p| p.lit.clone()),
+            Poll::Pending => match &self.prepared {
+                // The particles drawn before, as they were lit.
+                Some(p) => Some(p.lit.clone()),
+                // None yet: these, lit as if they shadowed nothing (a small part of the cost).
+                None => {
+                    let particles = crate::particles::gather(&key.sets, &key.sources);
+                    let lights = Lights::new(&key.sources, key.palette, key.epsilon);
+                    let lights = light_particles_unshadowed(&lights, &particles);
+                    (!particles.is_empty()).then(|| Arc::new(LitParticles { particles, lights }))
+                }
+            },
         }
     }
 

@@ -48,33 +48,46 @@ pub fn light_particles(lights: &Lights, particles: &[Particle]) -> Vec<ParticleL
         .map_init(
             || (vec![0u64; particles.len()], 0u64),
             |(seen, stamp), p| {
-                let mut out = ParticleLight::default();
-                for sample in lights.at(p.position) {
+                light_one(lights, p, |from| {
                     *stamp += 1;
-                    let depth =
-                        grid.optical_depth(particles, sample.from, p.position, seen, *stamp);
-                    let reach = 0.75 * sample.strength * (-depth).exp();
-                    let l = (p.position - sample.from).normalize_or_zero();
-                    let outer = [
-                        l.x * l.x,
-                        l.y * l.y,
-                        l.z * l.z,
-                        l.x * l.y,
-                        l.x * l.z,
-                        l.y * l.z,
-                    ];
-                    for c in 0..3 {
-                        let k = sample.color[c] * reach;
-                        out.iso[c] += k;
-                        for (m, o) in out.m[c].iter_mut().zip(outer) {
-                            *m += k * o;
-                        }
-                    }
-                }
-                out
+                    grid.optical_depth(particles, from, p.position, seen, *stamp)
+                })
             },
         )
         .collect()
+}
+
+/// Every particle's light from `lights` as if nothing stood between: `light_particles` without the particles'
+/// shadows, a small part of its cost. What the viewer draws for the moment it works out the shadowed light.
+pub fn light_particles_unshadowed(lights: &Lights, particles: &[Particle]) -> Vec<ParticleLight> {
+    (particles.par_iter())
+        .map(|p| light_one(lights, p, |_| 0.0))
+        .collect()
+}
+
+/// The light of `p` from `lights`, each sample dimmed by the optical depth `depth` gives from its place.
+fn light_one(lights: &Lights, p: &Particle, mut depth: impl FnMut(DVec3) -> f64) -> ParticleLight {
+    let mut out = ParticleLight::default();
+    for sample in lights.at(p.position) {
+        let reach = 0.75 * sample.strength * (-depth(sample.from)).exp();
+        let l = (p.position - sample.from).normalize_or_zero();
+        let outer = [
+            l.x * l.x,
+            l.y * l.y,
+            l.z * l.z,
+            l.x * l.y,
+            l.x * l.z,
+            l.y * l.z,
+        ];
+        for c in 0..3 {
+            let k = sample.color[c] * reach;
+            out.iso[c] += k;
+            for (m, o) in out.m[c].iter_mut().zip(outer) {
+                *m += k * o;
+            }
+        }
+    }
+    out
 }
 
 /// The particles binned by the cells of a uniform grid their balls overlap, for the shadow rays.
