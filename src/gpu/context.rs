@@ -40,8 +40,9 @@ pub enum GpuError {
 }
 
 impl GpuError {
-    /// No adapter on any of `backends`.
+    /// No adapter on any of `backends` (those this build has: Vulkan and GL on Linux).
     pub fn no_adapter(backends: wgpu::Backends) -> Self {
+        let backends = backends & wgpu::Instance::enabled_backend_features();
         let names = [
             (wgpu::Backends::VULKAN, "Vulkan"),
             (wgpu::Backends::GL, "GL"),
