@@ -262,13 +262,13 @@ impl ObjectPass {
             let built = self.build_pipelines(device, self.structure);
             self.pipelines.insert(self.structure, built);
         }
+        let key = LitKey::of(scene.lit_inputs());
         let lit = match &self.background {
             None => {
                 fill_tables(device, queue, &scene.objects, None);
                 Arc::new(lit(scene.lit_inputs()))
             }
             Some(worker) => {
-                let key = LitKey::of(scene.lit_inputs());
                 // A color edit (a picker dragged) needs no new light: the last one, recolored, is exact.
                 let recolored = (self.lit.as_ref())
                     .filter(|(k, _)| k.matches_but_colors(scene.lit_inputs()))
@@ -294,7 +294,6 @@ impl ObjectPass {
             }
         };
         self.upload(device, setup, &lit);
-        let key = LitKey::of(scene.lit_inputs());
         if self.background.is_some() {
             self.lit = Some((key.clone(), lit));
         }

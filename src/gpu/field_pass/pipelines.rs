@@ -339,15 +339,15 @@ impl FieldShaders {
         if start.is_empty() {
             return true;
         }
-        let shaders = self.clone();
+        let (shaders, started) = (self.clone(), start.clone());
         let spawned = std::thread::Builder::new()
             .name("energywave field compile".into())
             .spawn(move || {
-                shaders.build_generic(search, &start);
+                shaders.build_generic(search, &started);
             });
         if spawned.is_err() {
-            // Built at the first dispatch instead.
-            entries
+            // Built at the first dispatch instead: only the flags this call raised are lowered.
+            start
                 .iter()
                 .for_each(|&k| building[k].store(false, Ordering::SeqCst));
             return false;
