@@ -13,8 +13,23 @@ use std::process::Command;
 use energywave::particles::Particle;
 use energywave::particles::curl::Turbulence;
 use energywave::particles::live::advect;
-use energywave::scene::{Scene, live_state_at};
+use energywave::scene::{Scene, Simulations};
 use glam::DVec3;
+
+thread_local! {
+    /// The states this test thread's simulations reached, kept as a renderer's frame cache keeps them: a test
+    /// that reads several frames of one set steps from the last.
+    static SIMULATIONS: Simulations = Simulations::new();
+}
+
+/// The state of live set `index` of `scene` at `frame` (`Simulations::state_at`).
+fn live_state_at(
+    scene: &Scene,
+    index: usize,
+    frame: u32,
+) -> std::sync::Arc<energywave::particles::live::State> {
+    SIMULATIONS.with(|s| s.state_at(scene, index, frame))
+}
 
 fn parse(text: &str) -> Result<Scene, String> {
     Scene::parse(text, Path::new("live.toml")).map_err(|e| e.to_string())

@@ -1,7 +1,7 @@
 //! The crate's modules form no circle: each top-level module uses only those `src/lib.rs` lists before it, and
-//! within each module's folder its files use one another without a circle. Read from the sources themselves:
-//! `crate::name` paths between top-level modules, `super::name` and `crate::folder::name` between the files of
-//! a folder, comments left out.
+//! within every folder, at any depth, its files and subfolders use one another without a circle (a subfolder
+//! counted as one, with everything under it). Read from the sources themselves: every `crate::`, `super::` and
+//! `self::` path, resolved to the module it names, comments left out.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -100,6 +100,149 @@ fn circle(graph: &BTreeMap<String, BTreeSet<String>>) -> Option<Vec<String>> {
         .find_map(|n| visit(n, graph, &mut Vec::new(), &mut done))
 }
 
+/// The module a file under `src` is (`a/b.rs` and `a/b/mod.rs` are both `a::b`).
+fn module_of(rel: &Path) -> Vec<String> {
+    let mut parts: Vec<String> = rel
+        .iter()
+        .map(|p| p.to_string_lossy().trim_end_matches(".rs").to_owned())
+        .collect();
+    if parts.last().is_some_and(|p| p == "mod") {
+        parts.pop();
+    }
+    parts
+}
+
+/// Every module path `code` (a file of module `module`) names: `crate::a::b`, `super::c`, `self::d`, each item of
+/// a group `{e, f::g}`, resolved from the crate's root.
+fn paths_in(code: &str, module: &[String]) -> Vec<Vec<String>> {
+    fn tail(rest: &str, mut base: Vec<String>, out: &mut Vec<Vec<String>>) {
+        let mut rest = rest;
+        loop {
+            if let Some(group) = rest.strip_prefix('{') {
+                let (mut depth, mut start) = (0, 0);
+                for (i, c) in group.char_indices() {
+                    match c {
+                        '{' => depth += 1,
+                        '}' if depth == 0 => {
+                            tail(group[start..i].trim(), base.clone(), out);
+                            return;
+                        }
+                        '}' => depth -= 1,
+                        ',' if depth == 0 => {
+                            tail(group[start..i].trim(), base.clone(), out);
+                            start = i + 1;
+                        }
+                        _ => {}
+                    }
+                }
+                return;
+            }
+            let ident: String = rest
+                .chars()
+                .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
+                .collect();
+            if ident.is_empty() {
+                out.push(base);
+                return;
+            }
+            match ident.as_str() {
+                "super" => {
+                    base.pop();
+                }
+                "self" => {}
+                _ => base.push(ident.clone()),
+            }
+            rest = &rest[ident.len()..];
+            match rest.strip_prefix("::") {
+                Some(r) => rest = r,
+                None => {
+                    out.push(base);
+                    return;
+                }
+            }
+        }
+    }
+    let mut out = Vec::new();
+    for (at, _) in code.match_indices("::") {
+        let head: String = code[..at]
+            .chars()
+            .rev()
+            .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
+            .collect::<String>()
+            .chars()
+            .rev()
+            .collect();
+        let before = code[..at - head.len()].chars().last();
+        // A path's first segment: not the middle of a path (`a::super`), nor the tail of a longer name.
+        if before.is_some_and(|c| c == ':' || c.is_ascii_alphanumeric() || c == '_') {
+            continue;
+        }
+        let base = match head.as_str() {
+            "crate" => Vec::new(),
+            "super" => module[..module.len().saturating_sub(1)].to_vec(),
+            "self" => module.to_vec(),
+            _ => continue,
+        };
+        tail(&code[at + 2..], base, &mut out);
+    }
+    out
+}
+
+/// Every circle among the files and subfolders of each folder under `src` (at any depth), as
+/// `folder: a -> b -> a`.
+fn circles_in_folders(src: &Path) -> Vec<String> {
+    // What each file's module names, by the file's module.
+    let mut named: Vec<(Vec<String>, Vec<Vec<String>>)> = Vec::new();
+    for file in rust_files(src) {
+        let rel = file.strip_prefix(src).unwrap();
+        if rel.components().count() == 1
+            && (rel == Path::new("lib.rs") || rel == Path::new("main.rs"))
+        {
+            continue;
+        }
+        let module = module_of(rel);
+        let text = code(&std::fs::read_to_string(&file).unwrap());
+        named.push((module.clone(), paths_in(&text, &module)));
+    }
+    // Every folder (a module with files of its own below it), the root's top-level modules included.
+    let mut folders: BTreeSet<Vec<String>> = BTreeSet::new();
+    for (module, _) in &named {
+        for depth in 0..module.len() {
+            folders.insert(module[..depth].to_vec());
+        }
+    }
+    let mut found = Vec::new();
+    for folder in &folders {
+        // Its units: the modules directly in it (a file, or a subfolder with everything under it); its own
+        // mod.rs, which declares them, is none of them.
+        let units: BTreeSet<String> = (named.iter())
+            .filter(|(m, _)| m.len() > folder.len() && m.starts_with(folder))
+            .map(|(m, _)| m[folder.len()].clone())
+            .collect();
+        let mut graph: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
+        for (module, paths) in &named {
+            if module.len() <= folder.len() || !module.starts_with(folder) {
+                continue;
+            }
+            let unit = &module[folder.len()];
+            let uses = graph.entry(unit.clone()).or_default();
+            for p in paths {
+                if p.len() > folder.len()
+                    && p.starts_with(folder)
+                    && units.contains(&p[folder.len()])
+                    && p[folder.len()] != *unit
+                {
+                    uses.insert(p[folder.len()].clone());
+                }
+            }
+        }
+        if let Some(c) = circle(&graph) {
+            found.push(format!("src/{}: {}", folder.join("/"), c.join(" -> ")));
+        }
+    }
+    found
+}
+
 #[test]
 fn the_modules_form_no_circle_and_come_in_the_order_lib_rs_lists() {
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
@@ -174,6 +317,8 @@ fn the_modules_form_no_circle_and_come_in_the_order_lib_rs_lists() {
             .collect();
         assert_eq!(circle(&graph), None, "a circle of files in src/{folder}/");
     }
+    let circles = circles_in_folders(&src);
+    assert!(circles.is_empty(), "circles of files: {circles:#?}");
     // The reading finds what is there: the viewer uses the GPU, gpu's frame its object pass.
     assert!(uses["viewer"].contains("gpu") && uses["scene"].contains("objects"));
     assert!(within["gpu"]["frame"].contains("object_pass"));
@@ -197,4 +342,82 @@ fn a_circle_is_found() {
         names_after("use crate::{a, b::c};\nx_crate::z crate::d::e", "crate"),
         ["a", "b", "d"].map(String::from).into()
     );
+}
+
+#[test]
+fn a_circle_planted_in_a_subfolder_is_found() {
+    let dir = std::env::temp_dir().join(format!("energywave-module-graph-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let src = dir.join("src");
+    let write = |path: &str, text: &str| {
+        let path = src.join(path);
+        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+        std::fs::write(path, text).unwrap();
+    };
+    write("lib.rs", "pub mod a;\n");
+    write("a/mod.rs", "pub mod b;\npub mod p;\n");
+    write(
+        "a/p.rs",
+        "use super::b::x::X; // a use of the subfolder b\n",
+    );
+    write("a/b/mod.rs", "pub mod x;\npub mod y;\npub mod z;\n");
+    // Two files of a/b/ that use each other: one by `super`, one by its whole path.
+    write("a/b/x.rs", "use super::{y::Y, z};\npub struct X;\n");
+    write("a/b/y.rs", "pub struct Y(crate::a::b::x::X);\n");
+    write("a/b/z.rs", "// crate::a::b::x is named in a comment only\n");
+    let circles = circles_in_folders(&src);
+    assert_eq!(circles, vec!["src/a/b: x -> y -> x".to_owned()]);
+    // A circle through a subfolder: a file of a/b/ uses a/p.rs, which uses a/b/.
+    write("a/b/z.rs", "use super::super::p;\n");
+    let circles = circles_in_folders(&src);
+    assert!(
+        circles.contains(&"src/a: b -> p -> b".to_owned()),
+        "{circles:?}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Every process-wide static in `src` that can hold what a frame resolved (a `Mutex`, `RwLock`, `OnceLock`,
+/// `LazyLock`, `RefCell` or a `thread_local!`), as `file: line`. What a frame resolves is kept in the frame cache
+/// its renderer owns (`frame::FrameCache`); a flag (an atomic) is no cache.
+fn static_caches(src: &Path) -> Vec<String> {
+    let mut found = Vec::new();
+    for file in rust_files(src) {
+        let text = code(&std::fs::read_to_string(&file).unwrap());
+        for line in text.lines() {
+            let t = line.trim_start();
+            let t = t.strip_prefix("pub ").unwrap_or(t);
+            let t = t.strip_prefix("pub(crate) ").unwrap_or(t);
+            let holds = [
+                "Mutex", "RwLock", "OnceLock", "LazyLock", "RefCell", "OnceCell",
+            ]
+            .iter()
+            .any(|k| line.contains(k));
+            if (t.starts_with("static ") && holds) || t.contains("thread_local!") {
+                let rel = file.strip_prefix(src).unwrap().display();
+                found.push(format!("{rel}: {}", line.trim()));
+            }
+        }
+    }
+    found
+}
+
+#[test]
+fn no_static_cache_in_src() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let found = static_caches(&src);
+    assert!(found.is_empty(), "static caches: {found:#?}");
+    // The reading finds one where there is one.
+    let dir = std::env::temp_dir().join(format!("energywave-statics-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(
+        dir.join("kept.rs"),
+        "fn f() {\n    static CACHE: Mutex<Vec<u8>> = Mutex::new(Vec::new());\n}\nstatic STOP: AtomicBool = AtomicBool::new(false);\n",
+    )
+    .unwrap();
+    assert_eq!(
+        static_caches(&dir),
+        vec!["kept.rs: static CACHE: Mutex<Vec<u8>> = Mutex::new(Vec::new());".to_owned()]
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
 }

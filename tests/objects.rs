@@ -8,7 +8,7 @@ use std::path::Path;
 use std::sync::{Mutex, MutexGuard, OnceLock};
 
 use energywave::field::{Curve, Line, Point, Sources, Torus};
-use energywave::frame::FrameSetup;
+use energywave::frame::{FrameCache, FrameSetup};
 use energywave::gpu::HeadlessRenderer;
 use energywave::integrate::Integrator;
 use energywave::objects::lighting::{AMBIENT, Lights};
@@ -414,7 +414,7 @@ fn a_sphere_under_a_point_source_is_lit_by_lamberts_law_with_the_fields_falloff(
         ..Sources::default()
     };
     scene.colors.energy = ce;
-    let l = lit(scene.lit_inputs());
+    let l = lit(scene.lit_inputs(), &FrameCache::new());
     let mut lit_count = 0;
     for (k, p) in l.surface.positions.iter().enumerate() {
         let cos_theta = p.y / r;
@@ -764,7 +764,9 @@ fn on_the_gpu_an_object_before_the_glow_shows_lit_and_unglowing_and_a_holdout_le
     bare.objects.clear();
     let hidden = reference::render_brightness(&FrameSetup::new(&bare, bb));
     let place = against_the_sphere(&scene, (w, h));
-    let image = reference::objects::ObjectImage::of(&scene).unwrap();
+    let image =
+        reference::objects::ObjectImage::of(&FrameSetup::new(&scene, scene.place_billboard(1.0)))
+            .unwrap();
     let eye = scene.camera.eye;
     let mut g = gpu();
     let (mut on, mut off, mut bright) = (0, 0, 0);
@@ -943,7 +945,7 @@ fn a_gltf_mesh_loads_hits_and_saves_back_losslessly() {
         let back = Scene::parse(&saved, &scene_path).unwrap();
         assert_eq!(back, scene, "{file}");
         // Lit and drawn: its vertices lie on the placed triangles.
-        let l = lit(scene.lit_inputs());
+        let l = lit(scene.lit_inputs(), &FrameCache::new());
         assert_eq!(l.surface.positions.len(), 12);
     }
     std::fs::remove_dir_all(&dir).unwrap();
@@ -1093,8 +1095,8 @@ fn a_travelling_pulse_lights_the_floor_where_it_passes() {
     assert!(light_at(at_end, end) > 2.0 * light_at(at_start, end));
     // The lit vertices follow: the floor's lit colors change from frame to frame.
     let (a, b) = (
-        lit(scene.at_frame(at_start).lit_inputs()),
-        lit(scene.at_frame(at_end).lit_inputs()),
+        lit(scene.at_frame(at_start).lit_inputs(), &FrameCache::new()),
+        lit(scene.at_frame(at_end).lit_inputs(), &FrameCache::new()),
     );
     assert_ne!(a.light.colors, b.light.colors);
 }
@@ -1105,7 +1107,11 @@ fn the_lit_triangles_follow_a_shadows_edge() {
     // interpolated as the rasterizer does), against the light at that very point: off only within a thin band
     // along the sphere's shadow's edge, where the triangles crossing it were split.
     let scene = common::shipped_scene("floor.toml");
-    let image = energywave::reference::objects::ObjectImage::of(&scene).unwrap();
+    let image = energywave::reference::objects::ObjectImage::of(&FrameSetup::new(
+        &scene,
+        scene.place_billboard(1.0),
+    ))
+    .unwrap();
     let floor = scene.objects[0].clone();
     let lights = Lights::new(
         &scene.sources,
@@ -1221,7 +1227,7 @@ fn a_gltf_meshs_normals_shade_it_smoothly_and_its_base_color_is_its_albedo() {
         },
         ..Scene::default_scene()
     };
-    let l = lit(scene.lit_inputs());
+    let l = lit(scene.lit_inputs(), &FrameCache::new());
     let eps = scene.integration.epsilon;
     let mut checked = 0;
     for (k, p) in l.surface.positions.iter().enumerate() {
@@ -1289,7 +1295,7 @@ keys = [{ frame = 0, value = [0.5, 0.5, 0.5] }, { frame = 10, value = [1.0, 0.0,
     // The floor under the point: in the sphere's shadow at frame 0, lit once the sphere has moved away, and in
     // the keyed albedo.
     let under = |s: &Scene| {
-        let l = lit(s.lit_inputs());
+        let l = lit(s.lit_inputs(), &FrameCache::new());
         let k = (0..l.surface.positions.len())
             .filter(|&k| l.surface.object[k] == 0)
             .min_by(|&a, &b| {
@@ -1446,7 +1452,11 @@ fn objects_are_shaded_at_every_pixel_by_the_exact_light_there() {
     // which no interpolation between the cells' corners holds. Every point of the face, where the CPU twin's
     // rays straight down meet it, is the closed form at the point itself: albedo (AMBIENT + Ce b / d h / d).
     let scene = close_light_on_a_coarse_face(false);
-    let image = energywave::reference::objects::ObjectImage::of(&scene).unwrap();
+    let image = energywave::reference::objects::ObjectImage::of(&FrameSetup::new(
+        &scene,
+        scene.place_billboard(1.0),
+    ))
+    .unwrap();
     let source = scene.sources.points[0].position;
     let b = scene.sources.points[0].coefficient;
     let (albedo, ce) = (scene.objects[0].color, scene.colors.energy);
@@ -1487,7 +1497,7 @@ fn the_lit_surface_has_no_cracks_where_shadows_split_it() {
     // dots on the floor preset's lit floor). Every edge of its lit surface, by the places of its ends, is
     // shared by two triangles, but the floor disc's rim.
     let scene = common::shipped_scene("floor.toml");
-    let l = lit(scene.lit_inputs());
+    let l = lit(scene.lit_inputs(), &FrameCache::new());
     let (center, extent) = energywave::objects::focus(&scene.sources);
     let unsplit = energywave::objects::tessellate::Surface::of(&scene.objects, center, extent);
     assert!(l.surface.positions.len() > unsplit.positions.len() + 1000);
@@ -1616,8 +1626,12 @@ keys = [{ frame = 0, value = [1.0, 1.0, 1.0] }, { frame = 10, value = [3.0, 1.0,
     assert!((side(10.0) - 9.0).abs() < 1e-9, "{}", side(10.0));
     // Lit again at every frame: the floor under the growing sphere darkens.
     assert_ne!(
-        lit(scene.at_frame(0.0).lit_inputs()).light.colors,
-        lit(scene.at_frame(10.0).lit_inputs()).light.colors
+        lit(scene.at_frame(0.0).lit_inputs(), &FrameCache::new())
+            .light
+            .colors,
+        lit(scene.at_frame(10.0).lit_inputs(), &FrameCache::new())
+            .light
+            .colors
     );
     // Saved and read back alike.
     let saved = scene.to_toml();
@@ -1675,7 +1689,7 @@ fn a_negative_source_darkens_what_it_lights_with_its_own_shadows_alike_on_both_t
         color: [0.9; 3],
         translucent: None,
     });
-    let l = lit(scene.lit_inputs());
+    let l = lit(scene.lit_inputs(), &FrameCache::new());
     let (albedo, ce) = (scene.objects[0].color, scene.colors.energy);
     let (mut checked, mut dark_only, mut worst) = (0, 0, 0.0f64);
     for (k, p) in l.surface.positions.iter().enumerate() {
@@ -1749,14 +1763,14 @@ fn recolored_light_is_the_light_of_the_recolored_objects() {
         ..Default::default()
     }));
     scene.objects.push(glass);
-    let before = lit(scene.lit_inputs());
+    let before = lit(scene.lit_inputs(), &FrameCache::new());
     let key = energywave::objects::LitKey::of(scene.lit_inputs());
     let mut recolored = scene.clone();
     recolored.objects[0].color = [0.1, 0.9, 0.3];
     recolored.objects[1].color = [0.0, 0.4, 1.0];
     recolored.objects[2].color = [1.0, 0.5, 0.0];
     assert!(key.matches_but_colors(recolored.lit_inputs()));
-    let want = lit(recolored.lit_inputs());
+    let want = lit(recolored.lit_inputs(), &FrameCache::new());
     let got = before.recolored(&recolored.objects);
     assert_eq!(got.surface, want.surface);
     assert_eq!(got.light.shadow, want.light.shadow);

@@ -36,7 +36,7 @@ fn upsampled(ctx: &GpuContext, values: &[f32], n: u32, w: u32) -> Vec<f32> {
     );
     let mut upsample = Upsample::new(device);
     let mut encoder = device.create_command_encoder(&Default::default());
-    upsample.encode(device, queue, &mut encoder, (&source, &view), w, 1, None);
+    upsample.encode(ctx.gpu(), &mut encoder, (&source, &view), (w, 1), None);
     ctx.checked(|| queue.submit([encoder.finish()])).unwrap();
     let (output, _) = upsample.output().unwrap();
     bytemuck::cast_slice(&ctx.read_texture(output, 4).unwrap()).to_vec()

@@ -6,10 +6,11 @@ mod common;
 
 use std::sync::Arc;
 
+use energywave::frame::FrameCache;
 use energywave::objects::lighting::Lights;
 use energywave::objects::mesh::MeshData;
 use energywave::objects::translucent::light::{
-    Irradiance, Scattered, irradiance, leaving, prepared,
+    Irradiance, Prepared, Scattered, irradiance, leaving,
 };
 use energywave::objects::translucent::reference::{Estimate, Reference};
 use energywave::objects::translucent::table::{Table, thickness};
@@ -20,6 +21,16 @@ use energywave::objects::translucent::{
 use energywave::objects::{MeshObject, Object, Shape};
 use energywave::scene::Scene;
 use glam::DVec3;
+
+thread_local! {
+    /// The voxels and tables this test thread made, kept as a renderer's frame cache keeps them.
+    static CACHE: FrameCache = FrameCache::new();
+}
+
+/// `object`'s voxels and table (`translucent::light::prepare`), through the thread's frame cache.
+fn prepared(object: &Object) -> Option<Arc<Prepared>> {
+    CACHE.with(|c| c.translucent_here(object))
+}
 
 fn scene(name: &str) -> Scene {
     Scene::load(std::path::Path::new(&format!("assets/scenes/{name}.toml")))
@@ -290,7 +301,7 @@ fn error_against_reference(
 ) -> f64 {
     let s = ring_scene(object.clone());
     let lights = lights(&s);
-    let scattered = Scattered::of(object, &lights, &s.objects).unwrap();
+    let scattered = Scattered::of(object, prepared(object).unwrap(), &lights, &s.objects).unwrap();
     let mut num = 0.0;
     let mut den = 0.0;
     for &(x, n) in points {
@@ -384,7 +395,7 @@ fn the_cavity_lets_light_through_where_a_depth_map_sees_a_solid_cube() {
     let ratio = |f: &dyn Fn((DVec3, DVec3)) -> f64| f(behind) / f(beside);
     let exact = ratio(&|(x, n)| reference.leaving(x, n, Estimate::Exact)[0]);
     let depth_map = ratio(&|(x, n)| reference.leaving(x, n, Estimate::DepthMap)[0]);
-    let scattered = Scattered::of(&cube, &lights, &s.objects).unwrap();
+    let scattered = Scattered::of(&cube, prepared(&cube).unwrap(), &lights, &s.objects).unwrap();
     let table = ratio(&|(x, n)| scattered.at(x, n)[0]);
     println!(
         "behind the cavity over beside it: reference {exact:.3}, table {table:.3}, depth map {depth_map:.3}"

@@ -5,7 +5,9 @@ use std::time::Instant;
 
 use super::{Backend, CliError, RenderArgs, load_scene};
 use crate::export::{self, Progress, Target};
-use crate::frame::FrameSetup;
+use std::sync::Arc;
+
+use crate::frame::{FrameCache, FrameSetup};
 use crate::gpu::HeadlessRenderer;
 use crate::integrate::Integrator;
 use crate::output::{self, Format};
@@ -142,9 +144,9 @@ pub(super) fn render(args: &RenderArgs) -> Result<(), CliError> {
     let hdr = target.is_exr();
     let mut renderer = Renderer::new(args, hdr)?;
     follow_pixel_density(&mut scene, args, &renderer);
-    let scene = scene.at_frame(frames.start as f64);
+    let scene = renderer.cache().scene_at(&scene, frames.start as f64);
     specialise(&mut renderer, &scene);
-    let setup = FrameSetup::placed(&scene, width as f64 / height as f64);
+    let setup = renderer.setup(&scene, (width, height));
     let billboard = setup.billboard;
     let name = args
         .scene
@@ -208,9 +210,8 @@ fn follow_pixel_density(scene: &mut Scene, args: &RenderArgs, renderer: &Rendere
     if args.resolution.is_some() || args.brightness {
         return;
     }
-    scene.billboard.resolution = scene
-        .at_frame(0.0)
-        .resolution_for(args.size, renderer.texture_limit());
+    scene.billboard.resolution =
+        (renderer.cache().scene_at(scene, 0.0)).resolution_for(args.size, renderer.texture_limit());
 }
 
 /// An animation of more than a few frames gets the GPU's pipelines specialised to its structure (they pay for
@@ -229,7 +230,8 @@ fn specialise(renderer: &mut Renderer, scene: &Scene) {
 /// holdout and HDR, or the CPU twin.
 enum Renderer {
     Gpu(Box<HeadlessRenderer>),
-    Cpu,
+    /// The CPU twin, with its frame cache.
+    Cpu(Arc<FrameCache>),
 }
 
 impl Renderer {
@@ -242,7 +244,7 @@ impl Renderer {
                 gpu.set_unclamped(hdr);
                 Renderer::Gpu(Box::new(gpu))
             }
-            Backend::Cpu => Renderer::Cpu,
+            Backend::Cpu => Renderer::Cpu(Arc::new(FrameCache::new())),
         })
     }
 
@@ -250,7 +252,7 @@ impl Renderer {
     fn name(&self) -> &'static str {
         match self {
             Renderer::Gpu(_) => "gpu render",
-            Renderer::Cpu => "cpu render",
+            Renderer::Cpu(_) => "cpu render",
         }
     }
 
@@ -258,15 +260,28 @@ impl Renderer {
     fn texture_limit(&self) -> u32 {
         match self {
             Renderer::Gpu(gpu) => gpu.ctx.device.limits().max_texture_dimension_2d,
-            Renderer::Cpu => crate::scene::MAX_AUTO_RESOLUTION,
+            Renderer::Cpu(_) => crate::scene::MAX_AUTO_RESOLUTION,
         }
+    }
+
+    /// The cache its frames are resolved through.
+    fn cache(&self) -> &Arc<FrameCache> {
+        match self {
+            Renderer::Gpu(gpu) => gpu.cache(),
+            Renderer::Cpu(cache) => cache,
+        }
+    }
+
+    /// The frame of `scene` in a picture of `size`, resolved through its cache.
+    fn setup<'a>(&self, scene: &'a Scene, (width, height): (u32, u32)) -> FrameSetup<'a> {
+        FrameSetup::placed_in(scene, width as f64 / height as f64, self.cache())
     }
 
     /// B over the frame's W x W texels, rows from the top, before the blend.
     fn brightness(&mut self, setup: &FrameSetup) -> Result<Vec<f64>, CliError> {
         Ok(match self {
             Renderer::Gpu(gpu) => (gpu.brightness(setup)?.iter()).map(|&b| b as f64).collect(),
-            Renderer::Cpu => reference::render_brightness(setup).values,
+            Renderer::Cpu(_) => reference::render_brightness(setup).values,
         })
     }
 
@@ -285,8 +300,8 @@ impl Renderer {
                 let frame = gpu.render(scene, width, height, transparent)?;
                 frame.pixels.iter().map(|p| p.map(|c| c as f64)).collect()
             }
-            Renderer::Cpu => {
-                let setup = FrameSetup::placed(scene, width as f64 / height as f64);
+            Renderer::Cpu(cache) => {
+                let setup = FrameSetup::placed_in(scene, width as f64 / height as f64, cache);
                 let texture = reference::render_brightness(&setup);
                 let compose = match hdr {
                     true => reference::compose_frame_unclamped,
@@ -351,9 +366,8 @@ fn render_frames(
         };
         let mut written = Vec::new();
         for frame in frames.clone() {
-            let at = scene.at_frame(frame as f64);
-            let values =
-                renderer.brightness(&FrameSetup::placed(&at, width as f64 / height as f64))?;
+            let at = renderer.cache().scene_at(scene, frame as f64);
+            let values = renderer.brightness(&renderer.setup(&at, (width, height)))?;
             let path = export::frame_path(pattern, frame);
             output::write_brightness_exr(&path, at.billboard.resolution, &values)?;
             written.push(path);
@@ -371,7 +385,10 @@ fn render_frames(
             frames.clone(),
             (width, height),
             output::Alpha::of(args.transparent, args.premultiplied),
-            |at| renderer.compose(at, (width, height), backdrop(args), hdr),
+            |frame| {
+                let at = renderer.cache().scene_at(scene, frame as f64);
+                renderer.compose(&at, (width, height), backdrop(args), hdr)
+            },
             |_, frame| {
                 progress.frame_done(frame);
                 match super::interrupt::asked() {

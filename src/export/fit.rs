@@ -64,14 +64,16 @@ pub fn fit_field_of_view(
     let step = frames.len().div_ceil(MAX_PROBED as usize).max(1);
     let last = frames.end.saturating_sub(1).max(frames.start);
     let probed = frames.clone().step_by(step).chain(std::iter::once(last));
+    // One cache for the probes: the live sets step from the frame probed before, the objects lit once.
+    let cache = std::sync::Arc::new(crate::frame::FrameCache::new());
     for frame in probed {
-        let mut at = scene.at_frame(frame as f64);
+        let mut at = cache.scene_at(scene, frame as f64);
         at.billboard.resolution = PROBE_TEXELS;
         at.billboard.fixed_resolution = true;
         let mut tan_half = at.camera.tan_half_fov() * 2.0;
         loop {
             at.camera.fov_y_degrees = 2.0 * tan_half.atan().to_degrees();
-            let view = FrameSetup::placed(&at, pw as f64 / ph as f64);
+            let view = FrameSetup::placed_in(&at, pw as f64 / ph as f64, &cache);
             let tex = reference::render_brightness(&view);
             let pixels = reference::compose_frame_over(&view, &tex, (pw, ph), Backdrop::Holdout);
             let (mut reach_x, mut reach_y, mut edge) = (None::<f64>, None::<f64>, false);

@@ -546,8 +546,9 @@ impl FrameSink {
     }
 }
 
-/// Renders `frames` of `scene`'s animation with `render` (the composed frame of a scene at one frame, RGBA
-/// display values, `size` pixels) into `target`; `on_frame(done, frame)` after each. Returns the files
+/// Renders `frames` of `scene`'s animation with `render` (the composed frame of the scene at the frame given,
+/// RGBA display values, `size` pixels: its renderer takes the scene at that frame through its frame cache,
+/// `frame::FrameCache::scene_at`, so that live sets step from the last frame) into `target`; `on_frame(done, frame)` after each. Returns the files
 /// written. `on_frame` may stop the export (`ControlFlow::Break`): what it wrote so far is then removed, the
 /// files of the same names from before left whole, and it ends with `ExportError::Cancelled`, as after a failure. The command line and the viewer's export both
 /// run this.
@@ -557,7 +558,7 @@ pub fn export_frames<E: From<ExportError>>(
     frames: Range<u32>,
     size: (u32, u32),
     alpha: Alpha,
-    mut render: impl FnMut(&Scene) -> Result<Vec<[f64; 4]>, E>,
+    mut render: impl FnMut(u32) -> Result<Vec<[f64; 4]>, E>,
     mut on_frame: impl FnMut(u32, u32) -> ControlFlow<()>,
 ) -> Result<Vec<PathBuf>, E> {
     let frame_rate = scene
@@ -566,7 +567,7 @@ pub fn export_frames<E: From<ExportError>>(
         .map_or(crate::animation::DEFAULT_FRAME_RATE, |a| a.frame_rate);
     let mut sink = FrameSink::new(target, size.0, size.1, frames.clone(), frame_rate, alpha)?;
     for (done, frame) in frames.enumerate() {
-        let pixels = match render(&scene.at_frame(frame as f64)) {
+        let pixels = match render(frame) {
             Ok(p) => p,
             Err(e) => {
                 sink.abandon();

@@ -3,10 +3,13 @@
 
 use glam::DMat4;
 
+use super::context::GpuError;
 use super::context::{
     ClipBuffer, RenderPipelineSpec, depth_value_entry, fragment_storage_entry, pass_layouts,
     render_pipeline, uniform_buffer,
 };
+use super::pass::{FramePass, Recording, Stage};
+use crate::frame::FrameSetup;
 use crate::geometry::{Billboard, Camera};
 use crate::scene::Blend;
 
@@ -81,17 +84,17 @@ impl BlendMode {
     }
 }
 
-/// The pass's parameters for one frame.
+/// The pass's parameters for a frame of `setup` in a picture of `aspect`, showing a brightness of `resolution`
+/// texels a side.
 pub fn billboard_params(
-    camera: &Camera,
-    billboard: &Billboard,
+    setup: &FrameSetup,
     resolution: u32,
-    energy: [f64; 3],
     aspect: f64,
     mode: BlendMode,
-    nu: f64,
-    cutoff: f64,
 ) -> BillboardParams {
+    let (camera, billboard) = (&setup.scene.camera, &setup.billboard);
+    let energy = setup.scene.colors.energy_color();
+    let (nu, cutoff) = (setup.reach.nu, setup.scene.colors.cutoff);
     let (near, far) = depth_range(camera, billboard);
     BillboardParams {
         near: near as f32,
@@ -119,6 +122,8 @@ pub struct BillboardRenderer {
     params: wgpu::Buffer,
     /// Each texel's share of its ray before the first surface (`objects::clip`), where the scene has objects.
     clips: ClipBuffer,
+    /// What the next `record` draws: its bind group, and its pipeline's indices.
+    pending: Option<(wgpu::BindGroup, [usize; 2])>,
 }
 
 impl BillboardRenderer {
@@ -189,31 +194,44 @@ impl BillboardRenderer {
             layout,
             params,
             clips: ClipBuffer::new(device, "energywave.billboard.clips"),
+            pending: None,
         }
     }
+}
 
-    /// Records the billboard into `target` (loaded, not cleared), reading `background` (a copy of what lies
-    /// behind, same size as the target), `brightness` (the field pass's texture, of `layers` layers: B, or B
-    /// and the tint) and, where `objects`, the objects' `depth`. The parameters are written through the queue,
-    /// so one draw per submission.
-    #[allow(clippy::too_many_arguments)]
-    pub fn draw(
-        &mut self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        encoder: &mut wgpu::CommandEncoder,
-        target: &wgpu::TextureView,
-        background: &wgpu::TextureView,
-        brightness: &wgpu::TextureView,
-        (depth, clips): (&wgpu::TextureView, Option<std::sync::Arc<Vec<f32>>>),
-        layers: u32,
-        params: &BillboardParams,
-    ) {
-        queue.write_buffer(&self.params, 0, bytemuck::bytes_of(params));
+impl FramePass for BillboardRenderer {
+    fn stages(&self) -> &'static [Stage] {
+        &[Stage::Billboard]
+    }
+
+    /// The parameters, and a bind group reading the brightness, a copy of what lies behind the billboard (the
+    /// frame's background target, copied into its color target by `record`) and, where objects were drawn,
+    /// their depth and the clips of the texture it shows, up to the first surface of any object: a translucent
+    /// one's edge guides the glow blended for it as an opaque one's edge guides the glow it ends.
+    fn prepare(&mut self, _: Stage, r: &mut Recording<'_>) -> Result<(), GpuError> {
+        let (device, queue) = (r.gpu.device, r.gpu.queue);
+        let setup = r.frame.setup;
+        let [w, h] = r.targets.size;
+        let mode = BlendMode::of(r.look.transparent, setup.scene.colors.blend);
+        let resolution = r.brightness.resolution;
+        let mut params = billboard_params(setup, resolution, w as f64 / h as f64, mode);
+        if r.look.unclamped {
+            params.mode |= UNCLAMPED;
+        }
+        if let Some(threshold) = r.look.threshold_preview.filter(|_| !r.look.transparent) {
+            params.mode |= THRESHOLD_PREVIEW;
+            params.energy[3] = threshold as f32;
+        }
+        let clips = match r.objects {
+            true => setup.surface_clips_at(resolution),
+            false => None,
+        };
+        queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         let objects = clips.is_some();
         if let Some(clips) = &clips {
             self.clips.upload(device, queue, clips);
         }
+        let tex = wgpu::BindingResource::TextureView;
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("energywave.billboard.bind_group"),
             layout: &self.layout,
@@ -224,15 +242,15 @@ impl BillboardRenderer {
                 },
                 wgpu::BindGroupEntry {
                     binding: 1,
-                    resource: wgpu::BindingResource::TextureView(brightness),
+                    resource: tex(&r.brightness.view),
                 },
                 wgpu::BindGroupEntry {
                     binding: 2,
-                    resource: wgpu::BindingResource::TextureView(background),
+                    resource: tex(&r.targets.background_view),
                 },
                 wgpu::BindGroupEntry {
                     binding: 3,
-                    resource: wgpu::BindingResource::TextureView(depth),
+                    resource: tex(&r.targets.depth_value_view),
                 },
                 wgpu::BindGroupEntry {
                     binding: 4,
@@ -240,8 +258,25 @@ impl BillboardRenderer {
                 },
             ],
         });
-        let mut pass = super::context::over(encoder, "energywave.billboard.pass", target);
-        pass.set_pipeline(&self.pipelines[(layers > 1) as usize][objects as usize]);
+        let pipeline = [(r.brightness.layers > 1) as usize, objects as usize];
+        self.pending = Some((bind_group, pipeline));
+        Ok(())
+    }
+
+    /// Copies what lies behind the billboard, then blends the billboard over it.
+    fn record(&mut self, _: Stage, r: &Recording<'_>, encoder: &mut wgpu::CommandEncoder) {
+        let Some((bind_group, [layers, objects])) = self.pending.take() else {
+            return;
+        };
+        let targets = r.targets;
+        encoder.copy_texture_to_texture(
+            targets.background.as_image_copy(),
+            targets.color.as_image_copy(),
+            targets.background.size(),
+        );
+        let mut pass =
+            super::context::over(encoder, "energywave.billboard.pass", &targets.color_view);
+        pass.set_pipeline(&self.pipelines[layers][objects]);
         pass.set_bind_group(0, &bind_group, &[]);
         pass.draw(0..4, 0..1);
     }

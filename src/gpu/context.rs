@@ -443,7 +443,22 @@ pub fn describe(info: &wgpu::AdapterInfo) -> String {
     s
 }
 
+/// The GPU a pass works on.
+#[derive(Clone, Copy)]
+pub struct Gpu<'g> {
+    pub device: &'g wgpu::Device,
+    pub queue: &'g wgpu::Queue,
+}
+
 impl GpuContext {
+    /// Its device and queue, as the passes take them.
+    pub fn gpu(&self) -> Gpu<'_> {
+        Gpu {
+            device: &self.device,
+            queue: &self.queue,
+        }
+    }
+
     /// A context on the best adapter found: `WGPU_BACKEND` limits the backends tried, `WGPU_ADAPTER_NAME`
     /// (a case-insensitive part of the name) picks one, else a real GPU before a software one.
     pub fn new() -> Result<Self, GpuError> {

@@ -1,145 +1,109 @@
-//! One frame of a scene on the GPU: the field pass, what lies behind the billboard, and the billboard blended
-//! over it. Headless rendering and the viewer's viewport both draw through `SceneRenderer::record`; the viewer
-//! adds its grid behind the glow through the `behind` hook.
+//! One frame of a scene on the GPU: the field pass, then the frame's passes as one ordered list
+//! (`pass::FramePass`): the glow seen through translucent objects, the glare, what lies behind the billboard
+//! (the background, the viewer's grid, the objects, the smoke behind), the billboard blended over it, the smoke
+//! in front. Headless rendering and the viewer's viewport both draw through `SceneRenderer::compose`; the
+//! viewer integrates its field progressively and adds its grid to the same list.
 
-use super::billboard_pass::{BillboardRenderer, BlendMode, billboard_params, view_projection};
-use super::context::{GpuError, checked, over, read_texture, texture_2d};
+use std::sync::Arc;
+
+use super::billboard_pass::{BillboardRenderer, view_projection};
+use super::context::{GpuError, checked, read_texture};
 use super::field_pass::{FieldInputs, FieldRenderer};
-use super::formats::{DEPTH_FORMAT, DEPTH_VALUE_CLEAR, DEPTH_VALUE_FORMAT, FRAME_FORMAT};
+use super::formats::FRAME_FORMAT;
 use super::glare_pass::GlarePass;
 use super::object_pass::ObjectPass;
 use super::particle_pass::ParticlePass;
-use crate::frame::FrameSetup;
+use super::pass::{Brightness, FramePass, Gpu, Look, Recording, Stage, run};
+pub use super::targets::FrameTargets;
+use super::through_pass::ThroughPass;
+use crate::frame::{Frame, FrameCache, FrameSetup, Resolver};
+use crate::scene::Scene;
 
-/// The two textures of a composed frame: what lies behind the billboard, and the result.
-pub struct FrameTargets {
-    pub size: [u32; 2],
-    pub background: wgpu::Texture,
-    pub background_view: wgpu::TextureView,
-    pub color: wgpu::Texture,
-    pub color_view: wgpu::TextureView,
-    /// The objects' depth buffer (the depth test).
-    pub depth_view: wgpu::TextureView,
-    /// The copy of the objects' depth the billboard reads (`DEPTH_VALUE_FORMAT`).
-    pub depth_value_view: wgpu::TextureView,
-}
-
-impl FrameTargets {
-    pub fn new(device: &wgpu::Device, size: [u32; 2]) -> Self {
-        use wgpu::TextureUsages as U;
-        let background = texture_2d(
-            device,
-            "energywave.frame.background",
-            size,
-            FRAME_FORMAT,
-            U::RENDER_ATTACHMENT | U::TEXTURE_BINDING | U::COPY_SRC,
-        );
-        let color = texture_2d(
-            device,
-            "energywave.frame.color",
-            size,
-            FRAME_FORMAT,
-            U::RENDER_ATTACHMENT | U::TEXTURE_BINDING | U::COPY_DST | U::COPY_SRC,
-        );
-        let depth = texture_2d(
-            device,
-            "energywave.frame.depth",
-            size,
-            DEPTH_FORMAT,
-            U::RENDER_ATTACHMENT,
-        );
-        let depth_value = texture_2d(
-            device,
-            "energywave.frame.depth_value",
-            size,
-            DEPTH_VALUE_FORMAT,
-            U::RENDER_ATTACHMENT | U::TEXTURE_BINDING,
-        );
-        Self {
-            size,
-            depth_view: depth.create_view(&Default::default()),
-            depth_value_view: depth_value.create_view(&Default::default()),
-            background_view: background.create_view(&Default::default()),
-            color_view: color.create_view(&Default::default()),
-            background,
-            color,
-        }
-    }
-}
-
-/// The field and billboard passes, long-lived; the scene is passed in per frame.
+/// The frame's passes, long-lived, and the cache of what its frames resolved; the scene comes in per frame.
 pub struct SceneRenderer {
     field: FieldRenderer,
-    billboard: BillboardRenderer,
+    /// The glow seen through translucent objects.
+    through: ThroughPass,
     glare: GlarePass,
+    background: BackgroundPass,
     objects: ObjectPass,
     particles: ParticlePass,
-    /// The glow seen through translucent objects.
-    through: super::through_pass::ThroughPass,
-    /// The objects hide the glow but are not drawn: the glow alone with them as a holdout, to layer over a
-    /// render of the same scene made elsewhere.
-    holdout: bool,
-    /// The opaque blends are not clamped above 1 (an HDR export).
-    unclamped: bool,
-    /// The viewer's preview of the glare's threshold: the glow at or below it dimmed.
-    threshold_preview: Option<f64>,
+    billboard: BillboardRenderer,
+    /// Where what the frames resolved is kept (`frame::FrameCache`), and how the slow parts are resolved.
+    cache: Arc<FrameCache>,
+    resolver: Resolver,
+    look: Look,
 }
 
 impl SceneRenderer {
-    pub fn new(device: &wgpu::Device) -> Self {
+    /// The passes on `device`, with a frame cache of their own (filling translucent tables on `device` where it
+    /// is a real GPU).
+    pub fn new(device: &wgpu::Device, queue: &wgpu::Queue) -> Self {
+        Self::with_cache(device, Arc::new(frame_cache(device, queue)))
+    }
+
+    /// The passes on `device`, their frames resolved through `cache` (the viewer shares its own with the
+    /// simulation of its live particles).
+    pub fn with_cache(device: &wgpu::Device, cache: Arc<FrameCache>) -> Self {
         let field = FieldRenderer::new(device);
         Self {
-            through: super::through_pass::ThroughPass::new(device, &field.shaders()),
+            through: ThroughPass::new(device, &field.shaders()),
             field,
-            billboard: BillboardRenderer::new(device, FRAME_FORMAT),
             glare: GlarePass::new(device),
+            background: BackgroundPass,
             objects: ObjectPass::new(device),
             particles: ParticlePass::new(device),
-            holdout: false,
-            unclamped: false,
-            threshold_preview: None,
+            billboard: BillboardRenderer::new(device, FRAME_FORMAT),
+            cache,
+            resolver: Resolver::new(),
+            look: Look::default(),
         }
+    }
+
+    /// The cache its frames are resolved through.
+    pub fn cache(&self) -> &Arc<FrameCache> {
+        &self.cache
+    }
+
+    /// The frame of `scene` in a picture of `aspect` (width / height), resolved through this renderer's cache.
+    pub fn setup<'a>(&self, scene: &'a Scene, aspect: f64) -> FrameSetup<'a> {
+        FrameSetup::placed_in(scene, aspect, &self.cache)
     }
 
     /// Works out what takes long, the objects' light (with their translucent tables) and the particles' light,
     /// on threads of their own from now on (the viewer): a frame waits for it up to `wait`
-    /// (`object_pass::WAIT` in the viewer: a small scene's is ready within it), then draws stand-ins (the
+    /// (`frame::resolve::WAIT` in the viewer: a small scene's is ready within it), then draws stand-ins (the
     /// objects unshadowed, the particles it drew before) until it is ready; `preparing` says what is.
     pub fn prepare_in_background(&mut self, wait: std::time::Duration) {
-        self.objects.light_in_background(wait);
-        self.particles.light_in_background(wait);
+        self.resolver.in_background(wait);
     }
 
     /// What is being worked out on the background threads, for the status line; `None` when the frames show
     /// everything as it is.
     pub fn preparing(&self) -> Option<String> {
-        let parts: Vec<&str> = (self.objects.busy().into_iter())
-            .chain(self.particles.busy().then_some("particles' light"))
-            .collect();
-        (!parts.is_empty()).then(|| parts.join(", "))
+        self.resolver.preparing()
     }
 
     /// Waits until what is being worked out is ready (a screenshot shows the scene as it is).
     pub fn wait_prepared(&self) {
-        self.objects.wait();
-        self.particles.wait();
+        self.resolver.wait();
     }
 
     /// Dims the glow whose B is at or below `threshold` (the glare's, while the viewer's panel edits it), so that
     /// what glares stands out; `None` draws the frame as it is.
     pub fn set_threshold_preview(&mut self, threshold: Option<f64>) {
-        self.threshold_preview = threshold;
+        self.look.threshold_preview = threshold;
     }
 
     /// Whether an opaque frame keeps the blend's values above 1 (for an HDR export) or clamps them, as the
     /// display does. A transparent frame is unclamped either way.
     pub fn set_unclamped(&mut self, unclamped: bool) {
-        self.unclamped = unclamped;
+        self.look.unclamped = unclamped;
     }
 
     /// Whether the objects are left out of the picture while still hiding the glow (`holdout`).
     pub fn set_holdout(&mut self, holdout: bool) {
-        self.holdout = holdout;
+        self.look.holdout = holdout;
     }
 
     /// The particle pass, for inspection (the smoke's image and its plan).
@@ -147,21 +111,18 @@ impl SceneRenderer {
         &self.particles
     }
 
-    /// Records the glow of `setup` seen through its translucent objects over `field` (`layers` layers, the
-    /// setup's resolution); whether it has any (then `through_texture` holds the blend).
+    /// Records the field of `setup` and the glow seen through its translucent objects over it; whether it has
+    /// any (then `through_texture` holds the blend, else the field's texture holds the glow).
     pub fn see_through(
         &mut self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
+        gpu: Gpu<'_>,
         encoder: &mut wgpu::CommandEncoder,
         setup: &FrameSetup,
-        field: &wgpu::TextureView,
-        layers: u32,
     ) -> Result<bool, GpuError> {
-        let size = (setup.resolution, layers);
-        Ok((self.through)
-            .encode(device, queue, encoder, setup, field, size)?
-            .is_some())
+        let brightness = self.integrate(gpu, encoder, setup)?;
+        let seen = self.through.prepare_blend(gpu, setup, &brightness)?;
+        checked(gpu.device, || self.through.record_blend(encoder))?;
+        Ok(seen.is_some())
     }
 
     /// The last blend of the glow seen through translucent objects.
@@ -178,216 +139,150 @@ impl SceneRenderer {
         &mut self.field
     }
 
-    /// Records one frame (`setup`, its billboard placed for `targets`' aspect) into `targets.color`: the field
-    /// pass when something it depends on changed, the background (the scene's color, or transparent) with
-    /// whatever `behind` draws over it (given the view-projection matrix), then the billboard blended over a copy
-    /// of that.
-    // The GPU handles, the frame's inputs and its hook are all distinct; a struct would only rename them.
-    #[allow(clippy::too_many_arguments)]
-    pub fn record(
+    /// Records the field of `setup` (when something it depends on changed) and returns its brightness.
+    fn integrate(
         &mut self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
+        gpu: Gpu<'_>,
         encoder: &mut wgpu::CommandEncoder,
         setup: &FrameSetup,
-        targets: &FrameTargets,
-        transparent: bool,
-        behind: impl FnOnce(&mut wgpu::RenderPass<'_>, [[f32; 4]; 4]),
-    ) -> Result<(), GpuError> {
-        self.field.prepare(device, queue, &FieldInputs::of(setup))?;
-        checked(device, || self.field.encode(encoder))?;
-        let brightness = self.field.view().expect("prepared above").clone();
-        self.compose(
-            device,
-            queue,
-            encoder,
-            setup,
-            targets,
-            transparent,
-            (&brightness, setup.resolution, true),
-            behind,
-        )
+    ) -> Result<Brightness, GpuError> {
+        (self.field).prepare(gpu.device, gpu.queue, &FieldInputs::of(setup))?;
+        checked(gpu.device, || self.field.encode(encoder))?;
+        Ok(Brightness {
+            view: self.field.view().expect("prepared above").clone(),
+            resolution: setup.resolution,
+            layers: crate::gpu::field_pass::layers_of(setup.scene),
+            fresh: true,
+        })
     }
 
-    /// Records the rest of a frame over a brightness texture already integrated (`brightness`: its view, its
-    /// side, W or another, and whether its texels changed since the last frame, for the glare to reuse its
-    /// last where they did not): the background with whatever `behind` draws over it, then the billboard
-    /// blended over a copy of that.
-    #[allow(clippy::too_many_arguments)]
-    pub fn compose(
+    /// Records one frame (`setup`, its billboard placed for `target`'s aspect) into `target.targets.color`:
+    /// the field pass when something it depends on changed, then the frame's passes (`compose`).
+    pub fn record(
         &mut self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
+        gpu: Gpu<'_>,
         encoder: &mut wgpu::CommandEncoder,
         setup: &FrameSetup,
-        targets: &FrameTargets,
-        transparent: bool,
-        (brightness, resolution, fresh): (&wgpu::TextureView, u32, bool),
-        behind: impl FnOnce(&mut wgpu::RenderPass<'_>, [[f32; 4]; 4]),
+        target: Target<'_>,
     ) -> Result<(), GpuError> {
+        let brightness = self.integrate(gpu, encoder, setup)?;
+        self.compose(gpu, encoder, setup, target, brightness, &mut [])
+    }
+
+    /// Records the rest of a frame over a brightness already integrated (its view, side, layers, and whether its
+    /// texels changed since the last frame): the frame's data resolved (`frame::Resolver`), then its passes as
+    /// one ordered list, `overlays` (the viewer's grid) placed in it by their stages.
+    pub fn compose(
+        &mut self,
+        gpu: Gpu<'_>,
+        encoder: &mut wgpu::CommandEncoder,
+        setup: &FrameSetup,
+        target: Target<'_>,
+        brightness: Brightness,
+        overlays: &mut [&mut dyn FramePass],
+    ) -> Result<(), GpuError> {
+        let frame = self.resolver.resolve(setup);
+        let mut r = self.recording(gpu, &frame, target.targets, brightness, target.transparent);
+        let mut passes: Vec<&mut dyn FramePass> = vec![
+            &mut self.through,
+            &mut self.glare,
+            &mut self.background,
+            &mut self.objects,
+            &mut self.particles,
+            &mut self.billboard,
+        ];
+        passes.extend(overlays.iter_mut().map(|p| &mut **p as &mut dyn FramePass));
+        checked(gpu.device, || run(&mut passes, &mut r, encoder))?
+    }
+
+    /// What the passes of `frame` start from.
+    fn recording<'r>(
+        &self,
+        gpu: Gpu<'r>,
+        frame: &'r Frame<'r, 'r>,
+        targets: &'r FrameTargets,
+        brightness: Brightness,
+        transparent: bool,
+    ) -> Recording<'r> {
+        let setup = frame.setup;
         let [w, h] = targets.size;
-        let aspect = w as f64 / h as f64;
-        let (scene, billboard) = (setup.scene, setup.billboard);
-        let layers = crate::gpu::field_pass::layers_of(scene);
-        // Where translucent objects stand, the glow behind them seen through them.
-        let seen = (self.through)
-            .encode(
-                device,
-                queue,
-                encoder,
-                setup,
-                brightness,
-                (resolution, layers),
-            )?
-            .cloned();
-        let brightness = seen.as_ref().unwrap_or(brightness);
-        checked(device, || {
-            // The glare, where the scene has one, adds to the field before the blend.
-            let brightness = match &scene.glare {
-                Some(glare) => {
-                    let size = (resolution, layers);
-                    self.glare
-                        .encode(device, queue, encoder, brightness, size, glare, fresh)
-                }
-                None => brightness,
-            };
-            let view_proj = view_projection(&scene.camera, &billboard, aspect)
-                .as_mat4()
-                .to_cols_array_2d();
-            let [r, g, b] = scene.colors.background;
-            let clear = if transparent {
-                wgpu::Color::TRANSPARENT
-            } else {
-                wgpu::Color { r, g, b, a: 1.0 }
-            };
-            {
-                let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                    label: Some("energywave.frame.background"),
-                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                        view: &targets.background_view,
-                        depth_slice: None,
-                        resolve_target: None,
-                        ops: wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(clear),
-                            store: wgpu::StoreOp::Store,
-                        },
-                    })],
-                    depth_stencil_attachment: None,
-                    timestamp_writes: None,
-                    occlusion_query_set: None,
-                    multiview_mask: None,
-                });
-                behind(&mut pass, view_proj);
-            }
-            // The objects with depth (a holdout: their depth alone), which the billboard reads to hide the glow
-            // in front of them pixel by pixel.
-            let objects = self.objects.prepare(device, queue, setup);
-            if objects {
-                let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                    label: Some("energywave.frame.objects"),
-                    color_attachments: &[
-                        Some(wgpu::RenderPassColorAttachment {
-                            view: &targets.background_view,
-                            depth_slice: None,
-                            resolve_target: None,
-                            ops: wgpu::Operations {
-                                load: wgpu::LoadOp::Load,
-                                store: wgpu::StoreOp::Store,
-                            },
-                        }),
-                        // The depth's copy, cleared to the far plane as the depth buffer is.
-                        Some(wgpu::RenderPassColorAttachment {
-                            view: &targets.depth_value_view,
-                            depth_slice: None,
-                            resolve_target: None,
-                            ops: wgpu::Operations {
-                                load: wgpu::LoadOp::Clear(DEPTH_VALUE_CLEAR),
-                                store: wgpu::StoreOp::Store,
-                            },
-                        }),
-                    ],
-                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                        view: &targets.depth_view,
-                        depth_ops: Some(wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(1.0),
-                            store: wgpu::StoreOp::Store,
-                        }),
-                        stencil_ops: None,
-                    }),
-                    timestamp_writes: None,
-                    occlusion_query_set: None,
-                    multiview_mask: None,
-                });
-                self.objects.draw(
-                    queue,
-                    &mut pass,
-                    (view_proj, setup.eye().as_vec3().to_array()),
-                    !self.holdout,
-                );
-            }
-            // The particles' smoke behind the billboard's plane over the background and the objects, its rays
-            // ended by the objects; the smoke in front of the plane goes over the glow.
-            let smoke = (self.particles).prepare(device, queue, setup, targets.size, resolution);
-            if smoke {
-                self.particles
-                    .encode(device, encoder, &targets.depth_value_view);
-                let mut pass = over(
-                    encoder,
-                    "energywave.frame.particles",
-                    &targets.background_view,
-                );
-                self.particles.draw(&mut pass, false);
-            }
-            // The billboard blends over a copy of what lies behind it.
-            encoder.copy_texture_to_texture(
-                targets.background.as_image_copy(),
-                targets.color.as_image_copy(),
-                targets.background.size(),
-            );
-            let mut params = billboard_params(
-                &scene.camera,
-                &billboard,
-                resolution,
-                scene.colors.energy_color(),
-                aspect,
-                BlendMode::of(transparent, scene.colors.blend),
-                setup.reach.nu,
-                scene.colors.cutoff,
-            );
-            if self.unclamped {
-                params.mode |= crate::gpu::billboard_pass::UNCLAMPED;
-            }
-            if let Some(threshold) = self.threshold_preview.filter(|_| !transparent) {
-                params.mode |= crate::gpu::billboard_pass::THRESHOLD_PREVIEW;
-                params.energy[3] = threshold as f32;
-            }
-            // Where objects stand, the billboard reads the clips of the texture it shows (`resolution`), up to the
-            // first surface of any object: a translucent one's edge guides the glow blended for it as an opaque
-            // one's edge guides the glow it ends.
-            let clips = match objects {
-                true => setup.surface_clips_at(resolution),
-                false => None,
-            };
-            self.billboard.draw(
-                device,
-                queue,
-                encoder,
-                &targets.color_view,
-                &targets.background_view,
-                brightness,
-                (&targets.depth_value_view, clips),
-                layers,
-                &params,
-            );
-            if smoke {
-                let mut pass = over(
-                    encoder,
-                    "energywave.frame.particles.front",
-                    &targets.color_view,
-                );
-                self.particles.draw(&mut pass, true);
-            }
-        })
+        let view_proj = view_projection(&setup.scene.camera, &setup.billboard, w as f64 / h as f64);
+        Recording {
+            gpu,
+            frame,
+            targets,
+            look: Look {
+                transparent,
+                ..self.look
+            },
+            brightness,
+            view_proj: view_proj.as_mat4().to_cols_array_2d(),
+            objects: false,
+        }
+    }
+}
+
+/// A frame cache for renderers on `device`: its translucent tables filled on `device` where it is a real GPU
+/// (`tau_table`), from any thread but on GL, where every call holds the one context.
+pub fn frame_cache(device: &wgpu::Device, queue: &wgpu::Queue) -> FrameCache {
+    let mut cache = FrameCache::new();
+    if super::tau_table::fills_tables(&device.adapter_info()) {
+        let (d, q) = (device.clone(), queue.clone());
+        let any_thread = device.adapter_info().backend != wgpu::Backend::Gl;
+        cache.set_table_fill(
+            Box::new(move |voxels| super::tau_table::table_on(&d, &q, voxels).ok()),
+            any_thread,
+        );
+    }
+    cache
+}
+
+/// Where a frame is drawn: its targets, and whether over a transparent background.
+#[derive(Clone, Copy)]
+pub struct Target<'t> {
+    pub targets: &'t FrameTargets,
+    pub transparent: bool,
+}
+
+/// What lies behind the billboard cleared: the scene's background color, or transparent.
+struct BackgroundPass;
+
+impl FramePass for BackgroundPass {
+    fn stages(&self) -> &'static [Stage] {
+        &[Stage::Background]
+    }
+
+    fn prepare(&mut self, _: Stage, _: &mut Recording<'_>) -> Result<(), GpuError> {
+        Ok(())
+    }
+
+    fn record(&mut self, _: Stage, r: &Recording<'_>, encoder: &mut wgpu::CommandEncoder) {
+        let [red, g, b] = r.frame.setup.scene.colors.background;
+        let clear = match r.look.transparent {
+            true => wgpu::Color::TRANSPARENT,
+            false => wgpu::Color {
+                r: red,
+                g,
+                b,
+                a: 1.0,
+            },
+        };
+        encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("energywave.frame.background"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &r.targets.background_view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(clear),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: None,
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
     }
 }
 

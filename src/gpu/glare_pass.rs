@@ -2,10 +2,12 @@
 //! the excess over a threshold blurred by a separable Gaussian whose weights come from the f64 twin
 //! (`scene::Glare::kernel`).
 
+use super::context::GpuError;
 use super::context::{
     compute_pass, field_storage_entry, field_texture, field_texture_layers, loaded_field_entry,
     storage_buffer_entry,
 };
+use super::pass::{Brightness, FramePass, Recording, Stage};
 use super::shaders;
 use crate::scene::{Glare, MAX_GLARE_RADIUS};
 
@@ -39,6 +41,9 @@ pub struct GlarePass {
     targets: Option<[(wgpu::Texture, wgpu::TextureView); 2]>,
     /// What the output holds the glare of: the field's view, the glare, its side and layers.
     last: Option<(wgpu::TextureView, Glare, u32, u32)>,
+    /// What the next `record` dispatches: the rows' and columns' bind groups, the workgroups a side, the
+    /// layers.
+    pending: Option<([wgpu::BindGroup; 2], u32, u32)>,
 }
 
 impl GlarePass {
@@ -89,27 +94,25 @@ impl GlarePass {
             ),
             targets: None,
             last: None,
+            pending: None,
         }
     }
 
-    /// Records the glare over `field` (its view; `resolution` texels a side, `layers` layers) and returns the
-    /// view of the field with the glare added. Unless `fresh` (the field's texels changed since the last call),
-    /// the glare of the same field and settings is the one already there, and nothing is recorded: a viewer
-    /// at rest spends nothing on it.
-    #[allow(clippy::too_many_arguments)]
-    pub fn encode(
+    /// Prepares the glare over `field` (its brightness) and returns the view of the field with the glare
+    /// added. Unless `field.fresh` (its texels changed since the last call), the glare of the same field and
+    /// settings is the one already there, and nothing is recorded: a viewer at rest spends nothing on it.
+    fn prepare_glare(
         &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
-        encoder: &mut wgpu::CommandEncoder,
-        field: &wgpu::TextureView,
-        (resolution, layers): (u32, u32),
+        field: &Brightness,
         glare: &Glare,
-        fresh: bool,
-    ) -> &wgpu::TextureView {
-        let key = (field.clone(), *glare, resolution, layers);
-        if !fresh && self.last.as_ref() == Some(&key) {
-            return &self.targets.as_ref().expect("rendered before")[1].1;
+    ) -> wgpu::TextureView {
+        let (resolution, layers) = (field.resolution, field.layers);
+        self.pending = None;
+        let key = (field.view.clone(), *glare, resolution, layers);
+        if !field.fresh && self.last.as_ref() == Some(&key) {
+            return self.targets.as_ref().expect("rendered before")[1].1.clone();
         }
         self.last = Some(key);
         let stale = self.targets.as_ref().is_none_or(|[(t, _), _]| {
@@ -140,7 +143,7 @@ impl GlarePass {
             entries: &[
                 entry(0, self.params.as_entire_binding()),
                 entry(1, self.weights.as_entire_binding()),
-                entry(2, tex(field)),
+                entry(2, tex(&field.view)),
                 entry(4, tex(rows_view)),
             ],
         });
@@ -150,21 +153,43 @@ impl GlarePass {
             entries: &[
                 entry(0, self.params.as_entire_binding()),
                 entry(1, self.weights.as_entire_binding()),
-                entry(2, tex(field)),
+                entry(2, tex(&field.view)),
                 entry(3, tex(rows_view)),
                 entry(4, tex(output_view)),
             ],
         });
-        let groups = resolution.div_ceil(8);
-        for (pipeline, group) in [(&self.rows, &rows_group), (&self.columns, &columns_group)] {
+        self.pending = Some(([rows_group, columns_group], resolution.div_ceil(8), layers));
+        output_view.clone()
+    }
+}
+
+impl FramePass for GlarePass {
+    fn stages(&self) -> &'static [Stage] {
+        &[Stage::Glare]
+    }
+
+    /// Where the scene has a glare, it adds to the field before the blend.
+    fn prepare(&mut self, _: Stage, r: &mut Recording<'_>) -> Result<(), GpuError> {
+        self.pending = None;
+        if let Some(glare) = &r.frame.setup.scene.glare {
+            let (device, queue) = (r.gpu.device, r.gpu.queue);
+            r.brightness.view = self.prepare_glare(device, queue, &r.brightness, glare);
+        }
+        Ok(())
+    }
+
+    fn record(&mut self, _: Stage, _: &Recording<'_>, encoder: &mut wgpu::CommandEncoder) {
+        let Some((groups, size, layers)) = self.pending.take() else {
+            return;
+        };
+        for (pipeline, group) in [(&self.rows, &groups[0]), (&self.columns, &groups[1])] {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("energywave.glare.pass"),
                 timestamp_writes: None,
             });
             pass.set_pipeline(pipeline);
             pass.set_bind_group(0, group, &[]);
-            pass.dispatch_workgroups(groups, groups, layers);
+            pass.dispatch_workgroups(size, size, layers);
         }
-        output_view
     }
 }

@@ -1,6 +1,8 @@
 //! The viewer's ground grid and axes: a line list drawn behind the glow, in the billboard pass's own frame
 //! (`shaders/grid.wgsl`).
 
+use super::context::GpuError;
+use super::pass::{FramePass, Recording, Stage};
 use wgpu::util::DeviceExt;
 
 use super::context::{RenderPipelineSpec, pass_layouts, render_pipeline, uniform_buffer};
@@ -146,15 +148,7 @@ impl GridPass {
 
     /// Draws the uploaded lines into `pass` with the projection `view_proj` (written before the submit that
     /// runs the pass).
-    pub fn draw(
-        &self,
-        queue: &wgpu::Queue,
-        pass: &mut wgpu::RenderPass<'_>,
-        view_proj: [[f32; 4]; 4],
-    ) {
-        if self.count == 0 {
-            return;
-        }
+    fn draw(&self, queue: &wgpu::Queue, pass: &mut wgpu::RenderPass<'_>, view_proj: [[f32; 4]; 4]) {
         queue.write_buffer(
             &self.params,
             0,
@@ -164,5 +158,24 @@ impl GridPass {
         pass.set_bind_group(0, &self.bind_group, &[]);
         pass.set_vertex_buffer(0, self.vertices.slice(..));
         pass.draw(0..self.count, 0..1);
+    }
+}
+
+impl FramePass for GridPass {
+    /// Over the background, under the objects and the glow, which blends over it, with the frame's projection.
+    fn stages(&self) -> &'static [Stage] {
+        &[Stage::Behind]
+    }
+
+    fn prepare(&mut self, _: Stage, _: &mut Recording<'_>) -> Result<(), GpuError> {
+        Ok(())
+    }
+
+    fn record(&mut self, _: Stage, r: &Recording<'_>, encoder: &mut wgpu::CommandEncoder) {
+        if self.count == 0 {
+            return;
+        }
+        let mut pass = super::context::over(encoder, "energywave.grid", &r.targets.background_view);
+        self.draw(r.gpu.queue, &mut pass, r.view_proj);
     }
 }

@@ -2,9 +2,9 @@
 //! alone, or the composed frame in an offscreen texture, read back to the CPU.
 
 use super::context::{GpuContext, GpuError};
-use super::field_pass::{FieldInputs, FieldRenderer};
-use super::frame::{FrameTargets, SceneRenderer, read_frame};
-use crate::frame::FrameSetup;
+use super::field_pass::FieldRenderer;
+use super::frame::{FrameTargets, SceneRenderer, Target, read_frame};
+use crate::frame::{FrameCache, FrameSetup};
 use crate::scene::Scene;
 
 /// A composed frame read back from the GPU: RGBA in [0, 1], rows from the top.
@@ -38,12 +38,28 @@ impl HeadlessRenderer {
 
     /// A renderer on an existing context.
     pub fn from_context(ctx: GpuContext) -> Self {
-        let renderer = SceneRenderer::new(&ctx.device);
+        let renderer = SceneRenderer::new(&ctx.device, &ctx.queue);
         Self {
             ctx,
             renderer,
             read_through: false,
         }
+    }
+
+    /// The cache its frames are resolved through (`frame::FrameCache`).
+    pub fn cache(&self) -> &std::sync::Arc<FrameCache> {
+        self.renderer.cache()
+    }
+
+    /// The frame of `scene` in a picture of `aspect` (width / height), resolved through its cache.
+    pub fn setup<'a>(&self, scene: &'a Scene, aspect: f64) -> FrameSetup<'a> {
+        self.renderer.setup(scene, aspect)
+    }
+
+    /// `Scene::at_frame`, the live sets' simulations kept in its cache (a sequence steps each frame from the
+    /// last).
+    pub fn scene_at(&self, scene: &Scene, frame: f64) -> Scene {
+        self.renderer.cache().scene_at(scene, frame)
     }
 
     /// The field pass, for inspection (dispatch count, texture).
@@ -76,18 +92,13 @@ impl HeadlessRenderer {
     /// field inputs changed since the last call.
     pub fn brightness(&mut self, setup: &FrameSetup) -> Result<Vec<f32>, GpuError> {
         let (device, queue) = (&self.ctx.device, &self.ctx.queue);
-        let field = self.renderer.field_mut();
-        field.prepare(device, queue, &FieldInputs::of(setup))?;
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("energywave.field.encoder"),
         });
-        field.encode(&mut encoder);
         // Where translucent objects stand, the glow behind them seen through them, as a frame shows it.
-        let view = field.view().expect("prepared above").clone();
-        let layers = crate::gpu::field_pass::layers_of(setup.scene);
-        let through =
-            self.renderer
-                .see_through(device, queue, &mut encoder, setup, &view, layers)?;
+        let through = self
+            .renderer
+            .see_through(self.ctx.gpu(), &mut encoder, setup)?;
         self.ctx.checked(|| queue.submit([encoder.finish()]))?;
         let texture = match through {
             true => self.renderer.through_texture().expect("blended above"),
@@ -150,16 +161,12 @@ impl HeadlessRenderer {
             label: Some("energywave.headless.encoder"),
         });
         // Nothing lies behind the billboard here but the background and the objects (the viewer draws more).
-        let setup = FrameSetup::placed(scene, width as f64 / height as f64);
-        self.renderer.record(
-            device,
-            queue,
-            &mut encoder,
-            &setup,
-            &targets,
+        let setup = self.renderer.setup(scene, width as f64 / height as f64);
+        let target = Target {
+            targets: &targets,
             transparent,
-            |_, _| {},
-        )?;
+        };
+        (self.renderer).record(self.ctx.gpu(), &mut encoder, &setup, target)?;
         self.ctx.checked(|| queue.submit([encoder.finish()]))?;
         Ok(Frame {
             width,

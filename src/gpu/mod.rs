@@ -1,6 +1,9 @@
-//! The GPU renderer: the field pass (a WGSL compute shader integrating B into a storage texture), the
-//! billboard pass (drawing the billboard in 3D with the blend), and the headless renderer that runs both
-//! for the command line and the tests. The viewer draws through the same passes.
+//! The GPU renderer: the field pass (a WGSL compute shader integrating B into a storage texture), then a
+//! frame's passes as one ordered list (`pass::FramePass`, run by `frame::SceneRenderer::compose`: the glow seen
+//! through translucent objects, the glare, the background, the objects, the smoke, the billboard's blend), and
+//! the headless renderer that runs them for the command line and the tests. The viewer draws through the same
+//! list, its grid added to it. A new pass implements `FramePass`, names its `Stage` and joins the list in
+//! `SceneRenderer::compose`.
 
 mod billboard_pass;
 mod blit_pass;
@@ -14,7 +17,9 @@ pub mod grid_pass;
 mod headless;
 pub mod object_pass;
 pub mod particle_pass;
+pub mod pass;
 pub mod shaders;
+mod targets;
 pub mod tau_table;
 pub mod through_pass;
 mod upsample;
@@ -28,9 +33,10 @@ pub use context::{
 };
 pub use field_pass::{FieldInputs, FieldRenderer, FieldShaders, Specialise, Structure, layers_of};
 pub use formats::FRAME_FORMAT;
-pub use frame::{FrameTargets, SceneRenderer, f16_to_f32, read_frame};
+pub use frame::{FrameTargets, SceneRenderer, Target, f16_to_f32, frame_cache, read_frame};
 pub use grid_pass::GridPass;
 pub use headless::{Frame, HeadlessRenderer};
+pub use pass::{Brightness, FramePass, Gpu, Look, Stage};
 pub use upsample::{Upsample, UpsampleClips};
 
 /// The Rust mirrors of the WGSL structs, for the layout tests.

@@ -5,16 +5,18 @@
 
 use wgpu::util::DeviceExt;
 
+use super::context::GpuError;
 use super::context::{
     RenderPipelineSpec, fragment_storage_entry, pass_layouts, render_pipeline, uniform_buffer,
 };
 use super::field_pass::{SOURCE_BINDINGS, source_bindings, storage_buffer_init};
+use super::formats::DEPTH_VALUE_CLEAR;
 use super::formats::{DEPTH_FORMAT, DEPTH_VALUE_FORMAT, FRAME_FORMAT};
+use super::pass::{FramePass, Recording, Stage};
 use super::shaders::object_module_source;
-use crate::background::{Latest, Poll};
-use crate::frame::FrameSetup;
+use crate::frame::{Frame, FrameSetup};
 use crate::objects::lighting::AMBIENT;
-use crate::objects::{Lit, LitKey, Object, lit, unshadowed};
+use crate::objects::{Lit, LitKey};
 use crate::scene::Scene;
 use std::sync::Arc;
 
@@ -119,22 +121,11 @@ pub struct ObjectPass {
     count: u32,
     /// The scene's energy color Ce, its intensity applied.
     energy: [f32; 3],
-    /// What the buffers were lit from (`None` while they hold a stand-in, `drawn` alone).
+    /// What the buffers were lit from (`None` while they hold a stand-in).
     key: Option<LitKey>,
-    /// The objects the buffers hold, lit or not.
-    drawn: Option<Vec<crate::objects::Object>>,
-    /// The last light worked out whole (the viewer recolors it at once where only the objects' colors change).
-    lit: Option<(LitKey, Arc<Lit>)>,
-    /// Where the objects' light (and their translucent tables) is worked out on a thread of its own (the
-    /// viewer's, `light_in_background`); `None`: before the frame records (renders and exports).
-    background: Option<Latest<LitKey, Lit>>,
-    /// How long a frame waits for the light being worked out before it draws a stand-in.
-    wait: std::time::Duration,
+    /// The light the buffers hold.
+    lit: Option<Arc<Lit>>,
 }
-
-/// How long a viewer's frame waits for the objects' light being worked out before it draws a stand-in: a few
-/// spheres' and boxes' is ready within it, translucent tables and large meshes are not.
-pub const WAIT: std::time::Duration = std::time::Duration::from_millis(30);
 
 /// `ObjectParams`' binding, after the field's.
 const PARAMS_BINDING: u32 = 14;
@@ -179,10 +170,7 @@ impl ObjectPass {
             count: 0,
             energy: [0.0; 3],
             key: None,
-            drawn: None,
             lit: None,
-            background: None,
-            wait: WAIT,
         }
     }
 
@@ -235,26 +223,18 @@ impl ObjectPass {
         })
     }
 
-    /// Lights and uploads `scene`'s objects and sources where they or their colors changed since the last
-    /// call. Returns whether there is anything to draw.
-    pub fn prepare(
-        &mut self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        setup: &FrameSetup,
-    ) -> bool {
-        let scene = setup.scene;
-        if scene.objects.is_empty() {
+    /// Uploads the frame's lit objects and its sources where they changed since the last call (the light of
+    /// `frame.objects`, resolved by `frame::Resolver`: the same light again uploads nothing; a stand-in that
+    /// keeps the light drawn before uploads the sources alone). Returns whether there is anything to draw.
+    fn prepare_objects(&mut self, device: &wgpu::Device, frame: &Frame) -> bool {
+        let (setup, scene) = (frame.setup, frame.setup.scene);
+        let Some(objects) = &frame.objects else {
             self.count = 0;
             self.key = None;
-            self.drawn = None;
+            self.lit = None;
             return false;
-        }
-        if self
-            .key
-            .as_ref()
-            .is_some_and(|k| k.matches(scene.lit_inputs()))
-        {
+        };
+        if self.key.is_some() && self.key == objects.key {
             return self.count > 0;
         }
         self.structure = Structure::of(scene);
@@ -262,68 +242,15 @@ impl ObjectPass {
             let built = self.build_pipelines(device, self.structure);
             self.pipelines.insert(self.structure, built);
         }
-        let key = LitKey::of(scene.lit_inputs());
-        let lit = match &self.background {
-            None => {
-                fill_tables(device, queue, &scene.objects, None);
-                Arc::new(lit(scene.lit_inputs()))
-            }
-            Some(worker) => {
-                // A color edit (a picker dragged) needs no new light: the last one, recolored, is exact.
-                let recolored = (self.lit.as_ref())
-                    .filter(|(k, _)| k.matches_but_colors(scene.lit_inputs()))
-                    .map(|(_, lit)| Poll::Ready(Arc::new(lit.recolored(&scene.objects))));
-                let lit = recolored.unwrap_or_else(|| {
-                    worker.request_within(&key, self.wait, || light_job(device, queue, scene))
-                });
-                match lit {
-                    Poll::Ready(lit) => lit,
-                    // These objects drawn already, by older light: kept until the new light is ready, the
-                    // pixels shaded by the sources of now.
-                    Poll::Pending if self.drawn.as_deref() == Some(&scene.objects[..]) => {
-                        self.upload_sources(device, setup);
-                        self.key = None;
-                        return self.count > 0;
-                    }
-                    Poll::Pending => {
-                        self.upload(device, setup, &unshadowed(scene.lit_inputs()));
-                        self.key = None;
-                        return self.count > 0;
-                    }
-                }
-            }
-        };
-        self.upload(device, setup, &lit);
-        if self.background.is_some() {
-            self.lit = Some((key.clone(), lit));
+        match &self.lit {
+            // The light drawn already, kept while the new one is worked out: the pixels shaded by the sources
+            // of now.
+            Some(drawn) if Arc::ptr_eq(drawn, &objects.lit) => self.upload_sources(device, setup),
+            _ => self.upload(device, setup, &objects.lit),
         }
-        self.key = Some(key);
+        self.lit = Some(objects.lit.clone());
+        self.key = objects.key.clone();
         self.count > 0
-    }
-
-    /// Works out the objects' light on a thread of its own from now on: `prepare` waits for it up to `wait`
-    /// (`WAIT` for the viewer), then draws the objects unshadowed (or with their older light) until it is ready.
-    /// `busy` says while it is not.
-    pub fn light_in_background(&mut self, wait: std::time::Duration) {
-        self.background = Some(Latest::new("energywave objects' light"));
-        self.wait = wait;
-    }
-
-    /// What is being worked out for the objects, if anything (they are drawn with a stand-in meanwhile).
-    pub fn busy(&self) -> Option<&'static str> {
-        let translucent = (self.drawn.iter().flatten()).any(|o| o.translucent.is_some());
-        match self.background.as_ref().is_some_and(|w| w.busy()) {
-            false => None,
-            true if translucent => Some("objects' light, translucent tables"),
-            true => Some("objects' light"),
-        }
-    }
-
-    /// Waits until the light being worked out is ready (a screenshot must not show the stand-in).
-    pub fn wait(&self) {
-        if let Some(w) = &self.background {
-            w.wait();
-        }
     }
 
     /// Uploads `lit` and the scene's sources (the shader shades each pixel by them).
@@ -356,7 +283,6 @@ impl ObjectPass {
             }),
         );
         self.count = surface.indices.len() as u32;
-        self.drawn = Some(setup.scene.objects.clone());
         self.upload_sources(device, setup);
     }
 
@@ -437,60 +363,59 @@ impl ObjectPass {
     }
 }
 
-/// A real GPU fills the translucent objects' tables (kept, so that `lit` finds them); the CPU fills them
-/// otherwise, in `lit` itself. Stops between objects once `cancel` is raised.
-fn fill_tables(
-    device: &wgpu::Device,
-    queue: &wgpu::Queue,
-    objects: &[Object],
-    cancel: Option<&crate::background::Cancel>,
-) {
-    if !super::tau_table::fills_tables(&device.adapter_info()) {
-        return;
+impl FramePass for ObjectPass {
+    fn stages(&self) -> &'static [Stage] {
+        &[Stage::Objects]
     }
-    for o in objects.iter().filter(|o| o.translucent.is_some()) {
-        if cancel.is_some_and(|c| c.stopped()) {
+
+    fn prepare(&mut self, _: Stage, r: &mut Recording<'_>) -> Result<(), GpuError> {
+        r.objects = self.prepare_objects(r.gpu.device, r.frame);
+        Ok(())
+    }
+
+    /// The objects with depth (a holdout: their depth alone), which the billboard reads to hide the glow in
+    /// front of them pixel by pixel.
+    fn record(&mut self, _: Stage, r: &Recording<'_>, encoder: &mut wgpu::CommandEncoder) {
+        if !r.objects {
             return;
         }
-        let fill = |v: &crate::objects::translucent::voxels::Voxels| {
-            super::tau_table::table_on(device, queue, v).ok()
-        };
-        crate::objects::translucent::light::prepared_with(o, &fill);
-    }
-}
-
-/// The job that lights `scene`'s objects on the worker's thread: each translucent object's voxels and table
-/// (the longest part), then the surface and its shadows; it stops between those once a newer request cancels
-/// it. A GPU fills the tables where it would before a frame, except on GL, where every call holds the one
-/// context: the CPU fills them there.
-fn light_job(
-    device: &wgpu::Device,
-    queue: &wgpu::Queue,
-    scene: &Scene,
-) -> impl FnOnce(&crate::background::Cancel) -> Option<Lit> + Send + 'static {
-    let gpu = (device.adapter_info().backend != wgpu::Backend::Gl)
-        .then(|| (device.clone(), queue.clone()));
-    let objects = scene.objects.clone();
-    let sources = scene.sources.clone();
-    let (palette, epsilon) = (scene.colors.palette(), scene.integration.epsilon);
-    move |cancel| {
-        if let Some((device, queue)) = &gpu {
-            fill_tables(device, queue, &objects, Some(cancel));
-        }
-        for o in objects.iter().filter(|o| o.translucent.is_some()) {
-            if cancel.stopped() {
-                return None;
-            }
-            crate::objects::translucent::light::prepared(o);
-        }
-        if cancel.stopped() {
-            return None;
-        }
-        Some(lit(crate::objects::LitInputs {
-            objects: &objects,
-            sources: &sources,
-            palette,
-            epsilon,
-        }))
+        let targets = r.targets;
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("energywave.frame.objects"),
+            color_attachments: &[
+                Some(wgpu::RenderPassColorAttachment {
+                    view: &targets.background_view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Load,
+                        store: wgpu::StoreOp::Store,
+                    },
+                }),
+                // The depth's copy, cleared to the far plane as the depth buffer is.
+                Some(wgpu::RenderPassColorAttachment {
+                    view: &targets.depth_value_view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(DEPTH_VALUE_CLEAR),
+                        store: wgpu::StoreOp::Store,
+                    },
+                }),
+            ],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &targets.depth_view,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        let eye = r.frame.setup.eye().as_vec3().to_array();
+        self.draw(r.gpu.queue, &mut pass, (r.view_proj, eye), !r.look.holdout);
     }
 }

@@ -8,16 +8,16 @@ use std::sync::Arc;
 
 use wgpu::util::DeviceExt;
 
+use super::context::GpuError;
 use super::context::{
-    RenderPipelineSpec, compute_pass, fragment_storage_entry, pass_layouts, render_pipeline,
+    RenderPipelineSpec, compute_pass, fragment_storage_entry, over, pass_layouts, render_pipeline,
     storage_buffer_entry, uniform_buffer,
 };
 use super::formats::FRAME_FORMAT;
-use crate::background::{Latest, Poll};
-use crate::frame::FrameSetup;
+use super::pass::{FramePass, Gpu, Recording, Stage};
+use crate::frame::{Frame, FrameSetup};
 use crate::objects::lighting::AMBIENT;
-use crate::objects::lighting::Lights;
-use crate::particles::light::{LitParticles, light_particles_unshadowed, shared_lit};
+use crate::particles::light::LitParticles;
 use crate::particles::view::{SmokeView, TILE};
 
 /// Rust mirrors of `shaders/particles.wgsl` (keep in sync; `tests/gpu_layout.rs` checks them).
@@ -95,20 +95,8 @@ pub struct ParticlePass {
     chunks: wgpu::Buffer,
     chunk_stride: u64,
     prepared: Option<Prepared>,
-    /// Where the particles' light is worked out on a thread of its own (the viewer's, `light_in_background`);
-    /// `None`: before the frame records (renders and exports).
-    background: Option<Latest<LightKey, Option<Arc<LitParticles>>>>,
-    /// How long a frame waits for the light being worked out before it draws without it.
-    wait: std::time::Duration,
-}
-
-/// What the particles' light depends on (`particles::light::shared_lit`).
-#[derive(Clone, Debug, PartialEq)]
-struct LightKey {
-    sets: Vec<crate::particles::ParticleSet>,
-    sources: crate::field::Sources,
-    palette: crate::field::Palette,
-    epsilon: f64,
+    /// Whether the frame being recorded has smoke.
+    smoke: bool,
 }
 
 /// A smoke image read back: per pixel, rows from the top, the front and the back image's (radiance,
@@ -245,81 +233,22 @@ impl ParticlePass {
             chunks: chunk_buffer(device, chunk_stride, 1),
             chunk_stride,
             prepared: None,
-            background: None,
-            wait: super::object_pass::WAIT,
+            smoke: false,
         }
     }
 
-    /// Works out the particles' light on a thread of its own from now on: `prepare` waits for it up to `wait`,
-    /// then draws the particles it drew before (the first time, lit as if they shadowed nothing) until it is
-    /// ready.
-    pub fn light_in_background(&mut self, wait: std::time::Duration) {
-        self.background = Some(Latest::new("energywave particles' light"));
-        self.wait = wait;
-    }
-
-    /// Whether the particles' light is being worked out.
-    pub fn busy(&self) -> bool {
-        self.background.as_ref().is_some_and(|w| w.busy())
-    }
-
-    /// Waits until the light being worked out is ready (a screenshot must not show older particles).
-    pub fn wait(&self) {
-        if let Some(w) = &self.background {
-            w.wait();
-        }
-    }
-
-    /// The frame's lit particles: the setup's own, or those worked out in the background (the ones drawn now
-    /// while they are not ready).
-    fn lit(&self, setup: &FrameSetup) -> Option<Arc<LitParticles>> {
-        let Some(worker) = &self.background else {
-            return setup.particles();
-        };
-        let scene = setup.scene;
-        if scene.particles.is_empty() {
-            return None;
-        }
-        let key = LightKey {
-            sets: scene.particles.clone(),
-            sources: scene.sources.clone(),
-            palette: scene.colors.palette(),
-            epsilon: scene.integration.epsilon,
-        };
-        let job = || {
-            let k = key.clone();
-            move |cancel: &crate::background::Cancel| {
-                (!cancel.stopped()).then(|| shared_lit(&k.sets, &k.sources, k.palette, k.epsilon))
-            }
-        };
-        match worker.request_within(&key, self.wait, job) {
-            Poll::Ready(lit) => (*lit).clone(),
-            Poll::Pending => match &self.prepared {
-                // The particles drawn before, as they were lit.
-                Some(p) => Some(p.lit.clone()),
-                // None yet: these, lit as if they shadowed nothing (a small part of the cost).
-                None => {
-                    let particles = crate::particles::gather(&key.sets, &key.sources);
-                    let lights = Lights::new(&key.sources, key.palette, key.epsilon);
-                    let lights = light_particles_unshadowed(&lights, &particles);
-                    (!particles.is_empty()).then(|| Arc::new(LitParticles { particles, lights }))
-                }
-            },
-        }
-    }
-
-    /// Uploads the frame's particles and plans its segments for a frame of `frame` pixels over a field of
-    /// `resolution` texels a side (`FrameSetup::smoke_view`), where the particles, the view or the size changed.
-    /// Returns whether there is smoke to draw.
-    pub fn prepare(
+    /// Uploads the frame's particles (`Frame::particles`) and plans its segments for a frame of `frame` pixels
+    /// over a field of `resolution` texels a side (`FrameSetup::smoke_view`), where the particles, the view or
+    /// the size changed. Returns whether there is smoke to draw.
+    fn prepare_smoke(
         &mut self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        setup: &FrameSetup,
+        gpu: Gpu<'_>,
+        data: &Frame,
         frame: [u32; 2],
         resolution: u32,
     ) -> bool {
-        let Some(lit) = self.lit(setup) else {
+        let (device, queue, setup) = (gpu.device, gpu.queue, data.setup);
+        let Some(lit) = data.particles.clone() else {
             self.prepared = None;
             return false;
         };
@@ -445,7 +374,7 @@ impl ParticlePass {
 
     /// Records the splatting: the smoke's image of the prepared frame, its rays ended by the objects' depth
     /// (`depth_value`, read where the scene has objects).
-    pub fn encode(
+    fn encode(
         &self,
         device: &wgpu::Device,
         encoder: &mut wgpu::CommandEncoder,
@@ -490,7 +419,7 @@ impl ParticlePass {
 
     /// Lays the smoke's front image (in front of the billboard's plane) or its back image over what `pass` draws
     /// into (premultiplied: its light, plus what lies behind times its transmittance).
-    pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>, front: bool) {
+    fn draw(&self, pass: &mut wgpu::RenderPass<'_>, front: bool) {
         if let Some(p) = &self.prepared {
             pass.set_pipeline(&self.draw[!front as usize]);
             pass.set_bind_group(0, &p.draw_group, &[]);
@@ -524,6 +453,48 @@ impl ParticlePass {
             .map(|c| [[c[0], c[1], c[2], c[3]], [c[4], c[5], c[6], c[7]]])
             .collect();
         Ok(Some((pixels, p.view.clone())))
+    }
+}
+
+impl FramePass for ParticlePass {
+    /// The smoke behind the billboard's plane over the background and the objects, its rays ended by the
+    /// objects; the smoke in front of the plane over the glow.
+    fn stages(&self) -> &'static [Stage] {
+        &[Stage::SmokeBehind, Stage::SmokeInFront]
+    }
+
+    fn prepare(&mut self, stage: Stage, r: &mut Recording<'_>) -> Result<(), GpuError> {
+        if stage == Stage::SmokeBehind {
+            let (size, resolution) = (r.targets.size, r.brightness.resolution);
+            self.smoke = self.prepare_smoke(r.gpu, r.frame, size, resolution);
+        }
+        Ok(())
+    }
+
+    fn record(&mut self, stage: Stage, r: &Recording<'_>, encoder: &mut wgpu::CommandEncoder) {
+        if !self.smoke {
+            return;
+        }
+        let targets = r.targets;
+        match stage {
+            Stage::SmokeBehind => {
+                self.encode(r.gpu.device, encoder, &targets.depth_value_view);
+                let mut pass = over(
+                    encoder,
+                    "energywave.frame.particles",
+                    &targets.background_view,
+                );
+                self.draw(&mut pass, false);
+            }
+            _ => {
+                let mut pass = over(
+                    encoder,
+                    "energywave.frame.particles.front",
+                    &targets.color_view,
+                );
+                self.draw(&mut pass, true);
+            }
+        }
     }
 }
 

@@ -6,10 +6,11 @@
 //! their inputs do not change, as every field pass's is.
 
 use super::context::{
-    ClipBuffer, GpuError, checked, compute_pass, field_storage_entry, field_texture,
-    field_texture_layers, loaded_field_entry, storage_buffer_entry,
+    ClipBuffer, GpuError, compute_pass, field_storage_entry, field_texture, field_texture_layers,
+    loaded_field_entry, storage_buffer_entry,
 };
 use super::field_pass::{FieldInputs, FieldRenderer};
+use super::pass::{Brightness, FramePass, Gpu, Recording, Stage};
 use super::shaders;
 use crate::frame::FrameSetup;
 
@@ -39,6 +40,7 @@ pub struct ThroughPass {
     params: wgpu::Buffer,
     shares: ClipBuffer,
     output: Option<(wgpu::Texture, wgpu::TextureView)>,
+    pending: Option<Pending>,
 }
 
 impl ThroughPass {
@@ -71,6 +73,7 @@ impl ThroughPass {
             }),
             shares: ClipBuffer::new(device, "energywave.through.shares"),
             output: None,
+            pending: None,
         }
     }
 
@@ -84,31 +87,36 @@ impl ThroughPass {
         &self.front
     }
 
-    /// Records the glow of `setup` seen through its translucent objects over `behind` (its field, `resolution`
-    /// texels a side, `layers` layers) and returns the view of the blend; `None` where the scene has no
-    /// translucent objects (the field is the frame's as it is).
-    pub fn encode(
+    /// Prepares the glow of `setup` seen through its translucent objects over `behind` (its field): the front
+    /// and exit fields where their inputs changed, the blend's output and bind group; returns the view of the
+    /// blend, `None` where the scene has no translucent objects (the field is the frame's as it is).
+    /// `record_blend` records it.
+    pub fn prepare_blend(
         &mut self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        encoder: &mut wgpu::CommandEncoder,
+        gpu: Gpu<'_>,
         setup: &FrameSetup,
-        behind: &wgpu::TextureView,
-        (resolution, layers): (u32, u32),
-    ) -> Result<Option<&wgpu::TextureView>, GpuError> {
+        behind: &Brightness,
+    ) -> Result<Option<wgpu::TextureView>, GpuError> {
+        let (device, queue) = (gpu.device, gpu.queue);
+        let (resolution, layers) = (behind.resolution, behind.layers);
+        self.pending = None;
         let Some(shares) = setup.crossings_at(resolution) else {
             return Ok(None);
         };
         let mut views = Vec::new();
-        for (field, mut at) in [
+        let mut fields = [false; 2];
+        for (k, (field, mut at)) in [
             (&mut self.front, setup.front()),
             (&mut self.exit, setup.exit()),
-        ] {
+        ]
+        .into_iter()
+        .enumerate()
+        {
             at.resolution = resolution;
             let inputs = FieldInputs::of(&at);
             if !field.shows(&inputs) {
                 field.prepare(device, queue, &inputs)?;
-                checked(device, || field.encode(encoder))?;
+                fields[k] = true;
             }
             views.push(field.view().expect("prepared above").clone());
         }
@@ -143,20 +151,62 @@ impl ThroughPass {
                 entry(0, self.params.as_entire_binding()),
                 entry(1, self.shares.binding()),
                 entry(2, tex(&views[0])),
-                entry(3, tex(behind)),
+                entry(3, tex(&behind.view)),
                 entry(4, tex(output)),
                 entry(5, tex(&views[1])),
             ],
         });
-        let groups = resolution.div_ceil(8);
+        self.pending = Some(Pending {
+            fields,
+            group,
+            groups: resolution.div_ceil(8),
+            layers,
+        });
+        Ok(Some(output.clone()))
+    }
+
+    /// Records what `prepare_blend` prepared: the fields that changed, then the blend.
+    pub fn record_blend(&mut self, encoder: &mut wgpu::CommandEncoder) {
+        let Some(p) = self.pending.take() else {
+            return;
+        };
+        for (field, changed) in [&mut self.front, &mut self.exit].into_iter().zip(p.fields) {
+            if changed {
+                field.encode(encoder);
+            }
+        }
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("energywave.through.pass"),
             timestamp_writes: None,
         });
         pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups(groups, groups, layers);
-        drop(pass);
-        Ok(Some(output))
+        pass.set_bind_group(0, &p.group, &[]);
+        pass.dispatch_workgroups(p.groups, p.groups, p.layers);
+    }
+}
+
+/// What the next `record_blend` records.
+struct Pending {
+    /// Whether the front and the exit field changed (and are integrated before the blend).
+    fields: [bool; 2],
+    group: wgpu::BindGroup,
+    groups: u32,
+    layers: u32,
+}
+
+impl FramePass for ThroughPass {
+    fn stages(&self) -> &'static [Stage] {
+        &[Stage::SeeThrough]
+    }
+
+    fn prepare(&mut self, _: Stage, r: &mut Recording<'_>) -> Result<(), GpuError> {
+        if let Some(view) = self.prepare_blend(r.gpu, r.frame.setup, &r.brightness)? {
+            r.brightness.view = view;
+        }
+        Ok(())
+    }
+
+    fn record(&mut self, _: Stage, _: &Recording<'_>, encoder: &mut wgpu::CommandEncoder) {
+        self.record_blend(encoder);
     }
 }

@@ -80,17 +80,15 @@ impl Upsample {
     /// Records the upsampling of `source` (its view `source_view`) into the W x W output, `w` = `resolution`:
     /// its first `layers` layers (`field_pass::layers_of`), guided by both textures' `clips` where the scene
     /// has objects.
-    #[allow(clippy::too_many_arguments)]
     pub fn encode(
         &mut self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
+        gpu: super::pass::Gpu<'_>,
         encoder: &mut wgpu::CommandEncoder,
         (source, source_view): (&wgpu::Texture, &wgpu::TextureView),
-        resolution: u32,
-        layers: u32,
+        (resolution, layers): (u32, u32),
         clips: Option<UpsampleClips>,
     ) {
+        let (device, queue) = (gpu.device, gpu.queue);
         let stale = self.bound.as_ref().is_none_or(|b| {
             &b.source != source
                 || b.output.width() != resolution

@@ -8,8 +8,6 @@
 //! shortened ray `S -> S + c (E - S)` with the settings `Integration::on_ray(c)` (the decay mapped onto it as
 //! `geometry::Reach` maps it onto a ray of several decay lengths): the integrators run unchanged.
 
-use std::sync::{Arc, Mutex};
-
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -82,39 +80,6 @@ pub fn crossings(
     Some(out)
 }
 
-/// `crossings` in f32, kept for the last few frames' keys as the clips are.
-#[allow(clippy::too_many_arguments)]
-pub fn shared_crossings(
-    objects: &[Object],
-    opaque: &[Object],
-    (sources, epsilon): (&crate::field::Sources, f64),
-    eye: DVec3,
-    billboard: &Billboard,
-    reach: Reach,
-    w: u32,
-) -> Option<Arc<Vec<f32>>> {
-    if !objects.iter().any(|o| o.translucent.is_some()) {
-        return None;
-    }
-    static CACHE: Kept<(ClipKey, crate::field::Sources, f64)> = Mutex::new(Vec::new());
-    let key = (
-        ClipKey::of(objects, eye, billboard, reach, w),
-        sources.clone(),
-        epsilon,
-    );
-    kept(&CACHE, key, || {
-        crossings(
-            objects,
-            opaque,
-            (sources, epsilon),
-            eye,
-            billboard,
-            reach,
-            w,
-        )
-    })
-}
-
 /// `f` at the center of every texel of a `w` x `w` billboard, row-major from the top, on every core.
 fn per_texel(billboard: &Billboard, w: u32, f: impl Fn(DVec3) -> f64 + Sync) -> Vec<f64> {
     let mut out = vec![1.0; (w as usize) * (w as usize)];
@@ -126,69 +91,4 @@ fn per_texel(billboard: &Billboard, w: u32, f: impl Fn(DVec3) -> f64 + Sync) -> 
             }
         });
     out
-}
-
-/// What a frame's clips (and transmittances) depend on.
-#[derive(Clone, Debug, PartialEq)]
-struct ClipKey {
-    objects: Vec<Object>,
-    eye: DVec3,
-    billboard: Billboard,
-    nu: f64,
-    w: u32,
-}
-
-impl ClipKey {
-    fn of(objects: &[Object], eye: DVec3, billboard: &Billboard, reach: Reach, w: u32) -> ClipKey {
-        ClipKey {
-            objects: objects.to_vec(),
-            eye,
-            billboard: *billboard,
-            nu: reach.nu,
-            w,
-        }
-    }
-}
-
-/// The last few keys and what was made of them.
-type Kept<K> = Mutex<Vec<(K, Arc<Vec<f32>>)>>;
-
-/// What `make` gives for `key` (in f64), in f32, kept in `cache` for the last four keys.
-fn kept<K: PartialEq>(
-    cache: &Kept<K>,
-    key: K,
-    make: impl FnOnce() -> Option<Vec<f64>>,
-) -> Option<Arc<Vec<f32>>> {
-    if let Ok(cache) = cache.lock()
-        && let Some((_, v)) = cache.iter().find(|(k, _)| *k == key)
-    {
-        return Some(v.clone());
-    }
-    let v: Arc<Vec<f32>> = Arc::new(make()?.into_iter().map(|c| c as f32).collect());
-    if let Ok(mut cache) = cache.lock() {
-        if cache.len() >= 4 {
-            cache.remove(0);
-        }
-        cache.push((key, v.clone()));
-    }
-    Some(v)
-}
-
-/// `clip_fractions` in f32, kept for the last few frames' keys: the field pass and the billboard pass of a
-/// frame ask for the same clips, and a still view asks again every frame.
-pub fn shared_clip_fractions(
-    objects: &[Object],
-    eye: DVec3,
-    billboard: &Billboard,
-    reach: Reach,
-    w: u32,
-) -> Option<Arc<Vec<f32>>> {
-    if objects.is_empty() {
-        return None;
-    }
-    static CACHE: Kept<ClipKey> = Mutex::new(Vec::new());
-    let key = ClipKey::of(objects, eye, billboard, reach, w);
-    kept(&CACHE, key, || {
-        clip_fractions(objects, eye, billboard, reach, w)
-    })
 }

@@ -29,8 +29,6 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use super::tessellate::Surface;
-use super::translucent::fresnel_transmittance;
-use super::translucent::light::Scattered;
 use super::{Object, Shape, blocked};
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
 
@@ -404,16 +402,16 @@ pub struct VertexLights {
     pub eta: Vec<f64>,
 }
 
-/// Lights every vertex of `surface`, splitting the triangles a shadow's edge crosses (`SHADOW_REFINEMENTS`
-/// times; their edges' midpoints become vertices, lit in turn).
+/// Lights every vertex of `surface` by `lights`, splitting the triangles a shadow's edge crosses
+/// (`SHADOW_REFINEMENTS` times; their edges' midpoints become vertices, lit in turn). `scattered(o, x, n)` is
+/// the light translucent object `o` scatters out at its surface point `x` of normal `n`
+/// (`translucent::light::Scattered::at`), read at its vertices.
 pub fn light_surface(
     surface: &mut Surface,
     objects: &[Object],
-    sources: &Sources,
-    palette: Palette,
-    epsilon: f64,
+    lights: &Lights,
+    scattered: &(dyn Fn(usize, DVec3, DVec3) -> [f64; 3] + Sync),
 ) -> VertexLights {
-    let lights = Lights::new(sources, palette, epsilon);
     let shade = |s: &Surface, range: std::ops::Range<usize>| -> Vec<Shade> {
         range
             .into_par_iter()
@@ -479,11 +477,6 @@ pub fn light_surface(
         })
         .collect();
     let shadow: Vec<Split> = shades.iter().map(Shade::shadow).collect();
-    // The translucent objects' light, carried through them from their surface voxels.
-    let scattered: Vec<Option<Scattered>> = objects
-        .iter()
-        .map(|o| Scattered::of(o, &lights, objects))
-        .collect();
     let eta: Vec<f64> = (surface.object.iter())
         .map(|&o| {
             objects[o as usize]
@@ -494,9 +487,13 @@ pub fn light_surface(
         .collect();
     let subsurface: Vec<[f64; 3]> = (0..shades.len())
         .into_par_iter()
-        .map(|k| match &scattered[surface.object[k] as usize] {
-            Some(s) => s.at(surface.positions[k], surface.normals[k]),
-            None => [0.0; 3],
+        .map(|k| match eta[k] > 0.0 {
+            true => scattered(
+                surface.object[k] as usize,
+                surface.positions[k],
+                surface.normals[k],
+            ),
+            false => [0.0; 3],
         })
         .collect();
     let colors = (0..shades.len())
@@ -588,4 +585,20 @@ fn midpoint(
         surface.tint.push(surface.tint[p]);
         surface.positions.len() as u32 - 1
     })
+}
+
+/// The unpolarised Fresnel transmittance `F_t = 1 - F_r` of light crossing, at `cos_outside` (the cosine of its
+/// angle to the normal on the outside), into or out of a medium of relative index `eta`: the Fresnel equations,
+/// exact (`1 - F_r` with `F_r` the mean of the s and p reflectances), 0 past the critical angle where `eta < 1`.
+pub fn fresnel_transmittance(eta: f64, cos_outside: f64) -> f64 {
+    let c = cos_outside.abs().min(1.0);
+    let sin2_t = (1.0 - c * c) / (eta * eta);
+    if sin2_t >= 1.0 {
+        return 0.0;
+    }
+    let cos_t = (1.0 - sin2_t).sqrt();
+    let rs = (c - eta * cos_t) / (c + eta * cos_t);
+    let rp = (eta * c - cos_t) / (eta * c + cos_t);
+    let r = 0.5 * (rs * rs + rp * rp);
+    (1.0 - r).clamp(0.0, 1.0)
 }

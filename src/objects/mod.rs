@@ -477,16 +477,45 @@ pub fn unshadowed(inputs: LitInputs<'_>) -> Lit {
     Lit { surface, light }
 }
 
-/// The objects tessellated and lit, finer where a shadow's edge crosses them.
-pub fn lit(inputs: LitInputs<'_>) -> Lit {
+/// Where the translucent objects' voxels and tables come from: a renderer's frame cache
+/// (`frame::FrameCache`), which keeps them and fills the tables on a real GPU where it has one.
+pub trait Tables: Sync {
+    /// `object`'s voxels and table (`translucent::light::prepare`); none for an opaque object.
+    fn translucent(&self, object: &Object) -> Option<std::sync::Arc<translucent::light::Prepared>>;
+}
+
+/// The objects tessellated and lit, finer where a shadow's edge crosses them; the translucent ones' voxels and
+/// tables from `tables`.
+pub fn lit(inputs: LitInputs<'_>, tables: &dyn Tables) -> Lit {
     let (center, extent) = focus(inputs.sources);
     let mut surface = tessellate::Surface::of(inputs.objects, center, extent);
-    let light = lighting::light_surface(
-        &mut surface,
-        inputs.objects,
-        inputs.sources,
-        inputs.palette,
-        inputs.epsilon,
-    );
+    let lights = lighting::Lights::new(inputs.sources, inputs.palette, inputs.epsilon);
+    // The translucent objects' light, carried through them from their surface voxels.
+    let scattered: Vec<Option<translucent::light::Scattered>> = (inputs.objects.iter())
+        .map(|o| {
+            let prepared = tables.translucent(o)?;
+            translucent::light::Scattered::of(o, prepared, &lights, inputs.objects)
+        })
+        .collect();
+    let light = lighting::light_surface(&mut surface, inputs.objects, &lights, &|o, x, n| {
+        scattered[o].as_ref().map_or([0.0; 3], |s| s.at(x, n))
+    });
     Lit { surface, light }
+}
+
+impl Lit {
+    /// The bytes it holds, for a cache's memory bound.
+    pub fn bytes(&self) -> usize {
+        let (s, l) = (&self.surface, &self.light);
+        size_of_val(&s.positions[..])
+            + size_of_val(&s.normals[..])
+            + size_of_val(&s.object[..])
+            + size_of_val(&s.tint[..])
+            + size_of_val(&s.indices[..])
+            + size_of_val(&l.albedo[..])
+            + size_of_val(&l.shadow[..])
+            + size_of_val(&l.colors[..])
+            + size_of_val(&l.subsurface[..])
+            + size_of_val(&l.eta[..])
+    }
 }

@@ -239,50 +239,29 @@ pub struct LitParticles {
     pub lights: Vec<ParticleLight>,
 }
 
-/// What a scene's particles are lit from.
-#[derive(Clone, PartialEq)]
-struct LitKey {
-    sets: Vec<super::ParticleSet>,
-    sources: crate::field::Sources,
-    palette: crate::field::Palette,
-    epsilon: f64,
-}
-
-/// The particles of `sets` lit by `sources` (`light_particles`), none without particles; the last few kept, so
-/// that orbiting, or a frame's renderers and its twin, never light them again.
-pub fn shared_lit(
+/// The particles of `sets` lit by `sources` (`light_particles`), none without particles. A renderer keeps
+/// them in its frame cache (`frame::FrameCache::lit_particles`): orbiting, or a frame's renderers and its twin,
+/// never light them again.
+pub fn lit_particles(
     sets: &[super::ParticleSet],
     sources: &crate::field::Sources,
     palette: crate::field::Palette,
     epsilon: f64,
-) -> Option<std::sync::Arc<LitParticles>> {
-    use std::sync::{Arc, Mutex};
+) -> Option<LitParticles> {
     if sets.is_empty() {
         return None;
-    }
-    static CACHE: Mutex<Vec<(LitKey, Arc<LitParticles>)>> = Mutex::new(Vec::new());
-    let key = LitKey {
-        sets: sets.to_vec(),
-        sources: sources.clone(),
-        palette,
-        epsilon,
-    };
-    if let Ok(cache) = CACHE.lock()
-        && let Some((_, lit)) = cache.iter().find(|(k, _)| *k == key)
-    {
-        return Some(lit.clone());
     }
     let particles = super::gather(sets, sources);
     if particles.is_empty() {
         return None;
     }
     let lights = light_particles(&Lights::new(sources, palette, epsilon), &particles);
-    let lit = Arc::new(LitParticles { particles, lights });
-    if let Ok(mut cache) = CACHE.lock() {
-        if cache.len() >= 2 {
-            cache.remove(0);
-        }
-        cache.push((key, lit.clone()));
+    Some(LitParticles { particles, lights })
+}
+
+impl LitParticles {
+    /// The bytes it holds, for a cache's memory bound.
+    pub fn bytes(&self) -> usize {
+        size_of_val(&self.particles[..]) + size_of_val(&self.lights[..])
     }
-    Some(lit)
 }

@@ -216,7 +216,7 @@ fn compose(
         [r, g, b, 1.0]
     };
     // Held out, the objects are not drawn but still hide the glow in front of them.
-    let objects = ObjectImage::of(scene);
+    let objects = ObjectImage::of(setup);
     // The clips the billboard matches each pixel's own surface against: up to the first surface of any object
     // (a translucent one's edge guides the glow blended for it as an opaque one's guides the glow it ends).
     let surfaces = match setup.translucent() {

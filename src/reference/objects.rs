@@ -6,14 +6,14 @@
 
 use glam::DVec3;
 
+use crate::frame::FrameSetup;
+use crate::objects::Lit;
 use crate::objects::lighting::{Lights, shaded, shaded_translucent};
 use crate::objects::mesh::{MeshData, triangle_barycentric};
-use crate::objects::{Lit, lit};
-use crate::scene::Scene;
 
 /// The lit triangles of a scene, with a hierarchy for the pixels' rays and the sources that light them.
 pub struct ObjectImage {
-    lit: Lit,
+    lit: std::sync::Arc<Lit>,
     mesh: MeshData,
     /// The opaque objects' triangles alone, where some object is translucent: what ends the glow.
     opaque: Option<MeshData>,
@@ -21,12 +21,11 @@ pub struct ObjectImage {
 }
 
 impl ObjectImage {
-    /// None where the scene has no objects.
-    pub fn of(scene: &Scene) -> Option<ObjectImage> {
-        if scene.objects.is_empty() {
-            return None;
-        }
-        let lit = lit(scene.lit_inputs());
+    /// The objects of `setup`'s frame, lit as it resolves them (`FrameSetup::objects`, the GPU's light to the
+    /// bit); none where the scene has no objects.
+    pub fn of(setup: &FrameSetup) -> Option<ObjectImage> {
+        let scene = setup.scene;
+        let lit = setup.objects()?;
         let p = &lit.surface.positions;
         let triangles: Vec<[DVec3; 3]> = (lit.surface.indices.chunks_exact(3))
             .map(|t| [p[t[0] as usize], p[t[1] as usize], p[t[2] as usize]])

@@ -400,15 +400,22 @@ impl Scene {
     }
 
     /// The scene as it is at `frame`: keyed parameters and pulses applied, live particle sets simulated up to
-    /// it (`scene::live`; a fractional frame takes the whole frame before it); a clone of the scene if still.
+    /// it from their start (`scene::live`; a fractional frame takes the whole frame before it); a clone of the
+    /// scene if still. A renderer of many frames keeps the states reached: `at_frame_in`.
     pub fn at_frame(&self, frame: f64) -> Scene {
-        self.at_frame_unless(frame, &Default::default())
+        self.at_frame_in(frame, &super::Simulations::new(), &Default::default())
             .expect("never cancelled")
     }
 
-    /// `at_frame`, its simulation stopped once `cancel` is raised (then `None`): the viewer simulates on a
-    /// thread of its own, and an edit or another frame asked for cancels what is under way.
-    pub fn at_frame_unless(&self, frame: f64, cancel: &crate::background::Cancel) -> Option<Scene> {
+    /// `at_frame`, the live sets simulated from the states `simulations` keeps (a renderer's frame cache:
+    /// playback steps one frame from the last), stopped once `cancel` is raised (then `None`): the viewer
+    /// simulates on a thread of its own, and an edit or another frame asked for cancels what is under way.
+    pub fn at_frame_in(
+        &self,
+        frame: f64,
+        simulations: &super::Simulations,
+        cancel: &crate::background::Cancel,
+    ) -> Option<Scene> {
         let mut s = self.clone();
         if let Some(a) = &self.animation {
             a.apply(&mut s, frame);
@@ -420,7 +427,7 @@ impl Scene {
                 } else {
                     0.0
                 };
-                set.live = Some(super::live::particles_at(self, i, whole as u32, cancel)?);
+                set.live = Some(simulations.particles_at(self, i, whole as u32, cancel)?);
             }
         }
         Some(s)

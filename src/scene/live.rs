@@ -101,71 +101,118 @@ const SIMULATIONS: usize = 4;
 /// Frames between kept states at first.
 const STRIDE: u32 = 8;
 
-static KEPT: Mutex<Vec<Kept>> = Mutex::new(Vec::new());
-
-/// The particles of live set `index` of `scene` at `frame`, as the renderers draw them; `None` once `cancel`
-/// is raised (the states reached so far are kept).
-pub(super) fn particles_at(
-    scene: &Scene,
-    index: usize,
-    frame: u32,
-    cancel: &crate::background::Cancel,
-) -> Option<Arc<Vec<Particle>>> {
-    let (state, timeline) = reached(scene, index, frame, cancel);
-    (state.frame == frame).then(|| Arc::new(state.particles(&timeline)))
+/// The states the live sets' simulations have reached, kept (a few simulations, the least recently used
+/// dropped first; `BUDGET` and `TOTAL_BUDGET` bound them): owned by a renderer's frame cache
+/// (`frame::FrameCache`), which counts them in its memory bound; a `Simulations` of its own simulates from the
+/// start.
+#[derive(Default)]
+pub struct Simulations {
+    kept: Mutex<Vec<Kept>>,
 }
 
-/// The state of live set `index` of `scene` at `frame`: from the nearest kept state at or before it.
-pub fn state_at(scene: &Scene, index: usize, frame: u32) -> Arc<State> {
-    reached(scene, index, frame, &Default::default()).0
-}
-
-/// The state of live set `index` of `scene` at `frame`, and the scene as its simulation reads it; an earlier
-/// state where `cancel` stopped it.
-fn reached(
-    scene: &Scene,
-    index: usize,
-    frame: u32,
-    cancel: &crate::background::Cancel,
-) -> (Arc<State>, SceneTimeline) {
-    let key = Key::of(scene, index);
-    let timeline = SceneTimeline::new(scene, &key);
-    let from = KEPT.lock().ok().and_then(|kept| {
-        let k = kept.iter().find(|k| k.key == key)?;
-        k.states.range(..=frame).next_back().map(|(_, s)| s.clone())
-    });
-    let mut state = from.unwrap_or_else(|| Arc::new(live::start(&timeline)));
-    let mut reached = vec![state.clone()];
-    while state.frame < frame && !cancel.stopped() {
-        state = Arc::new(live::advance(&state, &timeline));
-        reached.push(state.clone());
+impl Simulations {
+    pub fn new() -> Self {
+        Self::default()
     }
-    if let Ok(mut kept) = KEPT.lock() {
-        let at = match kept.iter().position(|k| k.key == key) {
-            Some(i) => i,
-            None => {
-                if kept.len() >= SIMULATIONS {
-                    kept.remove(0);
-                }
-                kept.push(Kept {
-                    key,
-                    states: BTreeMap::new(),
-                    stride: STRIDE,
-                    latest: 0,
-                });
-                kept.len() - 1
+
+    /// The particles of live set `index` of `scene` at `frame`, as the renderers draw them; `None` once
+    /// `cancel` is raised (the states reached so far are kept).
+    pub fn particles_at(
+        &self,
+        scene: &Scene,
+        index: usize,
+        frame: u32,
+        cancel: &crate::background::Cancel,
+    ) -> Option<Arc<Vec<Particle>>> {
+        let (state, timeline) = self.reached(scene, index, frame, cancel);
+        (state.frame == frame).then(|| Arc::new(state.particles(&timeline)))
+    }
+
+    /// The state of live set `index` of `scene` at `frame`: from the nearest kept state at or before it.
+    pub fn state_at(&self, scene: &Scene, index: usize, frame: u32) -> Arc<State> {
+        self.reached(scene, index, frame, &Default::default()).0
+    }
+
+    /// The bytes the kept states hold (their particles).
+    pub fn bytes(&self) -> usize {
+        let kept = self
+            .kept
+            .lock()
+            .map(|k| k.iter().map(held).sum())
+            .unwrap_or(0);
+        kept * size_of::<live::LiveParticle>()
+    }
+
+    /// Drops the least recently used simulations' states until they hold at most `bytes` (the latest
+    /// simulation's are kept whole).
+    pub fn trim_to(&self, bytes: usize) {
+        if let Ok(mut kept) = self.kept.lock() {
+            let most = bytes / size_of::<live::LiveParticle>().max(1);
+            while kept.len() > 1 && kept.iter().map(held).sum::<usize>() > most {
+                kept.remove(0);
             }
-        };
-        // The most recently used last.
-        let mut k = kept.remove(at);
-        keep(&mut k, &reached);
-        kept.push(k);
-        let held = |k: &Kept| k.states.values().map(|s| s.particles.len()).sum::<usize>();
-        while kept.len() > 1 && kept.iter().map(held).sum::<usize>() > TOTAL_BUDGET {
-            kept.remove(0);
         }
     }
-    (state, timeline)
+
+    /// Drops every kept state.
+    pub fn clear(&self) {
+        if let Ok(mut kept) = self.kept.lock() {
+            kept.clear();
+        }
+    }
+
+    /// The state of live set `index` of `scene` at `frame`, and the scene as its simulation reads it; an
+    /// earlier state where `cancel` stopped it.
+    fn reached(
+        &self,
+        scene: &Scene,
+        index: usize,
+        frame: u32,
+        cancel: &crate::background::Cancel,
+    ) -> (Arc<State>, SceneTimeline) {
+        let key = Key::of(scene, index);
+        let timeline = SceneTimeline::new(scene, &key);
+        let from = self.kept.lock().ok().and_then(|kept| {
+            let k = kept.iter().find(|k| k.key == key)?;
+            k.states.range(..=frame).next_back().map(|(_, s)| s.clone())
+        });
+        let mut state = from.unwrap_or_else(|| Arc::new(live::start(&timeline)));
+        let mut reached = vec![state.clone()];
+        while state.frame < frame && !cancel.stopped() {
+            state = Arc::new(live::advance(&state, &timeline));
+            reached.push(state.clone());
+        }
+        if let Ok(mut kept) = self.kept.lock() {
+            let at = match kept.iter().position(|k| k.key == key) {
+                Some(i) => i,
+                None => {
+                    if kept.len() >= SIMULATIONS {
+                        kept.remove(0);
+                    }
+                    kept.push(Kept {
+                        key,
+                        states: BTreeMap::new(),
+                        stride: STRIDE,
+                        latest: 0,
+                    });
+                    kept.len() - 1
+                }
+            };
+            // The most recently used last.
+            let mut k = kept.remove(at);
+            keep(&mut k, &reached);
+            kept.push(k);
+            while kept.len() > 1 && kept.iter().map(held).sum::<usize>() > TOTAL_BUDGET {
+                kept.remove(0);
+            }
+        }
+        (state, timeline)
+    }
+}
+
+/// The particles a simulation's kept states hold.
+fn held(k: &Kept) -> usize {
+    k.states.values().map(|s| s.particles.len()).sum()
 }
 
 /// Keeps the states `reached` that fall on the stride, and the last one as the latest; thins the kept states
@@ -183,7 +230,6 @@ fn keep(k: &mut Kept, reached: &[Arc<State>]) {
     }
     k.states.insert(last.frame, last.clone());
     k.latest = last.frame;
-    let held = |k: &Kept| k.states.values().map(|s| s.particles.len()).sum::<usize>();
     while held(k) > BUDGET && k.states.len() > 1 {
         k.stride = k.stride.saturating_mul(2);
         let (stride, latest) = (k.stride, k.latest);

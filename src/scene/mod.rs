@@ -19,7 +19,7 @@ mod translucent_file;
 mod validate;
 
 pub use life_file::MAX_RATE;
-pub use live::state_at as live_state_at;
+pub use live::Simulations;
 pub use objects_file::DEFAULT_ALBEDO;
 pub use particles_file::{DEFAULTS as PARTICLE_DEFAULTS, MIN_SLICE_WIDTH};
 

@@ -71,6 +71,8 @@ pub struct ViewerGpu {
     pub egui_ctx: egui::Context,
     pub renderer: egui_wgpu::Renderer,
     report: Arc<Mutex<ViewportReport>>,
+    /// The viewer's frame cache, shared by the viewport and the app (which simulates live particles in it).
+    cache: Arc<crate::frame::FrameCache>,
     device_lost: Arc<AtomicBool>,
 }
 
@@ -84,11 +86,16 @@ impl ViewerGpu {
         let report = Arc::new(Mutex::new(ViewportReport::default()));
         let mut renderer =
             egui_wgpu::Renderer::new(&ctx.device, format, egui_wgpu::RendererOptions::default());
-        renderer
-            .callback_resources
-            .insert(ViewportGpu::new(&ctx.device, format, report.clone()));
+        let cache = Arc::new(crate::gpu::frame_cache(&ctx.device, &ctx.queue));
+        renderer.callback_resources.insert(ViewportGpu::new(
+            &ctx.device,
+            format,
+            report.clone(),
+            cache.clone(),
+        ));
         Self {
             ctx,
+            cache,
             egui_ctx: egui::Context::default(),
             renderer,
             report,
@@ -103,6 +110,7 @@ impl ViewerGpu {
             self.ctx.adapter_summary(),
             self.max_resolution(),
             self.report.clone(),
+            self.cache.clone(),
         )
     }
 
@@ -112,6 +120,7 @@ impl ViewerGpu {
             self.ctx.adapter_summary(),
             self.max_resolution(),
             self.report.clone(),
+            self.cache.clone(),
         );
         app.notify(
             "The GPU device was lost and has been recreated; the scene is unchanged",

@@ -129,8 +129,8 @@ impl ExportJob {
                         export::fit::fit_field_of_view(&scene, frames.clone(), size)
                             .map_err(|e| format!("fit: {e}"))?;
                 }
-                scene.billboard.resolution = scene
-                    .at_frame(frames.start as f64)
+                scene.billboard.resolution = gpu
+                    .scene_at(&scene, frames.start as f64)
                     .resolution_for(size, limit);
                 // Many frames of one structure: its specialised pipelines pay for their compile.
                 if frames.len() > 4 {
@@ -142,8 +142,9 @@ impl ExportJob {
                     frames,
                     size,
                     crate::output::Alpha::of(transparent, false),
-                    |at| -> Result<Vec<[f64; 4]>, ExportFailure> {
-                        let frame = gpu.render(at, size.0, size.1, transparent)?;
+                    |frame| -> Result<Vec<[f64; 4]>, ExportFailure> {
+                        let at = gpu.scene_at(&scene, frame as f64);
+                        let frame = gpu.render(&at, size.0, size.1, transparent)?;
                         Ok(frame.pixels.iter().map(|p| p.map(|c| c as f64)).collect())
                     },
                     |done, _| {

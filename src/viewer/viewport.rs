@@ -6,10 +6,10 @@ use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use super::progressive::{FrameBudget, PREVIEW_TOLERANCE, Pacing, Plan, Work};
-use crate::frame::FrameSetup;
+use crate::frame::{FrameCache, FrameSetup};
 use crate::gpu::{
-    BlitPass, FieldInputs, FieldRenderer, FrameTargets, GpuError, GridPass, SceneRenderer,
-    Specialise, Upsample, UpsampleClips, checked, read_frame,
+    BlitPass, Brightness, FieldInputs, FieldRenderer, FrameTargets, Gpu, GpuError, GridPass,
+    SceneRenderer, Specialise, Target, Upsample, UpsampleClips, checked, layers_of, read_frame,
 };
 use crate::integrate::Integrator;
 use crate::scene::Scene;
@@ -139,21 +139,23 @@ impl ViewportGpu {
         }
     }
 
-    /// Pipelines for a frame of `target_format` (egui's); `report` is shared with the UI.
+    /// Pipelines for a frame of `target_format` (egui's); `report` is shared with the UI, and `cache` (the
+    /// viewer's frame cache, `gpu::frame_cache`) with the app, which simulates its live particles in it.
     pub fn new(
         device: &wgpu::Device,
         target_format: wgpu::TextureFormat,
         report: Arc<Mutex<ViewportReport>>,
+        cache: Arc<FrameCache>,
     ) -> Self {
         // The viewer's frames never wait on a compile: a structure compiles on its own thread once the picture
         // is whole (`integrate`), so it takes no core from the frames that move or refine.
-        let mut scene_renderer = SceneRenderer::new(device);
+        let mut scene_renderer = SceneRenderer::with_cache(device, cache);
         scene_renderer
             .field_mut()
             .set_specialise(Specialise::IfReady);
         // Nor on the objects' or particles' light: the first frame shows the scene at once, with stand-ins
         // until they are ready.
-        scene_renderer.prepare_in_background(crate::gpu::object_pass::WAIT);
+        scene_renderer.prepare_in_background(crate::frame::resolve::WAIT);
         let shaders = scene_renderer.field().shaders();
         Self {
             scene_renderer,
@@ -178,11 +180,11 @@ impl ViewportGpu {
     /// grid, the billboard over them. Keeps its targets for `paint`.
     pub fn record(
         &mut self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
+        gpu: Gpu<'_>,
         encoder: &mut wgpu::CommandEncoder,
         view: &ViewportView,
     ) -> Result<(), GpuError> {
+        let device = gpu.device;
         let size = [view.size[0].max(1), view.size[1].max(1)];
         if self.targets.as_ref().is_none_or(|(t, _)| t.size != size) {
             let targets = FrameTargets::new(device, size);
@@ -194,27 +196,16 @@ impl ViewportGpu {
         }
         let (targets, bind_group) = self.targets.take().expect("created above");
         let shown = self.composed.take();
-        let result = self.record_into(
-            device,
-            queue,
-            encoder,
-            view,
-            &targets,
-            view.progressive,
-            shown,
-        );
+        let result = self.record_into(gpu, encoder, view, &targets, view.progressive, shown);
         self.targets = Some((targets, bind_group));
         result
     }
 
     /// `shown`: what the frame `targets` hold shows, where they hold one (then, if the field's texels and it
     /// stay the same, the frame is left as it is).
-    // The GPU handles, the frame's view and targets, and what they hold are all distinct.
-    #[allow(clippy::too_many_arguments)]
     fn record_into(
         &mut self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
+        gpu: Gpu<'_>,
         encoder: &mut wgpu::CommandEncoder,
         view: &ViewportView,
         targets: &FrameTargets,
@@ -223,7 +214,7 @@ impl ViewportGpu {
     ) -> Result<(), GpuError> {
         let [width, height] = targets.size;
         let aspect = width as f64 / height as f64;
-        let setup = FrameSetup::placed(&view.scene, aspect);
+        let setup = self.scene_renderer.setup(&view.scene, aspect);
         let inputs = FieldInputs::of(&setup);
         // While the scene's field pipelines compile on a thread of their own (the adaptive integrator's take
         // half a second and more on a software rasteriser), its frames are drawn by Simpson's rule, whose
@@ -239,14 +230,14 @@ impl ViewportGpu {
             false => (setup, inputs),
             true => {
                 simpson = stand_in(&view.scene);
-                let setup = FrameSetup::placed(&simpson, aspect);
+                let setup = self.scene_renderer.setup(&simpson, aspect);
                 let inputs = FieldInputs::of(&setup);
                 (setup, inputs)
             }
         };
-        let result = self.integrate(device, queue, encoder, view, &setup, inputs, progressive);
+        let result = self.integrate(gpu, encoder, view, (&setup, inputs), progressive);
         let unchanged = shown.as_ref().is_some_and(|c| c.shows(view, targets.size));
-        let still = matches!(&result, Ok((_, _, false))) && unchanged;
+        let still = matches!(&result, Ok(Brightness { fresh: false, .. })) && unchanged;
         let again = still && self.still;
         self.still = still;
         let result = if again {
@@ -255,7 +246,7 @@ impl ViewportGpu {
             }
             Ok(())
         } else {
-            self.compose(device, queue, encoder, view, &setup, targets, result)
+            self.compose(gpu, encoder, view, &setup, targets, result)
         };
         let preparing = match (self.compiling, self.scene_renderer.preparing()) {
             (true, Some(what)) => Some(format!("shaders, {what}")),
@@ -284,59 +275,53 @@ impl ViewportGpu {
         result
     }
 
-    /// Composes the frame into `targets` over the brightness `integrate` gave: the background and grid, the
-    /// objects, the billboard.
-    #[allow(clippy::too_many_arguments)]
+    /// Composes the frame into `targets` over the brightness `integrate` gave: the frame's passes, the grid
+    /// among them.
     fn compose(
         &mut self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
+        gpu: Gpu<'_>,
         encoder: &mut wgpu::CommandEncoder,
         view: &ViewportView,
         setup: &FrameSetup,
         targets: &FrameTargets,
-        brightness: Result<(wgpu::TextureView, u32, bool), GpuError>,
+        brightness: Result<Brightness, GpuError>,
     ) -> Result<(), GpuError> {
         let vertices = if view.show_grid {
             grid_vertices(&view.scene)
         } else {
             Vec::new()
         };
-        self.grid.upload(device, queue, vertices);
+        self.grid.upload(gpu.device, gpu.queue, vertices);
         self.scene_renderer
             .set_threshold_preview(view.threshold_preview);
-        let grid = &self.grid;
-        brightness.and_then(|brightness| {
-            self.scene_renderer.compose(
-                device,
-                queue,
-                encoder,
-                setup,
-                targets,
-                false,
-                (&brightness.0, brightness.1, brightness.2),
-                // The grid lies behind the glow, which blends over it, with the renderer's own projection.
-                |pass, view_proj| grid.draw(queue, pass, view_proj),
-            )
-        })
+        let target = Target {
+            targets,
+            transparent: false,
+        };
+        let brightness = brightness?;
+        (self.scene_renderer).compose(
+            gpu,
+            encoder,
+            setup,
+            target,
+            brightness,
+            &mut [&mut self.grid],
+        )
     }
 
     /// Records this frame's field work and returns the view of the W x W brightness to show: the full field
     /// when it shows the scene (or, with `progressive` off, always: it is integrated whole now), else what the
     /// frame budget allows (`progressive::FrameBudget::plan`), a coarse field upsampled while the view moves
     /// and bands of the full one once it holds still.
-    // The GPU handles, the frame's view, setup and inputs are all distinct.
-    #[allow(clippy::too_many_arguments)]
     fn integrate(
         &mut self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
+        gpu: Gpu<'_>,
         encoder: &mut wgpu::CommandEncoder,
         view: &ViewportView,
-        setup: &FrameSetup,
-        inputs: FieldInputs,
+        (setup, inputs): (&FrameSetup, FieldInputs),
         progressive: bool,
-    ) -> Result<(wgpu::TextureView, u32, bool), GpuError> {
+    ) -> Result<Brightness, GpuError> {
+        let (device, queue) = (gpu.device, gpu.queue);
         let scene = setup.scene;
         let moved = self.last_inputs.as_ref() != Some(&inputs);
         self.last_inputs = Some(inputs.clone());
@@ -378,7 +363,11 @@ impl ViewportGpu {
                 coarse.billboard.resolution = resolution;
                 let i = &mut coarse.integration;
                 i.tolerance = i.tolerance.max(PREVIEW_TOLERANCE);
-                let coarse = FieldInputs::of(&FrameSetup::new(&coarse, setup.billboard));
+                let coarse = FieldInputs::of(&FrameSetup::in_cache(
+                    &coarse,
+                    setup.billboard,
+                    setup.cache(),
+                ));
                 self.preview.prepare(device, queue, &coarse)?;
                 // Where objects stand, both textures' clips guide the upsampling at their silhouettes.
                 let clips = (setup.clips_at(resolution))
@@ -389,8 +378,7 @@ impl ViewportGpu {
                     let (texture, view) = (self.preview.texture(), self.preview.view());
                     let source = (texture.expect("prepared"), view.expect("prepared"));
                     let layers = self.preview.layers();
-                    self.upsample
-                        .encode(device, queue, encoder, source, upsampled, layers, clips);
+                    (self.upsample).encode(gpu, encoder, source, (upsampled, layers), clips);
                 })?;
                 work = Work::Preview {
                     texels: resolution as u64 * resolution as u64,
@@ -427,8 +415,13 @@ impl ViewportGpu {
             Some(_) => self.upsample.output().map(|(t, v)| (v, t.width())),
             None => self.scene_renderer.field().view().map(|v| (v, w)),
         };
-        let (view, side) = shown.expect("a field was integrated above");
-        Ok((view.clone(), side, fresh))
+        let (view, resolution) = shown.expect("a field was integrated above");
+        Ok(Brightness {
+            view: view.clone(),
+            resolution,
+            layers: layers_of(scene),
+            fresh,
+        })
     }
 
     /// How long a frame waits for what is prepared on other threads before it draws stand-ins (`WAIT` by
@@ -468,7 +461,8 @@ impl ViewportGpu {
             let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("energywave.viewport.screenshot"),
             });
-            let result = self.record_into(device, queue, &mut encoder, view, &targets, false, None);
+            let gpu = Gpu { device, queue };
+            let result = self.record_into(gpu, &mut encoder, view, &targets, false, None);
             // The frame composed is the screenshot's, not the one the window's targets hold.
             self.composed = None;
             result?;
@@ -540,7 +534,7 @@ impl egui_wgpu::CallbackTrait for ViewportCallback {
     ) -> Vec<wgpu::CommandBuffer> {
         if let Some(gpu) = resources.get_mut::<ViewportGpu>() {
             // Errors are reported through the shared report; the frame shows the last good texture.
-            let _ = gpu.record(device, queue, encoder, &self.0);
+            let _ = gpu.record(Gpu { device, queue }, encoder, &self.0);
         }
         Vec::new()
     }

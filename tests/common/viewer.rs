@@ -34,7 +34,8 @@ pub fn harness(scene: Scene) -> Harness<'static, ViewerApp> {
         egui_wgpu::Renderer::new(&ctx.device, FORMAT, egui_wgpu::RendererOptions::PREDICTABLE);
     // The UI tests check what a frame shows after an edit: its frames wait for what the viewer prepares on
     // other threads (a window's frames wait a moment, then draw stand-ins: tests/first_picture.rs).
-    let mut viewport = ViewportGpu::new(&ctx.device, FORMAT, report.clone());
+    let cache = Arc::new(energywave::gpu::frame_cache(&ctx.device, &ctx.queue));
+    let mut viewport = ViewportGpu::new(&ctx.device, FORMAT, report.clone(), cache.clone());
     viewport.set_preparation_wait(PREPARATION_WAIT);
     renderer.callback_resources.insert(viewport);
     let mut app = ViewerApp::new(
@@ -42,6 +43,7 @@ pub fn harness(scene: Scene) -> Harness<'static, ViewerApp> {
         ctx.adapter_summary(),
         ctx.device.limits().max_texture_dimension_2d,
         report,
+        cache,
     );
     app.set_preparation_wait(PREPARATION_WAIT);
     let render_state = egui_wgpu::RenderState {

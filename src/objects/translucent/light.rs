@@ -7,16 +7,16 @@
 //! it by `F_t(eta, w_out)` and the object's tint (`shaders/objects.wgsl`, `lighting::shaded_translucent`).
 
 use std::f64::consts::PI;
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 
 use glam::DVec3;
 use rayon::prelude::*;
 
+use super::Medium;
 use super::table::{Table, thickness};
 use super::voxels::{NONE, Voxels, resolution_of};
-use super::{Medium, fresnel_transmittance};
 use crate::objects::Object;
-use crate::objects::lighting::Lights;
+use crate::objects::lighting::{Lights, fresnel_transmittance};
 
 /// An object's voxels and table: what depends on its shape, place and material only.
 #[derive(Debug)]
@@ -29,47 +29,33 @@ pub struct Prepared {
     pub seconds: f64,
 }
 
-/// `object`'s voxels and table, kept for the last few objects asked for: editing a source or orbiting the
-/// camera relights the voxels without voxelising again.
-pub fn prepared(object: &Object) -> Option<Arc<Prepared>> {
-    prepared_with(object, &|voxels| Some(Table::of(voxels)))
-}
-
-/// `prepared`, the table filled by `fill` where it is not kept yet (a GPU's, `gpu::tau_table`), by the CPU
-/// where `fill` gives none.
-pub fn prepared_with(
-    object: &Object,
-    fill: &dyn Fn(&Voxels) -> Option<Table>,
-) -> Option<Arc<Prepared>> {
+/// `object`'s voxels and table (none for an opaque object, or one that cannot be voxelised), the table filled by
+/// `fill` where it gives one (a real GPU's, `gpu::tau_table`, through the frame cache's hook), else by the CPU.
+/// A renderer keeps them in its frame cache (`frame::FrameCache::translucent`): editing a source or orbiting
+/// the camera relights the voxels without voxelising again.
+pub fn prepare(object: &Object, fill: &dyn Fn(&Voxels) -> Option<Table>) -> Option<Prepared> {
     object.translucent.as_ref()?;
-    static CACHE: Mutex<Vec<(Object, Arc<Prepared>)>> = Mutex::new(Vec::new());
-    let key = Object {
-        color: [0.0; 3],
-        ..object.clone()
-    };
-    if let Ok(cache) = CACHE.lock()
-        && let Some((_, p)) = cache.iter().find(|(k, _)| *k == key)
-    {
-        return Some(p.clone());
-    }
     let start = std::time::Instant::now();
     let resolution = resolution_of(object).ok()?;
     let voxels = Voxels::of(object, resolution).ok()?;
     let table = fill(&voxels).unwrap_or_else(|| Table::of(&voxels));
     let spread = spread(&voxels, &table);
-    let p = Arc::new(Prepared {
+    Some(Prepared {
         voxels,
         table,
         spread,
         seconds: start.elapsed().as_secs_f64(),
-    });
-    if let Ok(mut cache) = CACHE.lock() {
-        if cache.len() >= 8 {
-            cache.remove(0);
-        }
-        cache.push((key, p.clone()));
+    })
+}
+
+impl Prepared {
+    /// The bytes it holds (its voxels, table and spread), for a cache's memory bound.
+    pub fn bytes(&self) -> usize {
+        let v = &self.voxels;
+        4 * (v.extinction.len() + v.number.len() + self.table.tau.len())
+            + size_of_val(&v.surface[..])
+            + 8 * self.spread.len()
     }
-    Some(p)
 }
 
 /// `Z_k = sum_l A_l exp(-tau(k, l))` of every surface voxel k.
@@ -206,10 +192,15 @@ pub struct Scattered {
 }
 
 impl Scattered {
-    /// The object's scattered light under `lights`, its shadows cast by `objects`.
-    pub fn of(object: &Object, lights: &Lights, objects: &[Object]) -> Option<Scattered> {
+    /// The object's scattered light under `lights`, its shadows cast by `objects`, from its voxels and table
+    /// (`prepare`).
+    pub fn of(
+        object: &Object,
+        prepared: Arc<Prepared>,
+        lights: &Lights,
+        objects: &[Object],
+    ) -> Option<Scattered> {
         let medium = Medium::of(object)?;
-        let prepared = prepared(object)?;
         let light = irradiance(&medium, &prepared.voxels, lights, objects);
         let leaving = leaving(&prepared, &light);
         Some(Scattered { prepared, leaving })

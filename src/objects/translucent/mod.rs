@@ -39,6 +39,7 @@ pub mod reference;
 pub mod table;
 pub mod voxels;
 
+pub use crate::objects::lighting::fresnel_transmittance;
 use glam::{DMat3, DVec3};
 
 use super::Object;
@@ -412,20 +413,4 @@ pub fn crossing(
         inside,
         behind,
     })
-}
-
-/// The unpolarised Fresnel transmittance `F_t = 1 - F_r` of light crossing, at `cos_outside` (the cosine of its
-/// angle to the normal on the outside), into or out of a medium of relative index `eta`: the Fresnel equations,
-/// exact (`1 - F_r` with `F_r` the mean of the s and p reflectances), 0 past the critical angle where `eta < 1`.
-pub fn fresnel_transmittance(eta: f64, cos_outside: f64) -> f64 {
-    let c = cos_outside.abs().min(1.0);
-    let sin2_t = (1.0 - c * c) / (eta * eta);
-    if sin2_t >= 1.0 {
-        return 0.0;
-    }
-    let cos_t = (1.0 - sin2_t).sqrt();
-    let rs = (c - eta * cos_t) / (c + eta * cos_t);
-    let rp = (eta * c - cos_t) / (eta * c + cos_t);
-    let r = 0.5 * (rs * rs + rp * rp);
-    (1.0 - r).clamp(0.0, 1.0)
 }

@@ -43,6 +43,8 @@ impl ViewerApp {
                 self.history.reset(&doc.scene);
                 self.home_camera = doc.scene.camera.clone();
                 self.doc = doc;
+                // Another file: nothing the frames resolved from the old one is wanted again.
+                self.cache.invalidate(crate::frame::Changed::ALL);
                 // Another file: nothing of the old one stays selected, and its panel reads from the top.
                 self.selection = None;
                 self.selected_object = None;

@@ -113,6 +113,8 @@ pub struct ViewerApp {
     /// The UI's clock at this frame (egui's time, seconds).
     now: f64,
     report: Arc<Mutex<ViewportReport>>,
+    /// The frame cache shared with the viewport: the live sets are simulated in it.
+    cache: Arc<crate::frame::FrameCache>,
     gesture: Option<Gesture>,
     hovered: Option<HandleId>,
     /// The selected source: ringed in the viewport, highlighted in the panel.
@@ -163,14 +165,17 @@ const SAVE_AS: KeyboardShortcut =
     KeyboardShortcut::new(Modifiers::COMMAND.plus(Modifiers::SHIFT), Key::S);
 
 impl ViewerApp {
-    /// The viewer on `doc`; `report` is shared with the viewport's GPU side.
+    /// The viewer on `doc`; `report` and `cache` (the frame cache its live particles are simulated in) are
+    /// shared with the viewport's GPU side.
     pub fn new(
         doc: Document,
         adapter: String,
         max_resolution: u32,
         report: Arc<Mutex<ViewportReport>>,
+        cache: Arc<crate::frame::FrameCache>,
     ) -> Self {
         Self {
+            cache,
             history: History::new(&doc.scene),
             home_camera: doc.scene.camera.clone(),
             path_input: doc
@@ -224,7 +229,10 @@ impl ViewerApp {
         let key = (scene.clone(), frame);
         let job = || {
             let (scene, frame) = key.clone();
-            move |cancel: &crate::background::Cancel| scene.at_frame_unless(frame as f64, cancel)
+            let cache = self.cache.clone();
+            move |cancel: &crate::background::Cancel| {
+                scene.at_frame_in(frame as f64, cache.simulations(), cancel)
+            }
         };
         match self.live.request_within(&key, self.live_wait, job) {
             Poll::Ready(shown) => {
@@ -317,10 +325,12 @@ impl ViewerApp {
         adapter: String,
         max_resolution: u32,
         report: Arc<Mutex<ViewportReport>>,
+        cache: Arc<crate::frame::FrameCache>,
     ) {
         self.adapter = adapter;
         self.max_resolution = max_resolution;
         self.report = report;
+        self.cache = cache;
     }
 
     /// Carries out what the user asked for: every action of the panels, the viewport, the shortcuts and the
@@ -363,7 +373,12 @@ impl ViewerApp {
                     self.notify("Redone", false);
                 }
             }
-            Action::AcceptReload => self.doc.accept_reload(),
+            Action::AcceptReload => {
+                let before = self.doc.scene.clone();
+                self.doc.accept_reload();
+                // The file changed on disk: what the frames resolved from what it no longer holds goes.
+                (self.cache).invalidate(crate::frame::Changed::between(&before, &self.doc.scene));
+            }
             Action::KeepMine => self.doc.pending_reload = None,
             Action::Screenshot => {
                 let path = self.doc.screenshot_path(SystemTime::now());

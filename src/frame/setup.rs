@@ -1,21 +1,15 @@
-//! A frame's resolved setup: what every renderer of one frame of a scene reads, worked out once.
-//!
-//! A frame is a scene seen through one billboard: the rays' reach (`geometry::Reach`), the integration mapped
-//! onto them, every term of the field with its energy color, tint and share of the tolerance, and the share of
-//! each texel's ray before the first surface of the scene's objects. The GPU passes (`gpu`), the CPU twin
-//! (`reference`), the viewer and the exports all take a `FrameSetup`, so that none of them works any of it out again;
-//! the renderers keep only what lives longer than a frame (pipelines, textures). A new kind of per-frame data
-//! (a particle set's slices, a translucent object's irradiance) is resolved here, once, beside the rest.
+//! A frame's setup: what every renderer of one frame of a scene reads, worked out once (see `frame`).
 
 use std::sync::{Arc, OnceLock};
 
 use glam::DVec3;
 
+use super::cache::{FrameCache, ParticlesKey, Rays};
 use crate::field::Curve;
 use crate::geometry::{Billboard, Reach};
 use crate::integrate::Integration;
-use crate::objects::clip::shared_clip_fractions;
-use crate::particles::light::{LitParticles, shared_lit};
+use crate::objects::Lit;
+use crate::particles::light::LitParticles;
 use crate::particles::view::{GlowPlace, SmokeView, smoke_size};
 use crate::scene::Scene;
 
@@ -67,11 +61,21 @@ pub struct FrameSetup<'a> {
     clip_objects: OnceLock<Vec<crate::objects::Object>>,
     /// The scene's particles and their light, worked out when first asked for.
     particles: OnceLock<Option<Arc<LitParticles>>>,
+    /// The objects lit, worked out when first asked for.
+    objects: OnceLock<Option<Arc<Lit>>>,
+    /// Where what the frame resolves is kept: its renderer's cache.
+    cache: Arc<FrameCache>,
 }
 
 impl<'a> FrameSetup<'a> {
-    /// The frame of `scene` through `billboard`, at the scene's resolution.
+    /// The frame of `scene` through `billboard`, at the scene's resolution, resolved through a cache of its own
+    /// (a one-off frame: a renderer of many frames passes its own cache, `in_cache`).
     pub fn new(scene: &'a Scene, billboard: Billboard) -> Self {
+        Self::in_cache(scene, billboard, &Arc::new(FrameCache::new()))
+    }
+
+    /// The frame of `scene` through `billboard`, at the scene's resolution, what it resolves kept in `cache`.
+    pub fn in_cache(scene: &'a Scene, billboard: Billboard, cache: &Arc<FrameCache>) -> Self {
         let reach = crate::geometry::ray_reach(
             &scene.camera,
             &scene.sources,
@@ -108,6 +112,23 @@ impl<'a> FrameSetup<'a> {
             ends: Ends::Opaque,
             clip_objects: OnceLock::new(),
             particles: OnceLock::new(),
+            objects: OnceLock::new(),
+            cache: cache.clone(),
+        }
+    }
+
+    /// The cache what this frame resolves is kept in.
+    pub fn cache(&self) -> &Arc<FrameCache> {
+        &self.cache
+    }
+
+    /// The texel grid of `w` x `w` texels over this frame's billboard.
+    fn rays(&self, w: u32) -> Rays<'_> {
+        Rays {
+            eye: self.eye(),
+            billboard: &self.billboard,
+            reach: self.reach,
+            w,
         }
     }
 
@@ -124,7 +145,7 @@ impl<'a> FrameSetup<'a> {
     }
 
     fn with_ends(&self, ends: Ends) -> FrameSetup<'a> {
-        let mut f = FrameSetup::new(self.scene, self.billboard);
+        let mut f = FrameSetup::in_cache(self.scene, self.billboard, &self.cache);
         f.resolution = self.resolution;
         f.ends = ends;
         f
@@ -153,8 +174,7 @@ impl<'a> FrameSetup<'a> {
     /// their glow where the ray crosses none, so those texels integrate nothing and these fields cost only the
     /// translucent objects' texels.
     fn crossing_clips_at(&self, w: u32) -> Option<Arc<Vec<f32>>> {
-        let (eye, billboard, reach) = (self.eye(), &self.billboard, self.reach);
-        let all = shared_clip_fractions(&self.scene.objects, eye, billboard, reach, w);
+        let all = self.cache.clips(&self.scene.objects, self.rays(w));
         let Some(x) = self.with_ends(Ends::Opaque).crossings_at(w) else {
             return all;
         };
@@ -174,13 +194,7 @@ impl<'a> FrameSetup<'a> {
     /// billboard matches each pixel's own surface against (`clips_at` without translucent objects).
     pub fn surface_clips_at(&self, w: u32) -> Option<Arc<Vec<f32>>> {
         match self.translucent() {
-            true => shared_clip_fractions(
-                &self.scene.objects,
-                self.eye(),
-                &self.billboard,
-                self.reach,
-                w,
-            ),
+            true => self.cache.clips(&self.scene.objects, self.rays(w)),
             false => self.clips_at(w),
         }
     }
@@ -193,14 +207,10 @@ impl<'a> FrameSetup<'a> {
         if !self.translucent() {
             return None;
         }
-        crate::objects::clip::shared_crossings(
-            &self.scene.objects,
-            self.clip_objects(),
+        self.cache.crossings(
+            (&self.scene.objects, self.clip_objects()),
             (&self.scene.sources, self.integration.epsilon),
-            self.eye(),
-            &self.billboard,
-            self.reach,
-            w,
+            self.rays(w),
         )
     }
 
@@ -208,6 +218,11 @@ impl<'a> FrameSetup<'a> {
     /// (`Scene::place_billboard`).
     pub fn placed(scene: &'a Scene, aspect: f64) -> Self {
         FrameSetup::new(scene, scene.place_billboard(aspect))
+    }
+
+    /// `placed`, what it resolves kept in `cache`.
+    pub fn placed_in(scene: &'a Scene, aspect: f64, cache: &Arc<FrameCache>) -> Self {
+        FrameSetup::in_cache(scene, scene.place_billboard(aspect), cache)
     }
 
     /// The eye every ray leaves from.
@@ -237,13 +252,20 @@ impl<'a> FrameSetup<'a> {
     pub fn particles(&self) -> Option<Arc<LitParticles>> {
         self.particles
             .get_or_init(|| {
-                let scene = self.scene;
-                shared_lit(
-                    &scene.particles,
-                    &scene.sources,
-                    scene.colors.palette(),
-                    scene.integration.epsilon,
-                )
+                (!self.scene.particles.is_empty())
+                    .then(|| self.cache.lit_particles(&ParticlesKey::of(self.scene)))
+                    .flatten()
+            })
+            .clone()
+    }
+
+    /// The scene's objects tessellated and lit (`objects::lit`), their translucent tables filled where the
+    /// renderer's cache fills them; none without objects.
+    pub fn objects(&self) -> Option<Arc<Lit>> {
+        self.objects
+            .get_or_init(|| {
+                let inputs = self.scene.lit_inputs();
+                (self.cache).lit_objects(inputs, true, &Default::default())
             })
             .clone()
     }
@@ -287,12 +309,6 @@ impl<'a> FrameSetup<'a> {
         if self.ends != Ends::Opaque {
             return self.crossing_clips_at(w);
         }
-        shared_clip_fractions(
-            self.clip_objects(),
-            self.eye(),
-            &self.billboard,
-            self.reach,
-            w,
-        )
+        self.cache.clips(self.clip_objects(), self.rays(w))
     }
 }
