@@ -213,7 +213,7 @@ fn draw(
 
 /// The uniforms of `effect` with the view set so that the billboard covers the clip square exactly.
 fn covering(effect: &EffectShader) -> Vec<u8> {
-    let v = effect.view;
+    let v = effect.view.params;
     let half = v.size / 2.0;
     let dot = |a: [f32; 3], b: [f32; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
     let rows = [
@@ -233,7 +233,7 @@ fn covering(effect: &EffectShader) -> Vec<u8> {
         [0.0, 0.0, 0.0, 1.0],
     ];
     let columns: [[f32; 4]; 4] = std::array::from_fn(|c| std::array::from_fn(|r| rows[r][c]));
-    let mut view = v;
+    let mut view = effect.view;
     view.view_proj = columns;
     let mut bytes = effect.uniforms.clone();
     bytes[..size_of::<energywave::engine::View>()].copy_from_slice(bytemuck::bytes_of(&view));

@@ -36,7 +36,8 @@ fn parse(text: &str) -> Result<Scene, String> {
 }
 
 fn particles(scene: &Scene, frame: u32) -> Vec<Particle> {
-    let at = scene.at_frame(frame as f64);
+    let at = SIMULATIONS.with(|s| scene.at_frame_in(frame as f64, s, &Default::default()));
+    let at = at.expect("never cancelled");
     at.particles[0].particles(&at.sources)
 }
 
@@ -83,6 +84,26 @@ fn every_frame_is_the_same_however_it_is_reached() {
             "from scratch at {f}"
         );
     }
+    // A renderer's frame cache keeps the states its frames reached (`FrameCache::scene_at`); `Scene::at_frame`
+    // keeps none and simulates from the start: the same particles either way.
+    let cache = energywave::frame::FrameCache::new();
+    for f in [30, 31, 29, 90] {
+        let at = cache.scene_at(&scene, f as f64);
+        assert_eq!(
+            at.particles[0].particles(&at.sources),
+            played[f as usize],
+            "cached at {f}"
+        );
+        assert!(cache.bytes() > 0);
+    }
+    let alone = scene.at_frame(90.0);
+    assert_eq!(alone.particles[0].particles(&alone.sources), played[90]);
+    // An edit of the particle sets drops their kept states.
+    cache.invalidate(energywave::frame::Changed {
+        particles: true,
+        ..Default::default()
+    });
+    assert_eq!(cache.bytes(), 0);
 }
 
 #[test]

@@ -421,3 +421,45 @@ fn no_static_cache_in_src() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Every WGSL file under `shaders/`, as the path the table of twins names it (`shared/field.wgsl`).
+fn wgsl_files(dir: &Path, root: &Path, out: &mut Vec<String>) {
+    let mut entries: Vec<_> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    entries.sort();
+    for path in entries {
+        if path.is_dir() {
+            wgsl_files(&path, root, out);
+        } else if path.extension().is_some_and(|e| e == "wgsl") {
+            out.push(
+                path.strip_prefix(root)
+                    .unwrap()
+                    .to_string_lossy()
+                    .replace('\\', "/"),
+            );
+        }
+    }
+}
+
+#[test]
+fn every_wgsl_file_has_its_twin_named() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let table = std::fs::read_to_string(root.join("src/reference/mod.rs")).unwrap();
+    let named: BTreeSet<String> = table
+        .lines()
+        .filter_map(|l| l.strip_prefix("//! | `"))
+        .map(|l| l[..l.find('`').unwrap()].to_owned())
+        .collect();
+    let mut files = Vec::new();
+    wgsl_files(&root.join("shaders"), &root.join("shaders"), &mut files);
+    assert!(files.len() > 20, "{files:?}");
+    let missing: Vec<&String> = files.iter().filter(|f| !named.contains(*f)).collect();
+    assert!(
+        missing.is_empty(),
+        "WGSL files without a row in reference/mod.rs's table: {missing:?}"
+    );
+    let gone: Vec<&String> = named.iter().filter(|n| !files.contains(n)).collect();
+    assert!(gone.is_empty(), "rows naming no WGSL file: {gone:?}");
+}

@@ -1794,3 +1794,50 @@ fn recolored_light_is_the_light_of_the_recolored_objects() {
     brighter.sources.tori[0].coefficient *= 2.0;
     assert!(!key.matches_but_colors(brighter.lit_inputs()));
 }
+
+#[test]
+fn a_frames_objects_are_resolved_once_in_the_renderers_cache() {
+    let scene = common::shipped_scene("floor.toml");
+    let (w, h) = (96u32, 64u32);
+    let aspect = w as f64 / h as f64;
+    let mut g = gpu();
+    g.cache().invalidate(energywave::frame::Changed::ALL);
+    g.render(&scene, w, h, false).unwrap();
+    // The frame the GPU drew resolved the objects' light and the clips into its renderer's cache...
+    let held = g.cache().bytes();
+    assert!(held > 0);
+    // ... where every later frame of the scene finds them: the same light and clips, not worked out again.
+    let a = g.setup(&scene, aspect);
+    let b = g.setup(&scene, aspect);
+    let lit = a.objects().unwrap();
+    assert!(std::sync::Arc::ptr_eq(&lit, &b.objects().unwrap()));
+    assert!(std::sync::Arc::ptr_eq(
+        &a.clips().unwrap(),
+        &b.clips().unwrap()
+    ));
+    assert_eq!(g.cache().bytes(), held, "nothing new resolved");
+    // What a one-off frame works out with a cache of its own is the same to the bit.
+    let alone = FrameSetup::placed(&scene, aspect);
+    assert_eq!(*alone.objects().unwrap(), *lit);
+    assert_eq!(*alone.clips().unwrap(), *a.clips().unwrap());
+    // An edit of the objects drops what depends on them; a source's edit keeps the clips.
+    g.cache().invalidate(energywave::frame::Changed {
+        sources: true,
+        ..Default::default()
+    });
+    assert!(std::sync::Arc::ptr_eq(
+        &g.setup(&scene, aspect).clips().unwrap(),
+        &a.clips().unwrap()
+    ));
+    g.cache().invalidate(energywave::frame::Changed {
+        objects: true,
+        ..Default::default()
+    });
+    let again = g.setup(&scene, aspect);
+    assert!(!std::sync::Arc::ptr_eq(
+        &again.clips().unwrap(),
+        &a.clips().unwrap()
+    ));
+    assert_eq!(*again.clips().unwrap(), *a.clips().unwrap());
+    assert_eq!(*again.objects().unwrap(), *lit);
+}

@@ -19,11 +19,11 @@ struct VertexOut {
 // A triangle strip of four corners: uv (0,0) top-left, (1,0), (0,1), (1,1), on the billboard.
 @vertex
 fn vs_main(@builtin(vertex_index) index: u32) -> VertexOut {
-    let v = effect.view;
+    let v = effect.view.params;
     let uv = vec2<f32>(f32(index & 1u), f32(index >> 1u));
     let world = v.center + v.right * (v.size * (uv.x - 0.5)) + v.up * (v.size * (0.5 - uv.y));
     var out: VertexOut;
-    out.position = v.view_proj * vec4<f32>(world, 1.0);
+    out.position = effect.view.view_proj * vec4<f32>(world, 1.0);
     out.world = world;
     return out;
 }
@@ -111,7 +111,7 @@ fn term_glow(t: u32, sums: vec4<f32>, coefficient: f32) -> vec4<f32> {
 // glow's color is B Ce + tint.
 fn brightness_at(s_point: vec3<f32>) -> vec4<f32> {
     load_scalars();
-    let v = effect.view;
+    let v = effect.view.params;
     let e_point = v.eye + v.nu * (s_point - v.eye);
     var sum = vec4<f32>(0.0);
     for (var i = 0u; i < POINTS; i++) {

@@ -7,25 +7,17 @@
 // shared/field_pass.wgsl there. Rust side: src/engine/mod.rs (`View`, the block's layout).
 #import engine/structure.wgsl
 #import shared/field.wgsl
+#import shared/field_params.wgsl
+#import shared/decay.wgsl
 
-// The camera-dependent part: the billboard and the rays' reach as the frame of the scene's camera places them
-// (frame::FrameSetup); a game moving the camera sets them again (docs/engines/README.md).
+// The camera-dependent part: the view-projection for vs_main, the field pass's own parameter block (the billboard
+// and the rays' reach as the frame of the scene's camera places them, frame::FrameSetup; the decay), and the
+// blend's energy color and edge. A game moving the camera sets them again (docs/engines/README.md).
 struct View {
     view_proj: mat4x4<f32>, // the engine's projection times view, for vs_main
-    eye: vec3<f32>,         // V
-    nu: f32,                // E = V + nu (S - V)
-    center: vec3<f32>,      // the billboard's center C
-    size: f32,              // its side l
-    right: vec3<f32>,
-    alpha: f32,             // the decay on the ray's s in [0, 1] (Integration::on_ray)
-    up: vec3<f32>,
-    beta: f32,
+    params: FieldParams,    // shared/field_params.wgsl: eye V, nu, center C, size l, right, up, alpha, beta, ...
     energy: vec3<f32>,      // Ce, its intensity applied
     cutoff: f32,            // the glow's edge (scene::edge_fade); 0: none
-    epsilon: f32,
-    stretch: f32,           // the rays' span in decay lengths (the rms decay's unit)
-    pad0: f32,
-    pad1: f32,
 }
 
 struct Effect {
@@ -49,24 +41,10 @@ fn weight_at(i: u32) -> f32 {
     return effect.weights[i / 4u][i % 4u];
 }
 
-// The decay's scalars, read once an invocation (load_scalars), as the field pass does.
-var<private> ALPHA: f32;
-var<private> BETA: f32;
-var<private> EPSILON: f32;
-var<private> STRETCH: f32;
+// The decay's scalars (shared/decay.wgsl), read once an invocation, as the field pass does.
 fn load_scalars() {
-    ALPHA = effect.view.alpha;
-    BETA = effect.view.beta;
-    EPSILON = effect.view.epsilon;
-    STRETCH = effect.view.stretch;
-}
-
-// The decay zeta(t) along the ray.
-fn zeta_at(t: f32) -> f32 {
-    return ALPHA / ((t + BETA) * (t + BETA));
-}
-
-// The rms decay's B_i from the integral of its squared weighed energy (twin of Integration::finish).
-fn signed_root(integral: f32, coefficient: f32) -> f32 {
-    return select(1.0, -1.0, coefficient < 0.0) * sqrt(max(integral, 0.0) / STRETCH);
+    ALPHA = effect.view.params.alpha;
+    BETA = effect.view.params.beta;
+    EPSILON = effect.view.params.epsilon;
+    STRETCH = effect.view.params.stretch;
 }

@@ -5,37 +5,9 @@
 // its own. Rust side: src/gpu/field_pass/ (gpu_data.rs holds the mirror of FieldParams; a test checks the
 // layout). CPU twin: src/reference/field_pass.rs.
 #import shared/curve.wgsl
+#import shared/field_params.wgsl
+#import shared/decay.wgsl
 
-struct FieldParams {
-    center: vec3<f32>,  // billboard center C
-    size: f32,          // side length l
-    right: vec3<f32>,
-    resolution: u32,    // W
-    up: vec3<f32>,
-    divisions: u32,     // Simpson's n, even
-    eye: vec3<f32>,     // V
-    nu: f32,
-    alpha: f32,
-    beta: f32,
-    epsilon: f32,
-    point_count: u32,
-    line_count: u32,
-    torus_count: u32,
-    curve_count: u32,
-    integrator: u32,    // 0: simpson, 1: adaptive
-    term_tolerance: f32, // adaptive: the error allowed on each term's part of B (the tolerance over the sources)
-    jitter: u32,        // simpson: 1 for the randomly shifted rectangle rule
-    seed: u32,
-    gauss_order: u32,   // adaptive: n of the Gauss-Kronrod pair (n and 2n + 1 nodes; adaptive::kronrod_order)
-    layers: u32,        // the texture's layers written: 1 (B alone, every source in the scene's color) or 4
-    search: u32,        // 1 where some curve's term reads its brightest point (read on the CPU: the SEARCH constant)
-    decay: u32,         // 0: distance (the papers'), 1: rms (integrate::Decay)
-    stretch: f32,       // the rays' span in decay lengths: the rms decay's unit
-    clipped: u32,       // 1 where the scene has objects: each texel's ray ends at its clip (binding 13)
-    pad0: u32,
-    pad1: u32,
-    pad2: u32,
-}
 
 @group(0) @binding(0) var<storage, read> params: FieldParams;
 
@@ -95,15 +67,11 @@ fn jittered() -> bool {
     return JITTER != 0u;
 }
 
-// The integrand's scalars, copied from params once an invocation (load_scalars, first thing in every entry point):
-// lavapipe does not hoist a storage-buffer load out of a loop, so a value read from params (or any source buffer)
-// inside the loops over samples and nodes is loaded again, lane by lane, at every pass. Reading the torus and
-// these from registers made simpson on the torus 16x faster there (measured).
-var<private> ALPHA: f32;
-var<private> BETA: f32;
-var<private> EPSILON: f32;
-// The rays' span in decay lengths (the rms decay's unit), this texel's share of it once clipped (begin_texel).
-var<private> STRETCH: f32;
+// The integrand's scalars (shared/decay.wgsl), copied from params once an invocation (load_scalars, first thing in
+// every entry point): lavapipe does not hoist a storage-buffer load out of a loop, so a value read from params (or
+// any source buffer) inside the loops over samples and nodes is loaded again, lane by lane, at every pass. Reading
+// the torus and these from registers made simpson on the torus 16x faster there (measured). STRETCH is this
+// texel's share of the rays' span once clipped (begin_texel).
 fn load_scalars() {
     ALPHA = params.alpha;
     BETA = params.beta;
@@ -224,15 +192,4 @@ fn texel_segment(id: vec2<u32>) -> array<vec3<f32>, 2> {
     let s_point = params.center + params.right * (params.size * u) + params.up * (params.size * v);
     let e_point = params.eye + params.nu * (s_point - params.eye);
     return array<vec3<f32>, 2>(s_point, e_point);
-}
-
-// The rms decay's B_i from the integral of its squared weighed energy over s: sign(c) sqrt(integral / stretch),
-// the root taking back the sign of the term's coefficient that the square dropped (twin of Integration::finish).
-fn signed_root(integral: f32, coefficient: f32) -> f32 {
-    return select(1.0, -1.0, coefficient < 0.0) * sqrt(max(integral, 0.0) / STRETCH);
-}
-
-// The decay zeta(t) along the ray.
-fn zeta_at(t: f32) -> f32 {
-    return ALPHA / ((t + BETA) * (t + BETA));
 }

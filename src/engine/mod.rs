@@ -26,26 +26,18 @@ pub const ES_BLOCK_BYTES: usize = 16384;
 /// The most Simpson divisions the shader takes: each fragment loops over n + 1 samples per source.
 pub const MAX_DIVISIONS: u32 = 4096;
 
-/// The view part of the block, as `engine/globals.wgsl` declares `View` (160 bytes).
+/// The view part of the block, as `engine/globals.wgsl` declares `View` (224 bytes): the view-projection, the
+/// field pass's own parameter block (`shared/field_params.wgsl`, filled as the field pass fills it), and the
+/// blend's energy color and edge.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct View {
     pub view_proj: [[f32; 4]; 4], // 0, columns
-    pub eye: [f32; 3],            // 64
-    pub nu: f32,                  // 76
-    pub center: [f32; 3],         // 80
-    pub size: f32,                // 92
-    pub right: [f32; 3],          // 96
-    pub alpha: f32,               // 108
-    pub up: [f32; 3],             // 112
-    pub beta: f32,                // 124
-    pub energy: [f32; 3],         // 128
-    pub cutoff: f32,              // 140
-    pub epsilon: f32,             // 144
-    pub stretch: f32,             // 148
-    pub pad0: f32,                // 152
-    pub pad1: f32,                // 156
+    pub params: FieldParams,      // 64
+    pub energy: [f32; 3],         // 208
+    pub cutoff: f32,              // 220
 }
+const _: () = assert!(size_of::<View>() == 224);
 
 /// One member of the uniform block: its name, where it starts, its length and what one element is.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
@@ -275,20 +267,9 @@ impl EffectShader {
             crate::gpu::view_projection(&scene.camera, &setup.billboard, aspect).as_mat4();
         let view = View {
             view_proj: view_proj.to_cols_array_2d(),
-            eye: params.eye,
-            nu: params.nu,
-            center: params.center,
-            size: params.size,
-            right: params.right,
-            alpha: params.alpha,
-            up: params.up,
-            beta: params.beta,
+            params,
             energy,
             cutoff: scene.colors.cutoff as f32,
-            epsilon: params.epsilon,
-            stretch: params.stretch,
-            pad0: 0.0,
-            pad1: 0.0,
         };
         let (lo, hi) = scene
             .sources

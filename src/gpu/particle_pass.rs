@@ -1,6 +1,6 @@
 //! Particle sets on the GPU (`shaders/particles.wgsl`, METHOD.md section 10): the smoke's image by sheet-buffer
 //! splatting, a compute pass over its pixels, then laid over the frame's background and objects before the
-//! glow. The particles and their light come from the frame (`FrameSetup::particles`, lit once per edit); the
+//! glow. The particles and their light come from the frame (`Frame::particles`, lit once per edit); the
 //! slices and each tile's segments from its camera (`particles::view::SmokeView`), worked out again only when
 //! the view or the particles change. CPU twin: `reference::particles::smoke_pixel`.
 

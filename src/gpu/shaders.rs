@@ -30,7 +30,7 @@ pub const BLIT_PASS: &str = include_str!("../../shaders/blit.wgsl");
 pub const CONSTANTS: &str = "shared/constants.wgsl";
 
 /// Every WGSL file but the generated one, by its path under `shaders/`.
-pub const FILES: [(&str, &str); 24] = [
+pub const FILES: [(&str, &str); 26] = [
     (
         "shared/field.wgsl",
         include_str!("../../shaders/shared/field.wgsl"),
@@ -46,6 +46,14 @@ pub const FILES: [(&str, &str); 24] = [
     (
         "shared/field_pass.wgsl",
         include_str!("../../shaders/shared/field_pass.wgsl"),
+    ),
+    (
+        "shared/field_params.wgsl",
+        include_str!("../../shaders/shared/field_params.wgsl"),
+    ),
+    (
+        "shared/decay.wgsl",
+        include_str!("../../shaders/shared/decay.wgsl"),
     ),
     (
         "shared/wseries.wgsl",

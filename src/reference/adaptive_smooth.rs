@@ -359,18 +359,23 @@ pub fn brightness(sources: &Sources, settings: &Integration, s: DVec3, e: DVec3)
         .sum()
 }
 
-/// The part of B of term `k` alone (points, then lines, then tori), as `brightness` integrates it.
-pub fn term_brightness(
-    sources: &Sources,
-    k: usize,
-    settings: &Integration,
-    s: DVec3,
-    e: DVec3,
-) -> f64 {
-    let share = settings.term_tolerance(sources.len());
-    terms(sources)
-        .nth(k)
-        .map_or(0.0, |t| integrate_term(t, s, e, settings, share))
+/// The adaptive integrator's points, lines and tori: `adaptive_smooth.wgsl`'s twin.
+pub struct AdaptiveSmooth;
+
+impl super::TermIntegrator for AdaptiveSmooth {
+    /// The part of B of term `k` alone (points, then lines, then tori), as `brightness` integrates it.
+    fn term_brightness(
+        &self,
+        sources: &Sources,
+        k: usize,
+        settings: &Integration,
+        ray: super::TexelRay,
+    ) -> f64 {
+        let share = settings.term_tolerance(sources.len());
+        terms(sources).nth(k).map_or(0.0, |t| {
+            integrate_term(t, ray.start, ray.end, settings, share)
+        })
+    }
 }
 
 fn terms(sources: &Sources) -> impl Iterator<Item = Smooth<'_>> {

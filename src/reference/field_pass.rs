@@ -6,7 +6,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use super::simpson::jitter_offset;
-use super::{adaptive_curves, adaptive_smooth, simpson};
+use super::{TermIntegrator, TexelRay, adaptive_curves, adaptive_smooth, simpson};
 use crate::field::{Sources, wseries};
 use crate::frame::FrameSetup;
 use crate::geometry::ray_end;
@@ -29,24 +29,31 @@ pub fn adaptive(sources: &Sources, settings: &Integration, s: DVec3, e: DVec3) -
         + adaptive_curves::brightness(sources, settings, s, e)
 }
 
-/// The part of B of term `k` alone (points, lines, tori, curves, as `Sources::term` counts), by the scene's
-/// integrator as `brightness` integrates it.
-pub fn term_brightness(
-    sources: &Sources,
-    k: usize,
-    settings: &Integration,
-    s: DVec3,
-    e: DVec3,
-    xi: f64,
-) -> f64 {
-    let smooth = sources.first_curve();
-    match settings.integrator {
-        Integrator::Simpson => simpson::term_brightness(sources, k, settings, s, e, xi),
-        Integrator::Adaptive if k < smooth => {
-            adaptive_smooth::term_brightness(sources, k, settings, s, e)
-        }
-        Integrator::Adaptive => {
-            adaptive_curves::term_brightness(sources, k - smooth, settings, s, e)
+/// The scene's integrator as the field pass runs it: Simpson's rule, or the adaptive integrator's two families.
+pub struct FieldPass;
+
+impl TermIntegrator for FieldPass {
+    /// The part of B of term `k` alone (points, lines, tori, curves, as `Sources::term` counts), by the scene's
+    /// integrator as `brightness` integrates it.
+    fn term_brightness(
+        &self,
+        sources: &Sources,
+        k: usize,
+        settings: &Integration,
+        ray: TexelRay,
+    ) -> f64 {
+        let smooth = sources.first_curve();
+        match settings.integrator {
+            Integrator::Simpson => simpson::Simpson.term_brightness(sources, k, settings, ray),
+            Integrator::Adaptive if k < smooth => {
+                (adaptive_smooth::AdaptiveSmooth).term_brightness(sources, k, settings, ray)
+            }
+            Integrator::Adaptive => (adaptive_curves::AdaptiveCurves).term_brightness(
+                sources,
+                k - smooth,
+                settings,
+                ray,
+            ),
         }
     }
 }
@@ -68,7 +75,12 @@ pub fn tint_of(
     for (k, term) in setup.terms.iter().enumerate() {
         let t = term.tint;
         if t.iter().any(|&x| x != 0.0) {
-            let b = term_brightness(sources, k, settings, s, e, xi);
+            let ray = TexelRay {
+                start: s,
+                end: e,
+                xi,
+            };
+            let b = FieldPass.term_brightness(sources, k, settings, ray);
             (0..3).for_each(|c| sum[c] += b * t[c]);
         }
         let Some(curve) = setup.series_curve(k) else {
@@ -207,7 +219,7 @@ pub fn texel_brightness(setup: &FrameSetup, i: u32, j: u32) -> f64 {
 }
 
 /// A texel's ray and what its integral needs.
-struct TexelRay {
+struct ClippedRay {
     s: DVec3,
     e: DVec3,
     xi: f64,
@@ -218,12 +230,12 @@ struct TexelRay {
 
 /// The ray of texel `(i, j)` of the frame, up to the first surface of the scene's objects (`objects::clip`, in
 /// f64 at the texel itself): the shortened ray with the decay mapped onto it.
-fn texel_ray(setup: &FrameSetup, i: u32, j: u32) -> TexelRay {
+fn texel_ray(setup: &FrameSetup, i: u32, j: u32) -> ClippedRay {
     texel_ray_clipped(setup, i, j, None)
 }
 
 /// `texel_ray`, its clip `clip` where given.
-fn texel_ray_clipped(setup: &FrameSetup, i: u32, j: u32, clip: Option<f64>) -> TexelRay {
+fn texel_ray_clipped(setup: &FrameSetup, i: u32, j: u32, clip: Option<f64>) -> ClippedRay {
     let (w, eye, reach) = (setup.resolution, setup.eye(), setup.reach);
     let s: DVec3 = setup.billboard.texel_center(i, j, w);
     let e = ray_end(s, eye, reach.nu);
@@ -231,7 +243,7 @@ fn texel_ray_clipped(setup: &FrameSetup, i: u32, j: u32, clip: Option<f64>) -> T
     let settings = setup.integration.clone();
     let c = clip.unwrap_or_else(|| clip_fraction(setup.clip_objects(), eye, s, reach.nu));
     if c < 1.0 && c > 0.0 {
-        return TexelRay {
+        return ClippedRay {
             s,
             e: s + (e - s) * c,
             xi,
@@ -239,7 +251,7 @@ fn texel_ray_clipped(setup: &FrameSetup, i: u32, j: u32, clip: Option<f64>) -> T
             hidden: false,
         };
     }
-    TexelRay {
+    ClippedRay {
         s,
         e,
         xi,

@@ -26,20 +26,26 @@ pub fn brightness(sources: &Sources, settings: &Integration, s: DVec3, e: DVec3,
     }
 }
 
-/// The part of B of term `k` of psi alone (`Sources::term`), by the same rule as `brightness`.
-pub fn term_brightness(
-    sources: &Sources,
-    k: usize,
-    settings: &Integration,
-    s: DVec3,
-    e: DVec3,
-    xi: f64,
-) -> f64 {
-    let field = sources.field();
-    settings.finish(
-        along_ray(settings, (s, e), xi, |p| field.term(k, p, settings.epsilon)),
-        sources.coefficient(k),
-    )
+/// The papers' rule (and the shifted rectangle rule with jitter): `simpson.wgsl`'s twin.
+pub struct Simpson;
+
+impl super::TermIntegrator for Simpson {
+    /// The part of B of term `k` of psi alone (`Sources::term`), by the same rule as `brightness`.
+    fn term_brightness(
+        &self,
+        sources: &Sources,
+        k: usize,
+        settings: &Integration,
+        ray: super::TexelRay,
+    ) -> f64 {
+        let field = sources.field();
+        settings.finish(
+            along_ray(settings, (ray.start, ray.end), ray.xi, |p| {
+                field.term(k, p, settings.epsilon)
+            }),
+            sources.coefficient(k),
+        )
+    }
 }
 
 /// Curve `c`'s term to the decay's power (`Integration::power`) without its W series, times `weight(t)` at the

@@ -161,16 +161,23 @@ pub fn term_weighted(
     })
 }
 
-/// The part of B of curve `k` alone, as `brightness` integrates it.
-pub fn term_brightness(
-    sources: &Sources,
-    k: usize,
-    settings: &Integration,
-    s: DVec3,
-    e: DVec3,
-) -> f64 {
-    let share = settings.term_tolerance(sources.len());
-    (sources.curves.get(k)).map_or(0.0, |c| integrate_term(c, s, e, settings, share))
+/// The adaptive integrator's curve chains: `adaptive_curves.wgsl`'s twin.
+pub struct AdaptiveCurves;
+
+impl crate::reference::TermIntegrator for AdaptiveCurves {
+    /// The part of B of curve `k` alone, as `brightness` integrates it.
+    fn term_brightness(
+        &self,
+        sources: &Sources,
+        k: usize,
+        settings: &Integration,
+        ray: crate::reference::TexelRay,
+    ) -> f64 {
+        let share = settings.term_tolerance(sources.len());
+        (sources.curves.get(k)).map_or(0.0, |c| {
+            integrate_term(c, ray.start, ray.end, settings, share)
+        })
+    }
 }
 
 #[cfg(test)]
