@@ -9,9 +9,11 @@
 //! - [`particles`]: particle sets (smoke, dust, sparks): the particle, its kernel and the kernel's integrals;
 //! - [`animation`]: time in scenes: the travelling pulse (thesis eq. 5.1) and keyframes;
 //! - [`scene`]: TOML scene files, validated field by field;
-//! - [`frame`]: a frame's resolved setup (billboard, reach, terms, clips), worked out once for every renderer;
+//! - [`frame`]: a frame's data (billboard, reach, terms; clips, the objects' and particles' light, live states),
+//!   resolved once before any pass records, through the one cache its renderer owns;
 //! - [`reference`]: the f64 CPU renderer, one module for each GPU pass it twins, named alike;
-//! - [`gpu`]: the same on the GPU: WGSL compute and render passes, headless or in the viewer;
+//! - [`gpu`]: the same on the GPU: the field pass, then a frame's passes as one ordered list, headless or in the
+//!   viewer;
 //! - [`output`]: PNG and EXR files, written atomically;
 //! - [`export`]: frame sequences, GIFs and sprite sheets of an animation, with a progress bar, and `assemble`,
 //!   which joins frames rendered apart;

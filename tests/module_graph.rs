@@ -6,8 +6,8 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
-/// Every `.rs` file under `dir`, depth first.
-fn rust_files(dir: &Path) -> Vec<PathBuf> {
+/// Every file under `dir` whose name ends in `.ext`, depth first.
+fn files_with(dir: &Path, ext: &str) -> Vec<PathBuf> {
     let mut out = Vec::new();
     let mut entries: Vec<_> = std::fs::read_dir(dir)
         .unwrap()
@@ -16,12 +16,17 @@ fn rust_files(dir: &Path) -> Vec<PathBuf> {
     entries.sort();
     for path in entries {
         if path.is_dir() {
-            out.extend(rust_files(&path));
-        } else if path.extension().is_some_and(|e| e == "rs") {
+            out.extend(files_with(&path, ext));
+        } else if path.extension().is_some_and(|e| e == ext) {
             out.push(path);
         }
     }
     out
+}
+
+/// Every `.rs` file under `dir`, depth first.
+fn rust_files(dir: &Path) -> Vec<PathBuf> {
+    files_with(dir, "rs")
 }
 
 /// The code of a file without its comments (`//` to the end of a line; the sources hold no `/* */`).
@@ -422,27 +427,6 @@ fn no_static_cache_in_src() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// Every WGSL file under `shaders/`, as the path the table of twins names it (`shared/field.wgsl`).
-fn wgsl_files(dir: &Path, root: &Path, out: &mut Vec<String>) {
-    let mut entries: Vec<_> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .collect();
-    entries.sort();
-    for path in entries {
-        if path.is_dir() {
-            wgsl_files(&path, root, out);
-        } else if path.extension().is_some_and(|e| e == "wgsl") {
-            out.push(
-                path.strip_prefix(root)
-                    .unwrap()
-                    .to_string_lossy()
-                    .replace('\\', "/"),
-            );
-        }
-    }
-}
-
 #[test]
 fn every_wgsl_file_has_its_twin_named() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
@@ -452,8 +436,15 @@ fn every_wgsl_file_has_its_twin_named() {
         .filter_map(|l| l.strip_prefix("//! | `"))
         .map(|l| l[..l.find('`').unwrap()].to_owned())
         .collect();
-    let mut files = Vec::new();
-    wgsl_files(&root.join("shaders"), &root.join("shaders"), &mut files);
+    let shaders = root.join("shaders");
+    let files: Vec<String> = (files_with(&shaders, "wgsl").iter())
+        .map(|f| {
+            f.strip_prefix(&shaders)
+                .unwrap()
+                .to_string_lossy()
+                .replace('\\', "/")
+        })
+        .collect();
     assert!(files.len() > 20, "{files:?}");
     let missing: Vec<&String> = files.iter().filter(|f| !named.contains(*f)).collect();
     assert!(

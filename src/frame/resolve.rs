@@ -60,6 +60,9 @@ struct Background {
     shown: Option<(Vec<Object>, Arc<Lit>)>,
     /// The particles the last frame drew.
     shown_particles: Option<Arc<LitParticles>>,
+    /// Whether the last frame drew a stand-in for the objects' light, and for the particles': until a frame
+    /// draws theirs, they are being prepared, even once the work is done (the frame did not show it).
+    stood_in: [bool; 2],
 }
 
 /// Resolves frames: before they record, or in the background (`in_background`).
@@ -84,6 +87,7 @@ impl Resolver {
             last: None,
             shown: None,
             shown_particles: None,
+            stood_in: [false; 2],
         });
     }
 
@@ -92,9 +96,11 @@ impl Resolver {
         let Some(bg) = &mut self.background else {
             return Frame::resolved(setup);
         };
+        let objects = bg.objects_of(setup);
+        bg.stood_in[0] = objects.as_ref().is_some_and(|o| o.key.is_none());
         Frame {
             setup,
-            objects: bg.objects_of(setup),
+            objects,
             particles: bg.particles_of(setup),
         }
     }
@@ -104,13 +110,13 @@ impl Resolver {
     pub fn preparing(&self) -> Option<String> {
         let bg = self.background.as_ref()?;
         let translucent = (bg.shown.iter()).any(|(o, _)| o.iter().any(|o| o.translucent.is_some()));
-        let objects = match (bg.objects.busy(), translucent) {
+        let objects = match (bg.objects.busy() || bg.stood_in[0], translucent) {
             (false, _) => None,
             (true, true) => Some("objects' light, translucent tables"),
             (true, false) => Some("objects' light"),
         };
         let parts: Vec<&str> = (objects.into_iter())
-            .chain(bg.particles.busy().then_some("particles' light"))
+            .chain((bg.particles.busy() || bg.stood_in[1]).then_some("particles' light"))
             .collect();
         (!parts.is_empty()).then(|| parts.join(", "))
     }
@@ -192,6 +198,7 @@ impl Background {
         let scene = setup.scene;
         if scene.particles.is_empty() {
             self.shown_particles = None;
+            self.stood_in[1] = false;
             return None;
         }
         let key = ParticlesKey::of(scene);
@@ -201,7 +208,9 @@ impl Background {
                 (!cancel.stopped()).then(|| cache.lit_particles(&k))
             }
         };
-        let lit = match self.particles.request_within(&key, self.wait, job) {
+        let ready = self.particles.request_within(&key, self.wait, job);
+        self.stood_in[1] = matches!(ready, Poll::Pending);
+        let lit = match ready {
             Poll::Ready(lit) => (*lit).clone(),
             Poll::Pending => match &self.shown_particles {
                 // The particles drawn before, as they were lit.
@@ -221,5 +230,43 @@ impl Background {
         };
         self.shown_particles = lit.clone();
         lit
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::Scene;
+
+    fn floor() -> Scene {
+        let path = std::path::Path::new(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/assets/scenes/floor.toml"
+        ));
+        Scene::parse(&std::fs::read_to_string(path).unwrap(), path).unwrap()
+    }
+
+    #[test]
+    fn a_frame_with_a_stand_in_is_preparing_until_a_frame_shows_the_light() {
+        let scene = floor();
+        let setup = FrameSetup::placed(&scene, 1.5);
+        let mut resolver = Resolver::new();
+        resolver.in_background(Duration::ZERO);
+        // Not waited for: the objects drawn unshadowed.
+        let first = resolver.resolve(&setup);
+        let stand_in = first.objects.unwrap();
+        assert!(stand_in.key.is_none());
+        assert_eq!(*stand_in.lit, unshadowed(scene.lit_inputs()));
+        // The light is ready now, but the frame showed the stand-in: still being prepared.
+        resolver.wait();
+        assert_eq!(resolver.preparing().as_deref(), Some("objects' light"));
+        // The next frame shows it, the light the frame resolves before it records.
+        let second = resolver.resolve(&setup).objects.unwrap();
+        assert!(second.key.is_some());
+        assert_eq!(*second.lit, *setup.objects().unwrap());
+        assert_eq!(resolver.preparing(), None);
+        // Resolved before it records, a frame never stands in.
+        let whole = Resolver::new().resolve(&setup).objects.unwrap();
+        assert!(whole.key.is_some() && Arc::ptr_eq(&whole.lit, &setup.objects().unwrap()));
     }
 }
