@@ -20,8 +20,8 @@
 //! | `simpson.wgsl`                | [`simpson`]: the papers' rule (and the shifted rectangle rule with jitter) |
 //! | `adaptive_smooth.wgsl`        | [`adaptive_smooth`]: points, lines (in closed form where it holds) and tori |
 //! | `adaptive_curves.wgsl`        | [`adaptive_curves`]: curve chains                                     |
-//! | `adaptive_curves/scan.wgsl`   | [`adaptive_curves::scan`]: a chain's scan along the ray, its features |
-//! | `adaptive_curves/kinks.wgsl`  | [`adaptive_curves::kinks`]: the kinks and jumps of a chain's term     |
+//! | `adaptive_curves/scan.wgsl`   | `adaptive_curves::scan`: a chain's scan along the ray, its features |
+//! | `adaptive_curves/kinks.wgsl`  | `adaptive_curves::kinks`: the kinks and jumps of a chain's term     |
 //! | `through.wgsl`                | [`field_pass::see_through`]: the glow seen through translucent objects |
 //! | `tau_table.wgsl`              | `crate::objects::translucent::table::Table::of`: the optical-thickness table |
 //! | `objects.wgsl`                | [`objects`]: the objects, lit at every pixel                          |
