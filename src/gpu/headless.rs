@@ -9,7 +9,7 @@ use crate::scene::Scene;
 
 /// A composed frame read back from the GPU: RGBA in [0, 1], rows from the top.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Frame {
+pub struct FramePixels {
     pub width: u32,
     pub height: u32,
     pub pixels: Vec<[f32; 4]>,
@@ -144,7 +144,7 @@ impl HeadlessRenderer {
         width: u32,
         height: u32,
         transparent: bool,
-    ) -> Result<Frame, GpuError> {
+    ) -> Result<FramePixels, GpuError> {
         let limit = self.ctx.device.limits().max_texture_dimension_2d;
         if width > limit || height > limit {
             return Err(GpuError::FrameTooLarge {
@@ -168,7 +168,7 @@ impl HeadlessRenderer {
         };
         (self.renderer).record(self.ctx.gpu(), &mut encoder, &setup, target)?;
         self.ctx.checked(|| queue.submit([encoder.finish()]))?;
-        Ok(Frame {
+        Ok(FramePixels {
             width,
             height,
             pixels: read_frame(device, queue, &targets)?,

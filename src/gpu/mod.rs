@@ -35,7 +35,7 @@ pub use field_pass::{FieldInputs, FieldRenderer, FieldShaders, Specialise, Struc
 pub use formats::FRAME_FORMAT;
 pub use frame::{FrameTargets, SceneRenderer, Target, f16_to_f32, frame_cache, read_frame};
 pub use grid_pass::GridPass;
-pub use headless::{Frame, HeadlessRenderer};
+pub use headless::{FramePixels, HeadlessRenderer};
 pub use pass::{Brightness, FramePass, Gpu, Look, Stage};
 pub use upsample::{Upsample, UpsampleClips};
 
