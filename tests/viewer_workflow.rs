@@ -275,6 +275,36 @@ fn a_scaled_screenshot_integrates_the_field_at_that_scale() {
 }
 
 #[test]
+fn a_screenshot_taken_while_the_objects_light_is_worked_out_shows_the_whole_frame() {
+    use energywave::gpu::HeadlessRenderer;
+    use energywave::viewer::Document;
+    use energywave::viewer::offscreen::OffscreenViewer;
+    let mut scene = common::shipped_scene("floor.toml");
+    scene.billboard.resolution = 40;
+    let mut v = OffscreenViewer::new(Document::new(scene, None), 240, 160).unwrap();
+    v.app.view_mut().show_overlays = false;
+    v.app.view_mut().show_grid = false;
+    // One frame, which asks for the objects' light and (on this machine) draws them unshadowed meanwhile; the
+    // screenshot right after it waits for the light and draws its frame again at twice the size, the field
+    // integrated at twice the resolution: every try's work done, none of it lost with a try drawn again.
+    v.frame().unwrap();
+    let (pixels, [w, h]) = v.screenshot(2).unwrap();
+    let mut want = v.app.frame_scene();
+    want.billboard.resolution = 80;
+    let frame = HeadlessRenderer::new()
+        .unwrap()
+        .render(&want, w, h, false)
+        .unwrap();
+    let mut worst = 0.0f32;
+    for (p, q) in pixels.iter().zip(&frame.pixels) {
+        for c in 0..3 {
+            worst = worst.max((p[c] - q[c]).abs());
+        }
+    }
+    assert!(worst < 2.0 / 255.0, "largest difference {worst}");
+}
+
+#[test]
 fn screenshots_of_a_scene_without_a_file_go_to_a_stated_place() {
     let h = harness(light_scene());
     let dir = h.state().document().screenshot_dir();

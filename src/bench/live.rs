@@ -82,14 +82,16 @@ pub fn live_rows(warmup: usize, frames: usize) -> Result<Vec<LiveRow>, GpuError>
         scene.billboard.fixed_resolution = true;
         let scene = unkept(&scene, round);
         let frame_rate = scene.animation.as_ref().map_or(30.0, |a| a.frame_rate);
+        // The states reached are kept in a frame cache, as the viewer's and an export's renderer keep them.
+        let cache = crate::frame::FrameCache::new();
         // Up to the first frame timed, then one frame at a time as playback steps.
-        std::hint::black_box(scene.at_frame(start as f64));
+        std::hint::black_box(cache.scene_at(&scene, start as f64));
         let (mut step, mut rendered, mut bare, mut alive) =
             (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         let last = start + (warmup + frames) as u32;
         for f in start + 1..=last {
             let t = Instant::now();
-            let at = scene.at_frame(f as f64);
+            let at = cache.scene_at(&scene, f as f64);
             let s = t.elapsed().as_secs_f64() * 1e3;
             let t = Instant::now();
             gpu.render(&at, w, h, false)?;
@@ -111,10 +113,11 @@ pub fn live_rows(warmup: usize, frames: usize) -> Result<Vec<LiveRow>, GpuError>
         let scrub_back = (1..=frames.max(8) as u32)
             .map(|k| {
                 let t = Instant::now();
-                std::hint::black_box(scene.at_frame((last - k) as f64));
+                std::hint::black_box(cache.scene_at(&scene, (last - k) as f64));
                 t.elapsed().as_secs_f64() * 1e3
             })
             .collect();
+        // From scratch: `Scene::at_frame` keeps no state (and the key differs from any kept).
         let fresh = unkept(&scene, 100 + round);
         let t = Instant::now();
         std::hint::black_box(fresh.at_frame(last as f64));

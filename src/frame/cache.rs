@@ -28,7 +28,7 @@ use crate::scene::{Scene, Simulations};
 
 /// The memory a cache holds at most by default: the viewer's orbit over a few translucent tables and a few
 /// simulations' kept states (about 120 bytes a live particle) fits.
-pub const DEFAULT_BUDGET: usize = 1 << 30;
+pub const DEFAULT_BUDGET: usize = 768 << 20;
 
 /// How a texel grid's rays run: from `eye` through the `w` x `w` texels of `billboard`, as far as `reach`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -100,6 +100,19 @@ enum Value {
     Translucent(Arc<Prepared>),
     Objects(Arc<Lit>),
     Particles(Arc<LitParticles>),
+}
+
+impl Key {
+    /// The bytes a key holds on its own: a live set's particles (its frame's, which the key may alone keep).
+    fn bytes(&self) -> usize {
+        match self {
+            Key::Particles(k) => (k.sets.iter())
+                .filter_map(|s| s.live.as_ref())
+                .map(|p| size_of_val(&p[..]))
+                .sum(),
+            _ => 0,
+        }
+    }
 }
 
 impl Value {
@@ -218,7 +231,7 @@ impl FrameCache {
     /// The bytes it holds.
     pub fn bytes(&self) -> usize {
         let entries: usize = (self.entries.lock())
-            .map(|e| e.iter().map(|(_, v)| v.bytes()).sum())
+            .map(|e| e.iter().map(|(k, v)| k.bytes() + v.bytes()).sum())
             .unwrap_or(0);
         entries + self.simulations.bytes()
     }
@@ -400,7 +413,7 @@ impl FrameCache {
             return Some(value);
         }
         let value = make()?;
-        let bytes = value.bytes();
+        let bytes = key.bytes() + value.bytes();
         if let Ok(mut entries) = self.entries.lock() {
             entries.retain(|(k, _)| *k != key);
             entries.push((key, value.clone()));
@@ -412,7 +425,11 @@ impl FrameCache {
     /// Drops the least recently used entries, then the simulations' oldest states, until what is held fits the
     /// budget (the newest entry, of `newest` bytes, always stays).
     fn trim(&self, newest: usize) {
-        let held = |e: &[(Key, Value)]| e.iter().map(|(_, v)| v.bytes()).sum::<usize>();
+        let held = |e: &[(Key, Value)]| {
+            (e.iter())
+                .map(|(k, v)| k.bytes() + v.bytes())
+                .sum::<usize>()
+        };
         if let Ok(mut entries) = self.entries.lock() {
             let simulated = self.simulations.bytes();
             while entries.len() > 1 && held(&entries) + simulated > self.budget {

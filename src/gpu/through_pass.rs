@@ -105,6 +105,7 @@ impl ThroughPass {
         };
         let mut views = Vec::new();
         let mut fields = [false; 2];
+        let mut failed = None;
         for (k, (field, mut at)) in [
             (&mut self.front, setup.front()),
             (&mut self.exit, setup.exit()),
@@ -115,10 +116,20 @@ impl ThroughPass {
             at.resolution = resolution;
             let inputs = FieldInputs::of(&at);
             if !field.shows(&inputs) {
-                field.prepare(device, queue, &inputs)?;
+                if let Err(e) = field.prepare(device, queue, &inputs) {
+                    failed = Some(e);
+                    break;
+                }
                 fields[k] = true;
             }
             views.push(field.view().expect("prepared above").clone());
+        }
+        if let Some(e) = failed {
+            // The front field, prepared but not recorded now, is integrated again by the next frame.
+            if fields[0] {
+                self.front.invalidate();
+            }
+            return Err(e);
         }
         let stale = self.output.as_ref().is_none_or(|(t, _)| {
             t.width() != resolution

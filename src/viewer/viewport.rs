@@ -456,7 +456,9 @@ impl ViewportGpu {
         }
         let targets = FrameTargets::new(device, view.size);
         // A screenshot shows the scene as it is: what is being prepared is waited for (twice at most: a request
-        // the frame itself made, then one a change made meanwhile would have).
+        // the frame itself made, then one a change made meanwhile would have), then the frame drawn again. Each
+        // try is submitted: the passes count what they recorded as done (the field, its glare), so a try's work
+        // must run even when the next try draws the frame again.
         for tries in 0.. {
             let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("energywave.viewport.screenshot"),
@@ -466,8 +468,8 @@ impl ViewportGpu {
             // The frame composed is the screenshot's, not the one the window's targets hold.
             self.composed = None;
             result?;
+            queue.submit([encoder.finish()]);
             if self.scene_renderer.preparing().is_none() || tries == 2 {
-                queue.submit([encoder.finish()]);
                 break;
             }
             self.scene_renderer.wait_prepared();
