@@ -238,9 +238,31 @@ fn the_panel_keeps_its_width_whatever_it_shows() {
     );
 }
 
+/// The largest difference between a screenshot of `v`'s frame (`pixels`, `size`) and the same frame rendered for
+/// export at that size, its field integrated at `resolution` texels a side: under 2/255.
+fn assert_is_the_export(
+    v: &energywave::viewer::offscreen::OffscreenViewer,
+    pixels: &[[f32; 4]],
+    [w, h]: [u32; 2],
+    resolution: u32,
+) {
+    let mut want = v.app.frame_scene();
+    want.billboard.resolution = resolution;
+    let frame = energywave::gpu::HeadlessRenderer::new()
+        .unwrap()
+        .render(&want, w, h, false)
+        .unwrap();
+    let mut worst = 0.0f32;
+    for (p, q) in pixels.iter().zip(&frame.pixels) {
+        for c in 0..3 {
+            worst = worst.max((p[c] - q[c]).abs());
+        }
+    }
+    assert!(worst < 2.0 / 255.0, "largest difference {worst}");
+}
+
 #[test]
 fn a_scaled_screenshot_integrates_the_field_at_that_scale() {
-    use energywave::gpu::HeadlessRenderer;
     use energywave::viewer::Document;
     use energywave::viewer::offscreen::OffscreenViewer;
     let mut scene = light_scene();
@@ -259,24 +281,11 @@ fn a_scaled_screenshot_integrates_the_field_at_that_scale() {
         "a field of 4 x 40 texels a side"
     );
     // The same frame rendered for export at that size and resolution: what the screenshot must be.
-    let mut want = v.app.frame_scene();
-    want.billboard.resolution = 160;
-    let frame = HeadlessRenderer::new()
-        .unwrap()
-        .render(&want, w, h, false)
-        .unwrap();
-    let mut worst = 0.0f32;
-    for (p, q) in pixels.iter().zip(&frame.pixels) {
-        for c in 0..3 {
-            worst = worst.max((p[c] - q[c]).abs());
-        }
-    }
-    assert!(worst < 2.0 / 255.0, "largest difference {worst}");
+    assert_is_the_export(&v, &pixels, [w, h], 160);
 }
 
 #[test]
 fn a_screenshot_taken_while_the_objects_light_is_worked_out_shows_the_whole_frame() {
-    use energywave::gpu::HeadlessRenderer;
     use energywave::viewer::Document;
     use energywave::viewer::offscreen::OffscreenViewer;
     let mut scene = common::shipped_scene("floor.toml");
@@ -289,19 +298,7 @@ fn a_screenshot_taken_while_the_objects_light_is_worked_out_shows_the_whole_fram
     // integrated at twice the resolution: every try's work done, none of it lost with a try drawn again.
     v.frame().unwrap();
     let (pixels, [w, h]) = v.screenshot(2).unwrap();
-    let mut want = v.app.frame_scene();
-    want.billboard.resolution = 80;
-    let frame = HeadlessRenderer::new()
-        .unwrap()
-        .render(&want, w, h, false)
-        .unwrap();
-    let mut worst = 0.0f32;
-    for (p, q) in pixels.iter().zip(&frame.pixels) {
-        for c in 0..3 {
-            worst = worst.max((p[c] - q[c]).abs());
-        }
-    }
-    assert!(worst < 2.0 / 255.0, "largest difference {worst}");
+    assert_is_the_export(&v, &pixels, [w, h], 80);
 }
 
 #[test]

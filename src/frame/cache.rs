@@ -468,11 +468,7 @@ mod tests {
     use crate::geometry::Billboard;
 
     fn scene_with_sphere() -> Scene {
-        let path = std::path::Path::new(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/assets/scenes/floor.toml"
-        ));
-        Scene::parse(&std::fs::read_to_string(path).unwrap(), path).unwrap()
+        crate::scene::shipped("floor.toml")
     }
 
     fn rays(billboard: &Billboard, w: u32) -> Rays<'_> {

@@ -142,7 +142,10 @@ impl Background {
             && key.matches(inputs)
         {
             let (key, lit) = (key.clone(), lit.clone());
-            self.shown = Some((scene.objects.clone(), lit.clone()));
+            // What the frames show already, as a still view shows it frame after frame: nothing to copy.
+            if !(self.shown.as_ref()).is_some_and(|(_, shown)| Arc::ptr_eq(shown, &lit)) {
+                self.shown = Some((scene.objects.clone(), lit.clone()));
+            }
             return Some(ResolvedObjects {
                 lit,
                 key: Some(key),
@@ -239,11 +242,7 @@ mod tests {
     use crate::scene::Scene;
 
     fn floor() -> Scene {
-        let path = std::path::Path::new(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/assets/scenes/floor.toml"
-        ));
-        Scene::parse(&std::fs::read_to_string(path).unwrap(), path).unwrap()
+        crate::scene::shipped("floor.toml")
     }
 
     #[test]

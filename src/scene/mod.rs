@@ -493,3 +493,12 @@ impl Scene {
             .clamp(own, top)
     }
 }
+
+/// A shipped scene of `assets/scenes/`, for the crate's unit tests.
+#[cfg(test)]
+pub(crate) fn shipped(name: &str) -> Scene {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("assets/scenes")
+        .join(name);
+    Scene::parse(&std::fs::read_to_string(&path).unwrap(), &path).unwrap()
+}
