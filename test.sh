@@ -31,7 +31,7 @@ tools="slurm openjd blender glslang"
 gl_tests="gpu_render objects colors decay degenerate_sources glare specialised integrators robustness camera_reach
   w_form cli progressive viewer_workflow viewer_ui particles_gpu live_particles farm first_picture"
 # tests/translucent.rs runs on GL only for its GPU tests (the rest of that file needs no GPU).
-gl_filtered="translucent:gpu"
+gl_filtered="translucent:gpu refine:gpu"
 # The GPU test files not run on GL, and why.
 declare -A gl_left_out=(
   [degenerate_curves]="one texel of a chain with coincident points at 1.5e-4 of the converged value on GL, 1.05e-4 allowed (README, \"Error control\")"
@@ -184,7 +184,7 @@ else
   # must be put on a list.
   for f in tests/*.rs; do
     t=$(basename "$f" .rs)
-    case " $(echo $gl_tests $no_gpu) ${gl_filtered//:*/} " in *" $t "*) continue ;; esac
+    case " $(echo $gl_tests $no_gpu $(for tf in $gl_filtered; do echo "${tf%%:*}"; done)) " in *" $t "*) continue ;; esac
     if [ -n "${gl_left_out[$t]:-}" ]; then
       summary+=("  not on GL: tests/$t.rs: ${gl_left_out[$t]}")
     else

@@ -161,7 +161,14 @@ fn rust_mirrors_match_the_wgsl_layouts() {
         &field,
         "Chunk",
         size_of::<Chunk>(),
-        fields!(Chunk: first, count, accumulate, pipeline, row_offset, term, stage),
+        fields!(Chunk: first, count, accumulate, pipeline, row_offset, term, stage, listed),
+    );
+    let refine = parse_and_validate("refine", &shaders::compose("refine.wgsl"));
+    check_struct(
+        &refine,
+        "Level",
+        size_of::<Level>(),
+        fields!(Level: resolution, layers, level, coarsest, tolerance, slot, pad0, pad1),
     );
     check_struct(
         &field,

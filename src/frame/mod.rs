@@ -8,6 +8,8 @@
 //! - `cache`: where what frames resolved is kept for the next ones: one `FrameCache` a renderer owns (the
 //!   viewer's, the headless renderer's, the CPU twin's through its setup), one memory bound, invalidated by
 //!   what changed. The live sets' simulations keep their states there too (`FrameCache::scene_at`).
+//! - `refine`: which texels of the field are integrated exactly and which predicted from coarser ones (refinement
+//!   in image space), the plan the GPU's field pass and the CPU twin both follow.
 //! - `resolve`: the objects' and particles' light as a frame's passes read them (`Frame`): resolved before the
 //!   frame records (renders, exports), or on threads of their own, the frames drawing stand-ins meanwhile (the
 //!   viewer).
@@ -17,9 +19,11 @@
 //! (pipelines, textures). A new kind of per-frame data is resolved here, beside the rest.
 
 pub mod cache;
+pub mod refine;
 pub mod resolve;
 mod setup;
 
 pub use cache::{Changed, FrameCache};
+pub use refine::Refine;
 pub use resolve::{Frame, ResolvedObjects, Resolver};
 pub use setup::{FrameSetup, Term};

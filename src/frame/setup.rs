@@ -5,6 +5,7 @@ use std::sync::{Arc, OnceLock};
 use glam::DVec3;
 
 use super::cache::{FrameCache, ParticlesKey, Rays};
+use super::refine::Refine;
 use crate::field::Curve;
 use crate::geometry::{Billboard, Reach};
 use crate::integrate::Integration;
@@ -53,6 +54,9 @@ pub struct FrameSetup<'a> {
     pub terms: Vec<Term>,
     /// Each term's share of the tolerance (`Integration::term_tolerance`).
     pub term_tolerance: f64,
+    /// Which texels of the field are integrated exactly (`refine`): by default the scene's tolerance decides
+    /// (`Refine::of`); `Refine::EveryTexel` for the reference.
+    pub refine: Refine,
     /// The texels' clips at `resolution`, worked out when first asked for.
     clips: OnceLock<Option<Arc<Vec<f32>>>>,
     /// Where the texels' rays end: at the first opaque surface, or (`front`, `exit`) at translucent ones.
@@ -106,6 +110,7 @@ impl<'a> FrameSetup<'a> {
             resolution: scene.billboard.resolution,
             reach,
             term_tolerance: integration.term_tolerance(scene.sources.len()),
+            refine: Refine::of(&scene.integration),
             integration,
             terms,
             clips: OnceLock::new(),
@@ -147,6 +152,7 @@ impl<'a> FrameSetup<'a> {
     fn with_ends(&self, ends: Ends) -> FrameSetup<'a> {
         let mut f = FrameSetup::in_cache(self.scene, self.billboard, &self.cache);
         f.resolution = self.resolution;
+        f.refine = self.refine;
         f.ends = ends;
         f
     }

@@ -46,5 +46,6 @@ pub mod layout {
         Chunk, CurvePiece, CurveSegment, CurveSource, FieldParams, LineSource, PointSource,
         TorusSource,
     };
+    pub use super::field_pass::refine::Level;
     pub use super::frame_average::gpu_data::AverageParams;
 }

@@ -30,7 +30,7 @@ pub const BLIT_PASS: &str = include_str!("../../shaders/blit.wgsl");
 pub const CONSTANTS: &str = "shared/constants.wgsl";
 
 /// Every WGSL file but the generated one, by its path under `shaders/`.
-pub const FILES: [(&str, &str); 26] = [
+pub const FILES: [(&str, &str); 27] = [
     (
         "shared/field.wgsl",
         include_str!("../../shaders/shared/field.wgsl"),
@@ -93,6 +93,7 @@ pub const FILES: [(&str, &str); 26] = [
         include_str!("../../shaders/adaptive_curves.wgsl"),
     ),
     ("objects.wgsl", include_str!("../../shaders/objects.wgsl")),
+    ("refine.wgsl", include_str!("../../shaders/refine.wgsl")),
     (
         "particles.wgsl",
         include_str!("../../shaders/particles.wgsl"),
@@ -364,6 +365,7 @@ mod tests {
                 "adaptive_smooth.wgsl",
                 "adaptive_curves.wgsl",
                 "objects.wgsl",
+                "refine.wgsl",
                 "particles.wgsl",
                 "billboard.wgsl",
                 "glare.wgsl",

@@ -181,31 +181,40 @@ pub fn see_through(
     }
 }
 
-/// The texture of `setup`, each texel's ray ending at its own surface, or at `clips[k]` where given.
+/// The texture of `setup`, each texel's ray ending at its own surface, or at `clips[k]` where given: refined in
+/// image space as `setup.refine` says (`refine`), the GPU's levels and decisions, or every texel integrated.
 fn render_clipped(setup: &FrameSetup, clips: Option<&[f64]>) -> BrightnessTexture {
     let w = setup.resolution;
-    let n = (w as usize) * (w as usize);
-    let mut values = vec![0.0; n];
-    let mut tint = vec![[0.0; 3]; n];
-    values
-        .par_chunks_mut(w as usize)
-        .zip(tint.par_chunks_mut(w as usize))
-        .enumerate()
-        .for_each(|(j, (row, tint_row))| {
-            for (i, (out, tint_out)) in row.iter_mut().zip(tint_row).enumerate() {
-                let clip = clips.map(|c| c[j * w as usize + i]);
-                let ray = texel_ray_clipped(setup, i as u32, j as u32, clip);
-                if ray.hidden {
-                    continue;
-                }
-                *out = brightness(&setup.scene.sources, &ray.settings, ray.s, ray.e, ray.xi);
-                *tint_out = tint_of(setup, &ray.settings, (ray.s, ray.e), ray.xi);
-            }
-        });
+    let exact = |i: u32, j: u32| {
+        let clip = clips.map(|c| c[(j * w + i) as usize]);
+        let ray = texel_ray_clipped(setup, i, j, clip);
+        if ray.hidden {
+            return [0.0; 4];
+        }
+        let b = brightness(&setup.scene.sources, &ray.settings, ray.s, ray.e, ray.xi);
+        let t = tint_of(setup, &ray.settings, (ray.s, ray.e), ray.xi);
+        [b, t[0], t[1], t[2]]
+    };
+    let values: Vec<[f64; 4]> = match setup.refine.tolerance() {
+        Some(tolerance) => {
+            let edges: Option<Vec<f32>> = match clips {
+                Some(c) => Some(c.iter().map(|&c| c as f32).collect()),
+                None => setup.clips().map(|c| c.to_vec()),
+            };
+            super::refine::refine_clipped(w, tolerance, edges.as_deref(), exact).values
+        }
+        None => {
+            let n = (w as usize) * (w as usize);
+            (0..n)
+                .into_par_iter()
+                .map(|k| exact(k as u32 % w, k as u32 / w))
+                .collect()
+        }
+    };
     BrightnessTexture {
         resolution: w,
-        values,
-        tint,
+        values: values.iter().map(|v| v[0]).collect(),
+        tint: values.iter().map(|v| [v[1], v[2], v[3]]).collect(),
     }
 }
 

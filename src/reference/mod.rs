@@ -22,6 +22,7 @@
 //! | `adaptive_curves.wgsl`        | [`adaptive_curves`]: curve chains                                     |
 //! | `adaptive_curves/scan.wgsl`   | `adaptive_curves::scan`: a chain's scan along the ray, its features |
 //! | `adaptive_curves/kinks.wgsl`  | `adaptive_curves::kinks`: the kinks and jumps of a chain's term     |
+//! | `refine.wgsl`                 | [`refine`]: the field refined in image space, texels predicted where the detail is small |
 //! | `through.wgsl`                | [`field_pass::see_through`]: the glow seen through translucent objects |
 //! | `tau_table.wgsl`              | `crate::objects::translucent::table::Table::of`: the optical-thickness table |
 //! | `objects.wgsl`                | [`objects`]: the objects, lit at every pixel                          |
@@ -52,6 +53,7 @@ pub mod field_pass;
 pub mod glare;
 pub mod objects;
 pub mod particles;
+pub mod refine;
 pub mod simpson;
 
 pub use billboard::{Backdrop, compose_frame, compose_frame_over, compose_frame_unclamped};

@@ -49,8 +49,9 @@ pub struct Chunk {
     pub row_offset: u32, // 16: the first texel row of its band
     pub term: u32,       // 20: simpson with the rms decay: the one term it integrates
     pub stage: u32, // 24: that term's sums: bit 0, add the scratch's; bit 1, finish (else keep)
+    pub listed: u32, // 28: 1: over the texels a refined level lists (indirect), not a band of rows
 }
-const _: () = assert!(size_of::<Chunk>() == 28);
+const _: () = assert!(size_of::<Chunk>() == 32);
 
 /// `PointSource` in `shaders/shared/field.wgsl`.
 #[repr(C)]

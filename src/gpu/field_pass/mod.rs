@@ -14,6 +14,7 @@ use gpu_data::*;
 
 mod pack;
 mod pipelines;
+pub mod refine;
 
 pub(crate) use gpu_data::FieldParams;
 use pack::*;
@@ -45,6 +46,8 @@ struct Resources {
     /// texel, which nothing reads.
     scratch: (wgpu::Texture, wgpu::TextureView),
     bind_group: Option<wgpu::BindGroup>,
+    /// The refinement's buffers: its list of texels is the field pass's binding 14.
+    refiner: refine::Refiner,
 }
 
 /// How far the uploaded inputs' field has come: its bands, and the jittered frames averaged.
@@ -106,6 +109,7 @@ impl FieldRenderer {
                 texture: None,
                 scratch: field_texture(device, "energywave.field.scratch", 1, FIELD_LAYERS),
                 bind_group: None,
+                refiner: refine::Refiner::new(device),
             },
             progress: Progress {
                 uploaded: None,
@@ -214,23 +218,31 @@ impl FieldRenderer {
                 0,
                 bytemuck::bytes_of(&packed.params),
             );
-            // Every band dispatches every chunk over its rows: entry `band * chunks + k`.
+            // Every band dispatches every chunk over its rows: entry `band * chunks + k`. A refined texture
+            // records a level a band, each chunk over the level's list.
+            let refined = packed.refinement.is_some();
             self.progress.band_height = match self.progress.band_rows {
+                _ if refined => w,
                 0 => w,
                 rows => rows.min(w),
             };
-            self.progress.bands = w.div_ceil(self.progress.band_height);
-            let entries = packed.chunks.len() * self.progress.bands as usize;
+            self.progress.bands = match &packed.refinement {
+                Some(r) => r.levels.coarsest + 1,
+                None => w.div_ceil(self.progress.band_height),
+            };
+            let sets = if refined { 1 } else { self.progress.bands as usize };
+            let entries = packed.chunks.len() * sets;
             let needed = entries as u64 * self.resources.chunk_stride;
             if self.resources.chunks.size() < needed {
                 self.resources.chunks = chunk_buffer(device, self.resources.chunk_stride, entries);
                 rebind = true;
             }
             let mut bytes = vec![0u8; needed as usize];
-            for band in 0..self.progress.bands {
+            for band in 0..sets as u32 {
                 for (k, c) in packed.chunks.iter().enumerate() {
                     let entry = Chunk {
                         row_offset: band * self.progress.band_height,
+                        listed: refined as u32,
                         ..*c
                     };
                     let at = (band as usize * packed.chunks.len() + k)
@@ -239,6 +251,9 @@ impl FieldRenderer {
                 }
             }
             queue.write_buffer(&self.resources.chunks, 0, &bytes);
+            if let Some(r) = &packed.refinement {
+                rebind |= (self.resources.refiner).prepare(device, queue, r, packed.params.layers);
+            }
             let layers = packed.params.layers;
             let stale = |t: &wgpu::Texture| {
                 t.width() != w || t.depth_or_array_layers() != field_texture_layers(device, layers)
@@ -262,6 +277,11 @@ impl FieldRenderer {
             }
             if rebind {
                 self.resources.bind_group = Some(self.make_bind_group(device));
+            }
+            if rebind || !self.resources.refiner.bound() {
+                let (_, view) = self.resources.texture.as_ref().expect("made above");
+                let shaders = &self.pipelines.shaders.refine;
+                self.resources.refiner.bind(device, shaders, view);
             }
         })?;
         self.progress.uploaded = Some(packed.clone());
@@ -293,6 +313,10 @@ impl FieldRenderer {
                 resource: b.buffer.as_entire_binding(),
             });
         }
+        entries.push(wgpu::BindGroupEntry {
+            binding: 14,
+            resource: self.resources.refiner.list.as_entire_binding(),
+        });
         entries.push(wgpu::BindGroupEntry {
             binding: 7,
             resource: wgpu::BindingResource::TextureView(view),
@@ -351,6 +375,7 @@ impl FieldRenderer {
             return true;
         }
         let w = packed.params.resolution;
+        let shaders = self.pipelines.shaders.clone();
         let pipelines = self.pipelines.for_dispatch(&packed.params, &packed.chunks);
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("energywave.field.pass"),
@@ -361,20 +386,33 @@ impl FieldRenderer {
             .next_band
             .saturating_add(bands)
             .min(self.progress.bands);
-        for band in self.progress.next_band..last {
-            let rows = self
-                .progress
-                .band_height
-                .min(w - band * self.progress.band_height);
-            for (k, c) in packed.chunks.iter().enumerate() {
-                let entry = band as usize * packed.chunks.len() + k;
-                pass.set_pipeline(pipelines.get(c.pipeline as usize));
-                pass.set_bind_group(
-                    0,
-                    bind_group,
-                    &[(entry as u64 * self.resources.chunk_stride) as u32],
-                );
-                pass.dispatch_workgroups(w.div_ceil(8), rows.div_ceil(8), 1);
+        let stride = self.resources.chunk_stride;
+        match &packed.refinement {
+            Some(r) => {
+                let refiner = &self.resources.refiner;
+                let shaders = &shaders.refine;
+                for band in self.progress.next_band..last {
+                    let level = r.levels.coarsest - band;
+                    refiner.record_level(&mut pass, shaders, level, |pass, arguments, at| {
+                        for (k, c) in packed.chunks.iter().enumerate() {
+                            pass.set_pipeline(pipelines.get(c.pipeline as usize));
+                            pass.set_bind_group(0, bind_group, &[(k as u64 * stride) as u32]);
+                            pass.dispatch_workgroups_indirect(arguments, at);
+                        }
+                    });
+                }
+            }
+            None => {
+                for band in self.progress.next_band..last {
+                    let rows = (self.progress.band_height)
+                        .min(w - band * self.progress.band_height);
+                    for (k, c) in packed.chunks.iter().enumerate() {
+                        let entry = band as usize * packed.chunks.len() + k;
+                        pass.set_pipeline(pipelines.get(c.pipeline as usize));
+                        pass.set_bind_group(0, bind_group, &[(entry as u64 * stride) as u32]);
+                        pass.dispatch_workgroups(w.div_ceil(8), rows.div_ceil(8), 1);
+                    }
+                }
             }
         }
         self.progress.next_band = last;
@@ -486,6 +524,7 @@ impl FieldRenderer {
                 .map(|b| b.buffer.size())
                 .sum::<u64>()
             + self.progress.average.gpu_bytes()
+            + self.resources.refiner.gpu_bytes()
     }
 
     /// The brightness texture and its view (after the first `prepare`): the mean of the frames so far while
@@ -515,6 +554,32 @@ impl FieldRenderer {
     /// A view of the brightness texture (after the first `prepare`).
     pub fn view(&self) -> Option<&wgpu::TextureView> {
         self.shown().map(|(_, v)| v)
+    }
+
+    /// How many texels the uploaded texture integrated exactly, once recorded and submitted (reads the GPU
+    /// back: benches and tests), or `None` where it is not refined (every texel is).
+    pub fn integrated_texels(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<Option<u64>, GpuError> {
+        let refined = self.progress.uploaded.as_ref().and_then(|p| p.refinement.as_ref());
+        let Some(r) = refined else {
+            return Ok(None);
+        };
+        let source = self.resources.refiner.arguments();
+        let bytes = 16 * (r.levels.coarsest as u64 + 1);
+        let read = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("energywave.refine.read"),
+            size: bytes,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut encoder = device.create_command_encoder(&Default::default());
+        encoder.copy_buffer_to_buffer(source, 0, &read, 0, bytes);
+        queue.submit([encoder.finish()]);
+        let words: Vec<u32> = bytemuck::cast_slice(&super::map_read(device, &read)?).to_vec();
+        Ok(Some(words.chunks_exact(4).map(|s| s[3] as u64).sum()))
     }
 
     /// How many times the texture has been rendered.

@@ -11,6 +11,8 @@ use crate::integrate::{Decay, Integrator};
 use crate::scene::Scene;
 
 use super::gpu_data::*;
+use super::refine::Refinement;
+use crate::frame::refine::{Levels, forced_mask};
 
 /// What the field texture of a scene and billboard depends on (equal inputs give equal textures): compare the
 /// inputs of two frames to tell whether the field changed between them.
@@ -50,6 +52,8 @@ pub(super) struct Packed {
     pub(super) clips: std::sync::Arc<Vec<f32>>,
     /// The dispatches that together integrate the texture.
     pub(super) chunks: Vec<Chunk>,
+    /// Where the texture is refined in image space (`frame::refine`): its tolerance and forced texels.
+    pub(super) refinement: Option<Refinement>,
 }
 
 /// Loop iterations one invocation may spend: Mesa's llvmpipe and lavapipe stop all loops of an invocation after
@@ -172,6 +176,7 @@ pub(super) fn plan_chunks(p: &Packed) -> Vec<Chunk> {
                     row_offset: 0,
                     term: t,
                     stage: if j > 0 { KEPT } else { 0 } | if last { FINISH } else { 0 },
+                    listed: 0,
                 });
                 finished += last as u32;
             }
@@ -260,6 +265,15 @@ pub(super) fn pack(setup: &FrameSetup) -> Packed {
         packed.params.clipped = 1;
     }
     packed.chunks = plan_chunks(&packed);
+    let levels = Levels::of(setup.resolution);
+    if let (Some(tolerance), true) = (setup.refine.tolerance(), levels.coarsest > 0) {
+        let forced = forced_mask(&levels, packed.params.clipped.eq(&1).then_some(&packed.clips[..]));
+        packed.refinement = Some(Refinement {
+            tolerance: tolerance as f32,
+            levels,
+            forced: std::sync::Arc::new(forced),
+        });
+    }
     packed
 }
 

@@ -251,6 +251,7 @@ fn field_layouts(device: &wgpu::Device) -> (wgpu::BindGroupLayout, wgpu::Pipelin
             storage(10),
             storage(11),
             storage(13),
+            storage(14),
             field_storage_entry(12, wgpu::StorageTextureAccess::ReadWrite),
             // A read-only storage buffer rather than a uniform one: lavapipe recompiles a shader for the
             // values of uniforms that bound its loops (to unroll them), and a chunk's range bounds the term
@@ -283,6 +284,8 @@ pub struct FieldShaders {
     generic: [[OnceLock<wgpu::ComputePipeline>; 3]; 2],
     /// Which of them a thread of their own is building (`build_in_background`).
     building: [[AtomicBool; 3]; 2],
+    /// The refinement's pass (`shaders/refine.wgsl`).
+    pub(super) refine: super::refine::RefineShaders,
 }
 
 impl std::fmt::Debug for FieldShaders {
@@ -316,6 +319,7 @@ impl FieldShaders {
             pipeline_layout,
             generic: Default::default(),
             building: Default::default(),
+            refine: super::refine::RefineShaders::new(device),
         })
     }
 
