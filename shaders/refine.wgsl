@@ -18,7 +18,7 @@ struct Level {
     coarsest: u32,   // L: the coarsest level, integrated whole
     tolerance: f32,  // the detail above which a texel's neighbours are integrated
     slot: u32,       // where this level's indirect arguments go in `arguments_out` (in u32s)
-    pad0: u32,
+    measured_top: u32, // 1: the coarsest level's own detail decides the level below it (else integrated whole)
     pad1: u32,
 }
 
@@ -170,12 +170,13 @@ fn mark(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
     if ours {
         let ti = vec2<i32>(t);
         let si = i32(s);
+        let i = t.y * w + t.x;
         if level.level == level.coarsest {
             listed = true;
+            detail[i] = 0.0;
         } else {
-            let i = t.y * w + t.x;
             let stencil_fits = axis(ti.x, si, i32(w) - 1).fits && axis(ti.y, si, i32(w) - 1).fits;
-            listed = level.level + 1u == level.coarsest || !stencil_fits || (forced[i / 32u] >> (i % 32u) & 1u) != 0u
+            listed = (level.level + 1u == level.coarsest && level.measured_top == 0u) || !stencil_fits || (forced[i / 32u] >> (i % 32u) & 1u) != 0u
                 || detail_near(ti, si);
             if stencil_fits {
                 store(ti, predict(ti, si));

@@ -168,7 +168,7 @@ fn rust_mirrors_match_the_wgsl_layouts() {
         &refine,
         "Level",
         size_of::<Level>(),
-        fields!(Level: resolution, layers, level, coarsest, tolerance, slot, pad0, pad1),
+        fields!(Level: resolution, layers, level, coarsest, tolerance, slot, measured_top, pad1),
     );
     check_struct(
         &field,

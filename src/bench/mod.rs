@@ -21,6 +21,7 @@ mod equal_error;
 mod live;
 mod particles;
 mod plain;
+mod refine;
 mod report;
 mod timing;
 mod translucent;
@@ -30,6 +31,7 @@ pub use equal_error::*;
 pub use live::*;
 pub use particles::*;
 pub use plain::*;
+pub use refine::*;
 pub use report::*;
 pub use timing::*;
 pub use translucent::*;
@@ -93,6 +95,8 @@ pub enum Section {
     Viewer,
     /// Particle sets beside paper 002_'s tables.
     Particles,
+    /// The field refined in image space against the field integrated at every texel.
+    Refine,
     /// Live particle sets: playing, scrubbing and rendering them.
     Live,
     /// Translucent objects: the table's precomputation, relighting, frames.
@@ -109,6 +113,7 @@ pub struct Sections {
     pub particles: bool,
     pub live: bool,
     pub translucent: bool,
+    pub refine: bool,
 }
 
 impl Sections {
@@ -121,6 +126,7 @@ impl Sections {
         particles: true,
         live: true,
         translucent: true,
+        refine: true,
     };
 
     /// Only those listed; every section for an empty list.
@@ -136,6 +142,7 @@ impl Sections {
             particles: list.contains(&Section::Particles),
             live: list.contains(&Section::Live),
             translucent: list.contains(&Section::Translucent),
+            refine: list.contains(&Section::Refine),
         }
     }
 }
@@ -319,6 +326,11 @@ pub fn run(
     } else {
         Vec::new()
     };
+    let refine = if options.sections.refine {
+        refine_rows(&mut bench, &options, &mut progress)?
+    } else {
+        Vec::new()
+    };
     let compile = (bench.field.compile_times().iter())
         .map(|(structure, ms)| CompileTime {
             structure: format!("{structure:?}"),
@@ -372,6 +384,7 @@ pub fn run(
         particles,
         live,
         translucent,
+        refine,
         compile,
         total_seconds: start.elapsed().as_secs_f64(),
     })
@@ -583,6 +596,24 @@ mod tests {
                     tried_divisions: vec![],
                 },
             }],
+            refine: vec![
+                RefineRow {
+                    scene: "default".into(),
+                    resolution: 256,
+                    every_texel: pass(1000.0),
+                    refined: pass(250.0),
+                    integrated: 16384,
+                    share: 0.25,
+                },
+                RefineRow {
+                    scene: "default".into(),
+                    resolution: 1024,
+                    every_texel: pass(16000.0),
+                    refined: pass(1000.0),
+                    integrated: 104858,
+                    share: 0.1,
+                },
+            ],
             compile: vec![CompileTime {
                 structure: "torus".into(),
                 ms: 280.0,
@@ -650,6 +681,12 @@ mod tests {
         );
         assert_eq!(json["translucent"][0][0]["surface_voxels"], 24_576);
         assert_eq!(json["translucent"][1]["orbit"]["median_ms"], 700.0);
+        // The refined field: its speedup, its share, each W against 256.
+        assert_eq!(json["refine"][1]["share"], 0.1);
+        assert!(
+            table.contains("refined in image space") && table.contains("4.00x") && table.contains("16.00x"),
+            "{table}"
+        );
         assert!(
             table.contains("translucent objects") && table.contains("refused"),
             "{table}"
@@ -663,6 +700,7 @@ mod tests {
             particles: Vec::new(),
             live: Vec::new(),
             translucent: None,
+            refine: Vec::new(),
             ..report
         };
         let table = only.table();
@@ -677,6 +715,7 @@ mod tests {
             "--quick",
             "particle sets",
             "alive",
+            "refined in image space",
         ] {
             assert!(!table.contains(absent), "{absent}: {table}");
         }

@@ -103,6 +103,8 @@ pub struct Report {
     pub live: Vec<super::LiveRow>,
     /// Translucent objects: the table per resolution, and frames.
     pub translucent: Option<(Vec<super::TranslucentRow>, super::TranslucentFrames)>,
+    /// The field refined in image space against every texel integrated.
+    pub refine: Vec<super::RefineRow>,
     /// What each structure's specialised pipelines took to compile, in milliseconds.
     pub compile: Vec<CompileTime>,
     pub total_seconds: f64,
@@ -467,8 +469,47 @@ impl Report {
             }
             let _ = writeln!(s, "(! : the target not reached; the finest tried shown)");
         }
+        if !self.refine.is_empty() {
+            self.refine_table(&mut s);
+        }
         let _ = writeln!(s, "\ntotal: {:.0} s", self.total_seconds);
         s
+    }
+
+    /// The refined field beside every texel integrated, and each W's time against W = 256's.
+    fn refine_table(&self, s: &mut String) {
+        use std::fmt::Write;
+        let _ = writeln!(
+            s,
+            "\nthe whole field refined in image space (the scene's tolerance) against every texel integrated, both on the specialised pass; ms, median (min..max), GPU time where available, then wall"
+        );
+        let _ = writeln!(
+            s,
+            "{:<8} {:>5} {:>24} {:>24} {:>8} {:>10} {:>12} {:>12} {:>14}",
+            "scene", "W", "every texel ms", "refined ms", "speedup", "integrated", "every / 256", "refined / 256", "wall every/ref"
+        );
+        let t = |t: &super::Timing| format!("{:.1} ({:.1}..{:.1})", t.median_ms, t.min_ms, t.max_ms);
+        for r in &self.refine {
+            let base = (self.refine.iter()).find(|b| b.scene == r.scene && b.resolution == 256);
+            let ratio = |f: &dyn Fn(&super::RefineRow) -> f64| {
+                base.map_or("-".to_owned(), |b| format!("{:.2}x", f(r) / f(b)))
+            };
+            let (e, f) = (r.every_texel.best(), r.refined.best());
+            let _ = writeln!(
+                s,
+                "{:<8} {:>5} {:>24} {:>24} {:>7.2}x {:>9.1}% {:>12} {:>12} {:>7.0}/{:<6.0}",
+                r.scene,
+                r.resolution,
+                t(e),
+                t(f),
+                e.median_ms / f.median_ms,
+                100.0 * r.share,
+                ratio(&|r| r.every_texel.best().median_ms),
+                ratio(&|r| r.refined.best().median_ms),
+                r.every_texel.wall.median_ms,
+                r.refined.wall.median_ms,
+            );
+        }
     }
 
     /// The report as JSON: every figure with its unit in its name, the adapter and the settings.

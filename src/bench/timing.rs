@@ -60,6 +60,9 @@ pub(super) enum Pass {
     Field(Specialise),
     /// The plain kernel specialised to the scene (`plain`), holding what `Baked` says as constants.
     Plain(Baked),
+    /// The field pass specialised to the scene, refined in image space as the scene's tolerance says
+    /// (`frame::refine`); `Field` integrates every texel, the work the papers timed.
+    Refined,
 }
 
 /// Times the field pass on one context: timestamp queries if available, else wall time only.
@@ -70,6 +73,9 @@ pub(super) struct FieldBench {
     pub(super) queries: Queries,
     /// The frames' data kept across the timed frames (the objects' clips are not timed again each frame).
     cache: std::sync::Arc<crate::frame::FrameCache>,
+    /// Which texels the next frames integrate: every one (the papers' work, what every section but the
+    /// refinement's times), or as the scene's tolerance says.
+    pub(super) refine: Option<crate::frame::Refine>,
 }
 
 impl FieldBench {
@@ -106,6 +112,7 @@ impl FieldBench {
             plain: PlainKernels::new(),
             queries,
             cache: Default::default(),
+            refine: Some(crate::frame::Refine::EveryTexel),
         })
     }
 
@@ -113,7 +120,11 @@ impl FieldBench {
     pub(super) fn frame(&mut self, scene: &Scene) -> Result<(Option<f64>, f64), GpuError> {
         let start = Instant::now();
         self.field.invalidate();
-        let inputs = FieldInputs::of(&FrameSetup::placed_in(scene, 1.0, &self.cache));
+        let mut setup = FrameSetup::placed_in(scene, 1.0, &self.cache);
+        if let Some(refine) = self.refine {
+            setup.refine = refine;
+        }
+        let inputs = FieldInputs::of(&setup);
         self.field
             .prepare(&self.ctx.device, &self.ctx.queue, &inputs)?;
         let Self {
@@ -159,7 +170,15 @@ impl FieldBench {
         match pass {
             Pass::Field(specialise) => {
                 self.field.set_specialise(specialise);
+                self.refine = Some(crate::frame::Refine::EveryTexel);
                 self.frame(scene)
+            }
+            Pass::Refined => {
+                self.field.set_specialise(Specialise::Blocking);
+                self.refine = None;
+                let timing = self.frame(scene);
+                self.refine = Some(crate::frame::Refine::EveryTexel);
+                timing
             }
             Pass::Plain(baked) => self.plain_frame(scene, baked),
         }

@@ -241,6 +241,11 @@ pub struct RenderArgs {
     /// fraction of a step, so a low n gives fine noise instead of bands.
     #[arg(long, value_name = "SEED")]
     pub jitter: Option<u32>,
+    /// Integrate the field at every texel (the reference), rather than refined in image space: predicted from
+    /// coarser texels where the detail stays within an eighth of the tolerance, integrated elsewhere. Slower,
+    /// and within half the tolerance of the refined render.
+    #[arg(long)]
+    pub every_texel: bool,
     /// Print the adapter, what is rendered and how long it took.
     #[arg(short, long)]
     pub verbose: bool,

@@ -7,7 +7,7 @@ use super::{Backend, CliError, RenderArgs, load_scene};
 use crate::export::{self, Progress, Target};
 use std::sync::Arc;
 
-use crate::frame::{FrameCache, FrameSetup};
+use crate::frame::{FrameCache, FrameSetup, Refine};
 use crate::gpu::HeadlessRenderer;
 use crate::integrate::Integrator;
 use crate::output::{self, Format};
@@ -230,21 +230,23 @@ fn specialise(renderer: &mut Renderer, scene: &Scene) {
 /// holdout and HDR, or the CPU twin.
 enum Renderer {
     Gpu(Box<HeadlessRenderer>),
-    /// The CPU twin, with its frame cache.
-    Cpu(Arc<FrameCache>),
+    /// The CPU twin, with its frame cache and, where not the scene's, which texels it integrates.
+    Cpu(Arc<FrameCache>, Option<Refine>),
 }
 
 impl Renderer {
     /// The renderer `--backend` names; `hdr` (an EXR) keeps the opaque blend's values above 1.
     fn new(args: &RenderArgs, hdr: bool) -> Result<Renderer, CliError> {
+        let refine = args.every_texel.then_some(Refine::EveryTexel);
         Ok(match args.backend {
             Backend::Gpu => {
                 let mut gpu = HeadlessRenderer::new()?;
                 gpu.set_holdout(args.holdout);
                 gpu.set_unclamped(hdr);
+                gpu.set_refine(refine);
                 Renderer::Gpu(Box::new(gpu))
             }
-            Backend::Cpu => Renderer::Cpu(Arc::new(FrameCache::new())),
+            Backend::Cpu => Renderer::Cpu(Arc::new(FrameCache::new()), refine),
         })
     }
 
@@ -252,7 +254,7 @@ impl Renderer {
     fn name(&self) -> &'static str {
         match self {
             Renderer::Gpu(_) => "gpu render",
-            Renderer::Cpu(_) => "cpu render",
+            Renderer::Cpu(..) => "cpu render",
         }
     }
 
@@ -260,7 +262,7 @@ impl Renderer {
     fn texture_limit(&self) -> u32 {
         match self {
             Renderer::Gpu(gpu) => gpu.ctx.device.limits().max_texture_dimension_2d,
-            Renderer::Cpu(_) => crate::scene::MAX_AUTO_RESOLUTION,
+            Renderer::Cpu(..) => crate::scene::MAX_AUTO_RESOLUTION,
         }
     }
 
@@ -268,20 +270,29 @@ impl Renderer {
     fn cache(&self) -> &Arc<FrameCache> {
         match self {
             Renderer::Gpu(gpu) => gpu.cache(),
-            Renderer::Cpu(cache) => cache,
+            Renderer::Cpu(cache, _) => cache,
         }
     }
 
     /// The frame of `scene` in a picture of `size`, resolved through its cache.
     fn setup<'a>(&self, scene: &'a Scene, (width, height): (u32, u32)) -> FrameSetup<'a> {
-        FrameSetup::placed_in(scene, width as f64 / height as f64, self.cache())
+        match self {
+            Renderer::Gpu(gpu) => gpu.setup(scene, width as f64 / height as f64),
+            Renderer::Cpu(cache, refine) => {
+                let mut setup = FrameSetup::placed_in(scene, width as f64 / height as f64, cache);
+                if let Some(refine) = refine {
+                    setup.refine = *refine;
+                }
+                setup
+            }
+        }
     }
 
     /// B over the frame's W x W texels, rows from the top, before the blend.
     fn brightness(&mut self, setup: &FrameSetup) -> Result<Vec<f64>, CliError> {
         Ok(match self {
             Renderer::Gpu(gpu) => (gpu.brightness(setup)?.iter()).map(|&b| b as f64).collect(),
-            Renderer::Cpu(_) => reference::render_brightness(setup).values,
+            Renderer::Cpu(..) => reference::render_brightness(setup).values,
         })
     }
 
@@ -300,8 +311,8 @@ impl Renderer {
                 let frame = gpu.render(scene, width, height, transparent)?;
                 frame.pixels.iter().map(|p| p.map(|c| c as f64)).collect()
             }
-            Renderer::Cpu(cache) => {
-                let setup = FrameSetup::placed_in(scene, width as f64 / height as f64, cache);
+            Renderer::Cpu(..) => {
+                let setup = self.setup(scene, (width, height));
                 let texture = reference::render_brightness(&setup);
                 let compose = match hdr {
                     true => reference::compose_frame_unclamped,

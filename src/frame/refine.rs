@@ -28,6 +28,9 @@ pub enum Refine {
     EveryTexel,
     /// Texels predicted where the detail stays within this (absolute, on B and the tint), integrated elsewhere.
     Within(f64),
+    /// The viewer's moving frames: from a coarsest grid of about `side` texels a side, whose own detail decides
+    /// the first level too (`Levels::coarse`), texels predicted where the detail stays within `threshold`.
+    Coarse { threshold: f64, side: u32 },
 }
 
 impl Refine {
@@ -45,8 +48,19 @@ impl Refine {
     pub fn tolerance(self) -> Option<f64> {
         match self {
             Refine::EveryTexel => None,
-            Refine::Within(t) => Some(t),
+            Refine::Within(t) | Refine::Coarse { threshold: t, .. } => Some(t),
         }
+    }
+
+    /// The levels of a `resolution`-square texture refined so; `None` where every texel is integrated (or the
+    /// texture is too small to have a level below its coarsest).
+    pub fn levels(self, resolution: u32) -> Option<Levels> {
+        let levels = match self {
+            Refine::EveryTexel => return None,
+            Refine::Within(_) => Levels::of(resolution),
+            Refine::Coarse { side, .. } => Levels::coarse(resolution, side),
+        };
+        (levels.coarsest > 0).then_some(levels)
     }
 }
 
@@ -57,6 +71,10 @@ pub struct Levels {
     pub resolution: u32,
     /// L: the coarsest level, of stride `2^L`.
     pub coarsest: u32,
+    /// Whether the coarsest level's own detail (each of its texels predicted from the grid of stride `2^(L+1)`)
+    /// decides the level below it, rather than that level being integrated whole: fewer texels, a coarser first
+    /// test (the viewer's moving frames).
+    pub measured_top: bool,
 }
 
 impl Levels {
@@ -68,6 +86,18 @@ impl Levels {
         Self {
             resolution,
             coarsest,
+            measured_top: false,
+        }
+    }
+
+    /// The levels of the viewer's moving frames: a coarsest grid of about `side` texels a side (its stride the
+    /// largest power of two within `resolution / side`), its own detail measured.
+    pub fn coarse(resolution: u32, side: u32) -> Self {
+        let stride = (resolution / side.max(1)).max(1);
+        Self {
+            resolution,
+            coarsest: 31 - stride.leading_zeros(),
+            measured_top: true,
         }
     }
 

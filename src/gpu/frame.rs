@@ -33,6 +33,9 @@ pub struct SceneRenderer {
     cache: Arc<FrameCache>,
     resolver: Resolver,
     look: Look,
+    /// Which texels of the field its frames integrate, where not as the scene's tolerance says
+    /// (`set_refine`).
+    refine: Option<crate::frame::Refine>,
 }
 
 impl SceneRenderer {
@@ -57,7 +60,14 @@ impl SceneRenderer {
             cache,
             resolver: Resolver::new(),
             look: Look::default(),
+            refine: None,
         }
+    }
+
+    /// Which texels of the field the frames from `setup` integrate: `None` (the default) as the scene's
+    /// tolerance says (`frame::Refine::of`), `Refine::EveryTexel` for a reference render.
+    pub fn set_refine(&mut self, refine: Option<crate::frame::Refine>) {
+        self.refine = refine;
     }
 
     /// The cache its frames are resolved through.
@@ -67,7 +77,11 @@ impl SceneRenderer {
 
     /// The frame of `scene` in a picture of `aspect` (width / height), resolved through this renderer's cache.
     pub fn setup<'a>(&self, scene: &'a Scene, aspect: f64) -> FrameSetup<'a> {
-        FrameSetup::placed_in(scene, aspect, &self.cache)
+        let mut setup = FrameSetup::placed_in(scene, aspect, &self.cache);
+        if let Some(refine) = self.refine {
+            setup.refine = refine;
+        }
+        setup
     }
 
     /// Works out what takes long, the objects' light (with their translucent tables) and the particles' light,

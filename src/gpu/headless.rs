@@ -62,6 +62,11 @@ impl HeadlessRenderer {
         self.renderer.cache().scene_at(scene, frame)
     }
 
+    /// Which texels of the field its frames integrate (`SceneRenderer::set_refine`).
+    pub fn set_refine(&mut self, refine: Option<crate::frame::Refine>) {
+        self.renderer.set_refine(refine);
+    }
+
     /// The field pass, for inspection (dispatch count, texture).
     pub fn field(&self) -> &FieldRenderer {
         self.renderer.field()

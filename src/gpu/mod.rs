@@ -22,7 +22,6 @@ pub mod shaders;
 mod targets;
 pub mod tau_table;
 pub mod through_pass;
-mod upsample;
 
 pub use billboard_pass::{BillboardRenderer, billboard_params, view_projection};
 pub use blit_pass::BlitPass;
@@ -37,7 +36,6 @@ pub use frame::{FrameTargets, SceneRenderer, Target, f16_to_f32, frame_cache, re
 pub use grid_pass::GridPass;
 pub use headless::{FramePixels, HeadlessRenderer};
 pub use pass::{Brightness, FramePass, Gpu, Look, Stage};
-pub use upsample::{Upsample, UpsampleClips};
 
 /// The Rust mirrors of the WGSL structs, for the layout tests.
 pub mod layout {

@@ -18,7 +18,6 @@ pub const THROUGH_PASS: &str = include_str!("../../shaders/through.wgsl");
 /// The optical-thickness table of a translucent object (`gpu::tau_table`).
 pub const TAU_TABLE_PASS: &str = include_str!("../../shaders/tau_table.wgsl");
 /// The smooth upsampling of the viewer's low-resolution preview field.
-pub const UPSAMPLE_PASS: &str = include_str!("../../shaders/upsample.wgsl");
 /// The running mean of jittered frames.
 pub const AVERAGE_PASS: &str = include_str!("../../shaders/average.wgsl");
 /// The viewer's ground grid.
@@ -30,7 +29,7 @@ pub const BLIT_PASS: &str = include_str!("../../shaders/blit.wgsl");
 pub const CONSTANTS: &str = "shared/constants.wgsl";
 
 /// Every WGSL file but the generated one, by its path under `shaders/`.
-pub const FILES: [(&str, &str); 27] = [
+pub const FILES: [(&str, &str); 26] = [
     (
         "shared/field.wgsl",
         include_str!("../../shaders/shared/field.wgsl"),
@@ -102,7 +101,6 @@ pub const FILES: [(&str, &str); 27] = [
     ("glare.wgsl", GLARE_PASS),
     ("through.wgsl", THROUGH_PASS),
     ("tau_table.wgsl", TAU_TABLE_PASS),
-    ("upsample.wgsl", UPSAMPLE_PASS),
     ("average.wgsl", AVERAGE_PASS),
     ("grid.wgsl", GRID_PASS),
     ("blit.wgsl", BLIT_PASS),
@@ -371,7 +369,6 @@ mod tests {
                 "glare.wgsl",
                 "through.wgsl",
                 "tau_table.wgsl",
-                "upsample.wgsl",
                 "average.wgsl",
                 "grid.wgsl",
                 "blit.wgsl"

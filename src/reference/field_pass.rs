@@ -195,13 +195,14 @@ fn render_clipped(setup: &FrameSetup, clips: Option<&[f64]>) -> BrightnessTextur
         let t = tint_of(setup, &ray.settings, (ray.s, ray.e), ray.xi);
         [b, t[0], t[1], t[2]]
     };
-    let values: Vec<[f64; 4]> = match setup.refine.tolerance() {
-        Some(tolerance) => {
+    let refined = (setup.refine.tolerance()).zip(setup.refine.levels(w));
+    let values: Vec<[f64; 4]> = match refined {
+        Some((tolerance, levels)) => {
             let edges: Option<Vec<f32>> = match clips {
                 Some(c) => Some(c.iter().map(|&c| c as f32).collect()),
                 None => setup.clips().map(|c| c.to_vec()),
             };
-            super::refine::refine_clipped(w, tolerance, edges.as_deref(), exact).values
+            super::refine::refine_clipped(&levels, tolerance, edges.as_deref(), exact).values
         }
         None => {
             let n = (w as usize) * (w as usize);

@@ -32,7 +32,6 @@
 //! | `engine/globals.wgsl`         | none of its own: the field pass's parameter block and the shared files read from one uniform block (`crate::engine`) |
 //! | `engine/effect.wgsl`          | [`simpson`] along each fragment's ray, then [`billboard`]'s transparent blend (`tests/engine.rs` holds it to the field pass) |
 //! | `average.wgsl`                | none: the viewer's running mean of jittered frames, no formula of the method |
-//! | `upsample.wgsl`               | none: resamples a coarse field already integrated (the viewer's moving view) |
 //! | `grid.wgsl`                   | none: the viewer's ground grid                                        |
 //! | `blit.wgsl`                   | none: copies the viewer's frame into the window                       |
 //!

@@ -1,20 +1,30 @@
 //! Progressive refinement: how much field the viewport integrates in a frame. While the field's inputs change
-//! from frame to frame (orbiting, dragging a handle, editing a value), the viewport integrates a coarse field,
-//! its resolution chosen from the measured cost to hold the frame budget, and shows it smoothly upsampled;
-//! once the view holds still it integrates the full field a band of rows at a time and shows it when whole:
-//! exactly the picture a still render gives. Screenshots and exports never see the coarse field.
+//! from frame to frame (orbiting, dragging a handle, editing a value), the viewport integrates the whole field
+//! refined in image space at a looser tolerance (`frame::Refine::Coarse`): a coarse grid, its side chosen from
+//! the measured cost to hold the frame budget, refined where the picture's detail is, down to single texels at
+//! the cores, within `MOVING_TOLERANCE` of the picture (loosened while even the smallest grid overruns the
+//! budget). Once the view holds still it integrates the field at the scene's tolerance, a level of the
+//! refinement at a time (or bands of rows where it integrates every texel), and shows it when whole: exactly
+//! the picture a still render gives. Screenshots and exports never see the moving field.
 //!
 //! The costs come from the frames themselves: the time from one frame's start to the next is the idle cost of
 //! a frame (UI, grid, billboard) plus the field work recorded in it: the full field's cost is linear in its
-//! texels, the coarse one's that per texel plus a fixed part (its dispatch and the upsampling to W x W,
-//! measured).
+//! texels, the moving one's that per texel of its coarse grid plus the rest (the refinement's texels, measured
+//! together).
 
 use std::time::Instant;
 
-/// The looser tolerance of the adaptive integrator on the coarse field (the resolution's error dominates it).
+/// The looser tolerance of the adaptive integrator on the moving field (the refinement's dominates it).
 pub const PREVIEW_TOLERANCE: f64 = 1e-3;
 
-/// Fewest texels a side of the coarse field.
+/// How far the moving field may lie from the still one, on B: a step of an 8-bit picture. Its refinement's
+/// detail threshold is `frame::refine::SHARE` of it, as the still field's is of the scene's tolerance.
+pub const MOVING_TOLERANCE: f64 = 1.0 / 255.0;
+
+/// The loosest the moving field gets where even its smallest coarse grid overruns the frame budget.
+pub const LOOSEST_MOVING_TOLERANCE: f64 = 8.0 / 255.0;
+
+/// Fewest texels a side of the moving field's coarse grid.
 pub const MIN_PREVIEW: u32 = 16;
 
 /// A moving frame may cost this many times an idle one (the slack the field gets while the view moves).
@@ -47,20 +57,21 @@ pub enum Work {
     /// No field work and nothing composed: the last frame shown again. It measures nothing (a moving frame
     /// composes, so the budget's idle frame is a composed one).
     Shown,
-    /// A coarse field of this many texels.
+    /// A moving field whose coarse grid holds this many texels.
     Preview { texels: u64 },
     /// Texels of the full field (a whole field, or bands of it).
     Full { texels: u64 },
 }
 
 /// What the viewport should integrate this frame.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Plan {
     /// The whole field at full quality in this frame (it fits the budget, or nothing is known yet).
     Full,
-    /// A coarse field of `resolution` texels a side, upsampled.
-    Preview { resolution: u32 },
-    /// The next bands of the full field, `band_rows` rows each, `bands` of them this frame.
+    /// The moving field: a coarse grid of `resolution` texels a side refined within `tolerance` of the picture.
+    Preview { resolution: u32, tolerance: f64 },
+    /// The next bands of the full field (levels of its refinement; rows, `band_rows` each, where every texel is
+    /// integrated), `bands` of them this frame.
     Refine { band_rows: u32, bands: u32 },
 }
 
@@ -84,10 +95,12 @@ pub struct FrameBudget {
     idle_measured: bool,
     /// Milliseconds per texel of the full field.
     full_ms: Option<f64>,
-    /// The fixed milliseconds of a coarse field beyond its texels' share (upsampling, dispatch).
+    /// The milliseconds of a moving field beyond its coarse grid's share (its refinement, its dispatches).
     preview_overhead_ms: f64,
-    /// The coarse field's side in use (kept while it still fits, so the picture does not shimmer).
+    /// The coarse grid's side in use (kept while it still fits, so the picture does not shimmer).
     resolution: Option<u32>,
+    /// The moving field's tolerance: `MOVING_TOLERANCE`, loosened while the smallest grid overruns.
+    moving_tolerance: f64,
     last: Option<(Instant, Work)>,
 }
 
@@ -100,6 +113,7 @@ impl Default for FrameBudget {
             full_ms: None,
             preview_overhead_ms: 0.0,
             resolution: None,
+            moving_tolerance: MOVING_TOLERANCE,
             last: None,
         }
     }
@@ -133,6 +147,14 @@ impl FrameBudget {
                 let per_texel = self.full_ms.unwrap_or(0.0);
                 let overhead = (field - per_texel * texels as f64).max(0.0);
                 self.preview_overhead_ms = blend(Some(self.preview_overhead_ms), overhead);
+                // The budget is kept by the tolerance once the grid is as small as it gets.
+                let budget = self.moving_budget();
+                let smallest = self.resolution.is_none_or(|r| r <= MIN_PREVIEW);
+                if field > 1.5 * budget && smallest {
+                    self.moving_tolerance = (2.0 * self.moving_tolerance).min(LOOSEST_MOVING_TOLERANCE);
+                } else if field < 0.5 * budget {
+                    self.moving_tolerance = (0.5 * self.moving_tolerance).max(MOVING_TOLERANCE);
+                }
             }
             Work::Full { texels } => {
                 self.full_ms = Some(blend(self.full_ms, field / texels.max(1) as f64));
@@ -172,6 +194,7 @@ impl FrameBudget {
             Pacing::Measured => self.plan(moved, w),
             Pacing::Fixed { preview, .. } if moved && preview < w => Plan::Preview {
                 resolution: preview.max(1),
+                tolerance: MOVING_TOLERANCE,
             },
             Pacing::Fixed { .. } if moved => Plan::Full,
             Pacing::Fixed { band_rows, .. } => Plan::Refine {
@@ -205,7 +228,10 @@ impl FrameBudget {
             if r >= w {
                 return Plan::Full;
             }
-            return Plan::Preview { resolution: r };
+            return Plan::Preview {
+                resolution: r,
+                tolerance: self.moving_tolerance,
+            };
         }
         match self.full_ms {
             // Within one refining frame's budget, and small enough that an estimate off by a few times still
@@ -241,6 +267,37 @@ mod tests {
         b.frame_started(*start);
     }
 
+    /// Where even the smallest coarse grid overruns the moving budget, the tolerance loosens (to its loosest at
+    /// most); once the frames fit again it tightens back to `MOVING_TOLERANCE`.
+    #[test]
+    fn the_moving_tolerance_keeps_the_budget_where_the_grid_cannot() {
+        let mut b = FrameBudget::default();
+        let mut t = Instant::now();
+        // Idle frames of 20 ms; 64^2 texels at 300 ms: the smallest grid is chosen.
+        run(&mut b, &mut t, 5, 20.0, Work::Nothing);
+        run(&mut b, &mut t, 5, 300.0, Work::Full { texels: 4096 });
+        let tolerance = |b: &mut FrameBudget| match b.plan(true, 256) {
+            Plan::Preview {
+                resolution,
+                tolerance,
+            } => {
+                assert_eq!(resolution, MIN_PREVIEW);
+                tolerance
+            }
+            plan => panic!("{plan:?}"),
+        };
+        assert_eq!(tolerance(&mut b), MOVING_TOLERANCE);
+        // Moving frames of 50 ms (30 of field against a budget of 6): looser each frame, up to the loosest.
+        let texels = (MIN_PREVIEW * MIN_PREVIEW) as u64;
+        run(&mut b, &mut t, 1, 50.0, Work::Preview { texels });
+        assert_eq!(tolerance(&mut b), 2.0 * MOVING_TOLERANCE);
+        run(&mut b, &mut t, 5, 50.0, Work::Preview { texels });
+        assert_eq!(tolerance(&mut b), LOOSEST_MOVING_TOLERANCE);
+        // Frames that fit well: back to the picture's step.
+        run(&mut b, &mut t, 5, 21.0, Work::Preview { texels });
+        assert_eq!(tolerance(&mut b), MOVING_TOLERANCE);
+    }
+
     #[test]
     fn a_slow_field_is_previewed_at_the_resolution_that_holds_the_budget() {
         let mut b = FrameBudget::default();
@@ -248,7 +305,7 @@ mod tests {
         // Idle frames of 20 ms; full frames of 256^2 texels at 300 ms (280 of them the field).
         run(&mut b, &mut t, 5, 20.0, Work::Nothing);
         run(&mut b, &mut t, 5, 300.0, Work::Full { texels: 65536 });
-        let Plan::Preview { resolution } = b.plan(true, 256) else {
+        let Plan::Preview { resolution, .. } = b.plan(true, 256) else {
             panic!("a 280 ms field is previewed while moving");
         };
         // A coarse texel costs what a full one does: 6 ms of field at 4.3 us a texel.
@@ -266,7 +323,13 @@ mod tests {
             20.0 + field_ms,
             Work::Preview { texels },
         );
-        assert_eq!(b.plan(true, 256), Plan::Preview { resolution });
+        assert_eq!(
+            b.plan(true, 256),
+            Plan::Preview {
+                resolution,
+                tolerance: MOVING_TOLERANCE
+            }
+        );
         // A fixed 3 ms on top of every coarse field (its upsampling) leaves the texels less.
         run(
             &mut b,
@@ -277,6 +340,7 @@ mod tests {
         );
         let Plan::Preview {
             resolution: smaller,
+            ..
         } = b.plan(true, 256)
         else {
             panic!("still previewed");

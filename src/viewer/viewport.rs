@@ -6,10 +6,11 @@ use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use super::progressive::{FrameBudget, PREVIEW_TOLERANCE, Pacing, Plan, Work};
-use crate::frame::{FrameCache, FrameSetup};
+use crate::frame::refine::SHARE;
+use crate::frame::{FrameCache, FrameSetup, Refine};
 use crate::gpu::{
     BlitPass, Brightness, FieldInputs, FieldRenderer, FrameTargets, Gpu, GpuError, GridPass,
-    SceneRenderer, Specialise, Target, Upsample, UpsampleClips, checked, layers_of, read_frame,
+    SceneRenderer, Specialise, Target, checked, layers_of, read_frame,
 };
 use crate::integrate::Integrator;
 use crate::scene::Scene;
@@ -46,8 +47,10 @@ pub struct ViewportReport {
     pub field_renders: u64,
     /// While jittered frames are averaged: how many the picture holds, and the most it will hold.
     pub averaged: Option<(u32, u32)>,
-    /// The side of the coarse field shown while the view moves, until the full field is whole again.
+    /// While the view moves, until the full field is whole again: the side of the moving field's coarse grid.
     pub preview: Option<u32>,
+    /// And the tolerance it was refined to (`progressive::MOVING_TOLERANCE`, looser where the machine is slow).
+    pub moving_tolerance: Option<f64>,
     /// The frame just recorded made the picture whole after a coarse one (the UI, drawn before it, still
     /// said otherwise).
     pub refined: bool,
@@ -82,13 +85,13 @@ pub struct ViewportGpu {
     blit: BlitPass,
     targets: Option<(FrameTargets, wgpu::BindGroup)>,
     report: Arc<Mutex<ViewportReport>>,
-    /// The coarse field of a moving view, its upsampling to W x W, and what frames cost.
+    /// The field of a moving view (refined at a looser tolerance, `progressive`), and what frames cost.
     preview: FieldRenderer,
-    upsample: Upsample,
     budget: FrameBudget,
-    /// The field inputs of the last frame, and whether it showed the coarse field (of the side given).
+    /// The field inputs of the last frame, and whether it showed the moving field (the side of its coarse grid
+    /// and its tolerance).
     last_inputs: Option<FieldInputs>,
-    showing_preview: Option<u32>,
+    showing_preview: Option<(u32, f64)>,
     /// What the frame in `targets` shows besides the field's texels: while neither changes, it is shown again
     /// as it is, not composed anew (a still view costs the copy into the window alone).
     composed: Option<Composed>,
@@ -130,11 +133,11 @@ impl Composed {
 }
 
 impl ViewportGpu {
-    /// The brightness texture the viewport shows now (after its first frame): the upsampled coarse field while
-    /// the view moves, else the full one.
+    /// The brightness texture the viewport shows now (after its first frame): the moving field while the view
+    /// moves, else the full one.
     pub fn field_texture(&self) -> Option<&wgpu::Texture> {
         match self.showing_preview {
-            Some(_) => self.upsample.output().map(|(t, _)| t),
+            Some(_) => self.preview.texture(),
             None => self.scene_renderer.field().texture(),
         }
     }
@@ -163,10 +166,9 @@ impl ViewportGpu {
             blit: BlitPass::new(device, target_format),
             targets: None,
             report,
-            // Generic: a coarse field's few texels gain little from a compile of their own; the full field's
+            // Generic: a moving field's few texels gain little from a compile of their own; the full field's
             // shaders, so that the first frames compile each generic pipeline once.
             preview: FieldRenderer::with_shaders(device, shaders),
-            upsample: Upsample::new(device),
             budget: FrameBudget::default(),
             last_inputs: None,
             showing_preview: None,
@@ -268,7 +270,8 @@ impl ViewportGpu {
                 self.scene_renderer.field().dispatch_count() + self.preview.dispatch_count();
             r.averaged = self.scene_renderer.field().averaged_frames();
             r.refined = r.preview.is_some() && self.showing_preview.is_none();
-            r.preview = self.showing_preview;
+            r.preview = self.showing_preview.map(|(side, _)| side);
+            r.moving_tolerance = self.showing_preview.map(|(_, tolerance)| tolerance);
             r.prepared = r.preparing.is_some() && preparing.is_none();
             r.preparing = preparing;
         }
@@ -311,8 +314,8 @@ impl ViewportGpu {
 
     /// Records this frame's field work and returns the view of the W x W brightness to show: the full field
     /// when it shows the scene (or, with `progressive` off, always: it is integrated whole now), else what the
-    /// frame budget allows (`progressive::FrameBudget::plan`), a coarse field upsampled while the view moves
-    /// and bands of the full one once it holds still.
+    /// frame budget allows (`progressive::FrameBudget::plan`): the whole field refined at a looser tolerance
+    /// while the view moves, and levels (or bands) of the full one once it holds still.
     fn integrate(
         &mut self,
         gpu: Gpu<'_>,
@@ -355,35 +358,27 @@ impl ViewportGpu {
                     work = Work::Full { texels };
                 }
             }
-            Plan::Preview { resolution } => {
-                // Four texels of the upsampled field to one of the coarse one are smooth under the
-                // billboard's bilinear filter, and cost a sixteenth of upsampling to W at a quarter of it.
-                let upsampled = (4 * resolution).min(w);
-                let mut coarse = scene.clone();
-                coarse.billboard.resolution = resolution;
-                let i = &mut coarse.integration;
+            Plan::Preview {
+                resolution,
+                tolerance,
+            } => {
+                // The whole field, refined from a coarse grid within the moving tolerance: the cores where they
+                // are and sharp, the objects' silhouettes integrated exactly (`frame::refine`).
+                let mut moving = scene.clone();
+                let i = &mut moving.integration;
                 i.tolerance = i.tolerance.max(PREVIEW_TOLERANCE);
-                let coarse = FieldInputs::of(&FrameSetup::in_cache(
-                    &coarse,
-                    setup.billboard,
-                    setup.cache(),
-                ));
-                self.preview.prepare(device, queue, &coarse)?;
-                // Where objects stand, both textures' clips guide the upsampling at their silhouettes.
-                let clips = (setup.clips_at(resolution))
-                    .zip(setup.clips_at(upsampled))
-                    .map(|(source, output)| UpsampleClips { source, output });
-                checked(device, || {
-                    self.preview.encode(encoder);
-                    let (texture, view) = (self.preview.texture(), self.preview.view());
-                    let source = (texture.expect("prepared"), view.expect("prepared"));
-                    let layers = self.preview.layers();
-                    (self.upsample).encode(gpu, encoder, source, (upsampled, layers), clips);
-                })?;
+                let mut at = FrameSetup::in_cache(&moving, setup.billboard, setup.cache());
+                at.resolution = w;
+                at.refine = Refine::Coarse {
+                    threshold: SHARE * tolerance,
+                    side: resolution,
+                };
+                self.preview.prepare(device, queue, &FieldInputs::of(&at))?;
+                checked(device, || self.preview.encode(encoder))?;
                 work = Work::Preview {
                     texels: resolution as u64 * resolution as u64,
                 };
-                preview = Some(resolution);
+                preview = Some((resolution, tolerance));
             }
             Plan::Refine { band_rows, bands } => {
                 if !main.holds(&inputs) {
@@ -395,9 +390,9 @@ impl ViewportGpu {
                 work = Work::Full {
                     texels: (bands * height).min(w) as u64 * w as u64,
                 };
-                // Until the full field is whole, the last coarse one (of these same inputs) stays.
-                if !complete && self.upsample.output().is_some() {
-                    preview = self.showing_preview.or(Some(w));
+                // Until the full field is whole, the last moving one (of these same inputs) stays.
+                if !complete && self.preview.view().is_some() {
+                    preview = self.showing_preview.or(Some((w, 0.0)));
                 }
             }
         }
@@ -412,7 +407,7 @@ impl ViewportGpu {
         let fresh = !matches!(work, Work::Nothing) || preview != self.showing_preview;
         self.showing_preview = preview;
         let shown = match preview {
-            Some(_) => self.upsample.output().map(|(t, v)| (v, t.width())),
+            Some(_) => self.preview.view().map(|v| (v, w)),
             None => self.scene_renderer.field().view().map(|v| (v, w)),
         };
         let (view, resolution) = shown.expect("a field was integrated above");

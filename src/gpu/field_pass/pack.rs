@@ -12,7 +12,7 @@ use crate::scene::Scene;
 
 use super::gpu_data::*;
 use super::refine::Refinement;
-use crate::frame::refine::{Levels, forced_mask};
+use crate::frame::refine::forced_mask;
 
 /// What the field texture of a scene and billboard depends on (equal inputs give equal textures): compare the
 /// inputs of two frames to tell whether the field changed between them.
@@ -265,8 +265,8 @@ pub(super) fn pack(setup: &FrameSetup) -> Packed {
         packed.params.clipped = 1;
     }
     packed.chunks = plan_chunks(&packed);
-    let levels = Levels::of(setup.resolution);
-    if let (Some(tolerance), true) = (setup.refine.tolerance(), levels.coarsest > 0) {
+    let refine = setup.refine;
+    if let Some((tolerance, levels)) = refine.tolerance().zip(refine.levels(setup.resolution)) {
         let forced = forced_mask(&levels, packed.params.clipped.eq(&1).then_some(&packed.clips[..]));
         packed.refinement = Some(Refinement {
             tolerance: tolerance as f32,

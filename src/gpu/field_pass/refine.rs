@@ -21,7 +21,7 @@ pub struct Level {
     pub coarsest: u32,   // 12
     pub tolerance: f32,  // 16
     pub slot: u32,       // 20: the level's indirect arguments, in u32s
-    pub pad0: u32,
+    pub measured_top: u32, // 24: 1 where the coarsest level's own detail decides the level below it
     pub pad1: u32,
 }
 const _: () = assert!(size_of::<Level>() == 32);
@@ -195,6 +195,7 @@ impl Refiner {
                 coarsest: levels.coarsest,
                 tolerance: refinement.tolerance,
                 slot: l * SLOT,
+                measured_top: levels.measured_top as u32,
                 ..Default::default()
             };
             let at = (l as u64 * self.level_stride) as usize;
@@ -270,7 +271,7 @@ impl Refiner {
         pass.dispatch_workgroups(1, 1, 1);
         let at = (l * SLOT * 4) as u64;
         integrate(pass, &self.arguments, at);
-        if l > 0 && l < levels.coarsest {
+        if l > 0 && (l < levels.coarsest || levels.measured_top) {
             run(pass, MEASURE);
             pass.dispatch_workgroups_indirect(&self.arguments, at);
         }

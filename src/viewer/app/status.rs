@@ -101,14 +101,22 @@ impl ViewerApp {
                 }
                 Integrator::Simpson => format!("simpson, n = {}", i.divisions),
             };
-            let moving = match self.report().preview {
-                Some(r) if r < w => format!(" (moving: {r}\u{d7}{r})"),
-                _ => String::new(),
+            // What is on screen: the moving field's tolerance (in steps of an 8-bit picture) while it shows,
+            // the scene's once the still field is whole.
+            let report = self.report();
+            let shown = match (report.preview, report.moving_tolerance) {
+                (Some(_), Some(t)) if t > 0.0 => {
+                    format!("moving: within {:.0}/255", (t * 255.0).max(1.0))
+                }
+                (Some(_), _) => "refining".to_owned(),
+                (None, _) => "still".to_owned(),
             };
-            ui.label(format!("billboard {w}\u{d7}{w}{moving}, {integrator}"))
+            ui.label(format!("billboard {w}\u{d7}{w} ({shown}), {integrator}"))
                 .on_hover_text(
-                    "While the view moves, a coarser field sized to hold the frame rate, refined to \
-                     the full one within about a second once it holds still (View: fast preview)",
+                    "While the view moves, the whole field refined in image space to a step of the \
+                     8-bit picture (looser where the machine cannot keep the frame rate), integrated \
+                     exactly at the cores and at objects' edges; once it holds still, refined to the \
+                     scene's tolerance within about a second (View: fast preview)",
                 );
             ui.separator();
             ui.label(self.doc.title());
