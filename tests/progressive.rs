@@ -164,8 +164,9 @@ fn the_moving_field_holds_the_glow_on_each_side_of_an_objects_silhouette() {
     navigation::orbit(&mut v.app.scene_mut().camera, 0.02, 0.0);
     v.frame().unwrap();
     assert_eq!(v.app.report().preview, Some(32));
-    let tolerance = v.app.report().moving_tolerance.expect("moving");
-    assert_eq!(tolerance, energywave::viewer::progressive::MOVING_TOLERANCE);
+    let w = v.app.scene().billboard.resolution;
+    assert_eq!(v.app.report().moving_side, Some(w), "the moving field at the scene's W");
+    let tolerance = energywave::viewer::progressive::MOVING_TOLERANCE;
     let shown = v.field_values().unwrap();
     let moving = v.app.frame_scene();
     let w = moving.billboard.resolution as usize;

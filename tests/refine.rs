@@ -247,3 +247,4 @@ fn the_gpu_and_the_cpu_twin_integrate_the_same_texels() {
     }
 }
 
+

@@ -21,8 +21,9 @@ pub const PREVIEW_TOLERANCE: f64 = 1e-3;
 /// detail threshold is `frame::refine::SHARE` of it, as the still field's is of the scene's tolerance.
 pub const MOVING_TOLERANCE: f64 = 1.0 / 255.0;
 
-/// The loosest the moving field gets where even its smallest coarse grid overruns the frame budget.
-pub const LOOSEST_MOVING_TOLERANCE: f64 = 8.0 / 255.0;
+/// The most the moving field's side is divided by where it overruns the frame budget (the field refined all the
+/// same at that side, and drawn filtered over the billboard).
+pub const MOST_DIVISOR: u32 = 4;
 
 /// Fewest texels a side of the moving field's coarse grid.
 pub const MIN_PREVIEW: u32 = 16;
@@ -43,8 +44,10 @@ const ASSUMED_TEXEL_MS: f64 = 4e-3;
 /// The largest field side a still frame integrates whole; larger ones are refined in bands.
 const MAX_WHOLE: u32 = 128;
 
-/// Frames further apart than this did not run back to back (the viewer was idle): they measure nothing.
+/// Frames further apart than this did not run back to back (the viewer was idle): they measure nothing, unless
+/// the first did field work, which may take that long (a moving field on a slow machine), up to `LONGEST_MS`.
 const STALE_MS: f64 = 400.0;
+const LONGEST_MS: f64 = 3000.0;
 
 /// The weight of a new measurement in the running estimates.
 const SMOOTHING: f64 = 0.3;
@@ -68,8 +71,9 @@ pub enum Work {
 pub enum Plan {
     /// The whole field at full quality in this frame (it fits the budget, or nothing is known yet).
     Full,
-    /// The moving field: a coarse grid of `resolution` texels a side refined within `tolerance` of the picture.
-    Preview { resolution: u32, tolerance: f64 },
+    /// The moving field: W / `divisor` texels a side, refined from a coarse grid of `resolution` texels a side
+    /// within `MOVING_TOLERANCE` of the picture.
+    Preview { resolution: u32, divisor: u32 },
     /// The next bands of the full field (levels of its refinement; rows, `band_rows` each, where every texel is
     /// integrated), `bands` of them this frame.
     Refine { band_rows: u32, bands: u32 },
@@ -99,8 +103,8 @@ pub struct FrameBudget {
     preview_overhead_ms: f64,
     /// The coarse grid's side in use (kept while it still fits, so the picture does not shimmer).
     resolution: Option<u32>,
-    /// The moving field's tolerance: `MOVING_TOLERANCE`, loosened while the smallest grid overruns.
-    moving_tolerance: f64,
+    /// What the moving field's side is W divided by: 1, more while the smallest grid overruns.
+    moving_divisor: u32,
     last: Option<(Instant, Work)>,
 }
 
@@ -113,7 +117,7 @@ impl Default for FrameBudget {
             full_ms: None,
             preview_overhead_ms: 0.0,
             resolution: None,
-            moving_tolerance: MOVING_TOLERANCE,
+            moving_divisor: 1,
             last: None,
         }
     }
@@ -130,7 +134,8 @@ impl FrameBudget {
             return;
         };
         let ms = now.duration_since(then).as_secs_f64() * 1e3;
-        if ms > STALE_MS {
+        let field_work = matches!(work, Work::Preview { .. } | Work::Full { .. });
+        if ms > LONGEST_MS || (ms > STALE_MS && !field_work) {
             return;
         }
         // The field's share: at least a tenth of the frame, so a noisy idle estimate never makes it free.
@@ -141,19 +146,20 @@ impl FrameBudget {
                 self.idle_measured = true;
             }
             Work::Shown => {}
-            // Without a measured idle frame the fixed part cannot be told from it.
-            Work::Preview { .. } if !self.idle_measured => {}
             Work::Preview { texels } => {
-                let per_texel = self.full_ms.unwrap_or(0.0);
-                let overhead = (field - per_texel * texels as f64).max(0.0);
-                self.preview_overhead_ms = blend(Some(self.preview_overhead_ms), overhead);
-                // The budget is kept by the tolerance once the grid is as small as it gets.
+                // Without a measured idle frame the fixed part cannot be told from it.
+                if self.idle_measured {
+                    let per_texel = self.full_ms.unwrap_or(0.0);
+                    let overhead = (field - per_texel * texels as f64).max(0.0);
+                    self.preview_overhead_ms = blend(Some(self.preview_overhead_ms), overhead);
+                }
+                // The budget is kept by the moving field's side: its refinement, not its coarse grid, is
+                // what it costs.
                 let budget = self.moving_budget();
-                let smallest = self.resolution.is_none_or(|r| r <= MIN_PREVIEW);
-                if field > 1.5 * budget && smallest {
-                    self.moving_tolerance = (2.0 * self.moving_tolerance).min(LOOSEST_MOVING_TOLERANCE);
-                } else if field < 0.5 * budget {
-                    self.moving_tolerance = (0.5 * self.moving_tolerance).max(MOVING_TOLERANCE);
+                if field > 1.5 * budget {
+                    self.moving_divisor = (2 * self.moving_divisor).min(MOST_DIVISOR);
+                } else if field < 0.4 * budget {
+                    self.moving_divisor = (self.moving_divisor / 2).max(1);
                 }
             }
             Work::Full { texels } => {
@@ -194,7 +200,7 @@ impl FrameBudget {
             Pacing::Measured => self.plan(moved, w),
             Pacing::Fixed { preview, .. } if moved && preview < w => Plan::Preview {
                 resolution: preview.max(1),
-                tolerance: MOVING_TOLERANCE,
+                divisor: 1,
             },
             Pacing::Fixed { .. } if moved => Plan::Full,
             Pacing::Fixed { band_rows, .. } => Plan::Refine {
@@ -230,7 +236,7 @@ impl FrameBudget {
             }
             return Plan::Preview {
                 resolution: r,
-                tolerance: self.moving_tolerance,
+                divisor: self.moving_divisor,
             };
         }
         match self.full_ms {
@@ -267,35 +273,35 @@ mod tests {
         b.frame_started(*start);
     }
 
-    /// Where even the smallest coarse grid overruns the moving budget, the tolerance loosens (to its loosest at
-    /// most); once the frames fit again it tightens back to `MOVING_TOLERANCE`.
+    /// Where the moving field overruns the moving budget, its side halves (down to W / `MOST_DIVISOR`); once the
+    /// frames fit well again it doubles back to W.
     #[test]
-    fn the_moving_tolerance_keeps_the_budget_where_the_grid_cannot() {
+    fn the_moving_side_keeps_the_budget_where_the_grid_cannot() {
         let mut b = FrameBudget::default();
         let mut t = Instant::now();
         // Idle frames of 20 ms; 64^2 texels at 300 ms: the smallest grid is chosen.
         run(&mut b, &mut t, 5, 20.0, Work::Nothing);
         run(&mut b, &mut t, 5, 300.0, Work::Full { texels: 4096 });
-        let tolerance = |b: &mut FrameBudget| match b.plan(true, 256) {
+        let divisor = |b: &mut FrameBudget| match b.plan(true, 256) {
             Plan::Preview {
                 resolution,
-                tolerance,
+                divisor,
             } => {
                 assert_eq!(resolution, MIN_PREVIEW);
-                tolerance
+                divisor
             }
             plan => panic!("{plan:?}"),
         };
-        assert_eq!(tolerance(&mut b), MOVING_TOLERANCE);
-        // Moving frames of 50 ms (30 of field against a budget of 6): looser each frame, up to the loosest.
+        assert_eq!(divisor(&mut b), 1);
+        // Moving frames of 50 ms (30 of field against a budget of 6): half the side each frame, down to the most.
         let texels = (MIN_PREVIEW * MIN_PREVIEW) as u64;
         run(&mut b, &mut t, 1, 50.0, Work::Preview { texels });
-        assert_eq!(tolerance(&mut b), 2.0 * MOVING_TOLERANCE);
+        assert_eq!(divisor(&mut b), 2);
         run(&mut b, &mut t, 5, 50.0, Work::Preview { texels });
-        assert_eq!(tolerance(&mut b), LOOSEST_MOVING_TOLERANCE);
-        // Frames that fit well: back to the picture's step.
+        assert_eq!(divisor(&mut b), MOST_DIVISOR);
+        // Frames that fit well: the whole side again.
         run(&mut b, &mut t, 5, 21.0, Work::Preview { texels });
-        assert_eq!(tolerance(&mut b), MOVING_TOLERANCE);
+        assert_eq!(divisor(&mut b), 1);
     }
 
     #[test]
@@ -327,7 +333,7 @@ mod tests {
             b.plan(true, 256),
             Plan::Preview {
                 resolution,
-                tolerance: MOVING_TOLERANCE
+                divisor: 1
             }
         );
         // A fixed 3 ms on top of every coarse field (its upsampling) leaves the texels less.

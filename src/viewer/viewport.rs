@@ -5,7 +5,7 @@
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
-use super::progressive::{FrameBudget, PREVIEW_TOLERANCE, Pacing, Plan, Work};
+use super::progressive::{FrameBudget, MOVING_TOLERANCE, PREVIEW_TOLERANCE, Pacing, Plan, Work};
 use crate::frame::refine::SHARE;
 use crate::frame::{FrameCache, FrameSetup, Refine};
 use crate::gpu::{
@@ -49,8 +49,8 @@ pub struct ViewportReport {
     pub averaged: Option<(u32, u32)>,
     /// While the view moves, until the full field is whole again: the side of the moving field's coarse grid.
     pub preview: Option<u32>,
-    /// And the tolerance it was refined to (`progressive::MOVING_TOLERANCE`, looser where the machine is slow).
-    pub moving_tolerance: Option<f64>,
+    /// And the moving field's side (W, or less where the machine is slow), while it shows.
+    pub moving_side: Option<u32>,
     /// The frame just recorded made the picture whole after a coarse one (the UI, drawn before it, still
     /// said otherwise).
     pub refined: bool,
@@ -91,7 +91,9 @@ pub struct ViewportGpu {
     /// The field inputs of the last frame, and whether it showed the moving field (the side of its coarse grid
     /// and its tolerance).
     last_inputs: Option<FieldInputs>,
-    showing_preview: Option<(u32, f64)>,
+    showing_preview: Option<(u32, Option<u32>)>,
+    /// The side of the moving field's texture (its W over the budget's divisor).
+    preview_side: u32,
     /// What the frame in `targets` shows besides the field's texels: while neither changes, it is shown again
     /// as it is, not composed anew (a still view costs the copy into the window alone).
     composed: Option<Composed>,
@@ -172,6 +174,7 @@ impl ViewportGpu {
             budget: FrameBudget::default(),
             last_inputs: None,
             showing_preview: None,
+            preview_side: 0,
             composed: None,
             still: false,
             compiling: false,
@@ -271,7 +274,7 @@ impl ViewportGpu {
             r.averaged = self.scene_renderer.field().averaged_frames();
             r.refined = r.preview.is_some() && self.showing_preview.is_none();
             r.preview = self.showing_preview.map(|(side, _)| side);
-            r.moving_tolerance = self.showing_preview.map(|(_, tolerance)| tolerance);
+            r.moving_side = self.showing_preview.and_then(|(_, side)| side);
             r.prepared = r.preparing.is_some() && preparing.is_none();
             r.preparing = preparing;
         }
@@ -360,25 +363,27 @@ impl ViewportGpu {
             }
             Plan::Preview {
                 resolution,
-                tolerance,
+                divisor,
             } => {
                 // The whole field, refined from a coarse grid within the moving tolerance: the cores where they
                 // are and sharp, the objects' silhouettes integrated exactly (`frame::refine`).
                 let mut moving = scene.clone();
                 let i = &mut moving.integration;
                 i.tolerance = i.tolerance.max(PREVIEW_TOLERANCE);
+                let side = (w / divisor).max(resolution).min(w);
                 let mut at = FrameSetup::in_cache(&moving, setup.billboard, setup.cache());
-                at.resolution = w;
+                at.resolution = side;
                 at.refine = Refine::Coarse {
-                    threshold: SHARE * tolerance,
+                    threshold: SHARE * MOVING_TOLERANCE,
                     side: resolution,
                 };
+                self.preview_side = side;
                 self.preview.prepare(device, queue, &FieldInputs::of(&at))?;
                 checked(device, || self.preview.encode(encoder))?;
                 work = Work::Preview {
                     texels: resolution as u64 * resolution as u64,
                 };
-                preview = Some((resolution, tolerance));
+                preview = Some((resolution, Some(side)));
             }
             Plan::Refine { band_rows, bands } => {
                 if !main.holds(&inputs) {
@@ -392,7 +397,7 @@ impl ViewportGpu {
                 };
                 // Until the full field is whole, the last moving one (of these same inputs) stays.
                 if !complete && self.preview.view().is_some() {
-                    preview = self.showing_preview.or(Some((w, 0.0)));
+                    preview = Some(self.showing_preview.map_or((w, None), |(r, _)| (r, None)));
                 }
             }
         }
@@ -407,7 +412,7 @@ impl ViewportGpu {
         let fresh = !matches!(work, Work::Nothing) || preview != self.showing_preview;
         self.showing_preview = preview;
         let shown = match preview {
-            Some(_) => self.preview.view().map(|v| (v, w)),
+            Some(_) => self.preview.view().map(|v| (v, self.preview_side)),
             None => self.scene_renderer.field().view().map(|v| (v, w)),
         };
         let (view, resolution) = shown.expect("a field was integrated above");

@@ -101,22 +101,21 @@ impl ViewerApp {
                 }
                 Integrator::Simpson => format!("simpson, n = {}", i.divisions),
             };
-            // What is on screen: the moving field's tolerance (in steps of an 8-bit picture) while it shows,
-            // the scene's once the still field is whole.
+            // What is on screen: the moving field (its side where the machine made it smaller), the still field
+            // being refined, or the still field whole.
             let report = self.report();
-            let shown = match (report.preview, report.moving_tolerance) {
-                (Some(_), Some(t)) if t > 0.0 => {
-                    format!("moving: within {:.0}/255", (t * 255.0).max(1.0))
-                }
-                (Some(_), _) => "refining".to_owned(),
+            let shown = match (report.preview, report.moving_side) {
+                (Some(_), Some(side)) if side >= w => "moving: within 1/255".to_owned(),
+                (Some(_), Some(side)) => format!("moving: {side}\u{d7}{side} within 1/255"),
+                (Some(_), None) => "refining".to_owned(),
                 (None, _) => "still".to_owned(),
             };
             ui.label(format!("billboard {w}\u{d7}{w} ({shown}), {integrator}"))
                 .on_hover_text(
-                    "While the view moves, the whole field refined in image space to a step of the \
-                     8-bit picture (looser where the machine cannot keep the frame rate), integrated \
-                     exactly at the cores and at objects' edges; once it holds still, refined to the \
-                     scene's tolerance within about a second (View: fast preview)",
+                    "While the view moves, the field refined in image space to a step of the 8-bit \
+                     picture, integrated exactly at the cores and at objects' edges (at a smaller side \
+                     where the machine cannot keep the frame rate); once it holds still, refined to the \
+                     scene's tolerance (View: fast preview)",
                 );
             ui.separator();
             ui.label(self.doc.title());
