@@ -22,13 +22,20 @@ struct Level {
     pad1: u32,
 }
 
-// The texels to integrate: their count, the invocations a row of the indirect dispatch holds, and each texel's
-// (x, y) packed as x | y << 16. The field pass reads the same buffer (shared/field_pass.wgsl, TexelList).
+// The texels to integrate: their count; the list cut into PARTS parts (the viewer integrates a fine level's over
+// several frames) and, last, the whole list, each as (first, count, invocations a row of its indirect dispatch
+// holds, 0); and each texel's (x, y) packed as x | y << 16. The field pass reads the same buffer
+// (shared/field_pass.wgsl, TexelList; the chunk names the part).
 struct List {
     count: atomic<u32>,
-    width: u32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
+    parts: array<vec4<u32>, 5>,
     texels: array<u32>,
 }
+
+const PARTS: u32 = 4u;
 
 @group(0) @binding(0) var<storage, read> level: Level;
 @group(0) @binding(1) var field: texture_storage_2d_array<r32float, read_write>;
@@ -202,24 +209,36 @@ fn mark(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
     }
 }
 
-// The indirect dispatch over the list: workgroups of 64, up to ROW_GROUPS a row.
+// The indirect dispatches over the list's parts and over the whole list (the fifth): workgroups of 64, up to
+// ROW_GROUPS a row; each slot x, y, z and the count of texels it covers.
 @compute @workgroup_size(1)
 fn arguments() {
-    let groups = (atomicLoad(&list.count) + 63u) / 64u;
-    let x = min(groups, ROW_GROUPS);
-    let y = select(0u, (groups + x - 1u) / x, x > 0u);
-    list.width = 8u * x;
-    arguments_out[level.slot] = x;
-    arguments_out[level.slot + 1u] = y;
-    arguments_out[level.slot + 2u] = 1u;
-    arguments_out[level.slot + 3u] = atomicLoad(&list.count);
+    let n = atomicLoad(&list.count);
+    for (var p = 0u; p < PARTS + 1u; p++) {
+        var first = n * p / PARTS;
+        var count = n * (p + 1u) / PARTS - first;
+        if p == PARTS {
+            first = 0u;
+            count = n;
+        }
+        let groups = (count + 63u) / 64u;
+        let x = min(groups, ROW_GROUPS);
+        let y = select(0u, (groups + x - 1u) / x, x > 0u);
+        list.parts[p] = vec4<u32>(first, count, 8u * x, 0u);
+        let at = level.slot + 4u * p;
+        arguments_out[at] = x;
+        arguments_out[at + 1u] = y;
+        arguments_out[at + 2u] = 1u;
+        arguments_out[at + 3u] = count;
+    }
 }
 
 // Over the list, once the field pass has integrated it: how far each texel's prediction was off.
 @compute @workgroup_size(8, 8)
 fn measure(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let k = gid.y * list.width + gid.x;
-    if k >= atomicLoad(&list.count) {
+    let whole = list.parts[PARTS];
+    let k = gid.y * whole.z + gid.x;
+    if k >= whole.y {
         return;
     }
     let packed = list.texels[k];

@@ -59,17 +59,17 @@ fn a_field_integrated_in_bands_is_the_field_integrated_at_once() {
     }
 }
 
-/// A refined field recorded a level of its refinement at a time is the field recorded at once (the levels are
-/// its bands), whatever band height is asked for.
+/// A refined field recorded a level of its refinement at a time, the two finest a quarter of their lists at a
+/// time, is the field recorded at once (those are its bands), whatever band height is asked for.
 #[test]
 fn a_refined_field_integrated_a_level_at_a_time_is_the_field_integrated_at_once() {
     let ctx = GpuContext::new().expect("a GPU adapter (lavapipe in CI)");
     let mut scene = shipped_scene("floor.toml");
     scene.billboard.resolution = 128;
     let (whole, frames) = integrate(&ctx, &scene, 0);
-    assert_eq!(frames, 3, "the coarsest level, then two finer ones");
+    assert_eq!(frames, 9, "the coarsest level, then the two finer ones, each in four parts");
     let (levels, frames) = integrate(&ctx, &scene, 8);
-    assert_eq!(frames, 3, "a level a frame, the band height aside");
+    assert_eq!(frames, 9, "the same, the band height aside");
     assert_eq!(levels, whole);
 }
 
@@ -109,15 +109,15 @@ fn the_viewer_previews_while_orbiting_and_ends_on_the_still_picture() {
     }
     assert_eq!(previews, vec![Some(32); 8]);
     let moving = v.app.frame_scene();
-    // Still: the four levels of the refinement (W = 256: the coarsest of stride 8, then 4, 2 and 1), the moving
-    // field shown until the last, then the full one.
+    // Still: the four levels of the refinement (W = 256: the coarsest of stride 8, then 4, then 2 and 1 a
+    // quarter of their lists a frame), the moving field shown until the last, then the full one.
     let mut refining = 0;
     while v.app.report().preview.is_some() {
         v.frame().unwrap();
         refining += 1;
-        assert!(refining <= 4, "four levels");
+        assert!(refining <= 10, "two levels, then two in four parts");
     }
-    assert_eq!(refining, 4);
+    assert_eq!(refining, 10);
     settle(&mut v);
     assert_eq!(v.app.report().preview, None);
     // A screenshot is the full picture, and the one the viewport ends on.

@@ -111,14 +111,18 @@ struct Chunk {
     row_offset: u32,  // the first texel row of the dispatch: a band of rows (the viewer refines in bands)
     term: u32,        // simpson with the rms decay: the one term whose samples first .. first + count it sums
     stage: u32,       // and what it does with its sums: bit 0, add the scratch's; bit 1, finish the term (else keep)
-    listed: u32,      // 1: the dispatch is indirect, over the texels listed (binding 14), not a band of rows
+    listed: u32,      // 1: the dispatch is indirect, over part row_offset of the texels listed (binding 14)
 }
 
-// The texels a refined field integrates at one level (refine.wgsl lists them): how many, the invocations a row of
-// the indirect dispatch holds, and each texel's (x, y) as x | y << 16.
+// The texels a refined field integrates at one level (refine.wgsl lists them): how many, the list's parts as
+// (first, count, invocations a row of the part's indirect dispatch holds, 0), and each texel's (x, y) as
+// x | y << 16.
 struct TexelList {
     count: u32,
-    width: u32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
+    parts: array<vec4<u32>, 5>,
     texels: array<u32>,
 }
 
@@ -128,11 +132,12 @@ struct TexelList {
 // texels (one past the texture where the invocation overhangs the list).
 fn texel_of(gid: vec3<u32>) -> vec2<u32> {
     if chunk.listed != 0u {
-        let k = gid.y * listed.width + gid.x;
-        if k >= listed.count {
+        let part = listed.parts[chunk.row_offset];
+        let k = gid.y * part.z + gid.x;
+        if k >= part.y {
             return vec2<u32>(params.resolution);
         }
-        let packed = listed.texels[k];
+        let packed = listed.texels[part.x + k];
         return vec2<u32>(packed & 0xffffu, packed >> 16u);
     }
     return vec2<u32>(gid.x, gid.y + chunk.row_offset);

@@ -56,8 +56,10 @@ struct Progress {
     /// Rows per band of the next upload's dispatches (0: the whole texture in one band).
     band_rows: u32,
     /// The uploaded texture's bands: how many, their height, and the next one to dispatch (all dispatched:
-    /// nothing pending).
+    /// nothing pending). A refined texture's bands are its levels, coarse to fine, each whole or (the two
+    /// finest) a part of its list at a time: `levels`.
     bands: u32,
+    levels: Vec<(u32, std::ops::Range<u32>)>,
     band_height: u32,
     next_band: u32,
     dispatches: u64,
@@ -116,6 +118,7 @@ impl FieldRenderer {
                 band_rows: 0,
                 bands: 0,
                 band_height: 0,
+                levels: Vec::new(),
                 next_band: 0,
                 dispatches: 0,
                 average: FrameAverage::new(device),
@@ -226,11 +229,30 @@ impl FieldRenderer {
                 0 => w,
                 rows => rows.min(w),
             };
+            self.progress.levels = match &packed.refinement {
+                Some(r) => (0..=r.levels.coarsest)
+                    .rev()
+                    .flat_map(|l| match l {
+                        0 | 1 => (0..refine::PARTS).map(|p| (l, p..p + 1)).collect(),
+                        _ => vec![(l, 0..refine::PARTS)],
+                    })
+                    .collect(),
+                None => Vec::new(),
+            };
             self.progress.bands = match &packed.refinement {
-                Some(r) => r.levels.coarsest + 1,
+                Some(_) => self.progress.levels.len() as u32,
                 None => w.div_ceil(self.progress.band_height),
             };
-            let sets = if refined { 1 } else { self.progress.bands as usize };
+            // A band of a refined texture counts as its share of the texels (`band_layout`: the viewer's estimate
+            // of a band's work).
+            if refined {
+                self.progress.band_height = w.div_ceil(self.progress.bands);
+            }
+            // A refined texture's chunks, once for each part of a level's list (`row_offset` names the part).
+            let sets = match refined {
+                true => refine::PARTS as usize,
+                false => self.progress.bands as usize,
+            };
             let entries = packed.chunks.len() * sets;
             let needed = entries as u64 * self.resources.chunk_stride;
             if self.resources.chunks.size() < needed {
@@ -241,7 +263,10 @@ impl FieldRenderer {
             for band in 0..sets as u32 {
                 for (k, c) in packed.chunks.iter().enumerate() {
                     let entry = Chunk {
-                        row_offset: band * self.progress.band_height,
+                        row_offset: match refined {
+                            true => band,
+                            false => band * self.progress.band_height,
+                        },
                         listed: refined as u32,
                         ..*c
                     };
@@ -388,15 +413,17 @@ impl FieldRenderer {
             .min(self.progress.bands);
         let stride = self.resources.chunk_stride;
         match &packed.refinement {
-            Some(r) => {
+            Some(_) => {
                 let refiner = &self.resources.refiner;
                 let shaders = &shaders.refine;
+                let n = packed.chunks.len();
                 for band in self.progress.next_band..last {
-                    let level = r.levels.coarsest - band;
-                    refiner.record_level(&mut pass, shaders, level, |pass, arguments, at| {
+                    let level = self.progress.levels[band as usize].clone();
+                    refiner.record_level(&mut pass, shaders, level, |pass, part, arguments, at| {
                         for (k, c) in packed.chunks.iter().enumerate() {
+                            let entry = part as usize * n + k;
                             pass.set_pipeline(pipelines.get(c.pipeline as usize));
-                            pass.set_bind_group(0, bind_group, &[(k as u64 * stride) as u32]);
+                            pass.set_bind_group(0, bind_group, &[(entry as u64 * stride) as u32]);
                             pass.dispatch_workgroups_indirect(arguments, at);
                         }
                     });
@@ -568,7 +595,7 @@ impl FieldRenderer {
             return Ok(None);
         };
         let source = self.resources.refiner.arguments();
-        let bytes = 16 * (r.levels.coarsest as u64 + 1);
+        let bytes = 4 * refine::SLOT as u64 * (r.levels.coarsest as u64 + 1);
         let read = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("energywave.refine.read"),
             size: bytes,
@@ -579,7 +606,9 @@ impl FieldRenderer {
         encoder.copy_buffer_to_buffer(source, 0, &read, 0, bytes);
         queue.submit([encoder.finish()]);
         let words: Vec<u32> = bytemuck::cast_slice(&super::map_read(device, &read)?).to_vec();
-        Ok(Some(words.chunks_exact(4).map(|s| s[3] as u64).sum()))
+        // Each level's whole list: its slot's last four u32s, the count last.
+        let slot = refine::SLOT as usize;
+        Ok(Some(words.chunks_exact(slot).map(|s| s[slot - 1] as u64).sum()))
     }
 
     /// How many times the texture has been rendered.

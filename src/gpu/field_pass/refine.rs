@@ -42,8 +42,15 @@ const MARK: usize = 1;
 const ARGUMENTS: usize = 2;
 const MEASURE: usize = 3;
 
-/// u32s of the indirect arguments a level holds: x, y, z and the count of texels listed.
-const SLOT: u32 = 4;
+/// The parts a level's list is cut into (`PARTS` in refine.wgsl): the viewer integrates a fine level's over
+/// several frames.
+pub(super) const PARTS: u32 = 4;
+
+/// u32s of the indirect arguments a level holds: x, y, z and the count of texels, for each part and the whole.
+pub(super) const SLOT: u32 = 4 * (PARTS + 1);
+
+/// u32s of the list's header (the count, its pad, the parts and the whole).
+const LIST_HEADER: u64 = 4 + 4 * (PARTS as u64 + 1);
 
 /// The refine pass's module, layouts and pipelines on a device (built when a refined field first records).
 pub struct RefineShaders {
@@ -150,7 +157,9 @@ impl Refiner {
             level_stride,
             detail: buffer(device, "energywave.refine.detail", 16, STORAGE),
             forced: buffer(device, "energywave.refine.forced", 16, STORAGE),
-            list: buffer(device, "energywave.refine.list", 16, STORAGE),
+            // The header and a texel, rounded to the struct's 16-byte alignment: the field pass binds it whether
+            // it refines or not.
+            list: buffer(device, "energywave.refine.list", (LIST_HEADER + 4) * 4, STORAGE),
             arguments: buffer(
                 device,
                 "energywave.refine.arguments",
@@ -182,7 +191,8 @@ impl Refiner {
             grow(device, &mut self.forced, "forced", refinement.forced.len() as u64 * 4, STORAGE),
             grow(device, &mut self.arguments, "arguments", count * SLOT as u64 * 4, arguments),
         ];
-        let list = grow(device, &mut self.list, "list", (2 + w * w) * 4, STORAGE);
+        let size = ((LIST_HEADER + w * w) * 4).next_multiple_of(16);
+        let list = grow(device, &mut self.list, "list", size, STORAGE);
         if list || grown.iter().any(|&g| g) {
             self.group = None;
         }
@@ -244,14 +254,15 @@ impl Refiner {
         self.group.is_some()
     }
 
-    /// Records level `l`: its texels predicted and listed, `integrate` (the field pass's dispatches, given the
-    /// indirect arguments' buffer and offset), then the detail measured where a finer level reads it.
+    /// Records parts `parts` of level `l` (all: `0..PARTS`): with the first, its texels predicted and listed;
+    /// each part's `integrate` (the field pass's dispatches, given the part, the indirect arguments' buffer and
+    /// offset); with the last, the detail measured where a finer level reads it.
     pub(super) fn record_level(
         &self,
         pass: &mut wgpu::ComputePass<'_>,
         shaders: &RefineShaders,
-        l: u32,
-        integrate: impl FnOnce(&mut wgpu::ComputePass<'_>, &wgpu::Buffer, u64),
+        (l, parts): (u32, std::ops::Range<u32>),
+        mut integrate: impl FnMut(&mut wgpu::ComputePass<'_>, u32, &wgpu::Buffer, u64),
     ) {
         let (Some([group, measure]), Some(levels)) = (&self.group, &self.uploaded) else {
             return;
@@ -262,26 +273,31 @@ impl Refiner {
             let group = if k == MEASURE { measure } else { group };
             pass.set_bind_group(0, group, &[offset]);
         };
-        run(pass, BEGIN);
-        pass.dispatch_workgroups(1, 1, 1);
-        run(pass, MARK);
-        let side = levels.resolution.div_ceil(1 << l).div_ceil(8);
-        pass.dispatch_workgroups(side, side, 1);
-        run(pass, ARGUMENTS);
-        pass.dispatch_workgroups(1, 1, 1);
-        let at = (l * SLOT * 4) as u64;
-        integrate(pass, &self.arguments, at);
-        if l > 0 && (l < levels.coarsest || levels.measured_top) {
+        if parts.start == 0 {
+            run(pass, BEGIN);
+            pass.dispatch_workgroups(1, 1, 1);
+            run(pass, MARK);
+            let side = levels.resolution.div_ceil(1 << l).div_ceil(8);
+            pass.dispatch_workgroups(side, side, 1);
+            run(pass, ARGUMENTS);
+            pass.dispatch_workgroups(1, 1, 1);
+        }
+        let at = |part: u32| ((l * SLOT + 4 * part) * 4) as u64;
+        for part in parts.clone() {
+            integrate(pass, part, &self.arguments, at(part));
+        }
+        if parts.end == PARTS && l > 0 && (l < levels.coarsest || levels.measured_top) {
             run(pass, MEASURE);
-            pass.dispatch_workgroups_indirect(&self.arguments, at);
+            pass.dispatch_workgroups_indirect(&self.arguments, at(PARTS));
         }
     }
 
-    /// The arguments' buffer, whose slot of each level recorded holds the count of texels it integrated (u32 3
-    /// of the level's four).
+    /// The arguments' buffer, whose slot of each level recorded holds the count of texels it integrated (the
+    /// whole list's, u32 3 of the level's last four).
     pub(super) fn arguments(&self) -> &wgpu::Buffer {
         &self.arguments
     }
+
 
 
     pub(super) fn gpu_bytes(&self) -> u64 {
