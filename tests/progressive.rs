@@ -67,7 +67,10 @@ fn a_refined_field_integrated_a_level_at_a_time_is_the_field_integrated_at_once(
     let mut scene = shipped_scene("floor.toml");
     scene.billboard.resolution = 128;
     let (whole, frames) = integrate(&ctx, &scene, 0);
-    assert_eq!(frames, 9, "the coarsest level, then the two finer ones, each in four parts");
+    assert_eq!(
+        frames, 9,
+        "the coarsest level, then the two finer ones, each in four parts"
+    );
     let (levels, frames) = integrate(&ctx, &scene, 8);
     assert_eq!(frames, 9, "the same, the band height aside");
     assert_eq!(levels, whole);
@@ -165,7 +168,11 @@ fn the_moving_field_holds_the_glow_on_each_side_of_an_objects_silhouette() {
     v.frame().unwrap();
     assert_eq!(v.app.report().preview, Some(32));
     let w = v.app.scene().billboard.resolution;
-    assert_eq!(v.app.report().moving_side, Some(w), "the moving field at the scene's W");
+    assert_eq!(
+        v.app.report().moving_side,
+        Some(w),
+        "the moving field at the scene's W"
+    );
     let tolerance = energywave::viewer::progressive::MOVING_TOLERANCE;
     let shown = v.field_values().unwrap();
     let moving = v.app.frame_scene();

@@ -62,7 +62,8 @@ fn cpu(scene: &Scene) -> Found {
     // The share the twin integrates: its plan replayed over the exact field (the same levels and decisions).
     let levels = energywave::frame::refine::Levels::of(w);
     let clips = refined.clips();
-    let forced = energywave::frame::refine::forced_mask(&levels, clips.as_deref().map(Vec::as_slice));
+    let forced =
+        energywave::frame::refine::forced_mask(&levels, clips.as_deref().map(Vec::as_slice));
     let tolerance = refined.refine.tolerance().expect("refined");
     let n = reference::refine::refine(&levels, tolerance, &forced, |x, y| e[(y * w + x) as usize]);
     Found {
@@ -246,5 +247,3 @@ fn the_gpu_and_the_cpu_twin_integrate_the_same_texels() {
         );
     }
 }
-
-

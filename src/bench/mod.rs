@@ -684,7 +684,9 @@ mod tests {
         // The refined field: its speedup, its share, each W against 256.
         assert_eq!(json["refine"][1]["share"], 0.1);
         assert!(
-            table.contains("refined in image space") && table.contains("4.00x") && table.contains("16.00x"),
+            table.contains("refined in image space")
+                && table.contains("4.00x")
+                && table.contains("16.00x"),
             "{table}"
         );
         assert!(

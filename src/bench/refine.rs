@@ -28,7 +28,10 @@ const SCENES: [(&str, &str); 4] = [
     ("default", include_str!("../../assets/scenes/default.toml")),
     ("mixed", include_str!("../../assets/scenes/mixed.toml")),
     ("floor", include_str!("../../assets/scenes/floor.toml")),
-    ("bezier", include_str!("../../assets/scenes/bezier_b5.0.toml")),
+    (
+        "bezier",
+        include_str!("../../assets/scenes/bezier_b5.0.toml"),
+    ),
 ];
 
 pub(super) fn refine_rows(
@@ -58,7 +61,8 @@ pub(super) fn refine_rows(
             let (every_texel, refined) = (t.next().expect("two"), t.next().expect("two"));
             // The last frame timed was the refined one: its count.
             let (device, queue) = (&bench.ctx.device, &bench.ctx.queue);
-            let integrated = (bench.field.integrated_texels(device, queue)?).unwrap_or(w as u64 * w as u64);
+            let integrated =
+                (bench.field.integrated_texels(device, queue)?).unwrap_or(w as u64 * w as u64);
             rows.push(RefineRow {
                 scene: name.to_owned(),
                 resolution: w,

@@ -486,9 +486,18 @@ impl Report {
         let _ = writeln!(
             s,
             "{:<8} {:>5} {:>24} {:>24} {:>8} {:>10} {:>12} {:>12} {:>14}",
-            "scene", "W", "every texel ms", "refined ms", "speedup", "integrated", "every / 256", "refined / 256", "wall every/ref"
+            "scene",
+            "W",
+            "every texel ms",
+            "refined ms",
+            "speedup",
+            "integrated",
+            "every / 256",
+            "refined / 256",
+            "wall every/ref"
         );
-        let t = |t: &super::Timing| format!("{:.1} ({:.1}..{:.1})", t.median_ms, t.min_ms, t.max_ms);
+        let t =
+            |t: &super::Timing| format!("{:.1} ({:.1}..{:.1})", t.median_ms, t.min_ms, t.max_ms);
         for r in &self.refine {
             let base = (self.refine.iter()).find(|b| b.scene == r.scene && b.resolution == 256);
             let ratio = |f: &dyn Fn(&super::RefineRow) -> f64| {

@@ -186,12 +186,20 @@ pub fn predict<const N: usize>(
 
 /// The nodes whose detail decides texel `(x, y)` of level `l`: those of stride `2s` within `3s` of it on both
 /// axes that were introduced at level `l + 1` (the older ones' detail was measured at a coarser scale).
-pub fn window(levels: &Levels, (x, y): (u32, u32), l: u32) -> impl Iterator<Item = (u32, u32)> + '_ {
+pub fn window(
+    levels: &Levels,
+    (x, y): (u32, u32),
+    l: u32,
+) -> impl Iterator<Item = (u32, u32)> + '_ {
     let s = 1i64 << l;
     let w = levels.resolution as i64;
     let near = move |c: u32| {
         let c = c as i64;
-        let first = if c % (2 * s) == 0 { c - 2 * s } else { c - 3 * s };
+        let first = if c % (2 * s) == 0 {
+            c - 2 * s
+        } else {
+            c - 3 * s
+        };
         (0..4)
             .map(move |k| first + 2 * s * k)
             .filter(move |&n| n >= 0 && n < w && (n - c).abs() <= 3 * s)
@@ -222,9 +230,9 @@ pub fn forced_mask(levels: &Levels, clips: Option<&[f32]>) -> Vec<u32> {
         let mut sum = vec![0u32; (w + 1) * (w + 1)];
         for y in 0..w {
             for x in 0..w {
-                sum[(y + 1) * (w + 1) + x + 1] = edge[y * w + x] as u32 + sum[y * (w + 1) + x + 1]
-                    + sum[(y + 1) * (w + 1) + x]
-                    - sum[y * (w + 1) + x];
+                sum[(y + 1) * (w + 1) + x + 1] =
+                    edge[y * w + x] as u32 + sum[y * (w + 1) + x + 1] + sum[(y + 1) * (w + 1) + x]
+                        - sum[y * (w + 1) + x];
             }
         }
         sum
@@ -284,7 +292,8 @@ fn clip_edges(clips: &[f32], w: usize) -> Vec<bool> {
                 }
             }
             if !e && class(c) == 1 {
-                let bend = |a: f32, b: f32| (a as f64 - 2.0 * c as f64 + b as f64).abs() > CLIP_BEND;
+                let bend =
+                    |a: f32, b: f32| (a as f64 - 2.0 * c as f64 + b as f64).abs() > CLIP_BEND;
                 if x > 0 && x + 1 < w {
                     e |= bend(at(x - 1, y), at(x + 1, y));
                 }
@@ -306,7 +315,9 @@ mod tests {
     fn every_texel_has_one_level_and_the_levels_cover_the_texture() {
         for w in [1, 7, 64, 100, 256, 257, 1024] {
             let levels = Levels::of(w);
-            let count: usize = (0..=levels.coarsest).map(|l| levels.texels(l).count()).sum();
+            let count: usize = (0..=levels.coarsest)
+                .map(|l| levels.texels(l).count())
+                .sum();
             assert_eq!(count, (w * w) as usize, "W = {w}");
         }
         assert_eq!(Levels::of(256).coarsest, 3);
@@ -340,7 +351,10 @@ mod tests {
         // A center texel of level 0: 12 of its 16 neighbours of stride 2 are of level 1.
         let n: Vec<_> = window(&levels, (13, 13), 0).collect();
         assert_eq!(n.len(), 12);
-        assert!(n.iter().all(|&(x, y)| x.abs_diff(13) <= 3 && y.abs_diff(13) <= 3));
+        assert!(
+            n.iter()
+                .all(|&(x, y)| x.abs_diff(13) <= 3 && y.abs_diff(13) <= 3)
+        );
     }
 
     #[test]

@@ -101,7 +101,10 @@ mod tests {
                 }
             }
             let share = r.integrated as f64 / (w * w) as f64;
-            assert!(worst <= tolerance, "width {width}: {worst:e} off, {share:.3} integrated");
+            assert!(
+                worst <= tolerance,
+                "width {width}: {worst:e} off, {share:.3} integrated"
+            );
             assert!(share < 0.6, "width {width}: {share:.3} integrated");
         }
     }
@@ -126,7 +129,11 @@ mod tests {
         let share = r.integrated as f64 / (w * w) as f64;
         let whole = refine_clipped(&Levels::of(w), threshold, None, f).integrated;
         assert!(worst <= 4.0 * threshold, "{worst:e} off");
-        assert!(4 * r.integrated < 3 * whole, "{} texels against {whole}", r.integrated);
+        assert!(
+            4 * r.integrated < 3 * whole,
+            "{} texels against {whole}",
+            r.integrated
+        );
         assert!(share < 0.1, "{share:.3} integrated");
     }
 }

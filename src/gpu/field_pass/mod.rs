@@ -431,8 +431,8 @@ impl FieldRenderer {
             }
             None => {
                 for band in self.progress.next_band..last {
-                    let rows = (self.progress.band_height)
-                        .min(w - band * self.progress.band_height);
+                    let rows =
+                        (self.progress.band_height).min(w - band * self.progress.band_height);
                     for (k, c) in packed.chunks.iter().enumerate() {
                         let entry = band as usize * packed.chunks.len() + k;
                         pass.set_pipeline(pipelines.get(c.pipeline as usize));
@@ -590,7 +590,11 @@ impl FieldRenderer {
         device: &wgpu::Device,
         queue: &wgpu::Queue,
     ) -> Result<Option<u64>, GpuError> {
-        let refined = self.progress.uploaded.as_ref().and_then(|p| p.refinement.as_ref());
+        let refined = self
+            .progress
+            .uploaded
+            .as_ref()
+            .and_then(|p| p.refinement.as_ref());
         let Some(r) = refined else {
             return Ok(None);
         };
@@ -608,7 +612,9 @@ impl FieldRenderer {
         let words: Vec<u32> = bytemuck::cast_slice(&super::map_read(device, &read)?).to_vec();
         // Each level's whole list: its slot's last four u32s, the count last.
         let slot = refine::SLOT as usize;
-        Ok(Some(words.chunks_exact(slot).map(|s| s[slot - 1] as u64).sum()))
+        Ok(Some(
+            words.chunks_exact(slot).map(|s| s[slot - 1] as u64).sum(),
+        ))
     }
 
     /// How many times the texture has been rendered.

@@ -267,7 +267,10 @@ pub(super) fn pack(setup: &FrameSetup) -> Packed {
     packed.chunks = plan_chunks(&packed);
     let refine = setup.refine;
     if let Some((tolerance, levels)) = refine.tolerance().zip(refine.levels(setup.resolution)) {
-        let forced = forced_mask(&levels, packed.params.clipped.eq(&1).then_some(&packed.clips[..]));
+        let forced = forced_mask(
+            &levels,
+            packed.params.clipped.eq(&1).then_some(&packed.clips[..]),
+        );
         packed.refinement = Some(Refinement {
             tolerance: tolerance as f32,
             levels,

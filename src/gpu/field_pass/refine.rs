@@ -15,12 +15,12 @@ use crate::frame::refine::Levels;
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Level {
-    pub resolution: u32, // 0
-    pub layers: u32,     // 4
-    pub level: u32,      // 8
-    pub coarsest: u32,   // 12
-    pub tolerance: f32,  // 16
-    pub slot: u32,       // 20: the level's indirect arguments, in u32s
+    pub resolution: u32,   // 0
+    pub layers: u32,       // 4
+    pub level: u32,        // 8
+    pub coarsest: u32,     // 12
+    pub tolerance: f32,    // 16
+    pub slot: u32,         // 20: the level's indirect arguments, in u32s
     pub measured_top: u32, // 24: 1 where the coarsest level's own detail decides the level below it
     pub pad1: u32,
 }
@@ -137,7 +137,12 @@ pub(super) struct Refiner {
     uploaded: Option<Levels>,
 }
 
-fn buffer(device: &wgpu::Device, label: &str, size: u64, usage: wgpu::BufferUsages) -> wgpu::Buffer {
+fn buffer(
+    device: &wgpu::Device,
+    label: &str,
+    size: u64,
+    usage: wgpu::BufferUsages,
+) -> wgpu::Buffer {
     device.create_buffer(&wgpu::BufferDescriptor {
         label: Some(label),
         size: size.max(16),
@@ -159,7 +164,12 @@ impl Refiner {
             forced: buffer(device, "energywave.refine.forced", 16, STORAGE),
             // The header and a texel, rounded to the struct's 16-byte alignment: the field pass binds it whether
             // it refines or not.
-            list: buffer(device, "energywave.refine.list", (LIST_HEADER + 4) * 4, STORAGE),
+            list: buffer(
+                device,
+                "energywave.refine.list",
+                (LIST_HEADER + 4) * 4,
+                STORAGE,
+            ),
             arguments: buffer(
                 device,
                 "energywave.refine.arguments",
@@ -186,10 +196,28 @@ impl Refiner {
         let count = levels.coarsest as u64 + 1;
         let arguments = STORAGE | wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_SRC;
         let grown = [
-            grow(device, &mut self.levels, "levels", count * self.level_stride, STORAGE),
+            grow(
+                device,
+                &mut self.levels,
+                "levels",
+                count * self.level_stride,
+                STORAGE,
+            ),
             grow(device, &mut self.detail, "detail", w * w * 4, STORAGE),
-            grow(device, &mut self.forced, "forced", refinement.forced.len() as u64 * 4, STORAGE),
-            grow(device, &mut self.arguments, "arguments", count * SLOT as u64 * 4, arguments),
+            grow(
+                device,
+                &mut self.forced,
+                "forced",
+                refinement.forced.len() as u64 * 4,
+                STORAGE,
+            ),
+            grow(
+                device,
+                &mut self.arguments,
+                "arguments",
+                count * SLOT as u64 * 4,
+                arguments,
+            ),
         ];
         let size = ((LIST_HEADER + w * w) * 4).next_multiple_of(16);
         let list = grow(device, &mut self.list, "list", size, STORAGE);
@@ -214,13 +242,22 @@ impl Refiner {
         queue.write_buffer(&self.levels, 0, &bytes);
         queue.write_buffer(&self.forced, 0, bytemuck::cast_slice(&refinement.forced));
         // The counts of a level not recorded yet read as zero.
-        queue.write_buffer(&self.arguments, 0, &vec![0u8; (count * SLOT as u64 * 4) as usize]);
+        queue.write_buffer(
+            &self.arguments,
+            0,
+            &vec![0u8; (count * SLOT as u64 * 4) as usize],
+        );
         self.uploaded = Some(levels);
         list
     }
 
     /// The bind group over the field texture `view`, made again where a buffer or the texture changed.
-    pub(super) fn bind(&mut self, device: &wgpu::Device, shaders: &RefineShaders, view: &wgpu::TextureView) {
+    pub(super) fn bind(
+        &mut self,
+        device: &wgpu::Device,
+        shaders: &RefineShaders,
+        view: &wgpu::TextureView,
+    ) {
         let entry = |binding, resource| wgpu::BindGroupEntry { binding, resource };
         let entries = [
             entry(
@@ -298,13 +335,17 @@ impl Refiner {
         &self.arguments
     }
 
-
-
     pub(super) fn gpu_bytes(&self) -> u64 {
-        [&self.levels, &self.detail, &self.forced, &self.list, &self.arguments]
-            .iter()
-            .map(|b| b.size())
-            .sum()
+        [
+            &self.levels,
+            &self.detail,
+            &self.forced,
+            &self.list,
+            &self.arguments,
+        ]
+        .iter()
+        .map(|b| b.size())
+        .sum()
     }
 }
 
