@@ -11,9 +11,10 @@ pub const VIEWER_SIZE: [u32; 2] = [1280, 720];
 pub trait TimedViewer {
     /// One whole frame: UI, viewport, and the field when it changed; waits for the GPU.
     fn frame(&mut self) -> Result<(), GpuError>;
-    /// True while the picture is not whole yet (a coarse field refining, frames averaging).
+    /// True while the picture is not whole yet (the moving field shown while the full one refines, frames
+    /// averaging).
     fn wants_frame(&self) -> bool;
-    /// The side of the coarse field drawn at the last frame, when it was not the full one.
+    /// The side of the moving field's coarse grid at the last frame, when it was not the full field.
     fn preview(&self) -> Option<u32>;
     /// The scene, changed between frames as a user's gesture would.
     fn scene_mut(&mut self) -> &mut Scene;

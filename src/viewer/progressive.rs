@@ -79,15 +79,16 @@ pub enum Plan {
     Refine { band_rows: u32, bands: u32 },
 }
 
-/// How the coarse field's side and the refining bands are chosen.
+/// How the moving field's coarse grid and the refining bands are chosen.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Pacing {
     /// From the measured cost of the frames, to hold the frame budget (the viewer's screen).
     #[default]
     Measured,
-    /// The same every frame whatever the machine's load: a coarse field of `preview` texels a side while the view
-    /// moves (the full field where it is no larger), and bands of `band_rows` rows while it refines. Tests drive
-    /// the viewer so, since a loaded machine measures other costs and would choose other fields.
+    /// The same every frame whatever the machine's load: a moving field at the full W from a coarse grid of
+    /// `preview` texels a side while the view moves (the full field where it is no larger), and bands of
+    /// `band_rows` rows (a refined field's levels) while it refines. Tests drive the viewer so, since a loaded
+    /// machine measures other costs and would choose other fields.
     Fixed { preview: u32, band_rows: u32 },
 }
 
@@ -336,7 +337,7 @@ mod tests {
                 divisor: 1
             }
         );
-        // A fixed 3 ms on top of every coarse field (its upsampling) leaves the texels less.
+        // A fixed 3 ms on top of every moving field (its refinement) leaves the coarse grid less.
         run(
             &mut b,
             &mut t,

@@ -29,10 +29,10 @@ pub struct ViewportView {
     pub show_grid: bool,
     /// With a jittered integrator: how many frames to average while the scene stays the same (1: none).
     pub average_frames: u32,
-    /// Whether a moving view may show a coarse field while the full one is refined (`progressive`); the
+    /// Whether a moving view may show the moving field while the full one is refined (`progressive`); the
     /// viewer's screen does, screenshots never.
     pub progressive: bool,
-    /// How the coarse field and the refining bands are chosen (`progressive::Pacing`).
+    /// How the moving field and the refining bands are chosen (`progressive::Pacing`).
     pub pacing: Pacing,
     /// While the panel edits the glare's threshold: that threshold, the glow at or below it dimmed.
     pub threshold_preview: Option<f64>,
