@@ -190,7 +190,7 @@ fn curve_kronrod(ray: Ray, p: Peak, a: f32, b: f32, panel: vec2<f32>, singular: 
         let m = map_node(p, toward.x);
         // The continuous W form searches the whole chain at every node (twin of integrate_weighted).
         var n: vec2<f32>;
-        if SEARCH != 0u && c.piece_count > 0u {
+        if reads_brightest(c) {
             let b = bright_track(c, ray, m.x, track);
             n = vec2<f32>(b.t, b.distance);
         } else {
@@ -362,7 +362,7 @@ fn integrate_curve_term(index: u32, s_point: vec3<f32>, e_point: vec3<f32>) -> v
             let inset = SWITCH_INSET * (b - a);
             // (Not for a curve that reads its brightest point: its nearest point's segments say nothing of it.)
             var ends = vec2<u32>(0u);
-            if !(SEARCH != 0u && c.piece_count > 0u) {
+            if !(reads_brightest(c)) {
                 ends = vec2<u32>(nearest_segment_index(c, ray, p, a + inset), nearest_segment_index(c, ray, p, b - inset));
             }
             let switched = ends.x != ends.y;

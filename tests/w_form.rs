@@ -216,6 +216,18 @@ fn continuous_scenes() -> Vec<(String, Scene)> {
         let scene = common::shipped_scene("pulse_travelling.toml").at_frame(frame);
         out.push((format!("pulse_travelling.toml at frame {frame}"), scene));
     }
+    // A chain in the continuous form beside one in the papers' form: the passes then hold both ways of reading a
+    // chain (FieldParams::search 1), where every other scene here reads all its chains by the search (2).
+    let mut both = common::shipped_scene("default.toml");
+    let mut papers = both.sources.curves[0].clone();
+    papers.weights = vec![0.8, 0.4, 1.0];
+    papers.w_form = WForm::Nearest;
+    papers.control_points.iter_mut().for_each(|p| p.y += 1.5);
+    both.sources.curves.push(papers);
+    out.push((
+        "default.toml with a chain in the papers' form".to_owned(),
+        both,
+    ));
     let mut figure = common::shipped_scene("local_intensity_w_b8.0.toml");
     figure.sources.curves[0].w_form = WForm::Continuous;
     out.push(("local_intensity_w_b8.0.toml, continuous".to_owned(), figure));

@@ -392,7 +392,7 @@ fn curve_features(ray: Ray) -> CurveFeatures {
     let end_moving1 = chain_sample(ray, end_t.y, true);
     let step = 1.0 / f32(SCAN);
     // The kinks of the nearest point, or in the continuous W form those of the brightest point (bright_kinks).
-    let nearest_kinks = !(SEARCH != 0u && c.piece_count > 0u);
+    let nearest_kinks = !(reads_brightest(c));
     var minima: Minima;
     minima.count = 0u;
     var kinks: Kinks;

@@ -30,7 +30,7 @@ fn held_chain(c: CurveSource) -> HeldChain {
     held.s2 = segments[min(c.first_segment + 2u, last)];
     held.s3 = segments[min(c.first_segment + 3u, last)];
     held.weights = held_weights(c);
-    if SEARCH != 0u && c.piece_count > 0u {
+    if reads_brightest(c) {
         let final_piece = c.first_piece + c.piece_count - 1u;
         held.q0 = pieces[c.first_piece];
         held.q1 = pieces[min(c.first_piece + 1u, final_piece)];
@@ -88,10 +88,17 @@ fn curve_nearest(c: CurveSource, held: HeldChain, p: vec3<f32>) -> vec2<f32> {
     return best;
 }
 
+// Whether a chain's term reads its brightest point (the continuous W form), not its nearest. SEARCH (FieldParams::search):
+// 0 no chain's does, 1 some do (those with pieces), 2 every chain's does, and a pass then holds no code for the
+// nearest point (lavapipe pays for the code a pass holds, taken or not).
+fn reads_brightest(c: CurveSource) -> bool {
+    return SEARCH == 2u || (SEARCH == 1u && c.piece_count > 0u);
+}
+
 // The point of a chain its term reads at p, (t, distance): the brightest point in the continuous W form
 // (piece_count > 0), else the nearest. The term is b Sw(t) / max(eps, distance) at it.
 fn curve_point(c: CurveSource, held: HeldChain, p: vec3<f32>) -> vec2<f32> {
-    if SEARCH != 0u && c.piece_count > 0u {
+    if reads_brightest(c) {
         return curve_brightest(c, held, p);
     }
     return curve_nearest(c, held, p);

@@ -24,7 +24,7 @@ struct FieldParams {
     seed: u32,
     gauss_order: u32,   // adaptive: n of the Gauss-Kronrod pair (n and 2n + 1 nodes; adaptive::kronrod_order)
     layers: u32,        // the texture's layers written: 1 (B alone, every source in the scene's color) or 4
-    search: u32,        // 1 where some curve's term reads its brightest point (read on the CPU: the SEARCH constant)
+    search: u32,        // which curves' terms read their brightest point: 0 none, 1 some, 2 all (read on the CPU: the SEARCH constant)
     decay: u32,         // 0: distance (the papers'), 1: rms (integrate::Decay)
     stretch: f32,       // the rays' span in decay lengths: the rms decay's unit
     clipped: u32,       // 1 where the scene has objects: each texel's ray ends at its clip (binding 13)

@@ -22,8 +22,8 @@ override TORUS_COUNT: u32 = 4294967295u;
 override CURVE_COUNT: u32 = 4294967295u;
 override GAUSS_ORDER: u32 = 4294967295u;
 override JITTER: u32 = 4294967295u;
-// Whether some curve's term reads its brightest point (the continuous W form, gpu::field_pass::Structure): 0
-// drops that search from the pipeline, so that scenes without it compile none of it.
+// Which curves' terms read their brightest point (the continuous W form, gpu::field_pass::Structure; reads_brightest):
+// 0 none, and the pipeline holds no search; 1 some; 2 all, and it holds no nearest point.
 override SEARCH: u32 = 0u;
 fn point_count() -> u32 {
     if POINT_COUNT == GENERIC {

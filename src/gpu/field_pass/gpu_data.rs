@@ -28,7 +28,7 @@ pub struct FieldParams {
     pub seed: u32,           // 104
     pub gauss_order: u32, // 108: adaptive: n of the Gauss-Kronrod pair (integrate::adaptive::kronrod_order)
     pub layers: u32, // 112: the field texture's layers written: 1 (B) or FIELD_LAYERS (and the tint)
-    pub search: u32, // 116: 1 where some curve's term reads its brightest point (the SEARCH constant)
+    pub search: u32, // 116: which curves' terms read their brightest point, 0 none, 1 some, 2 all (the SEARCH constant)
     pub decay: u32,  // 120: 0 distance, 1 rms (integrate::Decay)
     pub stretch: f32, // 124: the rays' span in decay lengths, the rms decay's unit
     pub clipped: u32, // 128: 1 where the scene has objects: each texel's ray ends at its clip (binding 13)

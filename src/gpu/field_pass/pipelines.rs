@@ -56,7 +56,7 @@ pub struct Structure {
     pub curves: u32,
     pub gauss_order: u32,
     pub jitter: u32,
-    /// Whether some curve's term reads its brightest point (`FieldParams::search`).
+    /// Which curves' terms read their brightest point (`FieldParams::search`: none, some, every one).
     pub search: u32,
 }
 
@@ -278,12 +278,12 @@ pub struct FieldShaders {
     modules: Modules,
     layout: wgpu::BindGroupLayout,
     pipeline_layout: wgpu::PipelineLayout,
-    /// The generic pipeline of each entry point (`shaders::FIELD_PASSES`, indexed by `Chunk::pipeline`): without
-    /// the search for a curve's brightest point (scenes without the continuous W form compile none of it), and
-    /// with it.
-    generic: [[OnceLock<wgpu::ComputePipeline>; 3]; 2],
+    /// The generic pipeline of each entry point (`shaders::FIELD_PASSES`, indexed by `Chunk::pipeline`), by
+    /// `FieldParams::search`: without the search for a curve's brightest point (scenes without the continuous W
+    /// form compile none of it), with it beside the nearest point, and with it alone.
+    generic: [[OnceLock<wgpu::ComputePipeline>; 3]; 3],
     /// Which of them a thread of their own is building (`build_in_background`).
-    building: [[AtomicBool; 3]; 2],
+    building: [[AtomicBool; 3]; 3],
     /// The refinement's pass (`shaders/refine.wgsl`).
     pub(super) refine: super::refine::RefineShaders,
 }
@@ -296,7 +296,11 @@ impl std::fmt::Debug for FieldShaders {
         f.debug_struct("FieldShaders")
             .field(
                 "generic_built",
-                &[built(&self.generic[0]), built(&self.generic[1])],
+                &[
+                    built(&self.generic[0]),
+                    built(&self.generic[1]),
+                    built(&self.generic[2]),
+                ],
             )
             .finish()
     }
@@ -324,14 +328,14 @@ impl FieldShaders {
     }
 
     /// Whether the generic pipelines of `entries` (with the search or without) are built.
-    fn built(&self, search: bool, entries: &[usize]) -> bool {
+    fn built(&self, search: u32, entries: &[usize]) -> bool {
         (entries.iter()).all(|&k| self.generic[search as usize][k].get().is_some())
     }
 
     /// Starts building the generic pipelines of `entries` that are not built on a thread of their own (one
     /// thread for them all, unless one is building them already). Returns false on GL, where every call holds
     /// the one context: nothing is started there, they are built when first dispatched.
-    fn build_in_background(self: &Arc<Self>, search: bool, entries: &[usize]) -> bool {
+    fn build_in_background(self: &Arc<Self>, search: u32, entries: &[usize]) -> bool {
         if self.device.adapter_info().backend == wgpu::Backend::Gl {
             return false;
         }
@@ -364,14 +368,15 @@ impl FieldShaders {
     /// call holds the one context).
     fn build_generic(
         &self,
-        search: bool,
+        search: u32,
         entries: &[usize],
     ) -> &[OnceLock<wgpu::ComputePipeline>; 3] {
         let generic = &self.generic[search as usize];
         let missing: Vec<usize> = (entries.iter().copied())
             .filter(|&k| generic[k].get().is_none())
             .collect();
-        let constants: &[(&str, f64)] = if search { &[("SEARCH", 1.0)] } else { &[] };
+        let with_search = [("SEARCH", search as f64)];
+        let constants: &[(&str, f64)] = if search > 0 { &with_search } else { &[] };
         let build = |k: usize| {
             generic[k].get_or_init(|| {
                 build_pipeline(
@@ -454,15 +459,14 @@ impl FieldPipelines {
             .then(|| self.specialised.peek(&Structure::of(params)))
             .flatten();
         let entries = Self::generic_entries(specialised.as_deref(), chunks);
-        self.shaders.built(params.search != 0, &entries)
+        self.shaders.built(params.search, &entries)
     }
 
     /// Starts building on a thread of its own what a dispatch of `chunks` with `params` would compile first;
     /// whether it will be ready without a compile on this thread (false on GL).
     pub(super) fn build_in_background(&self, params: &FieldParams, chunks: &[Chunk]) -> bool {
         let entries = Self::generic_entries(None, chunks);
-        self.shaders
-            .build_in_background(params.search != 0, &entries)
+        self.shaders.build_in_background(params.search, &entries)
     }
 
     /// The pipelines that dispatch `chunks` of inputs with these `params`: the specialised ones where
@@ -475,7 +479,7 @@ impl FieldPipelines {
     ) -> DispatchPipelines<'_> {
         let specialised = self.specialised_for(Structure::of(params));
         let entries = Self::generic_entries(specialised.as_deref(), chunks);
-        let generic = self.shaders.build_generic(params.search != 0, &entries);
+        let generic = self.shaders.build_generic(params.search, &entries);
         DispatchPipelines {
             specialised,
             generic,

@@ -202,3 +202,25 @@ fn a_scene_without_sources_still_writes_the_texture() {
     assert_eq!(chunks.len(), 1);
     assert_eq!((chunks[0].count, chunks[0].accumulate), (0, 0));
 }
+
+#[test]
+fn the_search_flag_says_whether_no_some_or_every_curve_reads_its_brightest_point() {
+    // 2 lets a pass drop the nearest point's code: it must be set only where every curve has pieces.
+    let mut s = Scene::default_scene();
+    let continuous = s.sources.curves[0].clone();
+    assert!(continuous.searches());
+    let search = |s: &Scene| {
+        pack(&crate::frame::FrameSetup::placed(s, 1.0))
+            .params
+            .search
+    };
+    assert_eq!(search(&s), 2);
+    let mut uniform = continuous.clone();
+    uniform.weights = vec![0.7; 5];
+    s.sources.curves = vec![continuous.clone(), uniform.clone()];
+    assert_eq!(search(&s), 1);
+    s.sources.curves = vec![uniform];
+    assert_eq!(search(&s), 0);
+    s.sources.curves.clear();
+    assert_eq!(search(&s), 0);
+}
