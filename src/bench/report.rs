@@ -43,10 +43,10 @@ pub struct ViewerFrameRow {
     pub scene: String,
     /// Nothing changes: the field is not integrated again.
     pub idle: Timing,
-    /// The camera orbits a little every frame, as the viewer draws it: a coarse field while moving
+    /// The camera orbits a little every frame, as the viewer draws it: the moving field, refined to 1/255
     /// (`viewer::progressive`).
     pub orbiting: Timing,
-    /// The side of the coarse field the viewer chose while orbiting (the full field's side if none).
+    /// The side of the moving field the viewer chose while orbiting (the full field's side if none).
     pub orbiting_resolution: u32,
     /// The same orbit with the whole field integrated every frame (progressive refinement off): the baseline.
     pub orbiting_full_field: Timing,

@@ -14,7 +14,8 @@ pub trait TimedViewer {
     /// True while the picture is not whole yet (the moving field shown while the full one refines, frames
     /// averaging).
     fn wants_frame(&self) -> bool;
-    /// The side of the moving field's coarse grid at the last frame, when it was not the full field.
+    /// The side of the field shown at the last frame while the picture was not whole (the moving field, refined to
+    /// 1/255, at W or less where the frame budget made it smaller); None once it is whole.
     fn preview(&self) -> Option<u32>;
     /// The scene, changed between frames as a user's gesture would.
     fn scene_mut(&mut self) -> &mut Scene;

@@ -546,7 +546,9 @@ impl crate::bench::TimedViewer for OffscreenViewer {
     }
 
     fn preview(&self) -> Option<u32> {
-        self.app.report().preview
+        // The moving field's own side (the budget may make it smaller than W), not its coarse start's.
+        let report = self.app.report();
+        report.preview.and(report.moving_side)
     }
 
     fn scene_mut(&mut self) -> &mut Scene {
