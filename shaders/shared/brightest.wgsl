@@ -225,6 +225,17 @@ fn stationary_quartic(q: CurvePiece, p: vec3<f32>) -> Quartic {
     let d2 = dot(q.c1, q.c1) + 2.0 * dot(q.c2, e);
     let d3 = 2.0 * dot(q.c1, q.c2);
     let d4 = dot(q.c2, q.c2);
+    // S = s2 (x - r)^2, its double zero at an end r: h = s2 (x - r) (4 D - (x - r) D') with (x - r) taken out, in
+    // the sign it has inside the piece; without h's root at r, which rounding put on either side of the end and hid a
+    // maximum next to it (a W series gone dark beyond a knot).
+    let r = q.zero_end;
+    if r >= 0.0 {
+        let sign = select(q.s2, -q.s2, r > 0.5);
+        return Quartic(
+            sign * vec4<f32>(4.0 * d0 + r * d1, 3.0 * d1 + 2.0 * r * d2, 2.0 * d2 + 3.0 * r * d3, d3 + 4.0 * r * d4),
+            0.0,
+        );
+    }
     return Quartic(
         vec4<f32>(
             2.0 * q.s1 * d0 - q.s0 * d1,
@@ -313,7 +324,7 @@ fn piece_maxima(best_in: Bright, q: CurvePiece, k: u32, p: vec3<f32>) -> Bright 
         // its maxima.
         var x = -1.0;
         if b.low.x > 0.0 && b.a4 < 0.0 {
-            x = bracketed_root(a, q, p, 0u, u, v);
+            x = bracketed_root(a, q, p, 0u, u, v, -1.0);
         } else if changes >= 2u {
             x = 0.5 * (u + v);
         }
@@ -321,9 +332,8 @@ fn piece_maxima(best_in: Bright, q: CurvePiece, k: u32, p: vec3<f32>) -> Bright 
             best = offer_point(best, q, k, x, p);
         }
         at += size;
-        while level > 0u && (at & ((end >> (level - 1u)) - 1u)) == 0u {
-            level--;
-        }
+        // Up as many levels as the parts this one ends (a loop here spent lavapipe's budget of loop iterations).
+        level -= min(level, countTrailingZeros(at / size));
     }
     return best;
 }
@@ -340,11 +350,17 @@ fn flat_top(best_in: Bright, q: CurvePiece, k: u32, p: vec3<f32>) -> Bright {
     // site of the root finder, in a loop).
     let unused = Quartic(vec4<f32>(0.0), 0.0);
     var ends = vec2<f32>(0.0, 1.0);
+    // Newton on D - eps^2 from next to D's minimum crawls (its slope is nearly zero there, and where the stretch is
+    // short the two ends nearly meet): it starts instead where D's quadratic model around the nearest point,
+    // distance^2 + |C'|^2 (x - x*)^2, reaches eps^2 (the secant from the nearest point stopped a few 1e-5 short of
+    // the end in f32 within ROOT_NEWTON steps, where a steep W series made that 0.5 % of the term).
+    let speed = length(2.0 * q.c2 * nearest.x + q.c1);
+    let half = sqrt(max(EPSILON * EPSILON - nearest.y * nearest.y, 0.0)) / max(speed, 1e-30);
     for (var side = 0u; side < 2u; side++) {
         let far = f32(side);
         var x = far;
         if length(piece_at(q, far) - p) > EPSILON {
-            x = bracketed_root(unused, q, p, 1u, nearest.x, far);
+            x = bracketed_root(unused, q, p, 1u, nearest.x, far, nearest.x + select(-half, half, side == 1u));
         }
         if side == 0u {
             ends.x = x;
@@ -363,14 +379,18 @@ fn flat_top(best_in: Bright, q: CurvePiece, k: u32, p: vec3<f32>) -> Bright {
 }
 
 // The root between u and v of h (mode 0) or of D - eps^2 (mode 1, evaluated from the point itself), whose signs
-// differ at u and v: Newton's method from the secant's root, kept in the bracket. Twin of bracketed_root.
-fn bracketed_root(a: Quartic, q: CurvePiece, p: vec3<f32>, mode: u32, u: f32, v: f32) -> f32 {
+// differ at u and v: Newton's method from start where it lies inside, else from the secant's root, kept in the
+// bracket. Twin of bracketed_root.
+fn bracketed_root(a: Quartic, q: CurvePiece, p: vec3<f32>, mode: u32, u: f32, v: f32, start: f32) -> f32 {
     let fu = root_function(a, q, p, mode, u).x;
     let fv = root_function(a, q, p, mode, v).x;
     // lo keeps the sign of u, hi that of v.
     var lo = u;
     var hi = v;
     var x = clamp(u + (v - u) * fu / (fu - fv), min(u, v), max(u, v));
+    if start > min(u, v) && start < max(u, v) {
+        x = start;
+    }
     for (var i = 0u; i < ROOT_NEWTON; i++) {
         let f = root_function(a, q, p, mode, x);
         if f.x == 0.0 {

@@ -41,7 +41,7 @@ struct CurveSource {
 
 // A stretch of a chain between its joints and W's knots, for the continuous W form (twin of field::brightest::Piece):
 // the curve C(x) = c2 x^2 + c1 x + c0 and S(x) = s2 x^2 + s1 x + s0 in its own x in [0, 1], the chain parameters at
-// its ends, a ball holding it and S's largest value on it.
+// its ends, a ball holding it, S's largest value on it and the end where S has a double zero.
 struct CurvePiece {
     c2: vec3<f32>,
     s2: f32,
@@ -54,7 +54,7 @@ struct CurvePiece {
     t0: f32,
     t1: f32,
     weight_max: f32,
-    pad0: f32,
+    zero_end: f32,  // the end (0 or 1) where S has a double zero, S = s2 (x - zero_end)^2; else -1
 }
 
 // One segment in power form, C(t) = c2 t^2 + c1 t + c0 (computed from the control points in f64).

@@ -30,6 +30,7 @@ pub use context::{
     field_texture, field_texture_bytes, field_texture_layers, map_read, read_texture,
     read_texture_layer, storage_buffer_entry, texture_2d, uniform_buffer,
 };
+pub use field_pass::probe;
 pub use field_pass::{FieldInputs, FieldRenderer, FieldShaders, Specialise, Structure, layers_of};
 pub use formats::FRAME_FORMAT;
 pub use frame::{FrameTargets, SceneRenderer, Target, f16_to_f32, frame_cache, read_frame};

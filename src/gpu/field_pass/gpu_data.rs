@@ -118,7 +118,7 @@ pub struct CurvePiece {
     pub t0: f32,          // 64
     pub t1: f32,          // 68
     pub weight_max: f32,  // 72
-    pub pad0: f32,        // 76
+    pub zero_end: f32,    // 76: the end of S's double zero, 0 or 1, else -1
 }
 const _: () = assert!(size_of::<CurvePiece>() == 80);
 

@@ -9,6 +9,7 @@ use super::context::{
 use super::frame_average::FrameAverage;
 
 pub mod gpu_data;
+pub mod probe;
 
 use gpu_data::*;
 

@@ -356,7 +356,7 @@ pub(super) fn pack_sources(setup: &FrameSetup) -> Packed {
             t0: q.t0 as f32,
             t1: q.t1 as f32,
             weight_max: (q.weight_max * (1.0 + 1e-6)) as f32,
-            pad0: 0.0,
+            zero_end: q.zero_end.map_or(-1.0, |r| r as f32),
         }));
         packed.curves.push(CurveSource {
             first_segment,
