@@ -148,6 +148,15 @@ fn bright_track(c: CurveSource, ray: Ray, t: f32, track: ptr<function, Track>) -
         let d = length(piece_at(q, x) - p);
         let value = piece_weight(q, x) / max(EPSILON, d);
         var stands = falls && abs(step) <= TRACK_SETTLED && x > 0.0 && x < 1.0 && d > EPSILON;
+        // It must be the largest of its own piece too: h has no other root there (no sign change but one in its
+        // Bernstein coefficients on the whole piece; a brighter stretch within eps would have one), and neither
+        // end is brighter. A piece whose W series falls from the chain's start toward a dark knot kept a local
+        // maximum against its brighter end (pulse_sparks at frame 60: 7.1e-4 of B low, with no other piece to bound it).
+        let ends = vec2<f32>(
+            piece_weight(q, 0.0) / max(EPSILON, length(q.c0 - p)),
+            piece_weight(q, 1.0) / max(EPSILON, length(piece_at(q, 1.0) - p)),
+        );
+        stands = stands && sign_changes(bernstein_on(h, 0.0, 1.0)) <= 1u && max(ends.x, ends.y) <= value;
         for (var i = 0u; i < c.piece_count; i++) {
             let j = c.first_piece + i;
             let o = chain_piece(c, HELD, j);
