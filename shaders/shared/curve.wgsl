@@ -55,6 +55,18 @@ fn nearest_on_segment(segment: CurveSegment, p: vec3<f32>) -> vec2<f32> {
     best = offer_root(best, s, p, k, roots.values.x);
     best = offer_root(best, s, p, k, roots.values.y);
     best = offer_root(best, s, p, k, roots.values.z);
+    // At rest at its start (as solved), the segment is straight, c0 + c2 x^2, and its nearest x^2 a projection:
+    // near the resting end the cubic's three roots crowd around 0 and f32 cannot part them (it gave the end itself,
+    // W read 0.002 away from where it should on a chain whose last two points coincide: 1.5e-4 of B on GL). Its distance
+    // is the true one's to f32's rounding, and so are the others' near the resting end: a tie goes to it.
+    let c22 = dot(s.c2, s.c2);
+    if starts_at_rest(s) && c22 > 0.0 {
+        let x = sqrt(clamp(-dot(s.c2, d) / c22, 0.0, 1.0));
+        let distance = length(segment_at(s, x) - p);
+        if distance <= best.y * (1.0 + 4e-7) {
+            best = vec2<f32>(x, distance);
+        }
+    }
     return select(best, vec2<f32>(1.0 - best.x, best.y), flip);
 }
 

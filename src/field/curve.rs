@@ -100,6 +100,12 @@ impl Segment {
             consider(root.clamp(0.0, 1.0));
             consider(polish(k, root).clamp(0.0, 1.0));
         }
+        // At rest at its start the segment is straight, c0 + c2 t^2, and its nearest t^2 a projection (the cubic's
+        // roots crowd around 0 near the resting end; the shader's twin cannot part them in f32).
+        let c22 = self.c2.length_squared();
+        if self.starts_at_rest() && c22 > 0.0 {
+            consider((-self.c2.dot(self.c0 - p) / c22).clamp(0.0, 1.0).sqrt());
+        }
         best
     }
 }
