@@ -151,7 +151,14 @@ pub fn write_rgba(
 ) -> Result<(), OutputError> {
     let format = check_destination(path)?;
     if format == Format::Exr {
-        let encoded = encode_exr(path, width, height, pixels, alpha != Alpha::Opaque)?;
+        let encoded = encode_exr(
+            path,
+            width,
+            height,
+            pixels,
+            alpha != Alpha::Opaque,
+            EXR_VALUES_NOTE,
+        )?;
         return write_atomically(path, &encoded);
     }
     write_png8(
@@ -206,13 +213,20 @@ pub fn write_png8(
     write_atomically(path, &encoded)
 }
 
-/// An EXR of `pixels` (f32, lossless ZIP), RGBA when `alpha`, with the header's chromaticities and notes.
+/// What the values of a brightness EXR are (`render --brightness`), in its header.
+pub const EXR_BRIGHTNESS_NOTE: &str = "the billboard's brightness B (R = G = B), W x W texels, rows from the top, \
+     before the blend and unclamped";
+
+/// An EXR of `pixels` (f32, lossless ZIP), RGBA when `alpha`, with the header's chromaticities and `note` on its
+/// values. Its chunks go in increasing line order, so the same pixels give the same bytes whatever order the
+/// writer's threads compress them in (the `image` crate's EXR writer leaves the order to them).
 fn encode_exr(
     path: &Path,
     width: u32,
     height: u32,
     pixels: &[[f64; 4]],
     alpha: bool,
+    note: &str,
 ) -> Result<Vec<u8>, OutputError> {
     use exr::meta::attribute::{AttributeValue, Chromaticities, Text};
     use exr::prelude::*;
@@ -222,11 +236,7 @@ fn encode_exr(
     attributes.software_name = Some(Text::from("energywave"));
     attributes.other.insert(
         Text::from("energywave:values"),
-        AttributeValue::Text(Text::from(EXR_VALUES_NOTE)),
-    );
-    attributes.other.insert(
-        Text::from("oiio:ColorSpace"),
-        AttributeValue::Text(Text::from("sRGB")),
+        AttributeValue::Text(Text::from(note)),
     );
     let [r, g, b, white] = SRGB_PRIMARIES.map(|[x, y]| Vec2(x, y));
     let chromaticities = Some(Chromaticities {
@@ -235,6 +245,12 @@ fn encode_exr(
         blue: b,
         white,
     });
+    // Each map of further attributes holds one, the layer's and the image's: the writer takes them in a hash map's
+    // order, which differs from run to run, and two in one map made the same frame two different files.
+    let color_space = (
+        Text::from("oiio:ColorSpace"),
+        AttributeValue::Text(Text::from("sRGB")),
+    );
     let mut buf = std::io::Cursor::new(Vec::new());
     let failed = |e: exr::error::Error| OutputError::Encode {
         path: path.to_owned(),
@@ -255,6 +271,10 @@ fn encode_exr(
         );
         let mut image = Image::from_layer(layer);
         image.attributes.chromaticities = chromaticities;
+        image
+            .attributes
+            .other
+            .insert(color_space.0.clone(), color_space.1.clone());
         image.write().to_buffered(&mut buf).map_err(failed)?;
     } else {
         let layer = Layer::new(
@@ -268,6 +288,10 @@ fn encode_exr(
         );
         let mut image = Image::from_layer(layer);
         image.attributes.chromaticities = chromaticities;
+        image
+            .attributes
+            .other
+            .insert(color_space.0.clone(), color_space.1.clone());
         image.write().to_buffered(&mut buf).map_err(failed)?;
     }
     Ok(buf.into_inner())
@@ -275,11 +299,8 @@ fn encode_exr(
 
 /// Writes a `w` x `w` field of unclamped floats (the brightness B) as a float EXR with R = G = B = value.
 pub fn write_brightness_exr(path: &Path, w: u32, values: &[f64]) -> Result<(), OutputError> {
-    let floats: Vec<f32> = values.iter().flat_map(|&b| [b as f32; 3]).collect();
-    let img = image::DynamicImage::ImageRgb32F(
-        image::Rgb32FImage::from_raw(w, w, floats).expect("size matches"),
-    );
-    let encoded = encode(path, img, image::ImageFormat::OpenExr)?;
+    let pixels: Vec<[f64; 4]> = values.iter().map(|&b| [b, b, b, 1.0]).collect();
+    let encoded = encode_exr(path, w, w, &pixels, false, EXR_BRIGHTNESS_NOTE)?;
     write_atomically(path, &encoded)
 }
 

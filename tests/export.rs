@@ -40,6 +40,17 @@ fn render(scene: &str, args: &[&str]) -> Output {
         .expect("the binary runs")
 }
 
+/// `render` of `scene` with `args` alone (no test size, resolution or divisions).
+fn render_as_given(scene: &str, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_energywave"))
+        .args(["render", scene])
+        .args(args)
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .expect("the binary runs")
+}
+
 fn ok(o: &Output) {
     assert!(
         o.status.success(),
@@ -790,4 +801,133 @@ fn without_ffmpeg_a_video_is_refused_with_the_install_command() {
     let o = render(&preset(), &["--transparent", "-o", mp4.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains(".webm"));
+}
+
+/// Runs `f` while as many threads as the machine has cores spin beside it, so that a writer's own threads are
+/// scheduled differently from an idle run.
+fn with_cores_busy<T>(f: impl FnOnce() -> T) -> T {
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let cores = std::thread::available_parallelism().map_or(2, |n| n.get());
+    let spinners: Vec<_> = (0..cores)
+        .map(|_| {
+            let stop = stop.clone();
+            std::thread::spawn(move || {
+                let mut x = 0u64;
+                while !stop.load(std::sync::atomic::Ordering::Relaxed) {
+                    x = x.wrapping_mul(6364136223846793005).wrapping_add(1);
+                }
+                x
+            })
+        })
+        .collect();
+    let out = f();
+    stop.store(true, std::sync::atomic::Ordering::Relaxed);
+    spinners.into_iter().for_each(|t| drop(t.join()));
+    out
+}
+
+#[test]
+fn two_renders_of_a_frame_are_the_same_bytes_in_every_format() {
+    // A render farm checksums frames: the same frame rendered twice must give the same file, whatever the writer's
+    // threads did. The EXR of the brightness went through the image crate's writer, whose chunks come in the order
+    // its threads finish them; every EXR now goes in increasing line order. Each format rendered at a larger size
+    // (many chunks), once idle and once with every core busy.
+    let dir = tmpdir("reproducible");
+    let scene = preset();
+    let cases: &[(&str, &[&str])] = &[
+        ("frame.png", &[]),
+        ("frame.exr", &[]),
+        ("transparent.png", &["--transparent"]),
+        ("premultiplied.png", &["--transparent", "--premultiplied"]),
+        ("transparent.exr", &["--transparent"]),
+        ("holdout.exr", &["--transparent", "--holdout"]),
+        ("brightness.exr", &["--brightness"]),
+        ("anim.gif", &["--frames", "20..23"]),
+        ("sheet.png", &["--frames", "20..23", "--sheet"]),
+        ("clip.mp4", &["--frames", "20..26"]),
+        ("clip.webm", &["--frames", "20..26"]),
+    ];
+    for (name, args) in cases {
+        let mut bytes = Vec::new();
+        for busy in [false, true] {
+            let out = dir.join(format!("{}-{busy}", busy as u8)).join(name);
+            std::fs::create_dir_all(out.parent().unwrap()).unwrap();
+            let out_s = out.display().to_string();
+            let mut all = vec!["--size", "320x240", "--resolution", "160", "-o", &out_s];
+            all.extend_from_slice(args);
+            if !args.contains(&"--frames") {
+                all.extend_from_slice(&["--frames", "20"]);
+            }
+            let run = || render_as_given(&scene, &all);
+            let o = if busy { with_cores_busy(run) } else { run() };
+            ok(&o);
+            let mut files = vec![std::fs::read(&out).unwrap()];
+            if args.contains(&"--sheet") {
+                files.push(std::fs::read(out.with_extension("json")).unwrap());
+            }
+            bytes.push(files);
+        }
+        assert!(
+            bytes[0].iter().all(|f| f.len() > 100),
+            "{name}: a file was written"
+        );
+        assert!(
+            bytes[0] == bytes[1],
+            "{name}: two renders of the same frame differ ({} against {} bytes)",
+            bytes[0][0].len(),
+            bytes[1][0].len()
+        );
+    }
+}
+
+#[test]
+fn a_brightness_sequence_is_staged_and_moved_in_whole() {
+    // As every other sequence: interrupted or failed on the way, it leaves an earlier sequence of the same names
+    // as it was; done, the frames are in place and nothing of the staging is left.
+    let dir = tmpdir("brightness-sequence");
+    let pattern = dir.join("b_####.exr").display().to_string();
+    ok(&render(
+        &preset(),
+        &["--brightness", "--frames", "3..6", "-o", &pattern],
+    ));
+    assert_eq!(files(&dir), ["b_0003.exr", "b_0004.exr", "b_0005.exr"]);
+    let before: Vec<Vec<u8>> = (3..6)
+        .map(|f| std::fs::read(dir.join(format!("b_{f:04}.exr"))).unwrap())
+        .collect();
+    // A second export over it that fails on its third frame (its folder made unwritable there is not portable;
+    // a frame named as a folder is): the first two frames it rendered must not have replaced the old ones.
+    std::fs::remove_file(dir.join("b_0005.exr")).unwrap();
+    std::fs::create_dir(dir.join("b_0005.exr")).unwrap();
+    std::fs::write(dir.join("b_0005.exr").join("keep"), b"a folder in the way").unwrap();
+    // (Another billboard resolution, so that the frames it renders differ from the ones in place.)
+    let o = render_as_given(
+        &preset(),
+        &[
+            "--brightness",
+            "--resolution",
+            "24",
+            "--frames",
+            "3..6",
+            "-o",
+            &pattern,
+        ],
+    );
+    assert_eq!(
+        o.status.code(),
+        Some(1),
+        "a frame's place taken by a folder fails the export: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    for (k, f) in (3..5).enumerate() {
+        assert_eq!(
+            std::fs::read(dir.join(format!("b_{f:04}.exr"))).unwrap(),
+            before[k],
+            "frame {f} kept"
+        );
+    }
+    assert!(
+        files(&dir).iter().all(|n| !n.contains("partial")),
+        "no staging left behind: {:?}",
+        files(&dir)
+    );
 }

@@ -375,20 +375,21 @@ fn render_frames(
                 args.output.display()
             )));
         };
-        let mut written = Vec::new();
+        // Staged as every other sequence: the frames are written beside the destination and moved in once all
+        // are whole, so a failure or a signal on the way leaves an earlier sequence of the same names as it was.
+        let mut staged =
+            export::staged::Staged::beside(&export::frame_path(pattern, frames.start))?;
         for frame in frames.clone() {
             let at = renderer.cache().scene_at(scene, frame as f64);
             let values = renderer.brightness(&renderer.setup(&at, (width, height)))?;
-            let path = export::frame_path(pattern, frame);
+            let path = staged.stage(&export::frame_path(pattern, frame));
             output::write_brightness_exr(&path, at.billboard.resolution, &values)?;
-            written.push(path);
             progress.frame_done(frame);
             if super::interrupt::asked() {
-                written.iter().for_each(|p| drop(std::fs::remove_file(p)));
                 return Err(export::ExportError::Cancelled.into());
             }
         }
-        written
+        staged.commit()?
     } else {
         export::export_frames(
             scene,
