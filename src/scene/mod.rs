@@ -259,6 +259,29 @@ impl Default for Colors {
 }
 
 impl Scene {
+    /// The scene to be written into the folder `to` when it was read from (or, unsaved, is read against) the
+    /// folder `from`: every mesh's and PLY file's relative path rewritten to name the same file from `to` (Save As
+    /// into another folder), relative where the two folders share a root, else absolute. Absolute paths stay.
+    pub fn rebased(&self, from: &Path, to: &Path) -> Scene {
+        let mut scene = self.clone();
+        let rebase = |written: &mut PathBuf| {
+            if written.is_relative() {
+                *written = rebase_path(written, from, to);
+            }
+        };
+        for o in &mut scene.objects {
+            if let crate::objects::Shape::Mesh(m) = &mut o.shape {
+                rebase(&mut m.path);
+            }
+        }
+        for set in &mut scene.particles {
+            if let crate::particles::Origin::File { path, .. } = &mut set.origin {
+                rebase(path);
+            }
+        }
+        scene
+    }
+
     /// Reads and validates a scene file.
     pub fn load(path: &Path) -> Result<Scene, SceneError> {
         let meta = std::fs::metadata(path).map_err(|source| SceneError::Read {
@@ -501,4 +524,76 @@ pub(crate) fn shipped(name: &str) -> Scene {
         .join("assets/scenes")
         .join(name);
     Scene::parse(&std::fs::read_to_string(&path).unwrap(), &path).unwrap()
+}
+
+/// `written`, a path relative to the folder `from`, as a path relative to the folder `to` naming the same file
+/// (lexically: `.` and `..` resolved without the file system, so that a file not yet there is named alike); absolute
+/// where the two share no root (another drive).
+pub fn rebase_path(written: &Path, from: &Path, to: &Path) -> PathBuf {
+    use std::path::Component;
+    fn absolute(p: &Path) -> Vec<Component<'_>> {
+        let mut out: Vec<Component<'_>> = Vec::new();
+        for c in p.components() {
+            match c {
+                Component::CurDir => {}
+                Component::ParentDir => {
+                    if matches!(out.last(), Some(Component::Normal(_))) {
+                        out.pop();
+                    }
+                }
+                c => out.push(c),
+            }
+        }
+        out
+    }
+    let here = std::env::current_dir().unwrap_or_default();
+    let full_path = here.join(from).join(written);
+    let to_path = here.join(to);
+    let (full, to) = (absolute(&full_path), absolute(&to_path));
+    let shared = full.iter().zip(&to).take_while(|(a, b)| a == b).count();
+    let rooted = |c: &[Component<'_>]| {
+        c.iter()
+            .any(|c| matches!(c, Component::RootDir | Component::Prefix(_)))
+    };
+    if shared == 0 || (rooted(&full) && !rooted(&full[..shared])) {
+        return full.iter().collect();
+    }
+    let mut out = PathBuf::new();
+    for _ in shared..to.len() {
+        out.push("..");
+    }
+    for c in &full[shared..] {
+        out.push(c);
+    }
+    out
+}
+
+#[cfg(test)]
+mod rebase_tests {
+    use super::*;
+
+    #[test]
+    fn a_relative_path_names_the_same_file_from_the_new_folder() {
+        let p = |s: &str| PathBuf::from(s);
+        assert_eq!(
+            rebase_path(&p("mesh.glb"), &p("/a/b"), &p("/a/b")),
+            p("mesh.glb")
+        );
+        assert_eq!(
+            rebase_path(&p("mesh.glb"), &p("/a/b"), &p("/a/c")),
+            p("../b/mesh.glb")
+        );
+        assert_eq!(
+            rebase_path(&p("../m/mesh.glb"), &p("/a/b"), &p("/a/b/c/d")),
+            p("../../../m/mesh.glb")
+        );
+        assert_eq!(
+            rebase_path(&p("./x/../mesh.glb"), &p("/a/b"), &p("/")),
+            p("a/b/mesh.glb")
+        );
+        assert_eq!(
+            rebase_path(&p("mesh.glb"), &p("/a/b"), &p("/a/b/./new/..")),
+            p("mesh.glb")
+        );
+    }
 }

@@ -125,11 +125,18 @@ impl Document {
     /// The file's own text gets the changes written into it, its comments, order and layout kept; a scene
     /// without a file is written fresh (`scene::format`).
     pub fn save_as(&mut self, path: &Path) -> Result<(), OutputError> {
+        // Into another folder, a mesh's or PLY file's relative path is rewritten to name the same file from there.
+        let folder = |p: Option<&Path>| {
+            p.and_then(Path::parent)
+                .map_or_else(PathBuf::new, Path::to_path_buf)
+        };
+        let scene = (self.scene).rebased(&folder(self.path.as_deref()), &folder(Some(path)));
         let text = match &self.source {
-            Some(source) => format::update_text(source, &self.saved, &self.scene, path),
-            None => format::fresh_text(&self.scene, path),
+            Some(source) => format::update_text(source, &self.saved, &scene, path),
+            None => format::fresh_text(&scene, path),
         };
         output::write_atomically(path, text.as_bytes())?;
+        self.scene = scene;
         self.source = Some(text);
         self.path = Some(path.to_owned());
         self.saved = self.scene.clone();
@@ -460,5 +467,36 @@ mod tests {
             }
             std::thread::sleep(Duration::from_millis(5));
         }
+    }
+
+    #[test]
+    fn save_as_into_another_folder_keeps_the_meshes_and_particle_files_it_names() {
+        // paper_two_particles names "two_particles.ply" beside it: saved into another folder, the file must still
+        // name it (as "../..." or absolute), and load with the same particles.
+        let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes");
+        let dir = tmp("save-as-elsewhere");
+        let copy = dir.join("orig");
+        std::fs::create_dir_all(&copy).unwrap();
+        for f in ["paper_two_particles.toml", "two_particles.ply"] {
+            std::fs::copy(scenes.join(f), copy.join(f)).unwrap();
+        }
+        let mut doc = Document::open(&copy.join("paper_two_particles.toml")).unwrap();
+        let before = doc.scene.clone();
+        let elsewhere = dir.join("other").join("deeper");
+        std::fs::create_dir_all(&elsewhere).unwrap();
+        let saved = elsewhere.join("moved.toml");
+        doc.save_as(&saved).unwrap();
+        let text = std::fs::read_to_string(&saved).unwrap();
+        assert!(text.contains("../../orig/two_particles.ply"), "{text}");
+        let loaded = Scene::load(&saved).unwrap_or_else(|e| panic!("{e}\n{text}"));
+        assert_eq!(loaded.particles.len(), before.particles.len());
+        for (a, b) in loaded.particles.iter().zip(&before.particles) {
+            let (a, b) = (a.particles(&loaded.sources), b.particles(&before.sources));
+            assert!(!a.is_empty() && a == b);
+        }
+        // Saved back beside the file it names, the path is as short as it was.
+        doc.save_as(&copy.join("again.toml")).unwrap();
+        let again = std::fs::read_to_string(copy.join("again.toml")).unwrap();
+        assert!(again.contains("file = \"two_particles.ply\""), "{again}");
     }
 }
