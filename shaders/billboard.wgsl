@@ -21,6 +21,14 @@ struct BillboardParams {
     far: f32,
     nu: f32,           // E = V + nu (S - V)
     cutoff: f32,       // the glow's edge: B at or below it transparent, faded in up to twice it; 0 for none
+    edge: f32,         // the band along each edge the glow fades over, a share of the side (geometry::edge_window)
+}
+
+// The glow's window at uv (twin of geometry::edge_window): 1 inside, smoothly to 0 at the edges across the band.
+fn edge_window(uv: vec2<f32>) -> f32 {
+    let e = params.edge;
+    let ramp = smoothstep(vec2<f32>(0.0), vec2<f32>(e), min(uv, vec2<f32>(1.0) - uv));
+    return select(1.0, ramp.x * ramp.y, e > 0.0);
 }
 
 // Whether the field texture holds the tint (layers 1 to 3) beside B: false where every source has the scene's
@@ -205,7 +213,8 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     // the colored sum G fades with B. A select, not a branch: the cutoff is a value per edit.
     let c = params.cutoff;
     let fade = select(1.0, smoothstep(c, 2.0 * c, abs(field.x)), c > 0.0);
-    field = field * fade;
+    // And where the billboard's edge lies inside the frame, the glow fades out before it, not cut off square.
+    field = field * (fade * edge_window(in.uv));
     let b = field.x;
     let glow = b * params.energy.rgb + field.yzw;
     let cb = textureLoad(background, vec2<i32>(in.position.xy), 0);

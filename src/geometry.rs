@@ -122,6 +122,28 @@ pub struct Billboard {
     pub up: DVec3,
     /// `normalize(V - C)`: toward the eye.
     pub normal: DVec3,
+    /// The band along each edge over which the glow fades to nothing, as a share of the side (`edge_window`): 0
+    /// where the billboard's edges lie outside the frame, up to `EDGE_BAND` where they lie inside it, so that a
+    /// glow reaching past the billboard is not cut off square there.
+    pub edge: f64,
+}
+
+/// The widest band of `Billboard::edge`: a fifth of the side along each edge (a tenth left the faint glow of a
+/// lone point a rounded square).
+pub const EDGE_BAND: f64 = 0.2;
+
+/// The glow's window at texture coordinates `(u, v)` in [0, 1] of a billboard whose fading band is `edge`: 1
+/// inside, falling smoothly (smoothstep) to 0 at the edges across the band; 1 everywhere for no band. The one
+/// formula of both renderers (`shaders/billboard.wgsl`).
+pub fn edge_window(u: f64, v: f64, edge: f64) -> f64 {
+    if edge <= 0.0 {
+        return 1.0;
+    }
+    let ramp = |x: f64| {
+        let t = (x.min(1.0 - x) / edge).clamp(0.0, 1.0);
+        t * t * (3.0 - 2.0 * t)
+    };
+    ramp(u) * ramp(v)
 }
 
 impl Billboard {
@@ -136,6 +158,7 @@ impl Billboard {
             right,
             up: normal.cross(right),
             normal,
+            edge: 0.0,
         }
     }
 
@@ -190,13 +213,17 @@ fn effect_sphere(camera: &Camera, sources: &Sources) -> (DVec3, f64) {
 /// `center` and `size` fix it where the scene gives them. Otherwise (automatic placement) the billboard is
 /// perpendicular to the view axis, just in front of the sources' bounding sphere (METHOD.md section 3: the
 /// plane must lie between the eye and the effect), and large enough to cover the whole frame, or only the
-/// effect and its glow when that is smaller. A camera inside the sphere gets a plane close to the eye.
+/// effect and its glow when that is smaller and `glow_ends` (the scene's glow has an edge, `colors.cutoff` above
+/// 0, which the effect's reach holds): a glow without one reaches past any reach (a lone point's, at 1.2 scene
+/// units, still 30/255 on black), and its billboard covers the frame. A camera inside the sphere gets a plane
+/// close to the eye.
 pub fn place_billboard(
     camera: &Camera,
     sources: &Sources,
     center: Option<DVec3>,
     size: Option<f64>,
     aspect: f64,
+    glow_ends: bool,
 ) -> Billboard {
     let frame = camera.frame();
     let view_distance = (camera.target - camera.eye).length();
@@ -208,17 +235,27 @@ pub fn place_billboard(
     let plane = (depth - extent).max(0.05 * extent).max(min_plane);
 
     let center = center.unwrap_or(camera.eye + frame.forward * plane);
+    let half_view = (center - camera.eye).length() * camera.tan_half_fov() * aspect.max(1.0);
     let size = size.unwrap_or_else(|| {
         let plane = (center - camera.eye).length();
-        let half_view = plane * camera.tan_half_fov() * aspect.max(1.0);
-        let half_effect = if depth > extent {
+        let half_effect = if depth > extent && glow_ends {
             plane * (lateral + GLOW_REACH * extent) / depth
         } else {
             f64::INFINITY
         };
         2.0 * half_view.min(half_effect)
     });
-    Billboard::facing(center, size, camera.eye, camera.up)
+    let mut billboard = Billboard::facing(center, size, camera.eye, camera.up);
+    // How far the edges lie inside the frame, in bands: the fade grows from none (edges at the frame's, which hide
+    // them) to the whole band as they come one band inside, continuously as the camera moves.
+    let inside = (half_view - 0.5 * size) / (EDGE_BAND * size);
+    let t = inside.clamp(0.0, 1.0);
+    billboard.edge = if t.is_finite() {
+        EDGE_BAND * t * t * (3.0 - 2.0 * t)
+    } else {
+        0.0
+    };
+    billboard
 }
 
 /// The most decay lengths a ray may span (a bound against overflow; real scenes stay near 1).
@@ -270,7 +307,7 @@ pub fn papers_decay_length(
     billboard_center: Option<DVec3>,
     nu: f64,
 ) -> f64 {
-    let b = place_billboard(camera, sources, billboard_center, Some(1.0), 1.0);
+    let b = place_billboard(camera, sources, billboard_center, Some(1.0), 1.0, true);
     (nu - 1.0) * (b.center - camera.eye).length()
 }
 
@@ -351,7 +388,7 @@ mod tests {
     #[test]
     fn automatic_billboard_is_in_front_of_the_sources_and_holds_a_small_effect() {
         let c = camera();
-        let b = place_billboard(&c, &ring(), None, None, 1.5);
+        let b = place_billboard(&c, &ring(), None, None, 1.5, true);
         // In front of every source (the ring reaches z = 1/sqrt(2)), between the eye and the effect.
         assert!(b.center.z > 1.0 && b.center.z < 10.0, "{b:?}");
         // The ring and a glow margin around it lie well inside the square.
@@ -374,7 +411,7 @@ mod tests {
             eye: DVec3::new(0.0, 0.0, 3.0),
             ..camera()
         };
-        let b = place_billboard(&c, &ring(), None, None, 1.5);
+        let b = place_billboard(&c, &ring(), None, None, 1.5, true);
         for (x, y) in [
             (0.0, 0.0),
             (300.0, 0.0),
@@ -392,7 +429,7 @@ mod tests {
             eye: DVec3::new(0.2, 0.0, 0.1),
             ..camera()
         };
-        let b = place_billboard(&inside, &ring(), None, None, 1.0);
+        let b = place_billboard(&inside, &ring(), None, None, 1.0, true);
         assert!(b.size.is_finite() && b.size > 0.0);
         assert!(
             b.hit(inside.eye, inside.pixel_ray(50.0, 50.0, 100, 100))

@@ -199,7 +199,7 @@ fn rust_mirrors_match_the_wgsl_layouts() {
         &field,
         "CurvePiece",
         size_of::<CurvePiece>(),
-        fields!(CurvePiece: c2, s2, c1, s1, c0, s0, center, radius, t0, t1, weight_max, pad0),
+        fields!(CurvePiece: c2, s2, c1, s1, c0, s0, center, radius, t0, t1, weight_max, zero_end),
     );
     check_struct(
         &field,
@@ -263,7 +263,7 @@ fn rust_mirrors_match_the_wgsl_layouts() {
         &billboard,
         "BillboardParams",
         size_of::<BillboardParams>(),
-        fields!(BillboardParams: view_proj, center, size, right, resolution, up, mode, energy, near, far, nu, cutoff),
+        fields!(BillboardParams: view_proj, center, size, right, resolution, up, mode, energy, near, far, nu, cutoff, edge),
     );
     let average = parse_and_validate("average", shaders::AVERAGE_PASS);
     check_struct(

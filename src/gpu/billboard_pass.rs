@@ -33,8 +33,12 @@ pub mod gpu_data {
         pub far: f32,                 // 132
         pub nu: f32,                  // 136: E = V + nu (S - V) (`geometry::Reach`)
         pub cutoff: f32,              // 140: the glow's edge (`scene::edge_fade`), 0 for none
+        pub edge: f32, // 144: the band the glow fades over at the edges (`geometry::edge_window`)
+        pub pad0: f32, // 148
+        pub pad1: f32, // 152
+        pub pad2: f32, // 156
     }
-    const _: () = assert!(size_of::<BillboardParams>() == 144);
+    const _: () = assert!(size_of::<BillboardParams>() == 160);
 }
 
 use gpu_data::BillboardParams;
@@ -101,6 +105,10 @@ pub fn billboard_params(
         far: far as f32,
         nu: nu as f32,
         cutoff: cutoff as f32,
+        edge: billboard.edge as f32,
+        pad0: 0.0,
+        pad1: 0.0,
+        pad2: 0.0,
         view_proj: view_projection(camera, billboard, aspect)
             .as_mat4()
             .to_cols_array_2d(),

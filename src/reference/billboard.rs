@@ -291,7 +291,8 @@ fn compose(
                             sample_near_clip(texture, clips.as_deref().unwrap_or(&[]), (u, v), clip)
                         }
                     };
-                    let fade = crate::scene::edge_fade(b, scene.colors.cutoff);
+                    let fade = crate::scene::edge_fade(b, scene.colors.cutoff)
+                        * crate::geometry::edge_window(u, v, billboard.edge);
                     let (b, tint) = (b * fade, tint.map(|t| t * fade));
                     let g = glow(b, tint, scene.colors.energy_color());
                     *out = if transparent {

@@ -480,6 +480,7 @@ impl Scene {
             self.billboard.center,
             self.billboard.size,
             aspect,
+            self.colors.cutoff > 0.0,
         )
     }
 

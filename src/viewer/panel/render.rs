@@ -335,13 +335,9 @@ pub(super) fn billboard_editor(ui: &mut Ui, cx: &Context, out: &mut Edits<'_>) {
     {
         let placement = fixed.then(|| {
             // Fixed where it is now.
-            let placed = crate::geometry::place_billboard(
-                &scene.camera,
-                &scene.sources,
-                None,
-                None,
-                cx.aspect,
-            );
+            let mut automatic = scene.clone();
+            (automatic.billboard.center, automatic.billboard.size) = (None, None);
+            let placed = automatic.place_billboard(cx.aspect);
             (placed.center, placed.size)
         });
         out.push(Action::Edit(Edit::Billboard(placement)));
