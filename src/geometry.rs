@@ -128,9 +128,11 @@ pub struct Billboard {
     pub edge: f64,
 }
 
-/// The widest band of `Billboard::edge`: a fifth of the side along each edge (a tenth left the faint glow of a
-/// lone point a rounded square).
-pub const EDGE_BAND: f64 = 0.2;
+/// The widest band of `Billboard::edge`: a 25th of the side along each edge. A glow this fade reaches is one the
+/// effect's reach did not cover (a strong source's, above its cutoff there): the band turns the cut into a short
+/// ramp without dimming the glow inside (a fifth of the side dimmed a point's glow beside an object from alpha 40
+/// to 6).
+pub const EDGE_BAND: f64 = 0.04;
 
 /// The glow's window at texture coordinates `(u, v)` in [0, 1] of a billboard whose fading band is `edge`: 1
 /// inside, falling smoothly (smoothstep) to 0 at the edges across the band; 1 everywhere for no band. The one

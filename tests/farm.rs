@@ -115,37 +115,58 @@ fn a_chunk_stopped_or_failing_halfway_leaves_no_file() {
     let dir = common::tmpdir("farm", "stopped");
     // A scheduler's time limit or cancel: SIGTERM while the chunk renders. It stops after its frame, removes
     // what it wrote and says to try again (status 1).
+    // The signal must land while the chunk still renders: once a frame is whole the chunk is stopped (SIGSTOP, at
+    // once), and only then sent SIGTERM and let go on (SIGCONT), so that it cannot finish first however fast the
+    // GPU; should every frame be done before it was stopped, the chunk is run again over more frames.
     let s = scene();
     let out = pattern(&dir);
-    let mut args = vec!["render", s.as_str(), "--frames", "0-60", "-o", &out];
-    args.extend(SMALL);
-    let mut child = bin()
-        .args(&args)
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    let start = std::time::Instant::now();
-    // Until a frame is whole in the chunk's staging folder.
-    loop {
-        let staged: usize = (std::fs::read_dir(&dir).unwrap().flatten())
-            .filter(|e| e.path().is_dir())
-            .map(|e| std::fs::read_dir(e.path()).map_or(0, |d| d.count()))
-            .sum();
-        if staged >= 2 {
+    let signal = |name: &str, child: &std::process::Child| {
+        // The shell's own kill: no procps needed.
+        let ok = Command::new("sh")
+            .args(["-c", &format!("kill -{name} {}", child.id())])
+            .status()
+            .unwrap();
+        assert!(ok.success(), "kill -{name}");
+    };
+    let mut child = None;
+    for last in [60, 119] {
+        let range = format!("0-{last}");
+        let mut args = vec!["render", s.as_str(), "--frames", range.as_str(), "-o", &out];
+        args.extend(SMALL);
+        let mut c = bin()
+            .args(&args)
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        let start = std::time::Instant::now();
+        // Until a frame is whole in the chunk's staging folder.
+        loop {
+            let staged: usize = (std::fs::read_dir(&dir).unwrap().flatten())
+                .filter(|e| e.path().is_dir())
+                .map(|e| std::fs::read_dir(e.path()).map_or(0, |d| d.count()))
+                .sum();
+            if staged >= 2 || c.try_wait().unwrap().is_some() {
+                break;
+            }
+            assert!(
+                start.elapsed().as_secs() < 120,
+                "no frame rendered in 2 minutes"
+            );
+            std::thread::sleep(std::time::Duration::from_millis(5));
+        }
+        signal("STOP", &c);
+        if c.try_wait().unwrap().is_none() {
+            child = Some(c);
             break;
         }
-        assert!(
-            start.elapsed().as_secs() < 120,
-            "no frame rendered in 2 minutes"
-        );
-        std::thread::sleep(std::time::Duration::from_millis(20));
+        // It finished every frame first: clear its frames away and run a longer chunk.
+        for name in names(&dir) {
+            let _ = std::fs::remove_file(dir.join(name));
+        }
     }
-    // The shell's own kill: no procps needed.
-    let term = Command::new("sh")
-        .args(["-c", &format!("kill -TERM {}", child.id())])
-        .status()
-        .unwrap();
-    assert!(term.success());
+    let mut child = child.expect("a chunk still rendering when stopped");
+    signal("TERM", &child);
+    signal("CONT", &child);
     let status = child.wait().unwrap();
     let mut err = String::new();
     std::io::Read::read_to_string(&mut child.stderr.take().unwrap(), &mut err).unwrap();

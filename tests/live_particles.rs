@@ -110,11 +110,17 @@ fn every_frame_is_the_same_however_it_is_reached() {
 fn a_frame_rendered_alone_in_another_process_matches_the_sequence() {
     let dir = common::tmpdir("live_particles", "alone");
     let scene = common::scenes_dir().join("pulse_sparks.toml");
+    // The same scene without its sparks: what the glow alone shows.
+    let text = std::fs::read_to_string(&scene).unwrap();
+    let glow_only = dir.join("glow_only.toml");
+    let cut = text.find("[[particles]]").expect("the preset has sparks");
+    let animation = &text[text.find("[animation]").expect("and an animation")..];
+    std::fs::write(&glow_only, format!("{}\n{animation}", &text[..cut])).unwrap();
     let bin = env!("CARGO_BIN_EXE_energywave");
-    let run = |args: &[&str]| {
+    let render = |scene: &std::path::Path, args: &[&str]| {
         let out = Command::new(bin)
             .arg("render")
-            .arg(&scene)
+            .arg(scene)
             .args(["--size", "96x72"])
             .args(args)
             .env("XDG_RUNTIME_DIR", std::env::temp_dir())
@@ -126,6 +132,7 @@ fn a_frame_rendered_alone_in_another_process_matches_the_sequence() {
             String::from_utf8_lossy(&out.stderr)
         );
     };
+    let run = |args: &[&str]| render(&scene, args);
     for backend in ["cpu", "gpu"] {
         let seq = dir.join(format!("{backend}_####.png"));
         run(&[
@@ -160,9 +167,30 @@ fn a_frame_rendered_alone_in_another_process_matches_the_sequence() {
             largest <= allowed,
             "{backend}: frame 43 differs by {largest} between the sequence and alone"
         );
-        // Not a blank frame: the sparks and the glow are in it.
+        // Not a blank frame, nor the glow alone: against the frame without the sparks, the sparks light pixels
+        // of their own.
+        let bare = dir.join(format!("{backend}_glow_only.png"));
+        render(
+            &glow_only,
+            &[
+                "--backend",
+                backend,
+                "--frames",
+                "43",
+                "-o",
+                bare.to_str().unwrap(),
+            ],
+        );
+        let bare = image::open(&bare).unwrap().to_rgba8();
         let lit = a.pixels().filter(|p| p.0[0] > 40).count();
         assert!(lit > 100, "{backend}: {lit}");
+        let sparks = (a.pixels().zip(bare.pixels()))
+            .filter(|(x, y)| x.0[0].abs_diff(y.0[0]) > 20)
+            .count();
+        assert!(
+            sparks > 20,
+            "{backend}: the sparks change {sparks} pixels of the glow's frame"
+        );
     }
 }
 
@@ -622,7 +650,10 @@ fn particles_are_thrown_along_the_shape() {
              bursts = [[0.0, 200.0]]\nlifetime = 10.0\nspeed = 1.0\ncone = 0.0\ndirection = \"{direction}\"\n\n\
              [animation]\nframes = 10\n"
         );
-        live_state_at(&parse(&text).unwrap(), 0, 0)
+        let state = live_state_at(&parse(&text).unwrap(), 0, 0);
+        // The burst's 200, every one of them checked below.
+        assert_eq!(state.particles.len(), 200, "{emitter} {direction}");
+        state
     };
     for p in &scene("emitter = \"torus\"\ntorus = 0", "outward").particles {
         let radial = DVec3::new(p.position.x, 0.0, p.position.z) / 2.0;

@@ -176,6 +176,65 @@ count = 300
         let q = p.position - DVec3::new(0.0, -5.0, 0.0);
         assert!(q.abs().cmple(DVec3::new(1.0, 0.5, 2.0)).all(), "{q}");
     }
+    // Spread over what they name, not gathered at one place that the bounds above would let through: around the
+    // whole ring, along the whole chain, into every corner of the box, through the spread's depth, and their radii and
+    // densities over their ranges.
+    let share = |set: &[energywave::particles::Particle],
+                 f: &dyn Fn(&energywave::particles::Particle) -> bool| {
+        set.iter().filter(|p| f(p)).count() as f64 / set.len() as f64
+    };
+    let frame = torus.axis.any_orthonormal_pair();
+    for quarter in 0..4 {
+        let s = share(&sets[0], &|p| {
+            let q = p.position - torus.center;
+            let a = q
+                .dot(frame.1)
+                .atan2(q.dot(frame.0))
+                .rem_euclid(std::f64::consts::TAU);
+            (a / std::f64::consts::FRAC_PI_2) as usize == quarter
+        });
+        assert!(
+            (0.15..0.35).contains(&s),
+            "torus: {s} of the set in quarter {quarter} of the ring"
+        );
+    }
+    let deep = share(&sets[0], &|p| {
+        energywave::field::torus_distance(p.position, torus.center, torus.axis, 2.0) > 0.15
+    });
+    assert!(
+        deep > 0.3,
+        "torus: {deep} of the set deeper than half the spread"
+    );
+    for quarter in 0..4 {
+        let s = share(&sets[1], &|p| {
+            let t = energywave::field::curve::nearest_on_chain(curve, p.position).t;
+            ((t * 4.0) as usize).min(3) == quarter
+        });
+        assert!(
+            s > 0.1,
+            "curve: {s} of the set along quarter {quarter} of the chain"
+        );
+    }
+    let (r, d): (Vec<f64>, Vec<f64>) = sets[1].iter().map(|p| (p.radius, p.density)).unzip();
+    let span = |v: &[f64]| {
+        v.iter().copied().fold(f64::MIN, f64::max) - v.iter().copied().fold(f64::MAX, f64::min)
+    };
+    assert!(
+        span(&r) > 0.04 && span(&d) > 0.8,
+        "radii span {}, densities {}",
+        span(&r),
+        span(&d)
+    );
+    for octant in 0..8 {
+        let s = share(&sets[2], &|p| {
+            let q = p.position - DVec3::new(0.0, -5.0, 0.0);
+            (q.x > 0.0) as usize + 2 * (q.y > 0.0) as usize + 4 * (q.z > 0.0) as usize == octant
+        });
+        assert!(
+            (0.05..0.2).contains(&s),
+            "box: {s} of the set in octant {octant}"
+        );
+    }
     // Moving the curve moves its sparks.
     let mut moved = scene.clone();
     moved.sources.curves[0].control_points[1].y = 4.0;
