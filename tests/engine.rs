@@ -376,13 +376,24 @@ fn the_glsl_and_hlsl_engines_get_give_the_field_pass_brightness_within_f32() {
             &uniforms,
             w,
         );
-        for (g, b) in glow.iter().zip(&want) {
+        // Its color too, not the alpha alone: G = B Ce + the sources' tint, faded at the glow's edge, against our
+        // field pass's B and tint and the scene's energy color.
+        let tint = ours.tint().expect("the field pass's tint");
+        let energy = scene.colors.energy_color();
+        for ((g, b), t) in glow.iter().zip(&want).zip(&tint) {
             let fade = energywave::scene::edge_fade(*b as f64, scene.colors.cutoff) as f32;
             assert!(
                 (g[3] - (b * fade).clamp(0.0, 1.0)).abs() < 1e-4,
                 "{name}: alpha {} for B {b}",
                 g[3]
             );
+            for k in 0..3 {
+                let color = (fade * (b * energy[k] as f32 + t[k])).max(0.0);
+                assert!(
+                    (g[k] - color).abs() < 1e-4 * color.abs().max(1.0),
+                    "{name}: premultiplied color {g:?} for B {b}, tint {t:?}: channel {k} should be {color}"
+                );
+            }
         }
     }
     let _ = std::fs::remove_dir_all(&dir);

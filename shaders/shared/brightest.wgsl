@@ -332,8 +332,14 @@ fn piece_maxima(best_in: Bright, q: CurvePiece, k: u32, p: vec3<f32>) -> Bright 
             best = offer_point(best, q, k, x, p);
         }
         at += size;
-        // Up as many levels as the parts this one ends (a loop here spent lavapipe's budget of loop iterations).
-        level -= min(level, countTrailingZeros(at / size));
+        // Up as many levels as the parts this one ends: the trailing zeros of at / size (at most 64), from its
+        // lowest set bit by comparisons (a loop here spent lavapipe's budget of loop iterations, and GLSL ES 3.00,
+        // the engine shader's, has no findLSB for countTrailingZeros).
+        let k = at / size;
+        let low = k & (~k + 1u);
+        let zeros = select(0u, 1u, low >= 2u) + select(0u, 1u, low >= 4u) + select(0u, 1u, low >= 8u)
+            + select(0u, 1u, low >= 16u) + select(0u, 1u, low >= 32u) + select(0u, 1u, low >= 64u);
+        level -= min(level, zeros);
     }
     return best;
 }
