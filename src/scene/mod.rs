@@ -552,11 +552,8 @@ pub fn rebase_path(written: &Path, from: &Path, to: &Path) -> PathBuf {
     let to_path = here.join(to);
     let (full, to) = (absolute(&full_path), absolute(&to_path));
     let shared = full.iter().zip(&to).take_while(|(a, b)| a == b).count();
-    let rooted = |c: &[Component<'_>]| {
-        c.iter()
-            .any(|c| matches!(c, Component::RootDir | Component::Prefix(_)))
-    };
-    if shared == 0 || (rooted(&full) && !rooted(&full[..shared])) {
+    // Both are absolute (joined onto the working folder), so a shared first component is a shared root.
+    if shared == 0 {
         return full.iter().collect();
     }
     let mut out = PathBuf::new();
