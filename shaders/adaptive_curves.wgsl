@@ -51,10 +51,12 @@ const TRACK_REACH: f32 = 0.05;
 // (NO_SEGMENT before the piece's first node), its parameter u on that segment, and du/dt there.
 struct Track {
     segment: u32,
-    u: f32,
+    u: f32,       // < 0 where only the segment is known (at a part's start: solved on it in closed form)
     rate: f32,
     t: f32,
     whole: bool,  // solve every node on the whole chain (a part whose ends lie on different segments)
+    home: u32,    // the segment of the part's two ends, where they agree (else NO_SEGMENT), which the part's first
+                  // node and a refinement's start are solved on (twin of split_at_switch's segment)
 }
 
 // The rate du/dt of a nearest point at u on segment s: from the stationarity (C(u) - L(t)) . C'(u) = 0, C'(u) . dir
@@ -93,7 +95,7 @@ fn track_nearest(c: CurveSource, ray: Ray, t: f32, track: ptr<function, Track>) 
         var segment = NO_SEGMENT;
         return nearest_on_chain_from(c, p, &segment);
     }
-    if j < k && reach <= TRACK_REACH {
+    if j < k && (*track).u >= 0.0 && reach <= TRACK_REACH {
         let s = chain_segment(c, HELD, j);
         var u = clamp((*track).u + (*track).rate * (t - (*track).t), 0.0, 1.0);
         var step = 0.0;
@@ -110,7 +112,7 @@ fn track_nearest(c: CurveSource, ray: Ray, t: f32, track: ptr<function, Track>) 
         let at_joint = (u == 0.0 && j > 0u) || (u == 1.0 && j + 1u < k);
         if convex && abs(step) <= TRACK_SETTLED && !at_joint && single_stationary(s, p) {
             let off = segment_at(s, u) - p;
-            *track = Track(j, u, track_rate(s, u, off, ray.dir), t, false);
+            *track = Track(j, u, track_rate(s, u, off, ray.dir), t, false, (*track).home);
             return vec2<f32>((f32(j) + u) / f32(k), length(off));
         }
     }
@@ -118,7 +120,7 @@ fn track_nearest(c: CurveSource, ray: Ray, t: f32, track: ptr<function, Track>) 
     let n = nearest_on_chain_from(c, p, &segment);
     let s = chain_segment(c, HELD, segment);
     let u = clamp(n.x * f32(k) - f32(segment), 0.0, 1.0);
-    *track = Track(segment, u, track_rate(s, u, segment_at(s, u) - p, ray.dir), t, false);
+    *track = Track(segment, u, track_rate(s, u, segment_at(s, u) - p, ray.dir), t, false, (*track).home);
     return n;
 }
 
@@ -164,15 +166,15 @@ fn bright_track(c: CurveSource, ray: Ray, t: f32, track: ptr<function, Track>) -
             stands = stands && (j == k || bound <= value);
         }
         if stands {
-            *track = Track(k, x, piece_rate(q, x, p, ray.dir), t, false);
+            *track = Track(k, x, piece_rate(q, x, p, ray.dir), t, false, NO_SEGMENT);
             return Bright(value, mix(q.t0, q.t1, x), d, x, k);
         }
     }
     let b = curve_search(c, HELD, p);
     let whole = (*track).whole;
-    *track = Track(NO_SEGMENT, 0.0, 0.0, t, whole);
+    *track = Track(NO_SEGMENT, 0.0, 0.0, t, whole, NO_SEGMENT);
     if b.x > 0.0 && b.x < 1.0 && b.distance > EPSILON {
-        *track = Track(b.piece, b.x, piece_rate(chain_piece(c, HELD, b.piece), b.x, p, ray.dir), t, whole);
+        *track = Track(b.piece, b.x, piece_rate(chain_piece(c, HELD, b.piece), b.x, p, ray.dir), t, whole, NO_SEGMENT);
     }
     return b;
 }
@@ -250,7 +252,8 @@ fn curve_panel(ray: Ray, p: Peak, a: f32, b: f32, singular: vec2<bool>, allowanc
         } else {
             // Back to the part's start: the nearest point is solved afresh there rather than carried back over
             // the whole part, where Newton could settle on another stationary point.
-            (*track).segment = NO_SEGMENT;
+            (*track).segment = (*track).home;
+            (*track).u = -1.0;
             *refinements -= 1u;
             level++;
         }
@@ -400,7 +403,11 @@ fn integrate_curve_term(index: u32, s_point: vec3<f32>, e_point: vec3<f32>) -> v
                 }
                 let panels = u32(clamp(ceil((pb0 - pa0) / U_PANEL), 1.0, f32(MAX_GAUSS_PANELS)));
                 let width = (pb0 - pa0) / f32(panels);
-                var track = Track(NO_SEGMENT, 0.0, 0.0, 0.0, switched || singular_a || singular_b || degenerate);
+                // Where the part's ends agree on a segment (not in the continuous form, whose ends are 0 here), its
+                // nodes are solved on it: a whole-chain solve at the first node could land inside a jump and back the
+                // scan missed and carry that segment over the whole part.
+                let home = select(NO_SEGMENT, ends.x, !switched && !(reads_brightest(c)));
+                var track = Track(home, -1.0, 0.0, 0.0, switched || singular_a || singular_b || degenerate, home);
                 for (var i = 0u; i < panels; i++) {
                     let pa = pa0 + width * f32(i);
                     let singular = vec2<bool>(singular_a && first && i == 0u, singular_b && last && i + 1u == panels);

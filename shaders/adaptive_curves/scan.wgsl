@@ -331,10 +331,12 @@ fn joint_cuts(ray: Ray, x: vec2<f32>, y: vec2<f32>, kinks: ptr<function, Kinks>)
     }
 }
 
-// The two deepest local minima of d^2 on the scan, offered in order (ties to the left). Twin of Minima.
+// The MINIMA (3) deepest local minima of d^2, offered in order (ties to the left), deepest first. Twin of Minima:
+// three named slots, shifted down by comparisons (an array indexed by a variable lives in memory on lavapipe).
 struct Minima {
     best0: ChainSample,
     best1: ChainSample,
+    best2: ChainSample,
     count: u32,
 }
 
@@ -342,19 +344,195 @@ fn offer(m: ptr<function, Minima>, x: ChainSample, g_left: f32, g_right: f32) {
     if !(x.d2 < g_left && x.d2 <= g_right) {
         return;
     }
-    if (*m).count == 0u {
-        (*m).best0 = x;
-        (*m).count = 1u;
-    } else if x.d2 < (*m).best0.d2 {
+    let c = (*m).count;
+    if c == 0u || x.d2 < (*m).best0.d2 {
+        (*m).best2 = (*m).best1;
         (*m).best1 = (*m).best0;
         (*m).best0 = x;
-        (*m).count = 2u;
-    } else if (*m).count == 1u {
+    } else if c == 1u || x.d2 < (*m).best1.d2 {
+        (*m).best2 = (*m).best1;
         (*m).best1 = x;
-        (*m).count = 2u;
-    } else if x.d2 < (*m).best1.d2 {
-        (*m).best1 = x;
+    } else if c == 2u || x.d2 < (*m).best2.d2 {
+        (*m).best2 = x;
     }
+    (*m).count = min(c + 1u, MINIMA);
+}
+
+// The local minima of a segment's distance squared to the ray's line, as (d2, t) with t the foot on the line
+// (d2 < 0 in a slot without one): slots 0 and 1 the segment's ends where the distance rises into it, 2 to 4 the
+// stationary cubic's roots inside it where the distance curves up. Twin of approaches (which keeps the same order).
+struct Approaches {
+    d2: vec4<f32>,
+    t: vec4<f32>,
+    d2_last: f32,
+    t_last: f32,
+    falls_out: bool,  // the distance falls into the segment's end (an inner joint then ends no peak of the chain)
+}
+
+fn approach_at(a: Approaches, i: u32) -> vec2<f32> {
+    if i == 4u {
+        return vec2<f32>(a.d2_last, a.t_last);
+    }
+    return vec2<f32>(a.d2[i], a.t[i]);
+}
+
+// The candidate at u of the projected segment q (across the ray) and the segment itself, (d2, t), or none.
+fn approach_of(q: CurveSegment, seg: CurveSegment, ray: Ray, u: f32, minimum: bool) -> vec2<f32> {
+    if !minimum {
+        return vec2<f32>(-1.0, 0.0);
+    }
+    let x = segment_at(q, u);
+    return vec2<f32>(dot(x, x), dot(ray.dir, segment_at(seg, u) - ray.start) / dot(ray.dir, ray.dir));
+}
+
+fn root_approach(q: CurveSegment, seg: CurveSegment, ray: Ray, k: vec4<f32>, root: f32) -> vec2<f32> {
+    // One Newton step on the cubic: Cardano loses digits near double roots.
+    let bend = (3.0 * k.x * root + 2.0 * k.y) * root + k.z;
+    var u = root;
+    if bend != 0.0 {
+        u = root - (((k.x * root + k.y) * root + k.z) * root + k.w) / bend;
+    }
+    let curving = (3.0 * k.x * u + 2.0 * k.y) * u + k.z;
+    return approach_of(q, seg, ray, u, u > 0.0 && u < 1.0 && curving > 0.0);
+}
+
+// An end that is no local minimum of the chain's distance (an inner joint the distance does not fall into from the
+// neighbour: twin of approaches' `peak`) keeps its d2 but gets t = -1, outside the ray.
+fn approaches(seg: CurveSegment, ray: Ray, falls_in: bool, last: bool) -> Approaches {
+    let a = dot(ray.dir, ray.dir);
+    var q = seg;
+    q.c2 = seg.c2 - ray.dir * (dot(ray.dir, seg.c2) / a);
+    q.c1 = seg.c1 - ray.dir * (dot(ray.dir, seg.c1) / a);
+    let c0 = seg.c0 - ray.start;
+    q.c0 = c0 - ray.dir * (dot(ray.dir, c0) / a);
+    let k = stationary_cubic(q, vec3<f32>(0.0));
+    let falls_out = k.x + k.y + k.z + k.w < 0.0;
+    var e0 = approach_of(q, seg, ray, 0.0, k.w > 0.0);
+    var e1 = approach_of(q, seg, ray, 1.0, falls_out);
+    e0.y = select(-1.0, e0.y, falls_in);
+    e1.y = select(-1.0, e1.y, last);
+    let roots = solve_cubic(k.x, k.y, k.z, k.w);
+    let r0 = root_approach(q, seg, ray, k, roots.values.x);
+    let r1 = root_approach(q, seg, ray, k, roots.values.y);
+    let r2 = root_approach(q, seg, ray, k, roots.values.z);
+    return Approaches(vec4<f32>(e0.x, e1.x, r0.x, r1.x), vec4<f32>(e0.y, e1.y, r0.y, r1.y), r2.x, r2.y, falls_out);
+}
+
+// A chain's segments seen from the ray's line, in one pass over them. Twin of Survey: the two that come nearest the
+// line by their closest approach, (d2, segment) nearest first (d2 = F32_MAX for none), and the EXACT_SAMPLES (4)
+// deepest closest approaches inside the ray, d2 and t, deepest first.
+struct Survey {
+    nearest0: vec2<f32>,
+    nearest1: vec2<f32>,
+    candidate_d2: vec4<f32>,
+    candidate_t: vec4<f32>,
+    candidate_count: u32,
+}
+
+fn survey_of(ray: Ray) -> Survey {
+    let c = CHAIN;
+    var r = Survey(vec2<f32>(F32_MAX, 0.0), vec2<f32>(F32_MAX, 0.0), vec4<f32>(F32_MAX), vec4<f32>(0.0), 0u);
+    var falls_in = true;
+    for (var j = 0u; j < c.segment_count; j++) {
+        let a = approaches(chain_segment(c, HELD, j), ray, falls_in, j + 1u == c.segment_count);
+        falls_in = a.falls_out;
+        var least = F32_MAX;
+        for (var i = 0u; i < 5u; i++) {
+            let x = approach_at(a, i);
+            if x.x < 0.0 {
+                continue;
+            }
+            least = min(least, x.x);
+            if !(x.y > 0.0 && x.y < 1.0) {
+                continue;
+            }
+            // Into its place among the deepest, by comparisons (the last dropped where all are taken): the slots
+            // deeper than it stay, the first other takes it, the rest shift down one.
+            let d = r.candidate_d2;
+            let t = r.candidate_t;
+            let stays = d <= vec4<f32>(x.x);
+            let here = vec4<bool>(!stays.x, stays.x && !stays.y, stays.y && !stays.z, stays.z && !stays.w);
+            let d_shifted = vec4<f32>(x.x, d.x, d.y, d.z);
+            let t_shifted = vec4<f32>(x.y, t.x, t.y, t.z);
+            r.candidate_d2 = select(select(d_shifted, d, stays), vec4<f32>(x.x), here);
+            r.candidate_t = select(select(t_shifted, t, stays), vec4<f32>(x.y), here);
+            r.candidate_count = min(r.candidate_count + 1u, EXACT_SAMPLES);
+        }
+        if least < r.nearest0.x {
+            r.nearest1 = r.nearest0;
+            r.nearest0 = vec2<f32>(least, f32(j));
+        } else if least < r.nearest1.x {
+            r.nearest1 = vec2<f32>(least, f32(j));
+        }
+    }
+    return r;
+}
+
+// Twin of reach_between: the farthest the chain can be from the ray, squared, between samples x and y.
+fn reach_between(x: ChainSample, y: ChainSample, ray: Ray) -> f32 {
+    let e = x.point - y.point;
+    let slope = -2.0 * dot(ray.dir, e);
+    let at_zero = dot(x.point, x.point) - dot(y.point, y.point) - 2.0 * dot(ray.start, e);
+    var cross = x.t;
+    if slope != 0.0 {
+        cross = clamp(-at_zero / slope, x.t, y.t);
+    }
+    let fx = ray.start + ray.dir * cross - x.point;
+    let fy = ray.start + ray.dir * cross - y.point;
+    return max(max(x.d2, y.d2), min(dot(fx, fx), dot(fy, fy)));
+}
+
+fn segment_of(param: f32, k: u32) -> u32 {
+    return min(u32(floor(clamp(param, 0.0, 1.0) * f32(k))), k - 1u);
+}
+
+fn inner_joint(param: f32, k: u32) -> bool {
+    let x = param * f32(k);
+    let r = round(x);
+    return r > 0.0 && r < f32(k) && abs(x - r) <= END_SNAP * f32(k);
+}
+
+// Twin of Survey::suspect: why the scan samples the interval between x and y SUB_SCAN times finer, as Suspicion: 0
+// not at all, 1 for events (the samples on different segments or on a joint), 2 for a rival segment.
+fn suspect(r: Survey, x: ChainSample, y: ChainSample, ray: Ray) -> u32 {
+    let k = CHAIN.segment_count;
+    if k < 2u {
+        return 0u;
+    }
+    let jx = segment_of(x.param, k);
+    if inner_joint(x.param, k) || inner_joint(y.param, k) || jx != segment_of(y.param, k) {
+        return 1u;
+    }
+    let rival = select(r.nearest0.x, r.nearest1.x, u32(r.nearest0.y) == jx);
+    return select(0u, 2u, rival <= RIVAL_MARGIN * reach_between(x, y, ray));
+}
+
+// Twin of closest_approaches: the chain's closest approaches found segment by segment, in place of the scan's
+// minima inside the ray.
+fn closest_approaches(ray: Ray, survey: Survey, scanned: Minima) -> Minima {
+    var exact: Minima;
+    exact.count = 0u;
+    for (var i = 0u; i < survey.candidate_count; i++) {
+        let m = chain_sample(ray, survey.candidate_t[i], false);
+        if m.d2 >= EXACT_SLACK * survey.candidate_d2[i] {
+            offer(&exact, m, F32_MAX, F32_MAX);
+        }
+    }
+    if exact.count == 0u {
+        return scanned;
+    }
+    for (var slot = 0u; slot < scanned.count; slot++) {
+        var x = scanned.best0;
+        if slot == 1u {
+            x = scanned.best1;
+        } else if slot == 2u {
+            x = scanned.best2;
+        }
+        if x.t == 0.0 || x.t == 1.0 {
+            offer(&exact, x, F32_MAX, F32_MAX);
+        }
+    }
+    return exact;
 }
 
 // A chain's features along the ray: its closest approaches (each owning its piece) and its kinks.
@@ -401,12 +579,31 @@ fn curve_features(ray: Ray) -> CurveFeatures {
     // The ends' peaks, where the ray crosses their normal planes (with_ends).
     var ends: array<Peak, 2>;
     var end_count = 0u;
-    var before: ChainSample;
+    // The scan's samples every step, and SUB_SCAN times finer over an interval it suspects (twin of the
+    // reference's loop, whose samples come in another order: one call site of chain_sample in the loop, which
+    // takes each coarse sample one interval ahead and decides then whether the interval up to it is suspect).
+    let survey = survey_of(ray);
+    let fine = SCAN * SUB_SCAN;
+    let fine_step = step / f32(SUB_SCAN);
+    var before = chain_sample(ray, 0.0, false);
+    var ahead = chain_sample(ray, step, false);
+    var why = suspect(survey, before, ahead, ray);
     var g_before_before = F32_MAX;
-    for (var i = 0u; i <= SCAN; i++) {
-        let after = chain_sample(ray, f32(i) * step, false);
-        if i == 0u {
-            before = after;
+    for (var i = 1u; i <= fine; i++) {
+        let coarse = i % SUB_SCAN == 0u;
+        var t_sample = f32(i) * fine_step;
+        if coarse {
+            t_sample = f32(i / SUB_SCAN + 1u) * step;
+        }
+        var taken = ahead;
+        if (coarse && i < fine) || (!coarse && why != 0u) {
+            taken = chain_sample(ray, t_sample, false);
+        }
+        var after = taken;
+        if coarse {
+            after = ahead;
+            ahead = taken;
+        } else if why == 0u {
             continue;
         }
         offer(&minima, before, g_before_before, after.d2);
@@ -415,11 +612,20 @@ fn curve_features(ray: Ray) -> CurveFeatures {
         var left = before;
         var calm = vec2<f32>(before.t, before.param);
         var e = 0u;
-        for (var part = 0u; part < 3u; part++) {
+        // An interval suspected for a rival alone is searched for jumps whole too, before its first finer part, as
+        // an interval the scan does not suspect is (where no end's normal plane splits it): a first pass of this
+        // loop, which keeps the kinks only (one call site of search_jumps still).
+        let split = (end_t.x > before.t && end_t.x <= ahead.t) || (end_t.y > before.t && end_t.y <= ahead.t);
+        var checking = !coarse && (i - 1u) % SUB_SCAN == 0u && why == 2u && nearest_kinks && !split;
+        for (var part = 0u; part < 4u; part++) {
             var right = after;
             var next_left = after;
             var cut = -1.0;
             var end_sample = after;
+            if checking {
+                right = ahead;
+                e = 2u;
+            }
             for (; e < 2u; e++) {
                 let t = end_t[e];
                 let at_end = end_at[e];
@@ -475,6 +681,11 @@ fn curve_features(ray: Ray) -> CurveFeatures {
             if nearest_kinks {
                 bracket = search_jumps(ray, left, right, &kinks);
             }
+            if checking {
+                checking = false;
+                e = 0u;
+                continue;
+            }
             if bracket.x >= 0.0 {
                 // Up to the jump, and inside its bracket (the nearest point may have passed a joint as well).
                 for (var q = 0u; q < 2u; q++) {
@@ -495,8 +706,12 @@ fn curve_features(ray: Ray) -> CurveFeatures {
         }
         g_before_before = before.d2;
         before = after;
+        if coarse && i < fine {
+            why = suspect(survey, before, ahead, ray);
+        }
     }
     offer(&minima, before, g_before_before, F32_MAX);
+    minima = closest_approaches(ray, survey, minima);
     if !nearest_kinks {
         bright_kinks(ray, &kinks);
     }
@@ -506,6 +721,8 @@ fn curve_features(ray: Ray) -> CurveFeatures {
         var x = minima.best0;
         if slot == 1u {
             x = minima.best1;
+        } else if slot == 2u {
+            x = minima.best2;
         }
         let lo = max(x.t - step, 0.0);
         let hi = min(x.t + step, 1.0);

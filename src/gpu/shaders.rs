@@ -219,8 +219,11 @@ pub fn shared_constants() -> String {
     use crate::field::brightest as b;
     use crate::integrate::adaptive as a;
     use std::fmt::Write;
-    let integers: [(&str, u64); 20] = [
+    let integers: [(&str, u64); 23] = [
         ("SCAN", a::SCAN as u64),
+        ("EXACT_SAMPLES", a::EXACT_SAMPLES as u64),
+        ("SUB_SCAN", a::SUB_SCAN as u64),
+        ("MINIMA", a::MINIMA as u64),
         ("BRIGHT_SCAN", a::BRIGHT_SCAN as u64),
         ("CUT_BISECTIONS", a::CUT_BISECTIONS as u64),
         ("KINK_ROUNDS", a::KINK_ROUNDS as u64),
@@ -241,8 +244,10 @@ pub fn shared_constants() -> String {
         ("ROOT_NEWTON", b::ROOT_NEWTON as u64),
         ("KRONROD_ROWS", a::KRONROD.len() as u64),
     ];
-    let reals: [(&str, f64); 18] = [
+    let reals: [(&str, f64); 20] = [
         ("JUMP", a::JUMP),
+        ("RIVAL_MARGIN", a::RIVAL_MARGIN),
+        ("EXACT_SLACK", a::EXACT_SLACK),
         ("PARAM_JUMP", a::PARAM_JUMP),
         ("SUSPECT_MISS", a::SUSPECT_MISS),
         ("END_SNAP", a::END_SNAP),

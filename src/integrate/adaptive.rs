@@ -210,8 +210,9 @@ pub const MAX_WIDTH: f64 = 4.0;
 /// resolves as well as any.
 pub const MIN_AXIS_WIDTH: f64 = 1e-4;
 
-/// Most kinks cut on one curve's ray.
-pub const MAX_KINKS: usize = 8;
+/// Most kinks cut on one curve's ray. Sixteen: a chain's scan, sampled finer where the nearest point passes a joint,
+/// filled eight with the figure 12 preset's cuts near its joint and dropped the rest (1.6e-3 of B lost).
+pub const MAX_KINKS: usize = 16;
 
 /// Cuts of a piece closer than this in u are merged (`cuts`).
 pub const CUT_MERGE: f64 = 1e-6;
@@ -223,6 +224,29 @@ pub const SINGULAR_MERGE: f64 = 1e-3;
 
 /// Intervals of the scan along a curve's ray, which finds its closest approaches and kinks.
 pub const SCAN: u32 = 6;
+
+/// How many times finer the scan samples an interval of a chain of several segments where the nearest point may
+/// leave its segment and come back, or passes more than one event (the reference's `Survey::suspect`).
+pub const SUB_SCAN: u32 = 8;
+
+/// Another segment is a rival of the one the scan finds the nearest point on where its closest approach to the ray,
+/// squared, is within this of the farthest the chain can be from the ray between two samples (a margin for the
+/// rounding of both, in f32 on the GPU).
+pub const RIVAL_MARGIN: f64 = 1.02;
+
+/// A closest approach to the ray found segment by segment is the chain's where the chain's nearest point there is
+/// at least this share of its distance squared (a little under 1: the two distances are rounded differently, and a
+/// candidate another segment barely hides still marks where d^2 is least).
+pub const EXACT_SLACK: f64 = 0.81;
+
+/// How many of a chain's closest approaches to the ray, found segment by segment, are sampled to check they are
+/// the chain's: the deepest, one more than are kept (`MINIMA`), for one another segment hides.
+pub const EXACT_SAMPLES: u32 = 4;
+
+/// How many closest approaches of a chain along one ray become peaks (each owning its piece of the ray). Three: a
+/// ray can pass near both segments beside a joint and, past a jump within a segment, near the first again (a ray
+/// with three lost 1.5e-2 of B with room for two).
+pub const MINIMA: usize = 3;
 
 /// Intervals of the scan along the ray of a curve in the continuous W form, which finds where its brightest point
 /// jumps between parts of the chain (each sample a whole search: finer than `SCAN`, since two jumps within one

@@ -77,16 +77,21 @@ pub(super) const fn rule_iterations(order: u32) -> u64 {
 /// approaches and two ends, each cut at its flat top's ends, and the kinks).
 pub(super) const fn curve_evaluations(order: u32) -> u64 {
     use crate::integrate::adaptive::{
-        BRIGHT_SCAN, CUT_BISECTIONS, KINK_ROUNDS, MAX_KINKS, MAX_PEAKS, PEAK_NEWTON, SCAN,
+        BRIGHT_SCAN, CUT_BISECTIONS, EXACT_SAMPLES, KINK_ROUNDS, MAX_KINKS, MAX_PEAKS, MINIMA,
+        PEAK_NEWTON, SCAN, SUB_SCAN,
     };
     let cuts = 3 * MAX_PEAKS as u64 + MAX_KINKS as u64;
-    (SCAN as u64 + 1)
+    // The scan, finer where it suspects a rival segment; the closest approaches' checks (the two passes over the
+    // segments that find them cost about one evaluation each).
+    (SCAN as u64 * SUB_SCAN as u64 + 1)
+        + EXACT_SAMPLES as u64
+        + 2
         // The continuous W form's scan, and the bisections that place its cuts (loop iterations, counted alike).
         + (BRIGHT_SCAN as u64 + 1)
         + MAX_KINKS as u64 * CUT_BISECTIONS as u64
         + 2
         + 2 * KINK_ROUNDS as u64 * MAX_KINKS as u64
-        + 2 * PEAK_NEWTON as u64
+        + MINIMA as u64 * PEAK_NEWTON as u64
         + MAX_KINKS as u64
         + rules(cuts) * rule_iterations(order)
 }

@@ -32,6 +32,11 @@ fn the_constants_shared_with_the_twin_are_generated_from_it_and_declared_once() 
     use crate::integrate::adaptive as a;
     let shared: &[(&str, f64)] = &[
         ("SCAN", a::SCAN as f64),
+        ("SUB_SCAN", a::SUB_SCAN as f64),
+        ("EXACT_SAMPLES", a::EXACT_SAMPLES as f64),
+        ("MINIMA", a::MINIMA as f64),
+        ("RIVAL_MARGIN", a::RIVAL_MARGIN),
+        ("EXACT_SLACK", a::EXACT_SLACK),
         ("JUMP", a::JUMP),
         ("PARAM_JUMP", a::PARAM_JUMP),
         ("SUSPECT_MISS", a::SUSPECT_MISS),

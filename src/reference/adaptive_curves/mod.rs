@@ -118,14 +118,14 @@ fn integrate_weighted(
         order,
         (tolerance, rms),
         |p, (a, singular_a), (b, singular_b)| {
-            segment.set(None);
             let at = |u: f64| s + dir * (p.center + p.width * f64::sinh(u)).clamp(p.lo, p.hi);
             // (Not for a curve that reads its brightest point: its nearest point's segments say nothing of it.)
-            let (parts, count) = if pieces.is_empty() {
+            let (parts, count, home) = if pieces.is_empty() {
                 split_at_switch(|u| curve::nearest_segment_index(cp, at(u)), (a, b))
             } else {
-                ([(a, b); 2], 1)
+                ([(a, b); 2], 1, None)
             };
+            segment.set(home);
             // A part that begins or ends at rest is solved on the whole chain too: its nodes crowd toward the
             // cut, which the shader's tracking of the nearest point does not follow reliably.
             tracking.set(count == 1 && !singular_a && !singular_b && !degenerate);

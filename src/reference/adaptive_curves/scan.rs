@@ -6,10 +6,11 @@ use glam::DVec3;
 
 use super::super::adaptive::{Kinks, Peak, peak};
 use super::kinks::{BrightSample, ChainSample, bright_miss, find_bright_kink, find_kink, miss};
-use crate::field::{Curve, brightest, curve};
+use crate::field::{Curve, brightest, cubic, curve};
 use crate::integrate::adaptive::{
-    BRIGHT_SCAN, CUT_BISECTIONS, END_SNAP, JUMP, MAX_KINKS, MAX_PEAKS, PARAM_JUMP, PEAK_NEWTON,
-    PEAK_SETTLED, SUSPECT_MISS, SWITCH_INSET, SWITCH_ROUNDS,
+    BRIGHT_SCAN, CUT_BISECTIONS, END_SNAP, EXACT_SAMPLES, EXACT_SLACK, JUMP, MAX_KINKS, MAX_PEAKS,
+    MINIMA, PARAM_JUMP, PEAK_NEWTON, PEAK_SETTLED, RIVAL_MARGIN, SUB_SCAN, SUSPECT_MISS,
+    SWITCH_INSET, SWITCH_ROUNDS,
 };
 
 /// A chain's closest approaches along the ray `s + t dir` and its kinks (appended to `kinks`), in one pass over
@@ -49,10 +50,36 @@ pub(super) fn chain_features(
     let mut end_peaks = [peak(0.0, 0.0, 0.0, eps); 2];
     let mut end_count = 0;
     let mut minima = Minima::default();
+    let survey = Survey::of(c, s, dir);
+    let fine = k * SUB_SCAN;
+    let fine_step = step / SUB_SCAN as f64;
     let mut before = sample(0.0);
     let mut g_before_before = f64::INFINITY;
-    for i in 1..=k {
-        let after = sample(i as f64 * step);
+    // The scan's next sample (`step` on), and whether the interval up to it is sampled `SUB_SCAN` times finer. The
+    // shader runs one loop of `fine` rounds, taking a sample only where one is due, in the same order.
+    let (mut ahead, mut suspect) = (before, false);
+    for i in 1..=fine {
+        if (i - 1) % SUB_SCAN == 0 {
+            ahead = sample(((i - 1) / SUB_SCAN + 1) as f64 * step);
+            let why = survey.suspect(&before, &ahead, (s, dir));
+            suspect = why != Suspicion::None;
+            // An interval suspected for a rival alone is searched for jumps whole too, as an interval the scan does
+            // not suspect is (where no end's normal plane splits it): its finer samples can each see the nearest
+            // point move smoothly where the whole interval sees it race, and a cut there keeps the pieces' rules
+            // honest (a chain with a segment of zero length lost 3.3e-4 of B without it). Not where it passes a
+            // joint: the finer samples' cuts there already fill the kinks (MAX_KINKS).
+            let split = ends.iter().any(|&(t, _, _)| t > before.t && t <= ahead.t);
+            if why == Suspicion::Rival && nearest_kinks && !split {
+                search_jumps(&sample, (s, dir), before, ahead, (eps, bracket), kinks);
+            }
+        }
+        let after = if i % SUB_SCAN == 0 {
+            ahead
+        } else if suspect {
+            sample(i as f64 * fine_step)
+        } else {
+            continue;
+        };
         minima.offer(before, g_before_before, after.d2);
         // The interval (before, after), split at the ends' normal planes inside it. `calm` starts the stretch
         // since the last jump, which the joints' cuts look at.
@@ -124,6 +151,7 @@ pub(super) fn chain_features(
         before = after;
     }
     minima.offer(before, g_before_before, f64::INFINITY);
+    let minima = closest_approaches(&survey, &sample, &minima);
     let (peaks, count) = chain_peaks(&sample, &minima, step, eps);
     with_ends(peaks, count, &end_peaks[..end_count])
 }
@@ -131,7 +159,7 @@ pub(super) fn chain_features(
 /// The closest approaches and, after them, each end's peak whose map at its center is more than twice as dense as
 /// every feature's before it (where an end is the closest approach, Newton has found it already).
 pub(super) fn with_ends(
-    found: [Peak; 2],
+    found: [Peak; MINIMA],
     count: usize,
     ends: &[Peak],
 ) -> ([Peak; MAX_PEAKS], usize) {
@@ -372,10 +400,233 @@ pub(super) fn bright_cuts(
     }
 }
 
-/// The two deepest local minima of d^2 on a scan, offered in order (ties to the left).
+/// The chain's closest approaches to the ray, found exactly segment by segment, in place of the scan's local
+/// minima of d^2 (`scanned`) inside the ray: a scan samples d^2 only every `step`, and where the nearest point
+/// jumps between segments beside a closest approach, the scan's deepest sample can lie on the other segment, and
+/// Newton's steps from it miss the approach (a peak of width 1e-2 of the ray, 0.6 of B lost on a chain of two
+/// segments; a scan four times finer still lost 0.6 on another).
+///
+/// The distance from segment `C(u) = c2 u^2 + c1 u + c0` to the ray's line is that of its projection across the
+/// ray, `P (C(u) - s)` with `P` the projection onto the plane normal to `dir`, from the origin: its stationary
+/// points are the roots of that projected segment's stationary cubic (`Segment::stationary_cubic`). Each local
+/// minimum of it in `[0, 1]` (a root where the distance curves up, or an end where it rises into the segment: a
+/// corner or an end of the chain) whose foot lies inside the ray is a candidate, the ray's closest approach to
+/// that segment; every local minimum of the chain's distance inside the ray is one of them. It is the chain's
+/// where no other segment comes nearer there: the chain's nearest point at that `t` is sampled (only for a
+/// `EXACT_SAMPLES` deepest candidates, `Survey::of`) and kept where its distance squared is within `EXACT_SLACK` of
+/// the candidate's. The scan's minima at the ray's ends (which no candidate inside it stands for) are offered too; where
+/// no candidate is kept (a straight segment along the ray has none), the scan's minima stand. Twin of
+/// `closest_approaches` in `shaders/adaptive_curves/scan.wgsl`.
+pub(super) fn closest_approaches(
+    survey: &Survey,
+    sample: &impl Fn(f64) -> ChainSample,
+    scanned: &Minima,
+) -> Minima {
+    let mut exact = Minima::default();
+    for &(d2, t) in &survey.candidates[..survey.candidate_count] {
+        let x = sample(t);
+        if x.d2 >= EXACT_SLACK * d2 {
+            exact.offer(x, f64::INFINITY, f64::INFINITY);
+        }
+    }
+    if exact.best[0].is_none() {
+        return *scanned;
+    }
+    for x in scanned.best.iter().flatten() {
+        if x.t == 0.0 || x.t == 1.0 {
+            exact.offer(*x, f64::INFINITY, f64::INFINITY);
+        }
+    }
+    exact
+}
+
+/// The local minima of segment `seg`'s distance squared to the line `s + t dir`, as `(d2, t, peak)` (`t` the foot
+/// on the line, anywhere along it): the ends where the distance rises into the segment, then the stationary cubic's
+/// roots inside where it curves up (see `closest_approaches`). `peak` says whether it is a local minimum of the
+/// chain's distance too: an inner joint is one only where the distance falls into it from the neighbour (a corner;
+/// at a smooth joint the neighbour's own minimum is the chain's), which `falls_in` says of the segment before and
+/// the returned flag (the distance falls into the segment's end) of the next; a chain's ends always are.
+pub(super) fn approaches(
+    seg: &curve::Segment,
+    s: DVec3,
+    dir: DVec3,
+    (falls_in, last): (bool, bool),
+) -> ([Option<(f64, f64, bool)>; 5], bool) {
+    let mut out = [None; 5];
+    let a = dir.length_squared();
+    if a == 0.0 {
+        return (out, false);
+    }
+    let across = |v: DVec3| v - dir * (dir.dot(v) / a);
+    let projected = curve::Segment {
+        c2: across(seg.c2),
+        c1: across(seg.c1),
+        c0: across(seg.c0 - s),
+    };
+    let k = projected.stationary_cubic(DVec3::ZERO);
+    // The slope of the distance squared at u, over 2, and its curvature, over 2.
+    let slope = |u: f64| ((k[0] * u + k[1]) * u + k[2]) * u + k[3];
+    let bend = |u: f64| (3.0 * k[0] * u + 2.0 * k[1]) * u + k[2];
+    let mut n = 0;
+    let mut take = |u: f64, peak: bool| {
+        out[n] = Some((
+            projected.at(u).length_squared(),
+            dir.dot(seg.at(u) - s) / a,
+            peak,
+        ));
+        n += 1;
+    };
+    let falls_out = slope(1.0) < 0.0;
+    if slope(0.0) > 0.0 {
+        take(0.0, falls_in);
+    }
+    if falls_out {
+        take(1.0, last);
+    }
+    for &u in cubic::solve_cubic(k[0], k[1], k[2], k[3], 1e-12).as_slice() {
+        // One Newton step on the cubic: Cardano loses digits near double roots.
+        let d = bend(u);
+        let u = if d != 0.0 { u - slope(u) / d } else { u };
+        if u > 0.0 && u < 1.0 && bend(u) > 0.0 {
+            take(u, true);
+        }
+    }
+    (out, falls_out)
+}
+
+/// A chain's segments seen from the ray's line, in one pass over them (`approaches`): the two that come nearest
+/// the line by their closest approach, which may take the nearest point from the one the scan's samples find it on
+/// (`Survey::suspect`), and the deepest closest approaches inside the ray (`closest_approaches`).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Survey {
+    /// `(d2, segment)`, nearest first; `d2` infinite where the chain has fewer segments.
+    nearest: [(f64, usize); 2],
+    segments: usize,
+    /// `(d2, t)` of the `EXACT_SAMPLES` deepest closest approaches whose foot lies inside the ray, deepest first
+    /// (ties in the order found).
+    candidates: [(f64, f64); EXACT_SAMPLES as usize],
+    candidate_count: usize,
+}
+
+impl Survey {
+    pub(super) fn of(c: &Curve, s: DVec3, dir: DVec3) -> Self {
+        let mut nearest = [(f64::INFINITY, 0); 2];
+        let mut candidates = [(f64::INFINITY, 0.0); EXACT_SAMPLES as usize];
+        let mut candidate_count = 0;
+        let mut segments = 0;
+        let count = (c.control_points.len() - 1) / 2;
+        let mut falls_in = true;
+        for (j, seg) in curve::segments(&c.control_points).enumerate() {
+            segments += 1;
+            let mut least = f64::INFINITY;
+            let (found, falls_out) = approaches(&seg, s, dir, (falls_in, j + 1 == count));
+            falls_in = falls_out;
+            for (d2, t, peak) in found.into_iter().flatten() {
+                least = least.min(d2);
+                if !peak || !(t > 0.0 && t < 1.0) {
+                    continue;
+                }
+                // Into its place among the deepest, the last dropped where all are taken.
+                let mut x = (d2, t);
+                for slot in &mut candidates {
+                    if x.0 < slot.0 {
+                        std::mem::swap(slot, &mut x);
+                    }
+                }
+                candidate_count = (candidate_count + 1).min(EXACT_SAMPLES as usize);
+            }
+            if least < nearest[0].0 {
+                nearest = [(least, j), nearest[0]];
+            } else if least < nearest[1].0 {
+                nearest[1] = (least, j);
+            }
+        }
+        Self {
+            nearest,
+            segments,
+            candidates,
+            candidate_count,
+        }
+    }
+
+    /// Whether the nearest point may leave its segment and come back, or pass more than one event, between scan
+    /// samples `x` and `y` (the scan then samples the interval `SUB_SCAN` times finer): where either lies on an
+    /// inner joint or they lie on different segments (`Suspicion::Events`), and where another segment's closest
+    /// approach to the ray comes within the farthest the chain can be from the ray between them
+    /// (`reach_between`; `Suspicion::Rival`).
+    pub(super) fn suspect(
+        &self,
+        x: &ChainSample,
+        y: &ChainSample,
+        (s, dir): (DVec3, DVec3),
+    ) -> Suspicion {
+        let k = self.segments;
+        if k < 2 {
+            return Suspicion::None;
+        }
+        let (jx, jy) = (segment_of(x.param, k), segment_of(y.param, k));
+        if inner_joint(x.param, k) || inner_joint(y.param, k) || jx != jy {
+            return Suspicion::Events;
+        }
+        let rival = if self.nearest[0].1 == jx {
+            self.nearest[1].0
+        } else {
+            self.nearest[0].0
+        };
+        if rival <= RIVAL_MARGIN * reach_between(x, y, (s, dir)) {
+            Suspicion::Rival
+        } else {
+            Suspicion::None
+        }
+    }
+}
+
+/// Why the scan samples an interval finer (`Survey::suspect`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Suspicion {
+    None,
+    /// The samples lie on different segments or on a joint: the nearest point passes a joint or jumps in between,
+    /// maybe more than once.
+    Events,
+    /// Both lie inside one segment, and another comes near enough the ray to take the nearest point and give it
+    /// back in between.
+    Rival,
+}
+
+/// The segment of chain parameter `param` on a chain of `k` segments.
+fn segment_of(param: f64, k: usize) -> usize {
+    ((param.clamp(0.0, 1.0) * k as f64).floor() as usize).min(k - 1)
+}
+
+/// Whether chain parameter `param` lies on an inner joint (within `END_SNAP` of it).
+fn inner_joint(param: f64, k: usize) -> bool {
+    let x = param * k as f64;
+    let r = x.round();
+    r > 0.0 && r < k as f64 && (x - r).abs() <= END_SNAP * k as f64
+}
+
+/// The farthest the chain can be from the ray, squared, between samples `x` and `y`: within the nearer of their
+/// two nearest points. Each distance squared `|L(t) - n|^2` is convex along the ray and their difference linear,
+/// so the least of the two is largest at the ends or where they cross.
+pub(super) fn reach_between(x: &ChainSample, y: &ChainSample, (s, dir): (DVec3, DVec3)) -> f64 {
+    let f = |n: DVec3, t: f64| (s + dir * t - n).length_squared();
+    // f(x.point, t) - f(y.point, t) = |x.point|^2 - |y.point|^2 - 2 (s + dir t) . (x.point - y.point).
+    let e = x.point - y.point;
+    let slope = -2.0 * dir.dot(e);
+    let at_zero = x.point.length_squared() - y.point.length_squared() - 2.0 * s.dot(e);
+    let cross = if slope != 0.0 {
+        (-at_zero / slope).clamp(x.t, y.t)
+    } else {
+        x.t
+    };
+    let cross = if cross.is_finite() { cross } else { x.t };
+    x.d2.max(y.d2).max(f(x.point, cross).min(f(y.point, cross)))
+}
+
+/// The `MINIMA` deepest local minima of d^2, offered in order (ties to the left), deepest first.
 #[derive(Clone, Copy, Debug, Default)]
 pub(super) struct Minima {
-    pub(super) best: [Option<ChainSample>; 2],
+    pub(super) best: [Option<ChainSample>; MINIMA],
 }
 
 impl Minima {
@@ -384,12 +635,19 @@ impl Minima {
         if !(x.d2 < g_left && x.d2 <= g_right) {
             return;
         }
-        match self.best {
-            [None, _] => self.best[0] = Some(x),
-            [Some(b0), _] if x.d2 < b0.d2 => self.best = [Some(x), Some(b0)],
-            [_, None] => self.best[1] = Some(x),
-            [_, Some(b1)] if x.d2 < b1.d2 => self.best[1] = Some(x),
-            _ => {}
+        let mut x = x;
+        for slot in &mut self.best {
+            match *slot {
+                None => {
+                    *slot = Some(x);
+                    return;
+                }
+                Some(b) if x.d2 < b.d2 => {
+                    *slot = Some(x);
+                    x = b;
+                }
+                Some(_) => {}
+            }
         }
     }
 }
@@ -401,8 +659,8 @@ pub(super) fn chain_peaks(
     minima: &Minima,
     step: f64,
     eps: f64,
-) -> ([Peak; 2], usize) {
-    let mut out = [peak(0.0, 0.0, 0.0, eps); 2];
+) -> ([Peak; MINIMA], usize) {
+    let mut out = [peak(0.0, 0.0, 0.0, eps); MINIMA];
     let mut count = 0;
     for x in minima.best.iter().flatten() {
         let (lo, hi) = ((x.t - step).max(0.0), (x.t + step).min(1.0));
@@ -436,11 +694,14 @@ pub(super) fn chain_peaks(
 /// where the segments just inside its ends differ (a joint at one end and a segment at the other counts): a
 /// jump the kink search missed, or a joint it passes without its plane's cut. Found by bisection to
 /// `2^-SWITCH_ROUNDS` of the part, so that the step a jump puts in the integrand is a cut. One part where the
-/// ends agree.
+/// ends agree, with their segment: the part's nodes are solved on it (the nearest point leaves it only through a
+/// joint, which the solve sees, or by a jump and back the scan missed, too narrow to matter; a whole-chain solve at
+/// the part's first node could land inside such a jump and carry the wrong segment over the whole part, 0.6 of
+/// B lost on a chain of two segments).
 pub(super) fn split_at_switch(
     segment: impl Fn(f64) -> Option<usize>,
     (a, b): (f64, f64),
-) -> ([(f64, f64); 2], usize) {
+) -> ([(f64, f64); 2], usize, Option<usize>) {
     // Looked at just inside the part: at a cut that is a jump, the nearest point may be on either branch.
     let inset = SWITCH_INSET * (b - a);
     match (segment(a + inset), segment(b - inset)) {
@@ -455,8 +716,8 @@ pub(super) fn split_at_switch(
                 }
             }
             let m = 0.5 * (lo + hi);
-            ([(a, m), (m, b)], 2)
+            ([(a, m), (m, b)], 2, None)
         }
-        _ => ([(a, b); 2], 1),
+        (x, _) => ([(a, b); 2], 1, x),
     }
 }
