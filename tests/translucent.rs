@@ -518,12 +518,22 @@ fn the_presets_compose_alike_on_the_gpu_and_the_cpu() {
             g.set_holdout(holdout);
             let frame = g.render(&scene, w, h, transparent).unwrap();
             g.set_holdout(false);
-            let off = common::pixels_off(&cpu, &frame.pixels);
-            // Off by more than a few 8-bit steps only where a pixel's center lies on an object's edge.
-            assert!(
-                off * 50 <= cpu.len(),
-                "{name} {backdrop:?}: {off} pixels differ"
-            );
+            // Off by more than a few 8-bit steps only where a pixel's center lies on an object's edge (the GPU
+            // rasterises what the CPU ray-casts, and a pixel astride an outline can go either way): each such
+            // pixel within a pixel of an outline of some object, seen directly or through a translucent one (the
+            // outlines cover 5 and 8 % of these frames; measured, no pixel differs at all, on Vulkan and GL).
+            let edges = outline_pixels(&scene, w, h);
+            for (k, (c, p)) in cpu.iter().zip(&frame.pixels).enumerate() {
+                let differs = (0..4).any(|i| {
+                    (c[i].clamp(0.0, 1.0) - (p[i] as f64).clamp(0.0, 1.0)).abs() > 4.0 / 255.0
+                });
+                assert!(
+                    !differs || edges[k],
+                    "{name} {backdrop:?}: pixel ({}, {}) differs away from every outline: CPU {c:?}, GPU {p:?}",
+                    k % w as usize,
+                    k / w as usize
+                );
+            }
             let lit = cpu.iter().filter(|p| p[0] + p[1] + p[2] > 0.05).count();
             assert!(
                 lit * 4 > cpu.len(),
@@ -851,4 +861,37 @@ fn a_source_inside_shows_through_as_the_exact_transmittance_weighted_glow() {
     }
     assert!(worst[0] < 0.06, "{worst:?}");
     assert!(worst[1] > 4.0 * worst[0], "{worst:?}");
+}
+
+/// Which pixels of a `w` x `h` frame of `scene` lie within a pixel of an outline of one of its objects: where the
+/// set of objects the eye's ray passes through (every one, not only the first: outlines seen through a translucent
+/// object count) changes between the pixel's center and its neighbours' centers.
+fn outline_pixels(scene: &energywave::scene::Scene, w: u32, h: u32) -> Vec<bool> {
+    let eye = scene.camera.eye;
+    let crossed = |x: f64, y: f64| -> u64 {
+        let dir = scene.camera.pixel_ray(x, y, w, h);
+        (scene.objects.iter().enumerate())
+            .filter(|(_, o)| o.hit(eye, dir, 0.0, f64::INFINITY).is_some())
+            .fold(0u64, |m, (i, _)| m | 1 << i)
+    };
+    let centers: Vec<u64> = (0..h)
+        .flat_map(|y| (0..w).map(move |x| (x, y)))
+        .map(|(x, y)| crossed(x as f64 + 0.5, y as f64 + 0.5))
+        .collect();
+    (0..h as i64)
+        .flat_map(|y| (0..w as i64).map(move |x| (x, y)))
+        .map(|(x, y)| {
+            let here = centers[(y * w as i64 + x) as usize];
+            (-1..=1).any(|dy| {
+                (-1..=1).any(|dx| {
+                    let (nx, ny) = (x + dx, y + dy);
+                    nx >= 0
+                        && ny >= 0
+                        && nx < w as i64
+                        && ny < h as i64
+                        && centers[(ny * w as i64 + nx) as usize] != here
+                })
+            })
+        })
+        .collect()
 }
