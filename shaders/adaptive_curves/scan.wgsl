@@ -358,6 +358,16 @@ fn offer(m: ptr<function, Minima>, x: ChainSample, g_left: f32, g_right: f32) {
     (*m).count = min(c + 1u, MINIMA);
 }
 
+// The minimum in slot 0, 1 or 2, by comparisons.
+fn minimum_at(m: Minima, slot: u32) -> ChainSample {
+    if slot == 1u {
+        return m.best1;
+    } else if slot == 2u {
+        return m.best2;
+    }
+    return m.best0;
+}
+
 // The local minima of a segment's distance squared to the ray's line, as (d2, t) with t the foot on the line
 // (d2 < 0 in a slot without one): slots 0 and 1 the segment's ends where the distance rises into it, 2 to 4 the
 // stationary cubic's roots inside it where the distance curves up. Twin of approaches (which keeps the same order).
@@ -522,12 +532,7 @@ fn closest_approaches(ray: Ray, survey: Survey, scanned: Minima) -> Minima {
         return scanned;
     }
     for (var slot = 0u; slot < scanned.count; slot++) {
-        var x = scanned.best0;
-        if slot == 1u {
-            x = scanned.best1;
-        } else if slot == 2u {
-            x = scanned.best2;
-        }
+        let x = minimum_at(scanned, slot);
         if x.t == 0.0 || x.t == 1.0 {
             offer(&exact, x, F32_MAX, F32_MAX);
         }
@@ -718,12 +723,7 @@ fn curve_features(ray: Ray) -> CurveFeatures {
     var found: Peaks;
     found.count = 0u;
     for (var slot = 0u; slot < minima.count; slot++) {
-        var x = minima.best0;
-        if slot == 1u {
-            x = minima.best1;
-        } else if slot == 2u {
-            x = minima.best2;
-        }
+        var x = minimum_at(minima, slot);
         let lo = max(x.t - step, 0.0);
         let hi = min(x.t + step, 1.0);
         for (var k = 0u; k < PEAK_NEWTON; k++) {
