@@ -522,7 +522,7 @@ fn the_presets_compose_alike_on_the_gpu_and_the_cpu() {
             // rasterises what the CPU ray-casts, and a pixel astride an outline can go either way): each such
             // pixel within a pixel of an outline of some object, seen directly or through a translucent one (the
             // outlines cover 5 and 8 % of these frames; measured, no pixel differs at all, on Vulkan and GL).
-            let edges = outline_pixels(&scene, w, h);
+            let edges = common::outline_pixels(&scene, w, h);
             for (k, (c, p)) in cpu.iter().zip(&frame.pixels).enumerate() {
                 let differs = (0..4).any(|i| {
                     (c[i].clamp(0.0, 1.0) - (p[i] as f64).clamp(0.0, 1.0)).abs() > 4.0 / 255.0
@@ -861,37 +861,4 @@ fn a_source_inside_shows_through_as_the_exact_transmittance_weighted_glow() {
     }
     assert!(worst[0] < 0.06, "{worst:?}");
     assert!(worst[1] > 4.0 * worst[0], "{worst:?}");
-}
-
-/// Which pixels of a `w` x `h` frame of `scene` lie within a pixel of an outline of one of its objects: where the
-/// set of objects the eye's ray passes through (every one, not only the first: outlines seen through a translucent
-/// object count) changes between the pixel's center and its neighbours' centers.
-fn outline_pixels(scene: &energywave::scene::Scene, w: u32, h: u32) -> Vec<bool> {
-    let eye = scene.camera.eye;
-    let crossed = |x: f64, y: f64| -> u64 {
-        let dir = scene.camera.pixel_ray(x, y, w, h);
-        (scene.objects.iter().enumerate())
-            .filter(|(_, o)| o.hit(eye, dir, 0.0, f64::INFINITY).is_some())
-            .fold(0u64, |m, (i, _)| m | 1 << i)
-    };
-    let centers: Vec<u64> = (0..h)
-        .flat_map(|y| (0..w).map(move |x| (x, y)))
-        .map(|(x, y)| crossed(x as f64 + 0.5, y as f64 + 0.5))
-        .collect();
-    (0..h as i64)
-        .flat_map(|y| (0..w as i64).map(move |x| (x, y)))
-        .map(|(x, y)| {
-            let here = centers[(y * w as i64 + x) as usize];
-            (-1..=1).any(|dy| {
-                (-1..=1).any(|dx| {
-                    let (nx, ny) = (x + dx, y + dy);
-                    nx >= 0
-                        && ny >= 0
-                        && nx < w as i64
-                        && ny < h as i64
-                        && centers[(ny * w as i64 + nx) as usize] != here
-                })
-            })
-        })
-        .collect()
 }

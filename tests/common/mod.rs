@@ -190,3 +190,36 @@ pub fn over_error(
     }
     (worst, compared)
 }
+
+/// Which pixels of a `w` x `h` frame of `scene` lie within a pixel of an outline of one of its objects: where the
+/// set of objects the eye's ray passes through (every one, not only the first: outlines seen through a translucent
+/// object count) changes between the pixel's center and its neighbours' centers.
+pub fn outline_pixels(scene: &energywave::scene::Scene, w: u32, h: u32) -> Vec<bool> {
+    let eye = scene.camera.eye;
+    let crossed = |x: f64, y: f64| -> u64 {
+        let dir = scene.camera.pixel_ray(x, y, w, h);
+        (scene.objects.iter().enumerate())
+            .filter(|(_, o)| o.hit(eye, dir, 0.0, f64::INFINITY).is_some())
+            .fold(0u64, |m, (i, _)| m | 1 << i)
+    };
+    let centers: Vec<u64> = (0..h)
+        .flat_map(|y| (0..w).map(move |x| (x, y)))
+        .map(|(x, y)| crossed(x as f64 + 0.5, y as f64 + 0.5))
+        .collect();
+    (0..h as i64)
+        .flat_map(|y| (0..w as i64).map(move |x| (x, y)))
+        .map(|(x, y)| {
+            let here = centers[(y * w as i64 + x) as usize];
+            (-1..=1).any(|dy| {
+                (-1..=1).any(|dx| {
+                    let (nx, ny) = (x + dx, y + dy);
+                    nx >= 0
+                        && ny >= 0
+                        && nx < w as i64
+                        && ny < h as i64
+                        && centers[(ny * w as i64 + nx) as usize] != here
+                })
+            })
+        })
+        .collect()
+}
