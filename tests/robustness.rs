@@ -1,6 +1,8 @@
 //! Degenerate but valid geometry gives defined, finite results on the CPU reference and on the GPU, and random
 //! valid scenes never produce a non-finite brightness with any integrator, on either, and survive a save and load.
 
+mod common;
+
 use std::sync::{Mutex, MutexGuard, OnceLock};
 
 use energywave::field::{Curve, Line, Point, Sources, Torus};
@@ -609,17 +611,38 @@ proptest! {
         for (k, (&x, &y)) in gpu_b.iter().zip(&cpu.values).enumerate() {
             prop_assert!((x as f64 - y).abs() <= 1.5e-4 * y.abs().max(0.01), "simpson texel {}: GPU {} CPU {}\n{}", k, x, y, text);
         }
-        // The composed frames: off by more than a few 8-bit steps only where a pixel lies on an object's edge.
-        let (w, h) = (48, 36);
+        // The composed frames: a pixel off by more than a few 8-bit steps only where the picture itself steps
+        // inside it, which the GPU's raster (f32 depths and positions) and the CPU's ray-cast can put on either
+        // side of the pixel's center. Two such places, each found apart from the code under test where it can be:
+        // an object's outline (`common::outline_pixels`, the objects' own ray tests), and any step of the CPU's
+        // own picture within the pixel: its 3 x 3 frame spreading by more than the allowance over the pixel's
+        // nine points. That covers the outlines again, a point source's hard shadow, and where the glow's texels
+        // stop matching the depth of the object behind a pixel (`sample_near_clip`), which at this W = 10 jumps
+        // by whole texels across a tilted plane.
+        let (w, h) = (48u32, 36u32);
+        let allowance = 4.0 / 255.0;
         let bb = s.place_billboard(w as f64 / h as f64);
         let texture = reference::render_brightness(&FrameSetup::new(&s, bb));
+        let outlines = common::outline_pixels(&s, w, h);
         for transparent in [false, true] {
             let want = reference::compose_frame(&FrameSetup::new(&s, bb), &texture, w, h, transparent);
+            let fine = reference::compose_frame(&FrameSetup::new(&s, bb), &texture, 3 * w, 3 * h, transparent);
+            let steps = |i: usize| {
+                let (x, y) = (i % w as usize, i / w as usize);
+                let block = (0..9).map(|k| fine[(3 * y + k / 3) * 3 * w as usize + 3 * x + k % 3]);
+                (0..4).any(|c| {
+                    let (lo, hi) = block.clone().map(|p| p[c].clamp(0.0, 1.0)).fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)));
+                    hi - lo > allowance
+                })
+            };
             let frame = g.render(&s, w, h, transparent).map_err(|e| TestCaseError::fail(e.to_string()))?;
-            let off = (want.iter().zip(&frame.pixels))
-                .filter(|(c, p)| (0..4).any(|k| (c[k].clamp(0.0, 1.0) - (p[k] as f64).clamp(0.0, 1.0)).abs() > 4.0 / 255.0))
-                .count();
-            prop_assert!(off * 100 <= 4 * want.len(), "transparent {}: {} of {} pixels differ\n{}", transparent, off, want.len(), text);
+            let off: Vec<usize> = (want.iter().zip(&frame.pixels).enumerate())
+                .filter(|(_, (c, p))| (0..4).any(|k| (c[k].clamp(0.0, 1.0) - (p[k] as f64).clamp(0.0, 1.0)).abs() > allowance))
+                .map(|(i, _)| i)
+                .collect();
+            let unexcused: Vec<usize> = off.iter().copied().filter(|&i| !outlines[i] && !steps(i)).collect();
+            prop_assert!(unexcused.is_empty(), "transparent {}: {} of {} pixels differ ({} on no outline or step: {:?}, the first CPU {:?} GPU {:?})\n{}",
+                transparent, off.len(), want.len(), unexcused.len(), unexcused, unexcused.first().map(|&i| want[i]), unexcused.first().map(|&i| frame.pixels[i]), text);
         }
     }
 }
