@@ -1,6 +1,9 @@
 //! Translucent objects (METHOD.md section 11): the voxel number map and its table against closed forms and a
 //! brute-force f64 reference (converging as the voxels shrink), the Fresnel equations, energy, a cavity against
-//! the depth-map estimate, and bad input.
+//! the depth-map estimate, and bad input. The f64 reference shares the model's code (`light_at`,
+//! `Medium::optical_thickness`); what shares none is the sphere's closed form (`sphere_oracle`: a sphere lit from
+//! outside, its chords and spread in closed form, the Fresnel equations written apart), which both the reference
+//! and the table meet, and the closed-form transmittance through a sphere.
 
 mod common;
 
@@ -269,6 +272,9 @@ fn powers(object: &Object) -> (f64, f64) {
     (entering, leaving)
 }
 
+/// What enters leaves: this holds for any table by construction (each voxel's light is divided by its own spread),
+/// so it checks the sums' indexing, not the table's values; `a_sphere_lit_from_outside_scatters_as_its_closed_form`
+/// checks those.
 #[test]
 fn no_more_light_leaves_than_enters() {
     for extinction in [0.0, 0.5, 3.0, 30.0] {
@@ -452,24 +458,33 @@ fn a_source_inside_lights_the_surface_from_within() {
         look: Default::default(),
     });
     let sigma = 1.2;
+    let color = s.colors.palette().color_of(&Default::default());
+    // Every surface voxel's light against the exact `b / r exp(-sigma r)` at its center, at every resolution: the
+    // path from a source inside is measured through the medium itself, not the voxels (measured: 3.3e-8, the
+    // color's f32).
+    let mut worst = Vec::new();
+    for resolution in [8, 16, 32] {
+        let ball = sphere(sigma, resolution);
+        s.objects = vec![ball.clone()];
+        let lights = lights(&s);
+        let p = prepared(&ball).unwrap();
+        let medium = Medium::of(&ball).unwrap();
+        let Irradiance { entering, inside } = irradiance(&medium, &p.voxels, &lights, &s.objects);
+        assert!(entering.iter().all(|e| e[0] == 0.0));
+        let off = (p.voxels.surface.iter().enumerate())
+            .map(|(k, v)| {
+                let r = (v.position - DVec3::new(0.1, -0.2, 0.3)).length();
+                let want = 0.8 / r * (-sigma * r).exp() * color[0];
+                (inside[k][0] / want - 1.0).abs()
+            })
+            .fold(0.0, f64::max);
+        println!("{resolution}^3 voxels: worst relative error {off:e}");
+        worst.push(off);
+    }
+    assert!(worst.iter().all(|&w| w < 1e-6), "{worst:?}");
     let ball = sphere(sigma, 16);
     s.objects = vec![ball.clone()];
     let lights = lights(&s);
-    let p = prepared(&ball).unwrap();
-    let medium = Medium::of(&ball).unwrap();
-    let Irradiance { entering, inside } = irradiance(&medium, &p.voxels, &lights, &s.objects);
-    assert!(entering.iter().all(|e| e[0] == 0.0));
-    let color = s.colors.palette().color_of(&Default::default());
-    for (k, v) in p.voxels.surface.iter().enumerate() {
-        let r = (v.position - DVec3::new(0.1, -0.2, 0.3)).length();
-        let want = 0.8 / r * (-sigma * r).exp() * color[0];
-        // The voxels' thickness against the exact one: within the grid's half voxel at the surface.
-        assert!(
-            (inside[k][0] / want - 1.0).abs() < 0.12,
-            "{} against {want}",
-            inside[k][0]
-        );
-    }
     let reference = Reference::new(&ball, &s.objects, &lights, 0.05);
     let x = DVec3::new(0.1, -0.2, 0.3) + DVec3::Y * 0.7;
     let got = reference.leaving(x, DVec3::Y, Estimate::Exact)[0];
@@ -780,8 +795,10 @@ fn a_clear_object_glows_evenly_and_a_negative_source_darkens_by_as_much() {
 /// A point glowing at the center of a translucent sphere, seen through it: the glow the renderers blend
 /// (`B_front + inside (B_exit - B_front) + behind (B - B_exit)`, the shares from `translucent::crossing`)
 /// against the exact integral of the transmittance times the glow along each ray, `integral T psi zeta ds`, both
-/// by fine Simpson on the same rays, so that the see-through model alone differs. Dimming the glow inside by the
-/// whole crossing (the two-field blend) is far off; the psi-weighted share is close.
+/// by fine Simpson on the same rays, so that the see-through model alone differs, `T` in closed form (the
+/// sphere's chord and the Fresnel equations, none of the code under test), which `translucent::transmittance`
+/// matches. Dimming the glow inside by the whole crossing (the two-field blend) is far off; the psi-weighted
+/// share is close.
 #[test]
 fn a_source_inside_shows_through_as_the_exact_transmittance_weighted_glow() {
     use energywave::frame::FrameSetup;
@@ -827,6 +844,28 @@ fn a_source_inside_shows_through_as_the_exact_transmittance_weighted_glow() {
             * h
             / 3.0
     };
+    // The share of light crossing the sphere (center 0, radius 0.6, extinction 1.5, index 1.4) from `from` to
+    // `to` in closed form, as the model has it (straight through, no refraction): `exp(-sigma L)`, `L` the length of
+    // the segment inside, times the Fresnel transmittance at every surface it crosses, at its angle there.
+    let sphere_transmittance = |from: DVec3, to: DVec3| -> f64 {
+        let (radius, sigma, eta) = (0.6, 1.5, 1.4);
+        let d = to - from;
+        let (a, b, c) = (d.dot(d), from.dot(d), from.dot(from) - radius * radius);
+        let disc = b * b - a * c;
+        if disc <= 0.0 {
+            return 1.0;
+        }
+        let (t0, t1) = ((-b - disc.sqrt()) / a, (-b + disc.sqrt()) / a);
+        let (enter, leave) = (t0.max(0.0), t1.min(1.0));
+        if enter >= leave {
+            return 1.0;
+        }
+        let crossed = [t0, t1].into_iter().filter(|t| (0.0..=1.0).contains(t));
+        let fresnel: f64 = crossed
+            .map(|t| fresnel_equations(eta, ((from + d * t) / radius).dot(d.normalize()).abs()))
+            .product();
+        fresnel * (-sigma * (leave - enter) * d.length()).exp()
+    };
     let w = 64;
     let mut worst: [f64; 2] = [0.0; 2];
     for (i, j) in [(33, 32), (36, 30), (40, 35), (30, 38), (44, 32)] {
@@ -834,11 +873,17 @@ fn a_source_inside_shows_through_as_the_exact_transmittance_weighted_glow() {
         let end = eye + (p - eye) * nu;
         let at = |u: f64| p + (end - p) * u;
         let glow = |u: f64| field.psi(at(u), eps) * zeta(u, alpha, beta);
-        let exact = simpson(
-            &|u| transmittance(&s.objects, eye, at(u)) * glow(u),
-            0.0,
-            1.0,
-        );
+        let exact = simpson(&|u| sphere_transmittance(eye, at(u)) * glow(u), 0.0, 1.0);
+        for u in [0.0, 0.1, 0.2, 0.3, 0.5, 1.0] {
+            let (model, closed) = (
+                transmittance(&s.objects, eye, at(u)),
+                sphere_transmittance(eye, at(u)),
+            );
+            assert!(
+                (model - closed).abs() < 1e-9,
+                "the transmittance to {u}: {model} against {closed}"
+            );
+        }
         let psi = |x: DVec3| field.psi(x, eps);
         let x = crossing(&s.objects, eye, p, nu, &psi).expect("the ray crosses the sphere");
         let clip = |t: f64| ((t - 1.0) / (nu - 1.0)).clamp(0.0, 1.0);
@@ -859,6 +904,206 @@ fn a_source_inside_shows_through_as_the_exact_transmittance_weighted_glow() {
         );
         worst = [worst[0].max(errors[0]), worst[1].max(errors[1])];
     }
-    assert!(worst[0] < 0.06, "{worst:?}");
+    // The psi-weighted share is an estimate of the exact integral from 16 samples of the crossing (measured
+    // 1.45 to 1.99 % off on these texels).
+    assert!(worst[0] < 0.025, "{worst:?}");
     assert!(worst[1] > 4.0 * worst[0], "{worst:?}");
+}
+
+/// The Fresnel equations' unpolarised transmittance for relative index `eta` at the cosine `cos_i` of the angle
+/// of incidence, written from the sine and tangent forms (`rs = -sin(i - t) / sin(i + t)`,
+/// `rp = tan(i - t) / tan(i + t)`): the oracles' own, none of the code under test.
+fn fresnel_equations(eta: f64, cos_i: f64) -> f64 {
+    let i = cos_i.clamp(0.0, 1.0).acos();
+    if i < 1e-9 {
+        return 1.0 - ((eta - 1.0) / (eta + 1.0)).powi(2);
+    }
+    let sin_t = i.sin() / eta;
+    if sin_t >= 1.0 {
+        return 0.0;
+    }
+    let t = sin_t.asin();
+    let rs = -(i - t).sin() / (i + t).sin();
+    let rp = (i - t).tan() / (i + t).tan();
+    1.0 - 0.5 * (rs * rs + rp * rp)
+}
+
+/// The model's light leaving a uniform sphere (radius `r`, extinction `sigma`, index `eta`) lit by a point of
+/// coefficient `b` at distance `d` from its center, at the surface point `beta` radians from the source's side,
+/// per unit of the source's color, worked out apart from the code under test: the chord between two surface
+/// points `gamma` apart is `2 r sin(gamma / 2)` (so `tau` is closed form and needs no voxels or ray march), the
+/// spread `Z = integral over the sphere of exp(-tau) = 2 pi (1 - exp(-2 r sigma) (1 + 2 r sigma)) / sigma^2` is
+/// the same at every point, and the light entering at the point `alpha` from the source's side is
+/// `E = F_t(eta, cos i) cos i b / dist`, `dist^2 = r^2 + d^2 - 2 r d cos alpha`, `cos i = (d cos alpha - r) / dist`
+/// (no shadow: a sphere hides nothing of a point from its own lit side). Then
+/// `S = (1 / pi) integral E exp(-tau) / Z dA`, in polar coordinates about the exit point (`gamma` by Simpson,
+/// the angle around it by the trapezoid rule, exact for a periodic integrand), `n` steps each.
+fn sphere_oracle(r: f64, sigma: f64, eta: f64, b: f64, d: f64, beta: f64, n: usize) -> f64 {
+    use std::f64::consts::PI;
+    let z = match sigma > 0.0 {
+        true => {
+            2.0 * PI * (1.0 - (-2.0 * r * sigma).exp() * (1.0 + 2.0 * r * sigma)) / (sigma * sigma)
+        }
+        false => 4.0 * PI * r * r,
+    };
+    let entering = |cos_alpha: f64| -> f64 {
+        let dist = (r * r + d * d - 2.0 * r * d * cos_alpha).sqrt();
+        let cos_i = (d * cos_alpha - r) / dist;
+        match cos_i > 0.0 {
+            true => fresnel_equations(eta, cos_i) * cos_i * b / dist,
+            false => 0.0,
+        }
+    };
+    let around = |gamma: f64| -> f64 {
+        let m = 2 * n;
+        (0..m)
+            .map(|k| {
+                let psi = 2.0 * PI * k as f64 / m as f64;
+                entering(beta.cos() * gamma.cos() + beta.sin() * gamma.sin() * psi.cos())
+            })
+            .sum::<f64>()
+            * 2.0
+            * PI
+            / m as f64
+    };
+    let h = PI / n as f64;
+    let integral: f64 = (0..=n)
+        .map(|k| {
+            let gamma = k as f64 * h;
+            let w = match k {
+                0 => 1.0,
+                k if k == n => 1.0,
+                k if k % 2 == 1 => 4.0,
+                _ => 2.0,
+            };
+            let chord = 2.0 * r * (gamma / 2.0).sin();
+            w * around(gamma) * (-sigma * chord).exp() * r * r * gamma.sin()
+        })
+        .sum::<f64>()
+        * h
+        / 3.0;
+    integral / (z * PI)
+}
+
+/// The translucent model against an oracle that shares none of its code (`sphere_oracle`): a sphere lit by a
+/// point outside it, its light leaving at points from the lit pole round to the far one. The f64 model
+/// (`translucent::reference`, its surface in small pieces and `tau` marched along each segment) agrees with it to
+/// its pieces' size, and the voxels' table converges to it as the voxels shrink. The oracle's quadrature is
+/// converged (n and 2 n agree) and its closed-form `Z` checked against the same quadrature with `E = 1`.
+#[test]
+fn a_sphere_lit_from_outside_scatters_as_its_closed_form() {
+    let (r, b, d) = (0.7, 0.8, 2.0);
+    let center = DVec3::new(0.1, -0.2, 0.3);
+    let axis = DVec3::new(1.0, 0.3, -0.2).normalize();
+    let across = axis.any_orthonormal_vector();
+    let betas = [0.0f64, 30.0, 60.0, 90.0, 120.0, 150.0, 180.0].map(f64::to_radians);
+    let point = |beta: f64| {
+        let n = axis * beta.cos() + across * beta.sin();
+        (center + n * r, n)
+    };
+    for sigma in [1.5, 5.0] {
+        let oracle: Vec<f64> = betas
+            .iter()
+            .map(|&beta| sphere_oracle(r, sigma, 1.4, b, d, beta, 400))
+            .collect();
+        for (&beta, &o) in betas.iter().zip(&oracle) {
+            let finer = sphere_oracle(r, sigma, 1.4, b, d, beta, 800);
+            assert!(
+                (finer / o - 1.0).abs() < 1e-6,
+                "the oracle's quadrature at {beta}: {o} against {finer}"
+            );
+        }
+        let mut s = scene("translucent_cavity");
+        s.sources.tori.clear();
+        assert!(s.sources.is_empty(), "the preset holds only the ring");
+        s.sources.points.push(energywave::field::Point {
+            position: center + axis * d,
+            coefficient: b,
+            look: Default::default(),
+        });
+        let color = s.colors.palette().color_of(&Default::default())[0];
+        let ball = |resolution: u32| Object {
+            shape: Shape::Sphere { center, radius: r },
+            color: [1.0; 3],
+            translucent: material(sigma, resolution),
+        };
+        s.objects = vec![ball(8)];
+        let lights = lights(&s);
+        let reference = Reference::new(&s.objects[0], &s.objects, &lights, 0.05);
+        let mut worst = 0.0f64;
+        for (&beta, &o) in betas.iter().zip(&oracle) {
+            let (x, n) = point(beta);
+            let got = reference.leaving(x, n, Estimate::Exact)[0] / color;
+            println!(
+                "sigma {sigma}, {:.0} degrees: oracle {o:.6}, f64 model {got:.6}",
+                beta.to_degrees()
+            );
+            worst = worst.max((got / o - 1.0).abs());
+        }
+        assert!(
+            worst < 5e-3,
+            "sigma {sigma}: the f64 model {worst} off the oracle"
+        );
+        let mut errors = Vec::new();
+        for resolution in [8, 12, 16, 24, 32] {
+            let object = ball(resolution);
+            let scattered = Scattered::of(
+                &object,
+                prepared(&object).unwrap(),
+                &lights,
+                std::slice::from_ref(&object),
+            )
+            .unwrap();
+            let (mut num, mut den) = (0.0, 0.0);
+            for (&beta, &o) in betas.iter().zip(&oracle) {
+                let (x, n) = point(beta);
+                num += (scattered.at(x, n)[0] / color - o).powi(2);
+                den += o * o;
+            }
+            let e = (num / den).sqrt();
+            println!("sigma {sigma}, {resolution}^3 voxels: relative RMS error {e:.4}");
+            errors.push(e);
+        }
+        assert!(
+            errors.windows(2).all(|w| w[1] < w[0]),
+            "sigma {sigma}: {errors:?}"
+        );
+    }
+    // The closed-form spread Z against the oracle's quadrature of exp(-tau) over the sphere.
+    for sigma in [0.0, 1.5, 5.0] {
+        let n = 2000;
+        let h = std::f64::consts::PI / n as f64;
+        let quadrature: f64 = (0..=n)
+            .map(|k| {
+                let gamma = k as f64 * h;
+                let w = if k == 0 || k == n {
+                    1.0
+                } else if k % 2 == 1 {
+                    4.0
+                } else {
+                    2.0
+                };
+                w * 2.0
+                    * std::f64::consts::PI
+                    * (-sigma * 2.0 * r * (gamma / 2.0).sin()).exp()
+                    * r
+                    * r
+                    * gamma.sin()
+            })
+            .sum::<f64>()
+            * h
+            / 3.0;
+        let z = match sigma > 0.0 {
+            true => {
+                2.0 * std::f64::consts::PI
+                    * (1.0 - (-2.0 * r * sigma).exp() * (1.0 + 2.0 * r * sigma))
+                    / (sigma * sigma)
+            }
+            false => 4.0 * std::f64::consts::PI * r * r,
+        };
+        assert!(
+            (quadrature / z - 1.0).abs() < 1e-9,
+            "sigma {sigma}: Z {z} against {quadrature}"
+        );
+    }
 }
