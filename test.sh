@@ -37,6 +37,7 @@ gl_filtered="translucent:gpu refine:gpu"
 declare -A gl_left_out=(
   [soak]="3 minutes on GL (it passes there)"
   [engine]="runs SPIR-V through wgpu's passthrough, which only Vulkan has"
+  [engine_es]="runs its GLSL ES stages on llvmpipe's GLES through EGL itself, in the first run: WGPU_BACKEND does not change it"
 )
 # The test files that need no GPU (they pass with no driver at all): nothing to run again on GL.
 no_gpu="animation curve_nearest field fuzz_corpus gpu_layout look module_graph particle_files particles scene_files

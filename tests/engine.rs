@@ -1,20 +1,19 @@
 //! The effect as a game engine's shader (`energywave shader`): the GLSL 4.50 and the HLSL naga writes from our WGSL
 //! compiled by glslang (Khronos' reference compiler, Debian's `glslang-tools`) to SPIR-V, that SPIR-V run as it
-//! is on the GPU (wgpu's passthrough, Vulkan), the billboard drawn texel for texel: its B is the field pass's
-//! Simpson B within f32, on points, lines, tori, curves with W and color series, the brightest-point W form and
-//! the rms decay. The GLSL ES 3.00 stages and the GLSL 4.50 vertex stage are checked by glslang for OpenGL. Needs
-//! `--features glslang` (`./test.sh` turns it on); without it the test is listed as ignored, with what it needs.
+//! is on the GPU (wgpu's passthrough, Vulkan) with the exported uniforms as they are (the scene's camera), each
+//! pixel's B against the f64 twin along the pixel's own ray (`common::engine::check_against_twin`), on points,
+//! lines, tori, curves with W and color series, the brightest-point W form and the rms decay. The GLSL ES 3.00
+//! stages and the GLSL 4.50 vertex stage are checked by glslang for OpenGL (tests/engine_es.rs runs the ES stages
+//! on GLES). Needs `--features glslang` (`./test.sh` turns it on); without it the test is listed as ignored, with
+//! what it needs.
 
 mod common;
 
 use std::path::Path;
 use std::process::Command;
 
+use common::engine::{CLEAR, FRAME};
 use energywave::engine::EffectShader;
-use energywave::frame::FrameSetup;
-use energywave::gpu::HeadlessRenderer;
-use energywave::integrate::{Decay, Integrator};
-use energywave::scene::Scene;
 
 /// `glslangValidator ARGS`, which must succeed.
 fn glslang(args: &[&str]) {
@@ -61,15 +60,15 @@ fn device() -> (wgpu::Device, wgpu::Queue) {
     .expect("a device")
 }
 
-/// The billboard's W x W texels drawn by the SPIR-V stages `vertex` and `fragment` (entry points by name), the
-/// view set so that the quad covers the target exactly: each fragment's center is a texel's. RGBA: B and the tint.
+/// The SPIR-V stages `vertex` and `fragment` (entry points by name) drawn over `common::engine::FRAME` with
+/// `uniforms`, the target cleared to `common::engine::CLEAR`: RGBA, rows from the top.
 fn draw(
     (device, queue): &(wgpu::Device, wgpu::Queue),
     vertex: (&[u32], &str),
     fragment: (&[u32], &str),
     uniforms: &[u8],
-    w: u32,
 ) -> Vec<[f32; 4]> {
+    let (w, h) = FRAME;
     let module = |code: &[u32], entry: &str| unsafe {
         device.create_shader_module_passthrough(wgpu::ShaderModuleDescriptorPassthrough {
             label: Some(entry),
@@ -144,7 +143,7 @@ fn draw(
         label: None,
         size: wgpu::Extent3d {
             width: w,
-            height: w,
+            height: h,
             depth_or_array_layers: 1,
         },
         mip_level_count: 1,
@@ -157,7 +156,7 @@ fn draw(
     let row = (16 * w).div_ceil(256) * 256;
     let readback = device.create_buffer(&wgpu::BufferDescriptor {
         label: None,
-        size: (row * w) as u64,
+        size: (row * h) as u64,
         usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
         mapped_at_creation: false,
     });
@@ -171,7 +170,12 @@ fn draw(
                 depth_slice: None,
                 resolve_target: None,
                 ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                    load: wgpu::LoadOp::Clear(wgpu::Color {
+                        r: CLEAR[0] as f64,
+                        g: CLEAR[1] as f64,
+                        b: CLEAR[2] as f64,
+                        a: CLEAR[3] as f64,
+                    }),
                     store: wgpu::StoreOp::Store,
                 },
             })],
@@ -193,7 +197,7 @@ fn draw(
         },
         wgpu::Extent3d {
             width: w,
-            height: w,
+            height: h,
             depth_or_array_layers: 1,
         },
     );
@@ -202,69 +206,12 @@ fn draw(
     slice.map_async(wgpu::MapMode::Read, |r| r.unwrap());
     device.poll(wgpu::PollType::wait_indefinitely()).unwrap();
     let data = slice.get_mapped_range().unwrap();
-    let mut out = Vec::with_capacity((w * w) as usize);
-    for y in 0..w as usize {
+    let mut out = Vec::with_capacity((w * h) as usize);
+    for y in 0..h as usize {
         let line: &[f32] =
             bytemuck::cast_slice(&data[y * row as usize..y * row as usize + 16 * w as usize]);
         out.extend(line.chunks_exact(4).map(|p| [p[0], p[1], p[2], p[3]]));
     }
-    out
-}
-
-/// The uniforms of `effect` with the view set so that the billboard covers the clip square exactly.
-fn covering(effect: &EffectShader) -> Vec<u8> {
-    let v = effect.view.params;
-    let half = v.size / 2.0;
-    let dot = |a: [f32; 3], b: [f32; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-    let rows = [
-        [
-            v.right[0] / half,
-            v.right[1] / half,
-            v.right[2] / half,
-            -dot(v.center, v.right) / half,
-        ],
-        [
-            v.up[0] / half,
-            v.up[1] / half,
-            v.up[2] / half,
-            -dot(v.center, v.up) / half,
-        ],
-        [0.0, 0.0, 0.0, 0.5],
-        [0.0, 0.0, 0.0, 1.0],
-    ];
-    let columns: [[f32; 4]; 4] = std::array::from_fn(|c| std::array::from_fn(|r| rows[r][c]));
-    let mut view = effect.view;
-    view.view_proj = columns;
-    let mut bytes = effect.uniforms.clone();
-    bytes[..size_of::<energywave::engine::View>()].copy_from_slice(bytemuck::bytes_of(&view));
-    bytes
-}
-
-/// Scenes that reach every part of the shader, Simpson's rule at the papers' n.
-fn scenes() -> Vec<(String, Scene)> {
-    let mut out = Vec::new();
-    for name in [
-        "default",
-        "mixed",
-        "pulse_travelling",
-        "rings_and_beam",
-        "bezier_b5.0",
-    ] {
-        let mut scene = common::shipped_scene(&format!("{name}.toml"));
-        scene.integration.integrator = Integrator::Simpson;
-        scene.billboard.resolution = 48;
-        out.push((name.to_owned(), scene));
-    }
-    // The rms decay, and curves read at their brightest point (the continuous W form).
-    let (_, mixed) = out[1].clone();
-    let mut rms = mixed;
-    rms.integration.decay = Decay::Rms;
-    out.push(("mixed, rms".into(), rms));
-    let (_, pulse) = out[2].clone();
-    let mut bright = pulse.at_frame(30.0);
-    (bright.sources.curves.iter_mut())
-        .for_each(|c| c.w_form = energywave::field::WForm::Continuous);
-    out.push(("pulse_travelling, continuous W".into(), bright));
     out
 }
 
@@ -273,13 +220,13 @@ fn scenes() -> Vec<(String, Scene)> {
     not(feature = "glslang"),
     ignore = "needs glslangValidator (Debian's glslang-tools) and Vulkan and --features glslang: ./test.sh runs it"
 )]
-fn the_glsl_and_hlsl_engines_get_give_the_field_pass_brightness_within_f32() {
+fn the_glsl_and_hlsl_engines_get_give_the_twins_brightness_with_the_exported_camera() {
     let gpu = device();
-    let mut ours = HeadlessRenderer::new().unwrap();
     let dir = common::tmpdir("engine", "shaders");
     let at = |f: &str| dir.join(f).display().to_string();
-    for (name, scene) in scenes() {
-        let effect = EffectShader::of(&scene, 1.0).unwrap();
+    let (width, height) = FRAME;
+    for (name, scene) in common::engine::scenes() {
+        let effect = EffectShader::of(&scene, width as f64 / height as f64).unwrap();
         let _ = std::fs::remove_dir_all(&dir);
         let (files, warning) = effect.write(&dir, "effect").unwrap();
         assert!(warning.is_none(), "{name}: {warning:?}");
@@ -322,78 +269,39 @@ fn the_glsl_and_hlsl_engines_get_give_the_field_pass_brightness_within_f32() {
                 &out,
             ]);
         }
-        // Our field pass, Simpson's rule, f32.
-        let setup = FrameSetup::placed(&scene, 1.0);
-        let w = setup.resolution;
-        let want = ours.brightness(&setup).unwrap();
-        let top = want.iter().fold(0.0f32, |m, b| m.max(b.abs()));
-        assert!(top > 0.05, "{name}: a glow to compare ({top})");
-        // And the f64 twin: the engine's f32 error against it is the field pass's own, not more.
-        let twin = energywave::reference::render_brightness(&setup).values;
-        let off = |b: &[f32]| -> f32 {
-            (b.iter().zip(&twin)).fold(0.0f64, |m, (b, t)| m.max((*b as f64 - t).abs())) as f32
-                / top
-        };
-        let pass_off = off(&want);
-        let uniforms = covering(&effect);
-        for (language, vs, fs) in [
+        // Both languages' stages with the exported uniforms (`uniforms.bin`: the scene's camera), against the twin.
+        let glsl_vertex = spirv(&dir.join("glsl.vert.spv"));
+        for (language, vs, fs, glow) in [
             (
                 "GLSL",
-                (spirv(&dir.join("glsl.vert.spv")), "main"),
+                (glsl_vertex.clone(), "main"),
                 (spirv(&dir.join("glsl.frag.spv")), "main"),
+                (spirv(&dir.join("glsl.glow.spv")), "main"),
             ),
             (
                 "HLSL",
                 (spirv(&dir.join("hlsl.vs_main.spv")), "vs_main"),
                 (spirv(&dir.join("hlsl.fs_brightness.spv")), "fs_brightness"),
+                (spirv(&dir.join("hlsl.fs_glow.spv")), "fs_glow"),
             ),
         ] {
-            let got = draw(&gpu, (&vs.0, vs.1), (&fs.0, fs.1), &uniforms, w);
-            let mut worst = 0.0f32;
-            for (g, b) in got.iter().zip(&want) {
-                worst = worst.max((g[0] - b).abs() / top);
-            }
-            let b: Vec<f32> = got.iter().map(|g| g[0]).collect();
-            let twin_off = off(&b);
+            let uniforms = std::fs::read(at("effect.uniforms.bin")).unwrap();
+            assert_eq!(
+                uniforms, effect.uniforms,
+                "{name}: the file holds the block"
+            );
+            let brightness = draw(&gpu, (&vs.0, vs.1), (&fs.0, fs.1), &uniforms);
+            let glow = draw(&gpu, (&vs.0, vs.1), (&glow.0, glow.1), &uniforms);
+            let (compared, outside, worst, top) = common::engine::check_against_twin(
+                &format!("{name}, {language}"),
+                &scene,
+                &brightness,
+                &glow,
+            );
             eprintln!(
-                "{name}, {language}: B within {worst:.1e} of the field pass's (of the largest B, {w}x{w} texels); \
-                 {twin_off:.1e} from the f64 twin, the field pass {pass_off:.1e}"
+                "{name}, {language}: {compared} pixels, {outside} outside the billboard, B within {worst:.1e} of \
+                 the twin's (relative, at least 0.01), largest B {top:.3}"
             );
-            assert!(
-                worst < 1e-4,
-                "{name}, {language}: B off by {worst:e} of the largest ({top})"
-            );
-            assert!(
-                twin_off <= 4.0 * pass_off + 1e-5,
-                "{name}, {language}: {twin_off:e} from the twin, the field pass {pass_off:e}"
-            );
-        }
-        // The glow the engine blends: G premultiplied, alpha min(B, 1), against the same B.
-        let glow = draw(
-            &gpu,
-            (&spirv(&dir.join("glsl.vert.spv")), "main"),
-            (&spirv(&dir.join("glsl.glow.spv")), "main"),
-            &uniforms,
-            w,
-        );
-        // Its color too, not the alpha alone: G = B Ce + the sources' tint, faded at the glow's edge, against our
-        // field pass's B and tint and the scene's energy color.
-        let tint = ours.tint().expect("the field pass's tint");
-        let energy = scene.colors.energy_color();
-        for ((g, b), t) in glow.iter().zip(&want).zip(&tint) {
-            let fade = energywave::scene::edge_fade(*b as f64, scene.colors.cutoff) as f32;
-            assert!(
-                (g[3] - (b * fade).clamp(0.0, 1.0)).abs() < 1e-4,
-                "{name}: alpha {} for B {b}",
-                g[3]
-            );
-            for k in 0..3 {
-                let color = (fade * (b * energy[k] as f32 + t[k])).max(0.0);
-                assert!(
-                    (g[k] - color).abs() < 1e-4 * color.abs().max(1.0),
-                    "{name}: premultiplied color {g:?} for B {b}, tint {t:?}: channel {k} should be {color}"
-                );
-            }
         }
     }
     let _ = std::fs::remove_dir_all(&dir);

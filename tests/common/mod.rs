@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 
 use energywave::scene::Scene;
 
+pub mod engine;
 pub mod viewer;
 
 /// A small deterministic generator (the tests need no crate for it).
