@@ -2,7 +2,7 @@
 // image, a ray through each pixel's center, slabs perpendicular to the view. Each tile of TILE x TILE pixels (a
 // workgroup) has its segments (a particle cut by a slab) in slab order; a pixel adds the optical depth of its slab's
 // segments (commutative: no order among them, so no popping) and their color times the light each particle
-// scatters back along the ray, then composites the slab over what lies behind it, front to back. The glow is taken
+// scatters back along the ray plus the light it gives off by itself, then composites the slab over what lies behind it, front to back. The glow is taken
 // to lie where its weight along the ray does (particles::view::GlowPlace): the slabs whose middle lies in front of
 // it make the front image, laid over the glow; the others the back image, under it. A
 // dispatch takes at most `params.chunk` segments a pixel (lavapipe stops a loop past 65535 iterations): the
@@ -33,7 +33,8 @@ struct SmokeParams {
 
 // A particle as the GPU reads it (128 bytes: a million fit one storage binding): its light as
 // `AMBIENT + iso + v^T M v` per channel toward the unit v (particles::light::ParticleLight, the ambient share in
-// `iso`), each channel's M diagonal in xyz with its `iso` in w, and its off-diagonal (xy, xz, yz).
+// `iso`), each channel's M diagonal in xyz with its `iso` in w, and its off-diagonal (xy, xz, yz) with the
+// channel's emission (the radiance it gives off by itself per unit of optical depth, particles::Particle) in w.
 struct SmokeParticle {
     position: vec3<f32>,
     radius: f32,
@@ -218,7 +219,8 @@ fn splat(@builtin(global_invocation_id) gid: vec3<u32>) {
         let tau = p.density * radius * KERNEL_PEAK * exp(-KERNEL_FALLOFF * u * u)
             * sqrt(3.14159265 / (4.0 * KERNEL_FALLOFF)) * (erf_approx(k * b) - erf_approx(k * a));
         if tau > 0.0 {
-            open += vec4<f32>(tau * p.color * light_toward(p, toward_eye), tau);
+            let emission = vec3<f32>(p.off_r.w, p.off_g.w, p.off_b.w);
+            open += vec4<f32>(tau * (p.color * light_toward(p, toward_eye) + emission), tau);
         }
     }
     if chunk.last != 0u {

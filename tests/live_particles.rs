@@ -514,9 +514,56 @@ fn size_density_and_color_follow_their_curves() {
     assert!(particles(&scene, 121).is_empty());
 }
 
+/// A spark's own light over its life: the set's emission (color times intensity) times the life's emission
+/// factor and emission color at the particle's age, not times the albedo (emission is not scattered light).
+#[test]
+fn emission_follows_its_curves() {
+    let scene = live_scene(
+        "emitter = \"sphere\"\ncenter = [0.0, 0.0, 0.0]\nradius = 0.5\nparticle_radius = 0.2\ndensity = 8.0\n\
+         emission = [1.0, 0.5, 0.5]\nemission_intensity = 4.0",
+        "rate = 0.0\nbursts = [[0.0, 20.0]]\nlifetime = 4.0\nspeed = 0.0\nopacity = [[0.0, 1.0]]\n\
+         emission = [[0.0, 1.0], [1.0, 0.25]]\n\
+         emission_colors = [[0.0, 1.0, 1.0, 1.0], [0.5, 1.0, 0.5, 0.0], [1.0, 0.6, 0.0, 0.0]]",
+        "",
+    );
+    for frame in [0u32, 12, 30, 60, 90, 119] {
+        let age = frame as f64 / 30.0 / 4.0;
+        let factor = 1.0 - 0.75 * age;
+        let tint = if age < 0.5 {
+            [1.0, 1.0 - age, 1.0 - 2.0 * age]
+        } else {
+            [1.0 - 0.8 * (age - 0.5), 0.5 - (age - 0.5), 0.0]
+        };
+        let drawn = particles(&scene, frame);
+        assert_eq!(drawn.len(), 20, "{frame}");
+        for p in drawn {
+            let want: Vec<f64> = (0..3)
+                .map(|c| [1.0, 0.5, 0.5][c] * 4.0 * factor * tint[c])
+                .collect();
+            assert!(
+                (0..3).all(|c| (p.emission[c] - want[c]).abs() < 1e-12),
+                "frame {frame}: {:?} against {want:?}",
+                p.emission
+            );
+        }
+    }
+    // A set that gives no emission glows with none.
+    let plain = common::shipped_scene("ring_smoke.toml");
+    assert!(
+        (plain.at_frame(20.0).particles.iter())
+            .flat_map(|s| s.particles(&plain.sources))
+            .all(|p| p.emission == [0.0; 3])
+    );
+}
+
 #[test]
 fn saved_and_loaded_again_a_live_set_is_the_same() {
-    for name in ["pulse_sparks.toml", "ring_smoke.toml", "beam_dust.toml"] {
+    for name in [
+        "pulse_sparks.toml",
+        "ring_smoke.toml",
+        "beam_dust.toml",
+        "beam_sparks.toml",
+    ] {
         let scene = common::shipped_scene(name);
         let again = parse(&scene.to_toml()).unwrap();
         assert_eq!(again.particles, scene.particles, "{name}");
@@ -538,7 +585,7 @@ fn bad_input_is_refused_with_its_place() {
         )
     };
     let sphere = "emitter = \"sphere\"";
-    let cases: [(String, &str); 15] = [
+    let cases: [(String, &str); 20] = [
         (base(sphere, "rate = -1.0", true), "particles[0].life.rate"),
         (
             base(sphere, "lifetime = [-1.0, 2.0]", true),
@@ -581,6 +628,31 @@ fn bad_input_is_refused_with_its_place() {
         (
             base(sphere, "rate = 1e6\nlifetime = 10.0", true),
             "particles in all",
+        ),
+        (
+            base(sphere, "emission = [[0.0, 1.0], [1.0, -0.5]]", true),
+            "particles[0].life.emission[1]",
+        ),
+        (
+            base(sphere, "emission_colors = []", true),
+            "particles[0].life.emission_colors",
+        ),
+        (
+            base(sphere, "emission_colors = [[0.0, 1.0, 2.0, 0.0]]", true),
+            "particles[0].life.emission_colors[0]",
+        ),
+        (
+            base(
+                "emitter = \"sphere\"\nemission_intensity = -1.0",
+                "rate = 1.0",
+                true,
+            ),
+            "particles[0].emission_intensity",
+        ),
+        (
+            base(sphere, "rate = 1.0", true)
+                + "[[animation.tracks]]\nparameter = \"particles[0].emission_intensity\"\nkeys = [[0, 2e3]]\n",
+            "animation.tracks[0].keys",
         ),
         (
             base(sphere, "rate = 1.0", true)

@@ -263,12 +263,19 @@ color = [0.5, 0.4, 0.3]
 seed = 9
 noise = 0.25
 albedo = 0.7
+emission = [1.0, 0.4, 0.1]
+emission_intensity = 2.5
 
 [[particles]]
 file = "cloud.ply"
+emission = [0.2, 0.5, 1.0]
 "#;
     let scene = parse(text, &dir).unwrap();
     assert_eq!(scene.slice_width, 0.25);
+    // A color alone glows at intensity 1; a set without either glows with none.
+    assert_eq!(scene.particles[0].emission.intensity, 2.5);
+    assert_eq!(scene.particles[1].emission.color, [0.2, 0.5, 1.0]);
+    assert_eq!(scene.particles[1].emission.intensity, 1.0);
     let again = parse(&scene.to_toml(), &dir).unwrap();
     assert_eq!(scene, again);
 }
@@ -324,6 +331,14 @@ fn bad_particle_sets_are_refused_with_their_place() {
         (
             "emitter = \"sphere\"\ncount = 10\nalbedo = 1.5",
             "an albedo is a share of the light",
+        ),
+        (
+            "emitter = \"sphere\"\ncount = 10\nemission = [1.5, 0, 0]",
+            "particles[0].emission: ",
+        ),
+        (
+            "emitter = \"sphere\"\ncount = 10\nemission_intensity = 1e4",
+            "particles[0].emission_intensity: 10000 is out of range",
         ),
         (
             "emitter = \"sphere\"\ncount = 10\nnoise = -1",

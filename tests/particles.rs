@@ -63,6 +63,7 @@ fn cloud(n: usize, seed: u64) -> Vec<Particle> {
                 rng.range(0.2, 1.0),
                 rng.range(0.2, 1.0),
             ],
+            emission: [0.0; 3],
         })
         .collect()
 }
@@ -198,12 +199,14 @@ fn particles_of_different_colors_at_equal_depth_do_not_pop() {
             radius: 0.5,
             density: 6.0,
             color: [1.0, 0.0, 0.0],
+            emission: [0.0; 3],
         },
         Particle {
             position: DVec3::new(0.15, 0.0, 0.0),
             radius: 0.5,
             density: 6.0,
             color: [0.0, 1.0, 0.0],
+            emission: [0.0; 3],
         },
     ];
     let step = 0.02f64.to_radians();
@@ -246,12 +249,14 @@ fn particles_without_density_or_size_leave_the_ray_clear() {
             radius: 0.5,
             density: 0.0,
             color: [1.0; 3],
+            emission: [0.0; 3],
         },
         Particle {
             position: DVec3::ZERO,
             radius: 0.0,
             density: 3.0,
             color: [1.0; 3],
+            emission: [0.0; 3],
         },
     ] {
         let slicing = Slicing::covering(&[p], eye, axis, 0.1);
@@ -537,4 +542,146 @@ fn unshadowed_particle_light_bounds_the_shadowed_light() {
             assert!((s[0].m[c][k] - ratio * o[0].m[c][k]).abs() < 1e-12);
         }
     }
+}
+
+/// A particle's optical depth along `ray`: its density times the paper's kernel integrated by the midpoint rule
+/// over the chord the ray cuts from its ball (where the kernel is smooth), apart from `segment_integral`'s closed
+/// form.
+fn brute_depth(p: &Particle, ray: &Ray) -> f64 {
+    let closest = (p.position - ray.origin).dot(ray.direction);
+    let miss = (ray.at(closest) - p.position).length_squared();
+    let half = (p.radius * p.radius - miss).max(0.0).sqrt();
+    let n = 200_000;
+    let dt = 2.0 * half / n as f64;
+    (0..n)
+        .map(|k| {
+            let x = ray.at(closest - half + (k as f64 + 0.5) * dt);
+            p.density * 0.446 * (-2.0 * ((x - p.position) / p.radius).length_squared()).exp() * dt
+        })
+        .sum()
+}
+
+/// A particle that glows by itself (emission `L_e`, METHOD.md section 9): the medium emits `sigma L_e`, so along
+/// any ray it shows `L_e (1 - exp(-tau))`, `tau` its optical depth there, whatever the slicing (a slab's share
+/// `(1 - exp(-tau_j)) / tau_j` of its own emission, dimmed by the slabs in front, sums to it exactly), and the
+/// marched medium converges to it. Against the optical depth by brute force along the ray.
+#[test]
+fn a_glowing_particle_shows_its_emission_over_its_opacity() {
+    use energywave::reference::particles::{Glow, sheet_buffer_glowing};
+    let emission = [2.0, 0.8, 0.3];
+    let spark = Particle {
+        position: DVec3::new(0.1, -0.05, 0.2),
+        radius: 0.4,
+        density: 5.0,
+        // Black: it scatters nothing, so all it shows is its own light.
+        color: [0.0; 3],
+        emission,
+    };
+    for target in [
+        DVec3::new(0.1, -0.05, 0.0),
+        DVec3::new(0.3, 0.1, 0.0),
+        DVec3::new(-0.15, -0.3, 0.1),
+    ] {
+        let (eye, axis, ray) = view(target);
+        let tau = brute_depth(&spark, &ray);
+        assert!(tau > 0.05, "{tau}: the ray crosses the spark");
+        for width in [0.4, 0.2, 0.05, 0.01] {
+            let slicing = Slicing::covering(&[spark], eye, axis, width);
+            let c = sheet_buffer_glowing(&[spark], &ray, &slicing, 0.9, light, &Glow::NONE);
+            for k in 0..3 {
+                let want = emission[k] * (1.0 - (-tau).exp());
+                assert!(
+                    (c.radiance[k] - want).abs() < 1e-6 * emission[k],
+                    "width {width}, channel {k}: {} against {want}",
+                    c.radiance[k]
+                );
+            }
+            assert!((c.transmittance - (-tau).exp()).abs() < 1e-6);
+        }
+        let marched = marched(&[spark], &ray, 0.9, light, 200_000);
+        assert!((marched.radiance[0] - emission[0] * (1.0 - (-tau).exp())).abs() < 1e-5);
+    }
+    // No emission, no light of its own: black.
+    let dark = Particle {
+        emission: [0.0; 3],
+        ..spark
+    };
+    let (eye, axis, ray) = view(DVec3::ZERO);
+    let slicing = Slicing::covering(&[dark], eye, axis, 0.1);
+    assert_eq!(
+        sheet_buffer(&[dark], &ray, &slicing, 0.9, light).radiance,
+        [0.0; 3]
+    );
+}
+
+/// A spark's light is absorbed by the smoke in front of it and not by the smoke behind it: a black, unlit smoke
+/// particle in front leaves `L_e (1 - exp(-tau_spark)) exp(-tau_smoke)`, behind it `L_e (1 - exp(-tau_spark))`.
+/// And the glowing medium converges to the marched one in a cloud where some particles glow.
+#[test]
+fn smoke_in_front_absorbs_a_sparks_light_and_the_glowing_cloud_converges() {
+    let emission = [3.0, 1.2, 0.4];
+    let spark = Particle {
+        position: DVec3::new(0.0, 0.0, 0.0),
+        radius: 0.3,
+        density: 4.0,
+        color: [0.0; 3],
+        emission,
+    };
+    let smoke = |z: f64| Particle {
+        position: DVec3::new(0.05, 0.0, z),
+        radius: 0.5,
+        density: 3.0,
+        color: [0.0; 3],
+        emission: [0.0; 3],
+    };
+    let (eye, axis, ray) = view(DVec3::new(0.02, 0.01, 0.0));
+    let tau_spark = brute_depth(&spark, &ray);
+    for (z, in_front) in [(1.5, true), (-1.5, false)] {
+        let particles = [spark, smoke(z)];
+        let tau_smoke = brute_depth(&particles[1], &ray);
+        assert!(tau_smoke > 0.5, "{tau_smoke}");
+        let slicing = Slicing::covering(&particles, eye, axis, 0.1);
+        // Unlit: the light the smoke would scatter is none.
+        let c = sheet_buffer(&particles, &ray, &slicing, 0.9, |_| [0.0; 3]);
+        let dimmed = if in_front { (-tau_smoke).exp() } else { 1.0 };
+        for k in 0..3 {
+            let want = emission[k] * (1.0 - (-tau_spark).exp()) * dimmed;
+            assert!(
+                (c.radiance[k] - want).abs() < 1e-6 * emission[k],
+                "smoke at z {z}, channel {k}: {} against {want}",
+                c.radiance[k]
+            );
+        }
+    }
+    // A lit cloud, a third of it glowing: the sheet buffer converges to the marched medium as slices thin.
+    let mut particles = cloud(30, 5);
+    for (k, p) in particles.iter_mut().enumerate() {
+        if k % 3 == 0 {
+            p.emission = [1.5, 0.6, 0.2];
+        }
+    }
+    let radius = 0.55;
+    let mut errors = Vec::new();
+    for divisions in [2.0, 8.0, 32.0] {
+        let mut worst = 0.0f64;
+        for target in [
+            DVec3::ZERO,
+            DVec3::new(0.3, 0.1, 0.0),
+            DVec3::new(-0.5, -0.4, 0.2),
+        ] {
+            let (eye, axis, ray) = view(target);
+            let reference = marched(&particles, &ray, 0.9, light, 200_000);
+            let slicing = Slicing::covering(&particles, eye, axis, radius / divisions);
+            worst = worst.max(off(
+                &sheet_buffer(&particles, &ray, &slicing, 0.9, light),
+                &reference,
+            ));
+        }
+        errors.push(worst);
+    }
+    assert!(
+        errors[1] < 0.5 * errors[0] && errors[2] < 0.5 * errors[1],
+        "{errors:?}"
+    );
+    assert!(errors[2] < 1e-3, "{errors:?}");
 }

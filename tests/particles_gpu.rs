@@ -73,16 +73,37 @@ noise = 0.5
 
 #[test]
 fn the_gpu_smoke_image_is_the_twins_pixel_by_pixel() {
-    let scene = scene(CLOUD);
+    smoke_image_against_the_twin(&scene(CLOUD));
+}
+
+/// The same with the cloud glowing by itself (its emission) besides scattering the wave's light.
+#[test]
+fn a_glowing_clouds_gpu_smoke_image_is_the_twins_pixel_by_pixel() {
+    let mut glowing = scene(CLOUD);
+    glowing.particles[0].emission = energywave::particles::Emission {
+        color: [1.0, 0.55, 0.2],
+        intensity: 1.5,
+    };
+    // It shows: the glowing image is brighter than the plain one.
+    let bright = smoke_image_against_the_twin(&glowing);
+    let plain = smoke_image_against_the_twin(&scene(CLOUD));
+    assert!(
+        bright > 2.0 * plain,
+        "mean radiance {bright} against {plain}"
+    );
+}
+
+/// The GPU's smoke image against `smoke_pixel` pixel by pixel; the mean radiance of the whole smoke (red).
+fn smoke_image_against_the_twin(scene: &Scene) -> f64 {
     let (w, h) = (96, 72);
     let mut gpu = gpu();
-    gpu.render(&scene, w, h, false).unwrap();
+    gpu.render(scene, w, h, false).unwrap();
     let (image, view) = gpu.smoke_image().unwrap().expect("the scene has particles");
-    let setup = FrameSetup::placed(&scene, w as f64 / h as f64);
+    let setup = FrameSetup::placed(scene, w as f64 / h as f64);
     let lit = setup.particles().unwrap();
     let [sw, sh] = view.size;
     assert_eq!(image.len(), (sw * sh) as usize);
-    let (mut worst, mut covered, mut split_apart, mut both) = (0.0f64, 0, 0, 0);
+    let (mut worst, mut covered, mut split_apart, mut both, mut red) = (0.0f64, 0, 0, 0, 0.0);
     for y in 0..sh {
         for x in 0..sw {
             let ray = view.ray(x, y);
@@ -99,6 +120,7 @@ fn the_gpu_smoke_image_is_the_twins_pixel_by_pixel() {
             // The whole smoke, the front image over the back one: independent of where the glow splits it.
             let whole = over(of(&want[0]), of(&want[1]));
             let gpu_whole = over(got[0].map(f64::from), got[1].map(f64::from));
+            red += whole[0] / (sw * sh) as f64;
             for k in 0..4 {
                 worst = worst.max((gpu_whole[k] - whole[k]).abs());
             }
@@ -122,6 +144,7 @@ fn the_gpu_smoke_image_is_the_twins_pixel_by_pixel() {
         split_apart * 100 <= sw * sh,
         "{split_apart} pixels split elsewhere"
     );
+    red
 }
 
 #[test]
@@ -151,6 +174,43 @@ fn a_particles_light_is_the_light_marched_to_its_center() {
     let bare = in_scattered(&lights, &[], particles[0].position, eye);
     let shadowed = in_scattered(&lights, &particles, particles[0].position, eye);
     assert!(shadowed[0] < bare[0]);
+}
+
+/// A glowing particle is not a light source: the light every particle gets (and the light at any point of the
+/// medium) is the same whether the set glows or not.
+#[test]
+fn a_glowing_set_lights_nothing() {
+    let mut glowing = scene(CLOUD);
+    glowing.particles[0].emission = energywave::particles::Emission {
+        color: [1.0, 0.8, 0.5],
+        intensity: 50.0,
+    };
+    let plain = scene(CLOUD);
+    let lights = Lights::new(
+        &plain.sources,
+        plain.colors.palette(),
+        plain.integration.epsilon,
+    );
+    let bright: Vec<Particle> = energywave::particles::gather(&glowing.particles, &glowing.sources);
+    let dark: Vec<Particle> = energywave::particles::gather(&plain.particles, &plain.sources);
+    assert!(
+        bright.iter().all(|p| p.emission[0] == 50.0),
+        "the set's emission reaches its particles"
+    );
+    assert!(dark.iter().all(|p| p.emission == [0.0; 3]));
+    let (a, b) = (
+        light_particles(&lights, &bright),
+        light_particles(&lights, &dark),
+    );
+    for (a, b) in a.iter().zip(&b) {
+        assert_eq!(a.toward(glam::DVec3::Z), b.toward(glam::DVec3::Z));
+    }
+    let x = glam::DVec3::new(0.2, 0.1, 0.0);
+    let eye = plain.camera.eye;
+    assert_eq!(
+        in_scattered(&lights, &bright, x, eye),
+        in_scattered(&lights, &dark, x, eye)
+    );
 }
 
 #[test]

@@ -4,7 +4,8 @@
 mod common;
 
 use common::viewer::{
-    click_first, export_and_wait, harness, light_scene, mean_abs_difference, undo, viewport_pixels,
+    click_first, differs, export_and_wait, harness, light_scene, mean_abs_difference, undo,
+    viewport_pixels,
 };
 use egui::accesskit::Role;
 use egui::{Key, Modifiers, Pos2, Vec2};
@@ -688,6 +689,45 @@ fn objects_can_be_added_edited_moved_by_their_handle_deleted_and_undone() {
         h.state().report().error.is_none(),
         "{:?}",
         h.state().report().error
+    );
+}
+
+/// A set's emission edited in the panel (its color and intensity keyable like its albedo): the smoke glows by
+/// itself in the viewport, brighter than it was, and one undo takes it back.
+#[test]
+fn a_sets_emission_is_edited_in_the_panel_and_glows_in_the_viewport() {
+    let mut h = harness(light_scene());
+    click_first(&mut h, "+ smoke");
+    assert_eq!(h.state().scene().particles[0].emission.intensity, 0.0);
+    let before = viewport_pixels(&mut h);
+    h.get_by_role_and_label(Role::SpinButton, "emission intensity")
+        .set_value_accesskit(4.0);
+    h.run();
+    assert_eq!(h.state().scene().particles[0].emission.intensity, 4.0);
+    let glowing = viewport_pixels(&mut h);
+    let brightness = |p: &[[u8; 4]]| {
+        p.iter()
+            .map(|c| c[0] as f64 + c[1] as f64 + c[2] as f64)
+            .sum::<f64>()
+    };
+    // Brighter, and visibly so where the smoke is (as much as the smoke itself shows in its own test).
+    let d = mean_abs_difference(&before, &glowing);
+    assert!(
+        brightness(&glowing) > brightness(&before) && d > 1.0,
+        "the smoke glows: {} against {}, {d} apart",
+        brightness(&glowing),
+        brightness(&before)
+    );
+    assert!(
+        h.get_all_by_label("key particles[0].emission_intensity")
+            .count()
+            == 1
+    );
+    undo(&mut h);
+    assert_eq!(h.state().scene().particles[0].emission.intensity, 0.0);
+    assert!(
+        !differs(&viewport_pixels(&mut h), &before),
+        "undone, the picture is as it was"
     );
 }
 

@@ -159,6 +159,10 @@ pub enum ParticleField {
     Color,
     /// Any set's albedo.
     Albedo,
+    /// Any set's emission color.
+    Emission,
+    /// Any set's emission intensity.
+    EmissionIntensity,
     /// A live emitter's acceleration (gravity, wind).
     Acceleration,
     /// A live emitter's drag.
@@ -168,13 +172,15 @@ pub enum ParticleField {
 }
 
 impl ParticleField {
-    pub const ALL: [ParticleField; 9] = [
+    pub const ALL: [ParticleField; 11] = [
         ParticleField::Rate,
         ParticleField::Center,
         ParticleField::Radius,
         ParticleField::Spread,
         ParticleField::Color,
         ParticleField::Albedo,
+        ParticleField::Emission,
+        ParticleField::EmissionIntensity,
         ParticleField::Acceleration,
         ParticleField::Drag,
         ParticleField::Turbulence,
@@ -189,6 +195,8 @@ impl ParticleField {
             ParticleField::Spread => "spread",
             ParticleField::Color => "color",
             ParticleField::Albedo => "albedo",
+            ParticleField::Emission => "emission",
+            ParticleField::EmissionIntensity => "emission_intensity",
             ParticleField::Acceleration => "acceleration",
             ParticleField::Drag => "drag",
             ParticleField::Turbulence => "turbulence",
@@ -206,7 +214,9 @@ impl ParticleField {
             ParticleField::Radius => "a sphere emitter",
             ParticleField::Spread => "a curve or torus emitter",
             ParticleField::Color => "an emitter",
-            ParticleField::Albedo => "any set",
+            ParticleField::Albedo | ParticleField::Emission | ParticleField::EmissionIntensity => {
+                "any set"
+            }
         }
     }
 
@@ -214,7 +224,10 @@ impl ParticleField {
     pub fn is_vector(self) -> bool {
         matches!(
             self,
-            ParticleField::Center | ParticleField::Color | ParticleField::Acceleration
+            ParticleField::Center
+                | ParticleField::Color
+                | ParticleField::Emission
+                | ParticleField::Acceleration
         )
     }
 }
@@ -317,8 +330,8 @@ objects[i].position (a sphere's or box's center, a plane's point, a mesh's trans
 objects[i].rotation (a box or a mesh), objects[i].radius (a sphere), objects[i].size (a box), \
 objects[i].scale (a mesh), objects[i].normal (a plane), objects[i].translucent.extinction, \
 objects[i].translucent.eta (a translucent object), particles[i].rate, particles[i].center, \
-particles[i].radius, particles[i].spread, particles[i].color, particles[i].albedo, particles[i].acceleration, \
-particles[i].drag, particles[i].turbulence";
+particles[i].radius, particles[i].spread, particles[i].color, particles[i].albedo, particles[i].emission, \
+particles[i].emission_intensity, particles[i].acceleration, particles[i].drag, particles[i].turbulence";
 
 /// Splits `name[3]` into `("name", Some(3))`, `name` into `("name", None)`.
 fn indexed(part: &str) -> Option<(&str, Option<usize>)> {

@@ -526,7 +526,7 @@ fn chunk_buffer(device: &wgpu::Device, stride: u64, count: u32) -> wgpu::Buffer 
 }
 
 /// The particles as the shader reads them, each channel's isotropic part (the ambient share in it) in its
-/// diagonal's w.
+/// diagonal's w, its emission in its off-diagonal's w.
 fn gpu_particles(lit: &LitParticles) -> Vec<SmokeParticle> {
     let f = |x: f64| x as f32;
     (lit.particles.iter().zip(&lit.lights))
@@ -540,7 +540,7 @@ fn gpu_particles(lit: &LitParticles) -> Vec<SmokeParticle> {
                     f(AMBIENT + l.iso[c]),
                 ]
             };
-            let off = |c: usize| [f(l.m[c][3]), f(l.m[c][4]), f(l.m[c][5]), 0.0];
+            let off = |c: usize| [f(l.m[c][3]), f(l.m[c][4]), f(l.m[c][5]), f(p.emission[c])];
             SmokeParticle {
                 position: p.position.as_vec3().to_array(),
                 radius: f(p.radius),

@@ -214,6 +214,11 @@ pub struct Life {
     /// Its density over its life, a factor (>= 0).
     pub opacity: LifeCurve,
     pub colors: ColorCurve,
+    /// Its emission over its life, a factor (>= 0) of the set's (`particles::Emission`).
+    pub emission: LifeCurve,
+    /// Its emission's color over its life (each channel in 0..=1), times the set's emission color: white to red
+    /// for a spark that cools. None: white throughout.
+    pub emission_colors: ColorCurve,
 }
 
 impl Default for Life {
@@ -233,6 +238,8 @@ impl Default for Life {
             size: LifeCurve::constant(1.0),
             opacity: LifeCurve::fade(),
             colors: ColorCurve::default(),
+            emission: LifeCurve::constant(1.0),
+            emission_colors: ColorCurve::default(),
         }
     }
 }
@@ -270,6 +277,7 @@ impl Emitter {
                 radius: self.radius.draw(&mut rng),
                 density: self.density.draw(&mut rng),
                 color: self.color,
+                emission: [1.0; 3],
             });
         }
         out

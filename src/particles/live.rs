@@ -1,6 +1,6 @@
 //! Particles that live: an emitter that makes particles over time (a rate and bursts), each with a lifetime,
 //! thrown with a velocity, moved by a constant acceleration, a drag and a turbulence (curl noise), its size,
-//! density and color following curves over its life (docs/METHOD.md section 9, "Particles that live").
+//! density, color and emission following curves over its life (docs/METHOD.md section 9, "Particles that live").
 //!
 //! The simulation is a pure function of the scene and the frame: the state at frame N is the state at frame 0
 //! stepped N times by [`advance`], each step the same `SUBSTEPS` substeps on one global time grid, each particle
@@ -296,6 +296,8 @@ impl State {
                     radius,
                     density,
                     color: life.colors.at(age).unwrap_or(p.color),
+                    emission: (life.emission_colors.at(age).unwrap_or([1.0; 3]))
+                        .map(|c| c * life.emission.at(age)),
                 })
             })
             .collect()

@@ -12,6 +12,12 @@
 //!   density scales its kernel, and a slab's opacity is `1 - exp(-optical depth)`. (The paper writes
 //!   `tau = 1 - alpha` with alpha the density, which read literally makes denser particles clearer.)
 //! - A particle's color is its material's: the share of light its material scatters, per channel.
+//! - A particle may also glow by itself (sparks, embers): its emission `L_e` is the radiance its material gives
+//!   off per unit of optical depth, so that the medium emits `sigma(x) L_e` per scene unit, the way a hot medium
+//!   emits where it absorbs. A slab of optical depth `tau` then shows `L_e (1 - exp(-tau))` of it, as much as a
+//!   thin particle lets through and at most `L_e` through a thick one, dimmed like any light by what lies in
+//!   front. Emission lights nothing else: a spark is not a light source for the objects, the smoke or the other
+//!   particles.
 
 pub mod curl;
 pub mod emit;
@@ -40,6 +46,8 @@ pub struct ParticleSet {
     pub origin: Origin,
     /// The share of the light reaching a particle that it scatters, in 0..=1 (times its color per channel).
     pub albedo: f64,
+    /// The light its particles give off by themselves (none by default).
+    pub emission: Emission,
     /// A live set's particles at the frame its scene was taken at (`Scene::at_frame`); none in a scene as
     /// loaded or edited, and for a still set.
     pub live: Option<Arc<Vec<Particle>>>,
@@ -58,10 +66,40 @@ pub enum Origin {
     Emitter(emit::Emitter),
 }
 
+/// The light a set's particles give off by themselves: a color (display values, each channel in 0..=1) times an
+/// intensity (0..=`scene::MAX_INTENSITY`, above 1 brighter than a display color can be). A live set's emission
+/// also follows its life's curves (`emit::Life::emission`, `emission_colors`), which multiply it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Emission {
+    pub color: [f64; 3],
+    pub intensity: f64,
+}
+
+impl Emission {
+    /// None: white at intensity 0.
+    pub const NONE: Emission = Emission {
+        color: [1.0; 3],
+        intensity: 0.0,
+    };
+
+    /// Its radiance per unit of optical depth, rgb.
+    pub fn radiance(&self) -> [f64; 3] {
+        self.color.map(|c| c * self.intensity)
+    }
+}
+
+impl Default for Emission {
+    fn default() -> Self {
+        Emission::NONE
+    }
+}
+
 impl ParticleSet {
-    /// The set's particles, each with its color times the set's albedo: the share of light it scatters, per
-    /// channel (what the renderers take as its color, with an albedo of 1).
+    /// The set's particles, each with its color times the set's albedo (the share of light it scatters, per
+    /// channel: what the renderers take as its color, with an albedo of 1) and its emission factor times the
+    /// set's emission (its radiance).
     pub fn particles(&self, sources: &Sources) -> Vec<Particle> {
+        let emission = self.emission.radiance();
         let own = match &self.origin {
             Origin::File { particles, .. } => particles.as_ref().clone(),
             Origin::Emitter(e) if e.life.is_some() => {
@@ -72,6 +110,7 @@ impl ParticleSet {
         own.into_iter()
             .map(|p| Particle {
                 color: p.color.map(|c| c * self.albedo),
+                emission: std::array::from_fn(|c| p.emission[c] * emission[c]),
                 ..p
             })
             .collect()
@@ -117,6 +156,10 @@ pub struct Particle {
     pub density: f64,
     /// The material's color, linear, each channel in [0, 1].
     pub color: [f64; 3],
+    /// The radiance it gives off by itself per unit of its optical depth, rgb, >= 0 (the module's emission). A
+    /// set's own particles carry a factor of the set's emission (1 for a still set; the life's curves at its
+    /// age for a live one), `ParticleSet::particles` the radiance itself.
+    pub emission: [f64; 3],
 }
 
 /// `G(r)`, r in radii from the center: the paper's Gaussian inside the ball, zero outside.

@@ -175,5 +175,6 @@ fn particle(
         radius,
         density,
         color,
+        emission: [1.0; 3],
     })
 }

@@ -49,9 +49,10 @@ impl Glow<'_> {
 }
 
 /// `ray` through `particles` by image-aligned sheet-buffer splatting over `slicing`: each slab's segments added
-/// (optical depth, and optical depth times color), then the slabs composited front to back, a slab scattering
-/// `albedo` times its color times `light` at its middle on the ray (the light in-scattered toward the eye
-/// there) over its opacity `1 - exp(-optical depth)`.
+/// (optical depth, and optical depth times color and times emission), then the slabs composited front to back, a
+/// slab scattering `albedo` times its color times `light` at its middle on the ray (the light in-scattered
+/// toward the eye there) and giving off its particles' emission, each over its opacity `1 - exp(-optical
+/// depth)`.
 pub fn sheet_buffer(
     particles: &[Particle],
     ray: &Ray,
@@ -77,6 +78,7 @@ pub fn sheet_buffer_glowing(
     // The sheet buffer along this ray: each slab's optical depth and its color weighed by it.
     let mut depth = vec![0.0; slicing.count as usize];
     let mut colored = vec![DVec3::ZERO; slicing.count as usize];
+    let mut emitting = vec![DVec3::ZERO; slicing.count as usize];
     let facing = ray.direction.dot(slicing.axis) > 0.0 && slicing.count > 0;
     if !facing {
         return Composite {
@@ -93,11 +95,13 @@ pub fn sheet_buffer_glowing(
             let tau = p.optical_depth(ray, t0.max(t_in), t1.min(t_out));
             depth[j as usize] += tau;
             colored[j as usize] += tau * DVec3::from_array(p.color);
+            emitting[j as usize] += tau * DVec3::from_array(p.emission);
         }
     }
     let mut radiance = glow.between(f64::NEG_INFINITY, slicing.slab(ray, 0).0);
     let mut transmittance = 1.0;
-    for (j, (&tau, &colored)) in (0..slicing.count).zip(depth.iter().zip(&colored)) {
+    let slabs = depth.iter().zip(&colored).zip(&emitting);
+    for (j, ((&tau, &colored), &emitting)) in (0..slicing.count).zip(slabs) {
         let (t0, t1) = slicing.slab(ray, j);
         let emitted = glow.between(t0, t1);
         if tau <= 0.0 {
@@ -106,8 +110,8 @@ pub fn sheet_buffer_glowing(
         }
         let lit = DVec3::from_array(light(ray.at(0.5 * (t0 + t1))));
         let opacity = -(-tau).exp_m1();
-        radiance +=
-            transmittance * (albedo * colored / tau * lit * opacity + emitted * opacity / tau);
+        radiance += transmittance
+            * ((albedo * colored * lit + emitting) / tau * opacity + emitted * opacity / tau);
         transmittance *= (-tau).exp();
     }
     radiance += transmittance * glow.between(slicing.slab(ray, slicing.count - 1).1, f64::INFINITY);
@@ -139,7 +143,8 @@ pub fn marched(
 
 /// [`marched`] with a glow along the ray, `(density, start, end)`: its light per unit length at t, on
 /// `[start, end]`, emitted at each step's middle and dimmed by the medium in front and, over the step, by its
-/// own layer. What [`sheet_buffer_glowing`] converges to.
+/// own layer; the particles' own emission alike, summed from their kernels. What [`sheet_buffer_glowing`]
+/// converges to.
 pub fn marched_glowing(
     particles: &[Particle],
     ray: &Ray,
@@ -176,18 +181,21 @@ pub fn marched_glowing(
             radiance += transmittance * emitted;
             continue;
         }
-        let color: DVec3 = (particles.iter())
-            .map(|p| {
-                p.density
-                    * kernel((x - p.position).length() / p.radius)
-                    * DVec3::from_array(p.color)
-            })
-            .sum::<DVec3>()
-            / sigma;
+        let weighed = |of: &dyn Fn(&Particle) -> [f64; 3]| -> DVec3 {
+            (particles.iter())
+                .map(|p| {
+                    p.density
+                        * kernel((x - p.position).length() / p.radius)
+                        * DVec3::from_array(of(p))
+                })
+                .sum::<DVec3>()
+                / sigma
+        };
+        let (color, emission) = (weighed(&|p| p.color), weighed(&|p| p.emission));
         let lit = DVec3::from_array(light(x));
         let opacity = -(-sigma * dt).exp_m1();
-        radiance +=
-            transmittance * (albedo * color * lit * opacity + emitted * opacity / (sigma * dt));
+        radiance += transmittance
+            * ((albedo * color * lit + emission) * opacity + emitted * opacity / (sigma * dt));
         transmittance *= (-sigma * dt).exp();
     }
     Composite {
@@ -198,7 +206,7 @@ pub fn marched_glowing(
 
 /// One pixel of a frame's smoke, as the GPU pass renders it (`gpu::particle_pass`, METHOD.md section 10): the
 /// sheet buffer along `ray` over `slicing`, each segment scattering its particle's color times the light that
-/// particle scatters back along the ray (`lights[k]`, `particles::light`), the slabs whose front lies at or past
+/// particle scatters back along the ray (`lights[k]`, `particles::light`) and giving off its emission, the slabs whose front lies at or past
 /// `until` (the depth along the view axis of the first object on the ray; infinite for none) left out. Two
 /// images: the slabs whose middle lies in front of `split` (the depth of the billboard's plane on the ray), which
 /// go over the glow, and the others, under it.
@@ -218,7 +226,8 @@ pub fn smoke_pixel(
         let Some((t_in, t_out)) = p.chord(ray) else {
             continue;
         };
-        let lit = DVec3::from_array(p.color) * DVec3::from_array(light.toward(toward_eye));
+        let lit = DVec3::from_array(p.color) * DVec3::from_array(light.toward(toward_eye))
+            + DVec3::from_array(p.emission);
         for j in slicing.slabs_between(ray, t_in, t_out) {
             let (t0, t1) = slicing.slab(ray, j);
             let tau = p.optical_depth(ray, t0.max(t_in), t1.min(t_out));
@@ -334,7 +343,7 @@ pub fn smoke_over(smoke: [f64; 4], under: [f64; 4]) -> [f64; 4] {
 
 /// The medium of [`smoke_pixel`] ray-marched in `steps` equal steps over the particles' span on `ray`: at each
 /// step's middle the extinction and, weighed by it, each particle's color times the light it scatters back
-/// along the ray (`lights`), the step a layer of them. What `smoke_pixel`'s two images, the front one over the
+/// along the ray (`lights`) plus its emission, the step a layer of them. What `smoke_pixel`'s two images, the front one over the
 /// back, converge to as its slabs thin.
 pub fn marched_lit(
     particles: &[Particle],
@@ -344,7 +353,10 @@ pub fn marched_lit(
 ) -> Composite {
     let toward_eye = -ray.direction;
     let lit: Vec<DVec3> = (particles.iter().zip(lights))
-        .map(|(p, l)| DVec3::from_array(p.color) * DVec3::from_array(l.toward(toward_eye)))
+        .map(|(p, l)| {
+            DVec3::from_array(p.color) * DVec3::from_array(l.toward(toward_eye))
+                + DVec3::from_array(p.emission)
+        })
         .collect();
     let chords = particles.iter().filter_map(|p| p.chord(ray));
     let (start, end) = chords.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), c| {

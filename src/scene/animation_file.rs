@@ -264,10 +264,17 @@ fn check_value(c: &mut Checker<'_, '_>, path: &FieldPath, parameter: &Parameter,
             | Parameter::SourceColor(..)
             | Parameter::SeriesColor(..)
             | Parameter::ObjectColor(..)
-            | Parameter::Particles(_, crate::animation::ParticleField::Color),
+            | Parameter::Particles(_, crate::animation::ParticleField::Color)
+            | Parameter::Particles(_, crate::animation::ParticleField::Emission),
             Value::Vector(v),
         ) => {
             c.color(path, v);
+        }
+        (
+            Parameter::Particles(_, crate::animation::ParticleField::EmissionIntensity),
+            Value::Number(x),
+        ) => {
+            c.intensity(path, x);
         }
         (Parameter::Particles(_, field), Value::Number(x)) => {
             use crate::animation::ParticleField as F;

@@ -281,6 +281,10 @@ pub(crate) struct ParticlesFile {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub albedo: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub emission: Option<[f64; 3]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub emission_intensity: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub life: Option<LifeFile>,
 }
 
@@ -314,6 +318,10 @@ pub(crate) struct LifeFile {
     pub opacity: Option<Vec<[f64; 2]>>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub colors: Option<Vec<[f64; 4]>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub emission: Option<Vec<[f64; 2]>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub emission_colors: Option<Vec<[f64; 4]>>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub turbulence: Option<TurbulenceFile>,
 }

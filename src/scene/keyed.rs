@@ -259,8 +259,11 @@ impl Parameter {
 /// A keyable setting of a particle set, where the set has it.
 fn particle_field(set: &ParticleSet, field: ParticleField) -> Option<Value> {
     use crate::particles::emit::EmitterShape as S;
-    if field == ParticleField::Albedo {
-        return Some(Value::Number(set.albedo));
+    match field {
+        ParticleField::Albedo => return Some(Value::Number(set.albedo)),
+        ParticleField::Emission => return Some(Value::Vector(set.emission.color)),
+        ParticleField::EmissionIntensity => return Some(Value::Number(set.emission.intensity)),
+        _ => {}
     }
     let Origin::Emitter(e) = &set.origin else {
         return None;
@@ -284,11 +287,27 @@ fn particle_field(set: &ParticleSet, field: ParticleField) -> Option<Value> {
 }
 
 /// Writes a keyable setting of a particle set, kept valid as the loader requires it (rates, drags, spreads and
-/// strengths at least 0, a radius positive, colors and the albedo in 0..1).
+/// strengths at least 0, a radius positive, colors and the albedo in 0..1, an emission's intensity in
+/// 0..=MAX_INTENSITY).
 fn set_particle_field(set: &mut ParticleSet, field: ParticleField, value: Value) {
     use crate::particles::emit::EmitterShape as S;
     match (field, value) {
         (ParticleField::Albedo, Value::Number(x)) => set.albedo = x.clamp(0.0, 1.0),
+        (ParticleField::Emission, Value::Vector(c)) => {
+            set.emission.color = c.map(|x| {
+                if x.is_finite() {
+                    x.clamp(0.0, 1.0)
+                } else {
+                    0.0
+                }
+            })
+        }
+        (ParticleField::EmissionIntensity, Value::Number(x)) => {
+            set.emission.intensity = match x.is_finite() {
+                true => x.clamp(0.0, crate::scene::MAX_INTENSITY),
+                false => 0.0,
+            }
+        }
         _ => {
             let Origin::Emitter(e) = &mut set.origin else {
                 return;

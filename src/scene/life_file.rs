@@ -116,6 +116,12 @@ pub(super) fn check_life(
     }
     let size = curve(c, &path.key("size"), f.size.as_deref()).unwrap_or(d.size);
     let opacity = curve(c, &path.key("opacity"), f.opacity.as_deref()).unwrap_or(d.opacity);
+    let emission = curve(c, &path.key("emission"), f.emission.as_deref()).unwrap_or(d.emission);
+    let emission_colors = colors(
+        c,
+        &path.key("emission_colors"),
+        f.emission_colors.as_deref(),
+    );
     let colors = colors(c, &path.key("colors"), f.colors.as_deref());
     let turbulence = f
         .turbulence
@@ -136,6 +142,8 @@ pub(super) fn check_life(
         size,
         opacity,
         colors,
+        emission,
+        emission_colors,
     };
     (c.problems.len() == before).then(|| Box::new(life))
 }
@@ -195,10 +203,18 @@ fn curve(
     })
 }
 
+/// Colors over a life, `[age, r, g, b]` keys: none where the file gives none; a list given needs a key.
 fn colors(c: &mut Checker<'_, '_>, path: &FieldPath, keys: Option<&[[f64; 4]]>) -> ColorCurve {
     let Some(keys) = keys else {
         return ColorCurve::default();
     };
+    if keys.is_empty() {
+        c.fail(
+            path,
+            "colors over a life need at least one key [age, r, g, b] (leave the list out for none)",
+        );
+        return ColorCurve::default();
+    }
     if !ages(c, path, keys.iter().map(|k| k[0])) {
         return ColorCurve::default();
     }
@@ -268,6 +284,13 @@ pub(super) fn write_life(life: &Life) -> LifeFile {
         opacity: Some(life.opacity.keys.iter().map(|&(a, x)| [a, x]).collect()),
         colors: (!life.colors.keys.is_empty()).then(|| {
             (life.colors.keys.iter())
+                .map(|&(a, [r, g, b])| [a, r, g, b])
+                .collect()
+        }),
+        emission: (life.emission != LifeCurve::constant(1.0))
+            .then(|| life.emission.keys.iter().map(|&(a, x)| [a, x]).collect()),
+        emission_colors: (!life.emission_colors.keys.is_empty()).then(|| {
+            (life.emission_colors.keys.iter())
                 .map(|&(a, [r, g, b])| [a, r, g, b])
                 .collect()
         }),

@@ -13,7 +13,7 @@ use super::life_file::{self, span};
 use crate::field::Sources;
 use crate::particles::emit::{Emitter, EmitterKind, EmitterShape, Span};
 use crate::particles::ply::{self, Defaults, MAX_PARTICLES};
-use crate::particles::{DEFAULT_ALBEDO, DEFAULT_SLICE_WIDTH, Origin, ParticleSet};
+use crate::particles::{DEFAULT_ALBEDO, DEFAULT_SLICE_WIDTH, Emission, Origin, ParticleSet};
 
 /// A particle's radius, density and color where a set gives none.
 pub const DEFAULTS: Defaults = Defaults {
@@ -38,7 +38,7 @@ fn shape_keys(kind: EmitterKind) -> &'static [&'static str] {
 }
 
 /// The keys every emitter takes.
-const EMITTER_KEYS: [&str; 9] = [
+const EMITTER_KEYS: [&str; 11] = [
     "life",
     "count",
     "particle_radius",
@@ -47,11 +47,21 @@ const EMITTER_KEYS: [&str; 9] = [
     "seed",
     "noise",
     "albedo",
+    "emission",
+    "emission_intensity",
     "emitter",
 ];
 
 /// The keys a set from a file takes.
-const FILE_KEYS: [&str; 5] = ["file", "particle_radius", "density", "color", "albedo"];
+const FILE_KEYS: [&str; 7] = [
+    "file",
+    "particle_radius",
+    "density",
+    "color",
+    "albedo",
+    "emission",
+    "emission_intensity",
+];
 
 /// The particle sets of the file; `base` is the scene file's folder, against which a PLY file's relative path
 /// is read; `sources` are the scene's, which curve and torus emitters follow.
@@ -66,7 +76,7 @@ pub(super) fn check_particles(
     let mut total = 0usize;
     for (i, f) in file.particles.iter().enumerate() {
         let path = root.index(i);
-        let given: [(&'static str, bool); 16] = [
+        let given: [(&'static str, bool); 18] = [
             ("life", f.life.is_some()),
             ("file", f.file.is_some()),
             ("emitter", f.emitter.is_some()),
@@ -83,6 +93,8 @@ pub(super) fn check_particles(
             ("seed", f.seed.is_some()),
             ("noise", f.noise.is_some()),
             ("albedo", f.albedo.is_some()),
+            ("emission", f.emission.is_some()),
+            ("emission_intensity", f.emission_intensity.is_some()),
         ];
         let albedo = f.albedo.map_or(DEFAULT_ALBEDO, |x| {
             let p = path.key("albedo");
@@ -97,6 +109,19 @@ pub(super) fn check_particles(
         let color = f
             .color
             .map_or(DEFAULTS.color, |a| c.color(&path.key("color"), a));
+        // A color given alone glows at intensity 1, an intensity alone white, and so does a life whose emission
+        // follows curves (they would show nothing at intensity 0).
+        let life_glows =
+            (f.life.as_ref()).is_some_and(|l| l.emission.is_some() || l.emission_colors.is_some());
+        let emission = Emission {
+            color: (f.emission).map_or(Emission::NONE.color, |a| c.color(&path.key("emission"), a)),
+            intensity: match (f.emission, f.emission_intensity) {
+                (_, Some(x)) => c.intensity(&path.key("emission_intensity"), x),
+                (Some(_), None) => 1.0,
+                (None, None) if life_glows => 1.0,
+                (None, None) => Emission::NONE.intensity,
+            },
+        };
         let origin = match (&f.file, &f.emitter) {
             (Some(_), Some(_)) => {
                 c.fail(&path, "a particle set has a file or an emitter, not both");
@@ -264,6 +289,7 @@ pub(super) fn check_particles(
         let set = ParticleSet {
             origin,
             albedo,
+            emission,
             live: None,
         };
         total += match &set.origin {
@@ -437,8 +463,11 @@ pub(super) fn write(sets: &[ParticleSet]) -> Vec<ParticlesFile> {
     };
     sets.iter()
         .map(|set| {
+            let glows = set.emission != Emission::NONE;
             let mut f = ParticlesFile {
                 albedo: Some(set.albedo),
+                emission: glows.then_some(set.emission.color),
+                emission_intensity: glows.then_some(set.emission.intensity),
                 ..ParticlesFile::default()
             };
             match &set.origin {

@@ -17,7 +17,7 @@ use crate::animation::{Parameter, ParticleField, Value};
 use crate::particles::curl::Turbulence;
 use crate::particles::emit::{Burst, Direction, Emitter, EmitterShape, Life, LifeCurve, Span};
 use crate::particles::ply::MAX_PARTICLES;
-use crate::particles::{DEFAULT_ALBEDO, Origin, ParticleSet};
+use crate::particles::{DEFAULT_ALBEDO, Emission, Origin, ParticleSet};
 use crate::scene::PARTICLE_DEFAULTS;
 
 /// The section.
@@ -92,6 +92,12 @@ pub(super) fn particles_section(ui: &mut Ui, cx: &Context, out: &mut Edits<'_>) 
                 "Sparks thrown off the first curve where its W series is lit (its pulse, if it has one)",
                 pulse_sparks(),
             );
+            add(
+                ui,
+                "+ glowing sparks",
+                "Sparks thrown off the first curve that glow by themselves, cooling from white to red",
+                glowing_sparks(),
+            );
         }
         if !scene.sources.tori.is_empty() {
             add(
@@ -104,8 +110,9 @@ pub(super) fn particles_section(ui: &mut Ui, cx: &Context, out: &mut Edits<'_>) 
     });
     if scene.particles.is_empty() {
         ui.weak(
-            "None. Particle sets are smoke, dust or sparks: lit by the glow, hiding what lies behind them \
-             (a PLY point cloud joins through the scene file: [[particles]] file = \"...\").",
+            "None. Particle sets are smoke, dust or sparks: lit by the glow, hiding what lies behind them, \
+             glowing by themselves where they have an emission (a PLY point cloud joins through the scene \
+             file: [[particles]] file = \"...\").",
         );
         return;
     }
@@ -171,6 +178,7 @@ fn new_set(shape: EmitterShape) -> ParticleSet {
             life: None,
         }),
         albedo: DEFAULT_ALBEDO,
+        emission: Emission::NONE,
         live: None,
     }
 }
@@ -195,6 +203,7 @@ fn live_set(
             life: Some(Box::new(life)),
         }),
         albedo: DEFAULT_ALBEDO,
+        emission: Emission::NONE,
         live: None,
     }
 }
@@ -252,6 +261,15 @@ fn pulse_sparks() -> ParticleSet {
     )
 }
 
+/// Sparks thrown off the first curve that glow by themselves, cooling from white to red: the shipped
+/// `beam_sparks` preset's.
+fn glowing_sparks() -> ParticleSet {
+    shipped_set(
+        include_str!("../../../assets/scenes/beam_sparks.toml"),
+        "beam_sparks.toml",
+    )
+}
+
 /// Smoke shed outward from the first torus's ring, curling: the shipped `ring_smoke` preset's.
 fn ring_smoke() -> ParticleSet {
     shipped_set(
@@ -296,7 +314,7 @@ fn set_editor(
     out: &mut Edits<'_>,
 ) {
     let key = |field| Parameter::Particles(i, field);
-    let albedo = set.albedo;
+    let (albedo, emission) = (set.albedo, set.emission);
     match &mut set.origin {
         Origin::File { defaults, .. } => {
             ui.weak("From its file; where a vertex gives none:");
@@ -374,6 +392,22 @@ fn set_editor(
         }
     }
     keyed_number(ui, out, "albedo", key(ParticleField::Albedo), albedo, 0.0);
+    // The light the particles give off by themselves (sparks, embers): it lights nothing else.
+    color_field(
+        ui,
+        out,
+        "emission",
+        key(ParticleField::Emission),
+        emission.color,
+    );
+    keyed_number(
+        ui,
+        out,
+        "emission intensity",
+        key(ParticleField::EmissionIntensity),
+        emission.intensity,
+        0.0,
+    );
 }
 
 /// A number with its key button on one row: `Edit::Set` when changed (a key at this frame where it is keyed).
@@ -387,10 +421,12 @@ fn keyed_number(
 ) {
     ui.horizontal(|ui| {
         let mut x = value;
-        let high = if matches!(parameter, Parameter::Particles(_, ParticleField::Albedo)) {
-            1.0
-        } else {
-            1e6
+        let high = match parameter {
+            Parameter::Particles(_, ParticleField::Albedo) => 1.0,
+            Parameter::Particles(_, ParticleField::EmissionIntensity) => {
+                crate::scene::MAX_INTENSITY
+            }
+            _ => 1e6,
         };
         let response = labelled(
             ui,
@@ -514,7 +550,19 @@ fn life_editor(
     }
     life_curve(ui, "size over life", &mut life.size);
     life_curve(ui, "density over life", &mut life.opacity);
-    color_curve(ui, &mut life.colors);
+    color_curve(
+        ui,
+        "color over life",
+        "none: the set's color",
+        &mut life.colors,
+    );
+    life_curve(ui, "emission over life", &mut life.emission);
+    color_curve(
+        ui,
+        "emission color over life",
+        "none: the set's emission color",
+        &mut life.emission_colors,
+    );
 }
 
 /// Bursts: a frame and a count each; + adds one at frame 0.
@@ -613,9 +661,14 @@ fn life_curve(ui: &mut Ui, label: &str, curve: &mut LifeCurve) {
     }
 }
 
-/// Colors over a life: none (the set's color) or keys `age, color`.
-fn color_curve(ui: &mut Ui, curve: &mut crate::particles::emit::ColorCurve) {
-    ui.label("color over life");
+/// Colors over a life: none (`none` says what stands for them) or keys `age, color`.
+fn color_curve(
+    ui: &mut Ui,
+    label: &str,
+    none: &str,
+    curve: &mut crate::particles::emit::ColorCurve,
+) {
+    ui.label(label);
     let gone = key_rows(ui, &mut curve.keys, false, |ui, c| {
         if let (Some(edited), _) = color(ui, "", *c) {
             *c = edited;
@@ -625,7 +678,7 @@ fn color_curve(ui: &mut Ui, curve: &mut crate::particles::emit::ColorCurve) {
         curve.keys.remove(j);
     }
     if curve.keys.is_empty() {
-        ui.weak("none: the set's color");
+        ui.weak(none);
     }
     if ui.small_button("+ color").clicked() {
         let ages: Vec<f64> = curve.keys.iter().map(|k| k.0).collect();
