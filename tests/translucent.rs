@@ -826,24 +826,7 @@ fn a_source_inside_shows_through_as_the_exact_transmittance_weighted_glow() {
     let (alpha, beta) = (setup.integration.alpha, setup.integration.beta);
     let eps = s.integration.epsilon;
     let field = s.sources.field();
-    let simpson = |f: &dyn Fn(f64) -> f64, a: f64, b: f64| -> f64 {
-        let n = 20_000;
-        let h = (b - a) / n as f64;
-        (0..=n)
-            .map(|k| {
-                let w = if k == 0 || k == n {
-                    1.0
-                } else if k % 2 == 1 {
-                    4.0
-                } else {
-                    2.0
-                };
-                w * f(a + k as f64 * h)
-            })
-            .sum::<f64>()
-            * h
-            / 3.0
-    };
+    let simpson = |f: &dyn Fn(f64) -> f64, a: f64, b: f64| simpson(f, (a, b), 20_000);
     // The share of light crossing the sphere (center 0, radius 0.6, extinction 1.5, index 1.4) from `from` to
     // `to` in closed form, as the model has it (straight through, no refraction): `exp(-sigma L)`, `L` the length of
     // the segment inside, times the Fresnel transmittance at every surface it crosses, at its angle there.
@@ -940,12 +923,7 @@ fn fresnel_equations(eta: f64, cos_i: f64) -> f64 {
 /// the angle around it by the trapezoid rule, exact for a periodic integrand), `n` steps each.
 fn sphere_oracle(r: f64, sigma: f64, eta: f64, b: f64, d: f64, beta: f64, n: usize) -> f64 {
     use std::f64::consts::PI;
-    let z = match sigma > 0.0 {
-        true => {
-            2.0 * PI * (1.0 - (-2.0 * r * sigma).exp() * (1.0 + 2.0 * r * sigma)) / (sigma * sigma)
-        }
-        false => 4.0 * PI * r * r,
-    };
+    let z = sphere_spread(r, sigma);
     let entering = |cos_alpha: f64| -> f64 {
         let dist = (r * r + d * d - 2.0 * r * d * cos_alpha).sqrt();
         let cos_i = (d * cos_alpha - r) / dist;
@@ -966,23 +944,44 @@ fn sphere_oracle(r: f64, sigma: f64, eta: f64, b: f64, d: f64, beta: f64, n: usi
             * PI
             / m as f64
     };
-    let h = PI / n as f64;
-    let integral: f64 = (0..=n)
+    let chord = |gamma: f64| 2.0 * r * (gamma / 2.0).sin();
+    let integral = simpson(
+        &|gamma| around(gamma) * (-sigma * chord(gamma)).exp() * r * r * gamma.sin(),
+        (0.0, PI),
+        n,
+    );
+    integral / (z * PI)
+}
+
+/// A sphere's spread `Z = integral over its surface of exp(-tau)` from any point of it, in closed form: the
+/// chord to a point `gamma` away is `c = 2 r sin(gamma / 2)` and `dA = 2 pi c dc`, so
+/// `Z = 2 pi (1 - exp(-2 r sigma) (1 + 2 r sigma)) / sigma^2` (its area `4 pi r^2` where clear).
+fn sphere_spread(r: f64, sigma: f64) -> f64 {
+    use std::f64::consts::PI;
+    match sigma > 0.0 {
+        true => {
+            2.0 * PI * (1.0 - (-2.0 * r * sigma).exp() * (1.0 + 2.0 * r * sigma)) / (sigma * sigma)
+        }
+        false => 4.0 * PI * r * r,
+    }
+}
+
+/// Simpson's rule for `f` over `[a, b]` in `n` (even) steps.
+fn simpson(f: &dyn Fn(f64) -> f64, (a, b): (f64, f64), n: usize) -> f64 {
+    let h = (b - a) / n as f64;
+    (0..=n)
         .map(|k| {
-            let gamma = k as f64 * h;
             let w = match k {
                 0 => 1.0,
                 k if k == n => 1.0,
                 k if k % 2 == 1 => 4.0,
                 _ => 2.0,
             };
-            let chord = 2.0 * r * (gamma / 2.0).sin();
-            w * around(gamma) * (-sigma * chord).exp() * r * r * gamma.sin()
+            w * f(a + k as f64 * h)
         })
         .sum::<f64>()
         * h
-        / 3.0;
-    integral / (z * PI)
+        / 3.0
 }
 
 /// The translucent model against an oracle that shares none of its code (`sphere_oracle`): a sphere lit by a
@@ -1071,36 +1070,15 @@ fn a_sphere_lit_from_outside_scatters_as_its_closed_form() {
     }
     // The closed-form spread Z against the oracle's quadrature of exp(-tau) over the sphere.
     for sigma in [0.0, 1.5, 5.0] {
-        let n = 2000;
-        let h = std::f64::consts::PI / n as f64;
-        let quadrature: f64 = (0..=n)
-            .map(|k| {
-                let gamma = k as f64 * h;
-                let w = if k == 0 || k == n {
-                    1.0
-                } else if k % 2 == 1 {
-                    4.0
-                } else {
-                    2.0
-                };
-                w * 2.0
-                    * std::f64::consts::PI
-                    * (-sigma * 2.0 * r * (gamma / 2.0).sin()).exp()
-                    * r
-                    * r
-                    * gamma.sin()
-            })
-            .sum::<f64>()
-            * h
-            / 3.0;
-        let z = match sigma > 0.0 {
-            true => {
-                2.0 * std::f64::consts::PI
-                    * (1.0 - (-2.0 * r * sigma).exp() * (1.0 + 2.0 * r * sigma))
-                    / (sigma * sigma)
-            }
-            false => 4.0 * std::f64::consts::PI * r * r,
-        };
+        let quadrature = simpson(
+            &|gamma| {
+                let chord = 2.0 * r * (gamma / 2.0).sin();
+                2.0 * std::f64::consts::PI * (-sigma * chord).exp() * r * r * gamma.sin()
+            },
+            (0.0, std::f64::consts::PI),
+            2000,
+        );
+        let z = sphere_spread(r, sigma);
         assert!(
             (quadrature / z - 1.0).abs() < 1e-9,
             "sigma {sigma}: Z {z} against {quadrature}"
