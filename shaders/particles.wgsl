@@ -1,14 +1,20 @@
-// Particle sets by image-aligned sheet-buffer splatting (METHOD.md section 10, after paper 002_): the smoke's own
-// image, a ray through each pixel's center, slabs perpendicular to the view. Each tile of TILE x TILE pixels (a
-// workgroup) has its segments (a particle cut by a slab) in slab order; a pixel adds the optical depth of its slab's
-// segments (commutative: no order among them, so no popping) and their color times the light each particle
-// scatters back along the ray plus the light it gives off by itself, then composites the slab over what lies behind it, front to back. The glow is taken
-// to lie where its weight along the ray does (particles::view::GlowPlace): the slabs whose middle lies in front of
-// it make the front image, laid over the glow; the others the back image, under it. A
-// dispatch takes at most `params.chunk` segments a pixel (lavapipe stops a loop past 65535 iterations): the
-// pixel's state carries over to the next dispatch in `state`. Then `fs_back` lays the back image over the
-// frame's background and objects and `fs_front` the front one over the glow, premultiplied. Rust side:
-// src/gpu/particle_pass.rs (gpu_data; keep in sync). CPU twin: src/reference/particles.rs (smoke_pixel).
+// Particle sets by image-aligned sheet-buffer splatting (METHOD.md section 9, after paper 002_): the smoke's own
+// image, a ray through each pixel's center, slabs perpendicular to the view. A pixel adds, in each slab, the
+// optical depth of the particles' parts that lie in it (commutative: no order among them, so no popping) and their
+// color times the light each particle scatters back along the ray plus the light it gives off by itself, then
+// composites the slabs front to back. The loop is particle-major: each tile of TILE x TILE pixels (a workgroup)
+// has its particles in the order of the first slab their ball reaches, and a pixel passes over each once, adding
+// its exact footprint (an erf a slab boundary) to the few slabs its chord crosses, kept open in a ring of RING;
+// a slab is closed (composited) once the next particle starts past it. A pixel stops adding once the light that
+// still comes through it is below CUTOFF. The glow is taken to lie where its weight along the ray does
+// (particles::view::GlowPlace): the slabs whose middle lies in front of it make the front image, laid over the
+// glow; the others the back image, under it. Only the tiles with particles are dispatched, the busiest first; a
+// dispatch takes at most `params.chunk` particles a tile (lavapipe stops a loop past 65535 iterations in all),
+// the tiles with more carry their pixels' state to the next in `state`. Every loop's trip count is the same for
+// the tile's pixels (llvmpipe's GL has read wrong after loops whose counts differ between lanes). The last
+// dispatch writes the front and back images as textures, which `fs_back` lays over the frame's background and
+// objects and `fs_front` over the glow, filtered, premultiplied. Rust side: src/gpu/particle_pass.rs (gpu_data;
+// keep in sync). CPU twin: src/reference/particles.rs (smoke_pixel).
 
 struct SmokeParams {
     eye: vec3<f32>,
@@ -21,7 +27,7 @@ struct SmokeParams {
     width: f32,         // a slab's width along `forward`
     size: vec2<u32>,    // the smoke image's
     tiles_x: u32,
-    chunk: u32,         // the most segments a pixel takes in one dispatch
+    chunk: u32,         // the most particles a tile takes in one dispatch
     frame: vec2<u32>,   // the frame's size (its objects' depth's)
     objects: u32,       // 1: the objects' depth ends the rays
     pad0: u32,
@@ -51,7 +57,7 @@ struct SmokeParticle {
 // Which dispatch of the frame this is.
 struct SmokeChunk {
     index: u32,
-    last: u32,          // 1 on the last: the pixels' final slab is composited and the state left as the image
+    last: u32,          // 1 on the last
     pad0: u32,
     pad1: u32,
 }
@@ -59,30 +65,38 @@ struct SmokeChunk {
 const TILE: u32 = 4u;
 // particles::view::GLOW_CELL.
 const GLOW_CELL: u32 = 16u;
+// particles::view::RING: the most slabs open at once along a ray (the plan keeps a particle's slabs under it).
+const RING: u32 = 32u;
+// particles::TRANSMITTANCE_CUTOFF.
+const CUTOFF: f32 = 1e-4;
 // particles::KERNEL_PEAK and KERNEL_FALLOFF.
 const KERNEL_PEAK: f32 = 0.446;
 const KERNEL_FALLOFF: f32 = 2.0;
+// A pixel's state between dispatches, in vec4s: the front image, the image so far, the marks, the ring.
+const STATE: u32 = 35u;
 
 @group(0) @binding(0) var<uniform> params: SmokeParams;
 @group(0) @binding(1) var<storage, read> particles: array<SmokeParticle>;
-// Each particle's ball (center, radius), read alone first: most segments of a tile miss a given pixel.
+// Each particle's ball (center, radius), read alone first: a pixel misses most of its tile's particles.
 @group(0) @binding(9) var<storage, read> balls: array<vec4<f32>>;
-// (slab, particle) a segment, each tile's in slab order.
-@group(0) @binding(2) var<storage, read> segments: array<vec2<u32>>;
-// Each tile's first segment; one more than tiles.
-@group(0) @binding(3) var<storage, read> starts: array<u32>;
+// A tile's particles (the first slab its ball reaches | the slabs past it it may reach << 24, particle), by their
+// first slab.
+@group(0) @binding(2) var<storage, read> entries: array<vec2<u32>>;
+// The tiles with particles, the busiest first (the workgroups of a dispatch): (tile, first entry, end entry).
+@group(0) @binding(3) var<storage, read> work: array<vec4<u32>>;
 // The glow's depth along the view axis at the glow cells' corners (one more than cells a row): the slabs in front of
 // it go over the glow (particles::view::SmokeView::split_at).
 @group(0) @binding(8) var<storage, read> glow: array<f32>;
-// Four a pixel: the front image (radiance, transmittance) once the billboard's plane is passed, the image so far,
-// the open slab's (sum of tau color light, sum of tau), and the open slab's index and whether the plane is
-// passed in x and y (as bits). After the last dispatch the first two are the front and the back image.
+// STATE a pixel of the tiles that take more than one dispatch, by their place in `work`.
 @group(0) @binding(4) var<storage, read_write> state: array<vec4<f32>>;
 // The objects' depth in the frame's projection (the bits gpu::formats::DEPTH_VALUE_FORMAT holds).
 @group(0) @binding(5) var depth: texture_2d<u32>;
 @group(0) @binding(6) var<uniform> chunk: SmokeChunk;
-// The image, read by fs_main (the same buffer as `state`).
-@group(0) @binding(7) var<storage, read> image: array<vec4<f32>>;
+// The images, two a pixel (front, back: radiance and transmittance), rows from the top, in f32 (read back).
+@group(0) @binding(10) var<storage, read_write> image: array<vec4<f32>>;
+// The images as the draw passes read them, light and coverage (cleared to none where no tile is dispatched).
+@group(0) @binding(11) var front_out: texture_storage_2d<rgba16float, write>;
+@group(0) @binding(12) var back_out: texture_storage_2d<rgba16float, write>;
 
 // erf by Abramowitz and Stegun 7.1.26 (error below 1.5e-7).
 fn erf_approx(x: f32) -> f32 {
@@ -109,46 +123,57 @@ fn light_toward(p: SmokeParticle, v: vec3<f32>) -> vec3<f32> {
     return max(vec3<f32>(p.diag_r.w, p.diag_g.w, p.diag_b.w) + q, vec3<f32>(0.0));
 }
 
-// The open slab composited behind what `acc` holds: its light over its opacity 1 - exp(-tau).
-fn close_slab(acc: vec4<f32>, open: vec4<f32>) -> vec4<f32> {
-    if open.w <= 0.0 {
-        return acc;
-    }
-    let through = exp(-open.w);
-    return vec4<f32>(acc.xyz + acc.w * open.xyz / open.w * (1.0 - through), acc.w * through);
+// A pixel's composite so far: the front image once the glow's depth is passed, the image so far, whether the glow's
+// depth is passed, whether the pixel is done (its light spent or its ray ended).
+struct Composite {
+    front: vec4<f32>,
+    acc: vec4<f32>,
+    passed: bool,
+    done: bool,
 }
 
-// The open slab composited into the image so far; the first slab whose middle lies past the glow (`behind`)
-// begins the back image, what came before it kept as the front image.
-fn close_into(front: ptr<function, vec4<f32>>, acc: ptr<function, vec4<f32>>, passed: ptr<function, u32>, open: vec4<f32>, behind: bool) {
-    if *passed == 0u && behind {
-        *front = *acc;
-        *acc = vec4<f32>(0.0, 0.0, 0.0, 1.0);
-        *passed = 1u;
+// Slab j's sums (sum of tau color light, sum of tau) composited behind what `c` holds: its light over its opacity
+// 1 - exp(-tau). The first slab whose middle lies past the glow begins the back image, what came before it kept as
+// the front image. Once the light through the pixel is below CUTOFF it is done.
+fn close_slab(c: ptr<function, Composite>, open: vec4<f32>, j: u32, split: f32) {
+    if open.w <= 0.0 || (*c).done {
+        return;
     }
-    *acc = close_slab(*acc, open);
+    if !(*c).passed && params.near + (f32(j) + 0.5) * params.width >= split {
+        (*c).front = (*c).acc;
+        (*c).acc = vec4<f32>(0.0, 0.0, 0.0, 1.0);
+        (*c).passed = true;
+    }
+    let through = exp(-open.w);
+    let acc = (*c).acc;
+    (*c).acc = vec4<f32>(acc.xyz + acc.w * open.xyz / open.w * (1.0 - through), acc.w * through);
+    var left = (*c).acc.w;
+    if (*c).passed {
+        left *= (*c).front.w;
+    }
+    (*c).done = left < CUTOFF;
 }
 
 @compute @workgroup_size(4, 4)
-fn splat(@builtin(global_invocation_id) gid: vec3<u32>) {
-    if gid.x >= params.size.x || gid.y >= params.size.y {
+fn splat(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>) {
+    let job = work[group.x];
+    let tile = job.x;
+    let xy = vec2<u32>((tile % params.tiles_x) * TILE + local.x, (tile / params.tiles_x) * TILE + local.y);
+    if xy.x >= params.size.x || xy.y >= params.size.y {
         return;
     }
-    let pixel = gid.y * params.size.x + gid.x;
-    let tile = (gid.y / TILE) * params.tiles_x + gid.x / TILE;
-    let end = starts[tile + 1u];
-    let first = min(starts[tile] + chunk.index * params.chunk, end);
-    let last = min(end, first + params.chunk);
+    let first = min(job.y + chunk.index * params.chunk, job.z);
+    let last = min(job.z, first + params.chunk);
     let ndc = vec2<f32>(
-        2.0 * (f32(gid.x) + 0.5) / f32(params.size.x) - 1.0,
-        1.0 - 2.0 * (f32(gid.y) + 0.5) / f32(params.size.y),
+        2.0 * (f32(xy.x) + 0.5) / f32(params.size.x) - 1.0,
+        1.0 - 2.0 * (f32(xy.y) + 0.5) / f32(params.size.y),
     );
     let dir = normalize(params.forward + params.right * (ndc.x * params.tan_half * params.aspect) + params.up * (ndc.y * params.tan_half));
     let along = dot(dir, params.forward);
     // The first object on the ray ends it: the slabs whose front lies at or past its depth are left out.
     var until = 3.0e38;
     if params.objects != 0u {
-        let at = vec2<u32>((vec2<f32>(gid.xy) + 0.5) * vec2<f32>(params.frame) / vec2<f32>(params.size));
+        let at = vec2<u32>((vec2<f32>(xy) + 0.5) * vec2<f32>(params.frame) / vec2<f32>(params.size));
         // A translucent surface (the depth's lowest bit set, shaders/objects.wgsl) does not end the smoke.
         let bits = textureLoad(depth, vec2<i32>(min(at, params.frame - 1u)), 0).r;
         let d = bitcast<f32>(bits);
@@ -157,7 +182,7 @@ fn splat(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
     }
     // Where the glow lies along the ray, bilinear between the glow cells' corners.
-    let g = (vec2<f32>(gid.xy) + 0.5) / f32(GLOW_CELL);
+    let g = (vec2<f32>(xy) + 0.5) / f32(GLOW_CELL);
     let cells = (params.size + GLOW_CELL - 1u) / GLOW_CELL;
     let c = min(vec2<u32>(g), cells - 1u);
     let f = g - vec2<f32>(c);
@@ -167,18 +192,23 @@ fn splat(@builtin(global_invocation_id) gid: vec3<u32>) {
     let bottom = glow[at + row] + (glow[at + row + 1u] - glow[at + row]) * f.x;
     let split = top + (bottom - top) * f.y;
     let none = vec4<f32>(0.0, 0.0, 0.0, 1.0);
-    var front = none;
-    var acc = none;
-    var open = vec4<f32>(0.0);
-    var slab = 0xffffffffu;
-    var passed = 0u;
+    var comp = Composite(none, none, false, false);
+    // The open slabs lo..end (the same for the tile's pixels), slab j's sums at ring[j % RING].
+    var ring: array<vec4<f32>, RING>;
+    var lo = 0u;
+    var end = 0u;
+    let slot = (group.x * TILE * TILE + local.y * TILE + local.x) * STATE;
     if chunk.index > 0u {
-        front = state[4u * pixel];
-        acc = state[4u * pixel + 1u];
-        open = state[4u * pixel + 2u];
-        let marks = state[4u * pixel + 3u];
-        slab = bitcast<u32>(marks.x);
-        passed = bitcast<u32>(marks.y);
+        comp.front = state[slot];
+        comp.acc = state[slot + 1u];
+        let marks = bitcast<vec4<u32>>(state[slot + 2u]);
+        lo = marks.x;
+        end = marks.y;
+        comp.passed = (marks.z & 1u) != 0u;
+        comp.done = (marks.z & 2u) != 0u;
+        for (var k = 0u; k < RING; k++) {
+            ring[k] = state[slot + 3u + k];
+        }
     }
     let toward_eye = -dir;
     // What the loop reads, in registers (lavapipe loads a buffer again at every pass of a loop).
@@ -186,58 +216,75 @@ fn splat(@builtin(global_invocation_id) gid: vec3<u32>) {
     let width = params.width;
     let eye = params.eye;
     let per_depth = 1.0 / along;
+    let k_erf = sqrt(KERNEL_FALLOFF);
     for (var i = first; i < last; i++) {
-        let s = segments[i];
-        if s.x != slab {
-            if slab != 0xffffffffu {
-                close_into(&front, &acc, &passed, open, near + (f32(slab) + 0.5) * width >= split);
-            }
-            open = vec4<f32>(0.0);
-            slab = s.x;
+        let e = entries[i];
+        let head = e.x & 0xffffffu;
+        let span = e.x >> 24u;
+        // No particle after this one reaches a slab before its first: those are final.
+        let closing = min(end, head);
+        for (; lo < closing; lo++) {
+            close_slab(&comp, ring[lo % RING], lo, split);
+            ring[lo % RING] = vec4<f32>(0.0);
         }
-        let slab_front = near + f32(s.x) * width;
-        if slab_front >= until {
-            continue;
-        }
-        let ball = balls[s.y];
+        lo = max(lo, head);
+        end = max(end, head + span + 1u);
+        // Its chord along this pixel's ray, in radii from the point nearest its center.
+        let ball = balls[e.y];
         let radius = ball.w;
         let to = ball.xyz - eye;
         let closest = dot(to, dir);
         let u = length(to - dir * closest) / radius;
-        if u >= 1.0 {
-            continue;
+        let hit = u < 1.0 && !comp.done && near + f32(head) * width < until;
+        var half = 0.0;
+        var weight = 0.0;
+        var lit = vec3<f32>(0.0);
+        if hit {
+            half = sqrt(1.0 - u * u);
+            let p = particles[e.y];
+            // particles::segment_integral in scene units: rho R G(u) sqrt(pi / (4 falloff)) (erf(k b) - erf(k a)).
+            weight = p.density * radius * KERNEL_PEAK * exp(-KERNEL_FALLOFF * u * u) * sqrt(3.14159265 / (4.0 * KERNEL_FALLOFF));
+            lit = p.color * light_toward(p, toward_eye) + vec3<f32>(p.off_r.w, p.off_g.w, p.off_b.w);
         }
-        let half = sqrt(1.0 - u * u);
-        let a = max((slab_front * per_depth - closest) / radius, -half);
-        let b = min(((slab_front + width) * per_depth - closest) / radius, half);
-        if b <= a {
-            continue;
-        }
-        let p = particles[s.y];
-        let k = sqrt(KERNEL_FALLOFF);
-        // particles::segment_integral in scene units: rho R G(u) sqrt(pi / (4 falloff)) (erf(k b) - erf(k a)).
-        let tau = p.density * radius * KERNEL_PEAK * exp(-KERNEL_FALLOFF * u * u)
-            * sqrt(3.14159265 / (4.0 * KERNEL_FALLOFF)) * (erf_approx(k * b) - erf_approx(k * a));
-        if tau > 0.0 {
-            let emission = vec3<f32>(p.off_r.w, p.off_g.w, p.off_b.w);
-            open += vec4<f32>(tau * (p.color * light_toward(p, toward_eye) + emission), tau);
+        // Its part in each slab it may reach (the same count for every pixel of the tile), the slabs at or past the
+        // ray's end left out.
+        var below = erf_approx(k_erf * clamp(((near + f32(head) * width) * per_depth - closest) / radius, -half, half));
+        for (var s = 0u; s <= span; s++) {
+            let j = head + s;
+            let slab_front = near + f32(j) * width;
+            let b = clamp(((slab_front + width) * per_depth - closest) / radius, -half, half);
+            let above = erf_approx(k_erf * b);
+            let tau = weight * (above - below);
+            below = above;
+            if hit && tau > 0.0 && slab_front < until {
+                ring[j % RING] += vec4<f32>(tau * lit, tau);
+            }
         }
     }
-    if chunk.last != 0u {
-        if slab != 0xffffffffu {
-            close_into(&front, &acc, &passed, open, near + (f32(slab) + 0.5) * width >= split);
+    // The dispatch that takes a tile's last particles closes its pixels' slabs and writes their images; the tiles
+    // with more left carry their state to the next (they are the first ones of it: the busiest first).
+    if job.z - job.y <= (chunk.index + 1u) * params.chunk {
+        for (; lo < end; lo++) {
+            close_slab(&comp, ring[lo % RING], lo, split);
         }
-        if passed == 0u {
-            front = acc;
-            acc = none;
+        if !comp.passed {
+            comp.front = comp.acc;
+            comp.acc = none;
         }
-        state[4u * pixel] = front;
-        state[4u * pixel + 1u] = acc;
+        let pixel = xy.y * params.size.x + xy.x;
+        image[2u * pixel] = comp.front;
+        image[2u * pixel + 1u] = comp.acc;
+        // Their light and coverage, as the draw passes blend them.
+        textureStore(front_out, vec2<i32>(xy), vec4<f32>(comp.front.xyz, 1.0 - comp.front.w));
+        textureStore(back_out, vec2<i32>(xy), vec4<f32>(comp.acc.xyz, 1.0 - comp.acc.w));
     } else {
-        state[4u * pixel] = front;
-        state[4u * pixel + 1u] = acc;
-        state[4u * pixel + 2u] = open;
-        state[4u * pixel + 3u] = vec4<f32>(bitcast<f32>(slab), bitcast<f32>(passed), 0.0, 0.0);
+        state[slot] = comp.front;
+        state[slot + 1u] = comp.acc;
+        let marks = vec4<u32>(lo, end, u32(comp.passed) | (u32(comp.done) << 1u), 0u);
+        state[slot + 2u] = bitcast<vec4<f32>>(marks);
+        for (var k = 0u; k < RING; k++) {
+            state[slot + 3u + k] = ring[k];
+        }
     }
 }
 
@@ -254,32 +301,19 @@ fn vs_main(@builtin(vertex_index) index: u32) -> VertexOut {
     return out;
 }
 
-fn image_at(at: vec2<i32>, which: u32) -> vec4<f32> {
-    let c = clamp(at, vec2<i32>(0), vec2<i32>(params.size) - 1);
-    return image[4u * (u32(c.y) * params.size.x + u32(c.x)) + which];
-}
+// The images as the passes read them (`front_out` and `back_out` written: light and coverage), filtered between the
+// smoke image's pixel centers, clamped at its edges.
+@group(0) @binding(13) var front_in: texture_2d<f32>;
+@group(0) @binding(14) var back_in: texture_2d<f32>;
+@group(0) @binding(15) var smoke_sampler: sampler;
 
-// An image (0: front, 1: back) at a frame pixel, bilinear between the smoke image's pixel centers: its light and
-// its coverage 1 - T, premultiplied, for the blend over what lies behind.
-fn smoke_at(position: vec2<f32>, which: u32) -> vec4<f32> {
-    let x = position * vec2<f32>(params.size) / vec2<f32>(params.frame) - 0.5;
-    let x0 = floor(x);
-    let f = x - x0;
-    let i0 = vec2<i32>(x0);
-    let s = mix(
-        mix(image_at(i0, which), image_at(i0 + vec2<i32>(1, 0), which), f.x),
-        mix(image_at(i0 + vec2<i32>(0, 1), which), image_at(i0 + vec2<i32>(1, 1), which), f.x),
-        f.y,
-    );
-    return vec4<f32>(s.xyz, 1.0 - s.w);
-}
-
+// An image's light and coverage 1 - T at a frame pixel, premultiplied, for the blend over what lies behind.
 @fragment
 fn fs_front(in: VertexOut) -> @location(0) vec4<f32> {
-    return smoke_at(in.position.xy, 0u);
+    return textureSampleLevel(front_in, smoke_sampler, in.position.xy / vec2<f32>(params.frame), 0.0);
 }
 
 @fragment
 fn fs_back(in: VertexOut) -> @location(0) vec4<f32> {
-    return smoke_at(in.position.xy, 1u);
+    return textureSampleLevel(back_in, smoke_sampler, in.position.xy / vec2<f32>(params.frame), 0.0);
 }

@@ -1,7 +1,7 @@
 //! Particle sets beside paper 002_'s tables: two particles, the 500-particle cloud lit, and 50,000 lit, each
 //! in a frame of the default beam at W = 256 (a 512 x 512 frame, its smoke image 256 x 256). What particles
 //! cost lies in three places, each timed: lighting them (CPU, once per edit of the particles or the sources:
-//! `particles::light`), planning a view's slices and segments (CPU, once per camera move:
+//! `particles::light`), planning a view's slices and each tile's particles (CPU, once per camera move:
 //! `particles::view`), and the frame itself: the smoke splatted and laid over it, timed on a view whose field
 //! and plan are made (a renderer with the particles and one without, interleaved frame by frame, the
 //! difference theirs). A frame whose view moved pays the plan and the splatting (`added_ms`) besides the field,
@@ -25,10 +25,10 @@ pub struct ParticleRow {
     pub particles: usize,
     /// Lighting every particle through the others (CPU, per edit).
     pub light: Timing,
-    /// The view's slices, segments and glow depths (CPU, per camera move).
+    /// The view's slices, tile lists and glow depths (CPU, per camera move).
     pub plan: Timing,
-    /// The segments the plan holds.
-    pub segments: usize,
+    /// The entries (a particle in a tile) the plan holds.
+    pub entries: usize,
     /// A frame of a view already planned (its field integrated before) with the particles, and the same frame
     /// without them: the difference is the splatting and the compositing.
     pub frame: Timing,
@@ -91,13 +91,13 @@ pub fn particle_rows(warmup: usize, frames: usize) -> Result<Vec<ParticleRow>, G
                 .collect(),
         );
         let setup = FrameSetup::placed(&scene, w as f64 / h as f64);
-        let mut segments = 0;
+        let mut entries = 0;
         let plan = Timing::of(
             (0..frames.max(3))
                 .map(|_| {
                     let t = Instant::now();
                     let view = setup.smoke_view(&particles, [w, h], 256);
-                    segments = view.segments(&particles).0.len();
+                    entries = view.tile_lists(&particles).0.len();
                     t.elapsed().as_secs_f64() * 1e3
                 })
                 .collect(),
@@ -126,7 +126,7 @@ pub fn particle_rows(warmup: usize, frames: usize) -> Result<Vec<ParticleRow>, G
             particles: particles.len(),
             light,
             plan,
-            segments,
+            entries,
             frame: Timing::of(with),
             bare: Timing::of(without),
             paper_unlit_ms,

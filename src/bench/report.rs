@@ -279,7 +279,7 @@ impl Report {
                 "case",
                 "particles",
                 "light ms",
-                "segments",
+                "entries",
                 "plan ms",
                 "frame ms",
                 "bare frame ms",
@@ -295,7 +295,7 @@ impl Report {
                     r.case,
                     r.particles,
                     r.light.median_ms,
-                    r.segments,
+                    r.entries,
                     r.plan.median_ms,
                     format!(
                         "{:.1} ({:.0}..{:.0})",

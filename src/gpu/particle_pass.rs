@@ -1,8 +1,9 @@
-//! Particle sets on the GPU (`shaders/particles.wgsl`, METHOD.md section 10): the smoke's image by sheet-buffer
-//! splatting, a compute pass over its pixels, then laid over the frame's background and objects before the
-//! glow. The particles and their light come from the frame (`Frame::particles`, lit once per edit); the
-//! slices and each tile's segments from its camera (`particles::view::SmokeView`), worked out again only when
-//! the view or the particles change. CPU twin: `reference::particles::smoke_pixel`.
+//! Particle sets on the GPU (`shaders/particles.wgsl`, METHOD.md section 9): the smoke's image by sheet-buffer
+//! splatting, a compute pass over the pixels of the tiles that have particles, then laid over the frame's
+//! background and objects before the glow, filtered. The particles and their light come from the frame
+//! (`Frame::particles`, lit once per edit); the slices and each tile's particles from its camera
+//! (`particles::view::SmokeView`), worked out again only when the view or the particles change. CPU twin:
+//! `reference::particles::smoke_pixel`.
 
 use std::sync::Arc;
 
@@ -10,15 +11,15 @@ use wgpu::util::DeviceExt;
 
 use super::context::GpuError;
 use super::context::{
-    RenderPipelineSpec, compute_pass, fragment_storage_entry, over, pass_layouts, render_pipeline,
-    storage_buffer_entry, uniform_buffer,
+    RenderPipelineSpec, compute_pass, over, pass_layouts, render_pipeline, storage_buffer_entry,
+    uniform_buffer,
 };
 use super::formats::FRAME_FORMAT;
 use super::pass::{FramePass, Gpu, Recording, Stage};
 use crate::frame::{Frame, FrameSetup};
 use crate::objects::lighting::AMBIENT;
 use crate::particles::light::LitParticles;
-use crate::particles::view::{SmokeView, TILE};
+use crate::particles::view::{RING, SmokeView, TILE};
 
 /// Rust mirrors of `shaders/particles.wgsl` (keep in sync; `tests/gpu_layout.rs` checks them).
 pub mod gpu_data {
@@ -79,9 +80,17 @@ pub mod gpu_data {
 
 use gpu_data::{SmokeChunk, SmokeParams, SmokeParticle};
 
-/// The most segments a pixel takes in one dispatch: lavapipe stops an invocation's loops after 65535
-/// iterations in all.
-pub const CHUNK: u32 = 16384;
+/// The most particles a tile takes in one dispatch: lavapipe stops an invocation's loops after 65535 iterations
+/// in all, and a particle costs a pixel at most 2 `RING` + 1 (its slabs, and the slabs it closes).
+pub const CHUNK: u32 = 960;
+const _: () = assert!(CHUNK * (2 * RING + 1) + RING < 65535);
+
+/// A pixel's state between dispatches, in vec4s (`STATE` in the shader): the front image, the image so far, the
+/// marks, the open slabs.
+const STATE: u64 = 3 + RING as u64;
+
+/// The format of the images the draw passes filter: their light and coverage.
+const IMAGE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 
 /// The splatting and compositing pipelines, and the last frame's buffers.
 pub struct ParticlePass {
@@ -94,6 +103,8 @@ pub struct ParticlePass {
     /// One `SmokeChunk` every `chunk_stride` bytes, bound at a dynamic offset.
     chunks: wgpu::Buffer,
     chunk_stride: u64,
+    /// Bilinear between the smoke image's pixel centers, clamped at its edges.
+    sampler: wgpu::Sampler,
     prepared: Option<Prepared>,
     /// Whether the frame being recorded has smoke.
     smoke: bool,
@@ -137,11 +148,21 @@ struct Prepared {
     view: SmokeView,
     particles: wgpu::Buffer,
     balls: wgpu::Buffer,
-    segments: wgpu::Buffer,
-    starts: wgpu::Buffer,
+    entries: wgpu::Buffer,
+    work: wgpu::Buffer,
     glow: wgpu::Buffer,
     state: wgpu::Buffer,
-    dispatches: u32,
+    /// The front and back images, two a pixel, in f32 (read back by `read_image`).
+    image: wgpu::Buffer,
+    /// The same as the draw passes filter them: front, back.
+    textures: [wgpu::Texture; 2],
+    /// The tiles with particles, the busiest first (`SmokeView::tile_lists`).
+    tiles: Vec<u32>,
+    /// How many tiles each dispatch takes: those with more particles than the dispatches before took.
+    groups: Vec<u32>,
+    /// The frame's pixels the smoke may cover: (x, y, width, height), the tiles' box and a pixel of the image
+    /// around it.
+    scissor: [u32; 4],
     draw_group: wgpu::BindGroup,
 }
 
@@ -159,6 +180,26 @@ impl ParticlePass {
             count: None,
         };
         let compute = wgpu::ShaderStages::COMPUTE;
+        let written = |binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: compute,
+            ty: wgpu::BindingType::StorageTexture {
+                access: wgpu::StorageTextureAccess::WriteOnly,
+                format: IMAGE_FORMAT,
+                view_dimension: wgpu::TextureViewDimension::D2,
+            },
+            count: None,
+        };
+        let read_write = |binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: compute,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only: false },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        };
         let splat_entries = [
             uniform(0, compute, false),
             storage_buffer_entry(1),
@@ -166,16 +207,10 @@ impl ParticlePass {
             storage_buffer_entry(3),
             storage_buffer_entry(8),
             storage_buffer_entry(9),
-            wgpu::BindGroupLayoutEntry {
-                binding: 4,
-                visibility: compute,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Storage { read_only: false },
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            },
+            read_write(4),
+            read_write(10),
+            written(11),
+            written(12),
             wgpu::BindGroupLayoutEntry {
                 binding: 5,
                 visibility: compute,
@@ -190,6 +225,16 @@ impl ParticlePass {
         ];
         let (splat, splat_layout) =
             compute_pass(device, "particles.splat", &source, "splat", &splat_entries);
+        let sampled = |binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ty: wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                view_dimension: wgpu::TextureViewDimension::D2,
+                multisampled: false,
+            },
+            count: None,
+        };
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("energywave.particles.draw.shader"),
             source: wgpu::ShaderSource::Wgsl(source.as_str().into()),
@@ -199,7 +244,14 @@ impl ParticlePass {
             "particles.draw",
             &[
                 uniform(0, wgpu::ShaderStages::FRAGMENT, false),
-                fragment_storage_entry(7),
+                sampled(13),
+                sampled(14),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 15,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                    count: None,
+                },
             ],
         );
         let draw = ["fs_front", "fs_back"].map(|fragment_entry| {
@@ -232,6 +284,12 @@ impl ParticlePass {
             params: uniform_buffer::<SmokeParams>(device, "energywave.particles.params"),
             chunks: chunk_buffer(device, chunk_stride, 1),
             chunk_stride,
+            sampler: device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some("energywave.particles.sampler"),
+                mag_filter: wgpu::FilterMode::Linear,
+                min_filter: wgpu::FilterMode::Linear,
+                ..Default::default()
+            }),
             prepared: None,
             smoke: false,
         }
@@ -262,16 +320,19 @@ impl ParticlePass {
         }
         let view = setup.smoke_view(&lit.particles, frame, resolution);
         let size = view.size;
-        let (segments, starts) = view.segments(&lit.particles);
-        let busiest = starts.windows(2).map(|w| w[1] - w[0]).max().unwrap_or(0);
-        let dispatches = busiest.div_ceil(CHUNK).max(1);
-        if self.chunks.size() < dispatches as u64 * self.chunk_stride {
-            self.chunks = chunk_buffer(device, self.chunk_stride, dispatches);
+        let (entries, work) = view.tile_lists(&lit.particles);
+        // Dispatch i takes the tiles with more than i CHUNK particles: the first ones, the busiest first.
+        let busiest = work.first().map_or(0, |w| w[2] - w[1]);
+        let groups: Vec<u32> = (0..busiest.div_ceil(CHUNK).max(1))
+            .map(|i| work.partition_point(|w| w[2] - w[1] > i * CHUNK) as u32)
+            .collect();
+        if self.chunks.size() < groups.len() as u64 * self.chunk_stride {
+            self.chunks = chunk_buffer(device, self.chunk_stride, groups.len() as u32);
         }
-        for i in 0..dispatches {
+        for i in 0..groups.len() {
             let c = SmokeChunk {
-                index: i,
-                last: (i + 1 == dispatches) as u32,
+                index: i as u32,
+                last: (i + 1 == groups.len()) as u32,
                 ..Default::default()
             };
             queue.write_buffer(
@@ -284,46 +345,80 @@ impl ParticlePass {
             .prepared
             .as_ref()
             .is_some_and(|p| Arc::ptr_eq(&p.lit, &lit));
-        let (particles, balls) = match self.prepared.take() {
-            Some(p) if same_particles => (p.particles, p.balls),
-            _ => {
-                let balls: Vec<[f32; 4]> = (lit.particles.iter())
-                    .map(|p| {
-                        let c = p.position.as_vec3();
-                        [c.x, c.y, c.z, p.radius as f32]
+        let (particles, balls, textures) = match self.prepared.take() {
+            Some(p) if same_particles && p.view.size == size => (p.particles, p.balls, p.textures),
+            p => {
+                let (particles, balls) = match p {
+                    Some(p) if same_particles => (p.particles, p.balls),
+                    _ => {
+                        let balls: Vec<[f32; 4]> = (lit.particles.iter())
+                            .map(|p| {
+                                let c = p.position.as_vec3();
+                                [c.x, c.y, c.z, p.radius as f32]
+                            })
+                            .collect();
+                        (
+                            storage(
+                                device,
+                                "particles",
+                                bytemuck::cast_slice(&gpu_particles(&lit)),
+                            ),
+                            storage(device, "balls", bytemuck::cast_slice(&balls)),
+                        )
+                    }
+                };
+                let textures = ["front", "back"].map(|name| {
+                    device.create_texture(&wgpu::TextureDescriptor {
+                        label: Some(&format!("energywave.particles.{name}")),
+                        size: wgpu::Extent3d {
+                            width: size[0],
+                            height: size[1],
+                            depth_or_array_layers: 1,
+                        },
+                        mip_level_count: 1,
+                        sample_count: 1,
+                        dimension: wgpu::TextureDimension::D2,
+                        format: IMAGE_FORMAT,
+                        usage: wgpu::TextureUsages::STORAGE_BINDING
+                            | wgpu::TextureUsages::TEXTURE_BINDING
+                            | wgpu::TextureUsages::RENDER_ATTACHMENT,
+                        view_formats: &[],
                     })
-                    .collect();
-                (
-                    storage(
-                        device,
-                        "particles",
-                        bytemuck::cast_slice(&gpu_particles(&lit)),
-                    ),
-                    storage(device, "balls", bytemuck::cast_slice(&balls)),
-                )
+                });
+                (particles, balls, textures)
             }
         };
-        let segments = storage(device, "segments", bytemuck::cast_slice(&segments));
-        let starts = storage(device, "starts", bytemuck::cast_slice(&starts));
+        let tiles: Vec<u32> = work.iter().map(|w| w[0]).collect();
+        let work: Vec<[u32; 4]> = work.iter().map(|&[t, a, b]| [t, a, b, 0]).collect();
+        let entries = storage(device, "entries", bytemuck::cast_slice(&entries));
+        let work = storage(device, "work", bytemuck::cast_slice(&work));
         let glow = storage(device, "glow", bytemuck::cast_slice(&view.glow));
+        // The tiles a second dispatch takes carry their pixels' state.
+        let carried = groups.get(1).copied().unwrap_or(0).max(1) as u64;
         let state = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("energywave.particles.state"),
-            size: 64 * (size[0] as u64 * size[1] as u64),
+            size: 16 * STATE * (TILE * TILE) as u64 * carried,
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        });
+        let image = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("energywave.particles.image"),
+            size: 32 * (size[0] as u64 * size[1] as u64),
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
             mapped_at_creation: false,
         });
+        let scissor = scissor(&view, &tiles, frame);
+        let views = textures
+            .each_ref()
+            .map(|t| t.create_view(&Default::default()));
         let draw_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("energywave.particles.draw.bind_group"),
             layout: &self.draw_layout,
             entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: self.params.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 7,
-                    resource: state.as_entire_binding(),
-                },
+                entry(0, self.params.as_entire_binding()),
+                entry(13, wgpu::BindingResource::TextureView(&views[0])),
+                entry(14, wgpu::BindingResource::TextureView(&views[1])),
+                entry(15, wgpu::BindingResource::Sampler(&self.sampler)),
             ],
         });
         self.prepared = Some(Prepared {
@@ -332,11 +427,15 @@ impl ParticlePass {
             view,
             particles,
             balls,
-            segments,
-            starts,
+            entries,
+            work,
             glow,
             state,
-            dispatches,
+            image,
+            textures,
+            tiles,
+            groups,
+            scissor,
             draw_group,
         });
         self.write_params(queue, setup, frame);
@@ -383,14 +482,44 @@ impl ParticlePass {
         let Some(p) = &self.prepared else {
             return;
         };
+        // The images start as none: the tiles without particles are not dispatched.
+        let views = p
+            .textures
+            .each_ref()
+            .map(|t| t.create_view(&Default::default()));
+        let cleared = |view| {
+            Some(wgpu::RenderPassColorAttachment {
+                view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                    store: wgpu::StoreOp::Store,
+                },
+            })
+        };
+        drop(encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("energywave.particles.clear"),
+            color_attachments: &[cleared(&views[0]), cleared(&views[1])],
+            depth_stencil_attachment: None,
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        }));
+        if p.tiles.is_empty() {
+            return;
+        }
         let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("energywave.particles.splat.bind_group"),
             layout: &self.splat_layout,
             entries: &[
                 entry(0, self.params.as_entire_binding()),
                 entry(1, p.particles.as_entire_binding()),
-                entry(2, p.segments.as_entire_binding()),
-                entry(3, p.starts.as_entire_binding()),
+                entry(2, p.entries.as_entire_binding()),
+                entry(3, p.work.as_entire_binding()),
+                entry(10, p.image.as_entire_binding()),
+                entry(11, wgpu::BindingResource::TextureView(&views[0])),
+                entry(12, wgpu::BindingResource::TextureView(&views[1])),
                 entry(8, p.glow.as_entire_binding()),
                 entry(9, p.balls.as_entire_binding()),
                 entry(4, p.state.as_entire_binding()),
@@ -410,17 +539,20 @@ impl ParticlePass {
             timestamp_writes: None,
         });
         pass.set_pipeline(&self.splat);
-        let [w, h] = p.view.size;
-        for i in 0..p.dispatches {
+        for (i, &groups) in p.groups.iter().enumerate() {
             pass.set_bind_group(0, &group, &[(i as u64 * self.chunk_stride) as u32]);
-            pass.dispatch_workgroups(w.div_ceil(TILE), h.div_ceil(TILE), 1);
+            pass.dispatch_workgroups(groups, 1, 1);
         }
     }
 
     /// Lays the smoke's front image (in front of the billboard's plane) or its back image over what `pass` draws
     /// into (premultiplied: its light, plus what lies behind times its transmittance).
     fn draw(&self, pass: &mut wgpu::RenderPass<'_>, front: bool) {
-        if let Some(p) = &self.prepared {
+        if let Some(p) = &self.prepared
+            && !p.tiles.is_empty()
+        {
+            let [x, y, w, h] = p.scissor;
+            pass.set_scissor_rect(x, y, w, h);
             pass.set_pipeline(&self.draw[!front as usize]);
             pass.set_bind_group(0, &p.draw_group, &[]);
             pass.draw(0..3, 0..1);
@@ -439,19 +571,33 @@ impl ParticlePass {
         };
         let staging = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("energywave.particles.readback"),
-            size: p.state.size(),
+            size: p.image.size(),
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
         let mut encoder = device.create_command_encoder(&Default::default());
-        encoder.copy_buffer_to_buffer(&p.state, 0, &staging, 0, p.state.size());
+        encoder.copy_buffer_to_buffer(&p.image, 0, &staging, 0, p.image.size());
         queue.submit([encoder.finish()]);
         let bytes = super::context::map_read(device, &staging)?;
         let floats: &[f32] = bytemuck::cast_slice(&bytes);
-        let pixels = floats
-            .chunks_exact(16)
+        let mut pixels: Vec<[[f32; 4]; 2]> = floats
+            .chunks_exact(8)
             .map(|c| [[c[0], c[1], c[2], c[3]], [c[4], c[5], c[6], c[7]]])
             .collect();
+        // The pixels of the tiles not dispatched hold no smoke.
+        let none = [[0.0, 0.0, 0.0, 1.0]; 2];
+        let mut dispatched = vec![false; p.view.tiles().iter().product::<u32>() as usize];
+        for &t in &p.tiles {
+            dispatched[t as usize] = true;
+        }
+        let [w, _] = p.view.size;
+        let tiles_x = p.view.tiles()[0];
+        for (k, pixel) in pixels.iter_mut().enumerate() {
+            let (x, y) = (k as u32 % w, k as u32 / w);
+            if !dispatched[((y / TILE) * tiles_x + x / TILE) as usize] {
+                *pixel = none;
+            }
+        }
         Ok(Some((pixels, p.view.clone())))
     }
 }
@@ -496,6 +642,34 @@ impl FramePass for ParticlePass {
             }
         }
     }
+}
+
+/// The frame's pixels that the smoke of `tiles` may cover, as a scissor rectangle: their box in the smoke image
+/// and a pixel of it around (the filter reaches that far), in frame pixels.
+fn scissor(view: &SmokeView, tiles: &[u32], frame: [u32; 2]) -> [u32; 4] {
+    let tiles_x = view.tiles()[0];
+    let (mut lo, mut hi) = ([u32::MAX; 2], [0u32; 2]);
+    for &t in tiles {
+        let at = [t % tiles_x, t / tiles_x];
+        for k in 0..2 {
+            lo[k] = lo[k].min(at[k] * TILE);
+            hi[k] = hi[k].max((at[k] + 1) * TILE);
+        }
+    }
+    if tiles.is_empty() {
+        return [0, 0, 0, 0];
+    }
+    // Smoke pixel i covers frame pixels [i, i + 1) frame / size.
+    let to_frame = |v: u32, k: usize, up: bool| {
+        let x = v as u64 * frame[k] as u64;
+        let n = view.size[k] as u64;
+        (if up { x.div_ceil(n) } else { x / n }).min(frame[k] as u64) as u32
+    };
+    let x0 = to_frame(lo[0].saturating_sub(1), 0, false);
+    let y0 = to_frame(lo[1].saturating_sub(1), 1, false);
+    let x1 = to_frame(hi[0] + 1, 0, true);
+    let y1 = to_frame(hi[1] + 1, 1, true);
+    [x0, y0, x1 - x0, y1 - y0]
 }
 
 fn entry(binding: u32, resource: wgpu::BindingResource<'_>) -> wgpu::BindGroupEntry<'_> {

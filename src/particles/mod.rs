@@ -146,6 +146,10 @@ pub const KERNEL_PEAK: f64 = 0.446;
 /// The kernel's exponent: `G(r) = KERNEL_PEAK exp(-KERNEL_FALLOFF r^2)`.
 pub const KERNEL_FALLOFF: f64 = 2.0;
 
+/// The light through a pixel's smoke below which the rest of its slabs are left out, by both renderers: what lies
+/// behind could add at most this share of its radiance (3D Gaussian splatting stops at the same).
+pub const TRANSMITTANCE_CUTOFF: f64 = 1e-4;
+
 /// One particle: a ball of material.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Particle {

@@ -1,6 +1,6 @@
 //! A frame's particles as both renderers read them (METHOD.md section 10): the smoke's own image of `size`
 //! pixels over the frame (rays from the eye through its pixel centers), the slices perpendicular to the view, and
-//! for the GPU each tile's segments, a segment being a particle cut by a slab, in slab order. The CPU twin
+//! for the GPU each tile's particles in the order of the first slab they reach. The CPU twin
 //! (`reference::particles::smoke_pixel`) takes the same rays and slices.
 
 use glam::DVec3;
@@ -11,9 +11,9 @@ use crate::field::Sources;
 use crate::geometry::{Billboard, Camera};
 use crate::integrate::zeta;
 
-/// The smoke image's tiles: the pixels that share a list of segments. Measured on lavapipe (50,000 particles of
-/// 1 to 2 pixels' radius, 256 x 256): tiles of 16 took 1.9 s to splat, of 8 1.9 s, of 4 1.2 s (a pixel
-/// passes over fewer segments that miss it).
+/// The smoke image's tiles: the pixels that share a list of particles (a workgroup on the GPU). Small: a pixel
+/// passes over fewer particles that miss it (with the former loop over segments, 50,000 particles of 1 to 2
+/// pixels' radius at 256 x 256 on lavapipe took 1.9 s in tiles of 16 or 8, 1.2 s in tiles of 4).
 pub const TILE: u32 = 4;
 
 /// The cells the glow's depth is placed on, in pixels: psi is sampled along the rays of their corners only (it
@@ -21,12 +21,18 @@ pub const TILE: u32 = 4;
 /// at these 12 ms).
 pub const GLOW_CELL: u32 = 16;
 
-/// The most segments a frame takes: past it the slices widen (a scene of a million particles keeps a bounded
-/// plan; 8 M segments are 64 MiB on the GPU, within every adapter's storage binding).
-pub const MAX_SEGMENTS: usize = 1 << 23;
+/// The most entries (a particle in a tile) a frame's lists take: past it the image is made coarser (a scene of a
+/// million particles keeps a bounded plan; 8 M entries are 64 MiB on the GPU, within every adapter's storage
+/// binding).
+pub const MAX_ENTRIES: usize = 1 << 23;
 
 /// The most slabs a frame takes: past it the slices widen (a tiny particle far from a large one).
 pub const MAX_SLABS: u32 = 1 << 14;
+
+/// The most slabs the GPU's pixel keeps open at once along its ray (`shaders/particles.wgsl`'s ring): the slices
+/// are at least as wide as keeps every particle within `RING` slabs (a fifteenth of the largest radius; finer
+/// slices than that change the picture by less than the convergence test's 1e-4).
+pub const RING: u32 = 32;
 
 /// The samples of psi along a ray that place its glow (`GlowPlace`).
 pub const GLOW_SAMPLES: u32 = 48;
@@ -93,7 +99,7 @@ pub fn smoke_size(frame: [u32; 2], resolution: u32) -> [u32; 2] {
 
 impl SmokeView {
     /// The smoke of `particles` seen by `camera` in an image of `size` pixels, sliced at `width` radii of the
-    /// smallest particle (widened where the segments would exceed `MAX_SEGMENTS`).
+    /// smallest particle (widened where a particle would span more than `RING` slabs).
     pub fn new(
         particles: &[Particle],
         camera: &Camera,
@@ -106,7 +112,9 @@ impl SmokeView {
             .iter()
             .map(|p| p.radius)
             .fold(f64::INFINITY, f64::min);
-        let slicing = Slicing::covering(particles, camera.eye, axis, width * smallest);
+        let largest = particles.iter().map(|p| p.radius).fold(0.0, f64::max);
+        let width = (width * smallest).max(2.0 * largest / (RING - 2) as f64);
+        let slicing = Slicing::covering(particles, camera.eye, axis, width);
         let mut view = SmokeView {
             camera: camera.clone(),
             size,
@@ -131,8 +139,7 @@ impl SmokeView {
     }
 
     /// Bounds the plan: at most `MAX_SLABS` slabs (the twin keeps two numbers a slab along a ray), and at most
-    /// `MAX_SEGMENTS` segments (a particle's tiles times the slabs it spans), the slices widened as much as that
-    /// takes, and where even a slab a particle is too many, the image made coarser.
+    /// `MAX_ENTRIES` entries (a particle's tiles), the image made coarser as much as that takes.
     fn bound(&mut self, particles: &[Particle]) {
         let (axis, eye) = (self.slicing.axis, self.camera.eye);
         let far = (particles.iter())
@@ -143,27 +150,14 @@ impl SmokeView {
             self.slicing = Slicing::covering(particles, eye, axis, depth / MAX_SLABS as f64);
         }
         for _ in 0..8 {
-            let tiles: Vec<f64> = particles
+            let entries: f64 = particles
                 .par_iter()
                 .map(|p| {
                     self.footprint(p)
                         .map_or(0.0, |(x0, x1, y0, y1)| ((x1 - x0) * (y1 - y0)) as f64)
                 })
-                .collect();
-            let at_least: f64 = tiles.iter().map(|t| 2.0 * t).sum();
-            if at_least <= MAX_SEGMENTS as f64 {
-                let spans = |width: f64| -> f64 {
-                    (particles.iter().zip(&tiles))
-                        .map(|(p, t)| t * (2.0 * p.radius / width + 2.0))
-                        .sum()
-                };
-                let mut width = self.slicing.width;
-                while spans(width) > MAX_SEGMENTS as f64 {
-                    width *= 2.0;
-                }
-                if width != self.slicing.width {
-                    self.slicing = Slicing::covering(particles, eye, axis, width);
-                }
+                .sum();
+            if entries <= MAX_ENTRIES as f64 {
                 return;
             }
             self.size = self.size.map(|s| s.div_ceil(2).max(1));
@@ -204,47 +198,50 @@ impl SmokeView {
         self.size.map(|s| s.div_ceil(TILE))
     }
 
-    /// Each tile's segments `(slab, particle)`, in slab order, flattened, with each tile's start in them (one
-    /// more start than tiles: the end).
-    pub fn segments(&self, particles: &[Particle]) -> (Vec<[u32; 2]>, Vec<u32>) {
-        let [tx, ty] = self.tiles();
+    /// The first slab particle `p`'s ball reaches and how many slabs past it it may reach (below `RING`), or none
+    /// where it lies wholly behind the eye or past the slices.
+    pub fn slabs(&self, p: &Particle) -> Option<(u32, u32)> {
         let s = &self.slicing;
-        let f = self.camera.frame();
+        let depth = (p.position - self.camera.eye).dot(s.axis);
+        let first = ((depth - p.radius - s.near) / s.width).floor().max(0.0);
+        let last = ((depth + p.radius - s.near) / s.width)
+            .floor()
+            .min(s.count as f64 - 1.0);
+        (last >= first).then(|| {
+            let first = first as u32;
+            (first, (last as u32 - first).min(RING - 1))
+        })
+    }
+
+    /// Each tile's particles, the GPU's loop (`gpu::particle_pass`): `(first slab | slabs past it << 24,
+    /// particle)`, each tile's in the order of their first slab (then of the particles), flattened; and the tiles
+    /// that have any, the busiest first, as `[tile, first entry, end entry]`.
+    pub fn tile_lists(&self, particles: &[Particle]) -> (Vec<[u32; 2]>, Vec<[u32; 3]>) {
+        let [tx, _] = self.tiles();
         let mut keyed: Vec<(u32, [u32; 2])> = particles
             .par_iter()
             .enumerate()
             .flat_map_iter(|(k, p)| {
-                let depth = (p.position - self.camera.eye).dot(f.forward);
-                let first = ((depth - p.radius - s.near) / s.width).floor().max(0.0);
-                let last = ((depth + p.radius - s.near) / s.width)
-                    .floor()
-                    .min(s.count as f64 - 1.0);
-                let tiles = self.footprint(p);
-                let slabs = if last >= first {
-                    first as u32..last as u32 + 1
-                } else {
-                    0..0
-                };
-                tiles.into_iter().flat_map(move |(x0, x1, y0, y1)| {
-                    let slabs = slabs.clone();
-                    (y0..y1).flat_map(move |y| {
-                        let slabs = slabs.clone();
-                        (x0..x1).flat_map(move |x| {
-                            slabs.clone().map(move |j| (y * tx + x, [j, k as u32]))
+                let placed = self.slabs(p).zip(self.footprint(p));
+                placed
+                    .into_iter()
+                    .flat_map(move |((first, span), (x0, x1, y0, y1))| {
+                        (y0..y1).flat_map(move |y| {
+                            (x0..x1).map(move |x| (y * tx + x, [first | span << 24, k as u32]))
                         })
                     })
-                })
             })
             .collect();
-        keyed.par_sort_unstable_by_key(|&(tile, [j, k])| (tile, j, k));
-        let mut starts = vec![0u32; (tx * ty) as usize + 1];
-        for &(tile, _) in &keyed {
-            starts[tile as usize + 1] += 1;
+        keyed.par_sort_unstable_by_key(|&(tile, [slabs, k])| (tile, slabs & 0xff_ffff, k));
+        let mut work: Vec<[u32; 3]> = Vec::new();
+        for (i, &(tile, _)) in keyed.iter().enumerate() {
+            match work.last_mut() {
+                Some(w) if w[0] == tile => w[2] = i as u32 + 1,
+                _ => work.push([tile, i as u32, i as u32 + 1]),
+            }
         }
-        for i in 1..starts.len() {
-            starts[i] += starts[i - 1];
-        }
-        (keyed.into_iter().map(|(_, e)| e).collect(), starts)
+        work.sort_by_key(|&[tile, start, end]| (std::cmp::Reverse(end - start), tile));
+        (keyed.into_iter().map(|(_, e)| e).collect(), work)
     }
 
     /// The tiles a particle's ball may cover, `(x0, x1, y0, y1)` half-open: the box of its bounding cube's

@@ -207,7 +207,8 @@ pub fn marched_glowing(
 /// One pixel of a frame's smoke, as the GPU pass renders it (`gpu::particle_pass`, METHOD.md section 10): the
 /// sheet buffer along `ray` over `slicing`, each segment scattering its particle's color times the light that
 /// particle scatters back along the ray (`lights[k]`, `particles::light`) and giving off its emission, the slabs whose front lies at or past
-/// `until` (the depth along the view axis of the first object on the ray; infinite for none) left out. Two
+/// `until` (the depth along the view axis of the first object on the ray; infinite for none) left out, and those
+/// past where the light through the pixel falls below `particles::TRANSMITTANCE_CUTOFF`. Two
 /// images: the slabs whose middle lies in front of `split` (the depth of the billboard's plane on the ray), which
 /// go over the glow, and the others, under it.
 pub fn smoke_pixel(
@@ -250,6 +251,9 @@ pub fn smoke_pixel(
         let opacity = -(-tau).exp_m1();
         *radiance += *transmittance * colored / tau * opacity;
         *transmittance *= (-tau).exp();
+        if images[0].1 * images[1].1 < crate::particles::TRANSMITTANCE_CUTOFF {
+            break;
+        }
     }
     images.map(|(radiance, transmittance)| Composite {
         radiance: radiance.to_array(),
