@@ -170,7 +170,8 @@ fn splat(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) 
     );
     let dir = normalize(params.forward + params.right * (ndc.x * params.tan_half * params.aspect) + params.up * (ndc.y * params.tan_half));
     let along = dot(dir, params.forward);
-    // The first object on the ray ends it: the slabs whose front lies at or past its depth are left out.
+    // The first object on the ray ends it: the slabs whose front lies at or past its depth are left out, the one it
+    // lies in cut there.
     var until = 3.0e38;
     if params.objects != 0u {
         let at = vec2<u32>((vec2<f32>(xy) + 0.5) * vec2<f32>(params.frame) / vec2<f32>(params.size));
@@ -236,6 +237,9 @@ fn splat(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) 
         let closest = dot(to, dir);
         let u = length(to - dir * closest) / radius;
         let hit = u < 1.0 && !comp.done && near + f32(head) * width < until;
+        // The slabs its chord crosses, within those its ball reaches (none where it misses).
+        var j0 = 1u;
+        var j1 = 0u;
         var half = 0.0;
         var weight = 0.0;
         var lit = vec3<f32>(0.0);
@@ -245,18 +249,21 @@ fn splat(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) 
             // particles::segment_integral in scene units: rho R G(u) sqrt(pi / (4 falloff)) (erf(k b) - erf(k a)).
             weight = p.density * radius * KERNEL_PEAK * exp(-KERNEL_FALLOFF * u * u) * sqrt(3.14159265 / (4.0 * KERNEL_FALLOFF));
             lit = p.color * light_toward(p, toward_eye) + vec3<f32>(p.off_r.w, p.off_g.w, p.off_b.w);
+            let slab_of = (vec2<f32>(closest - half * radius, closest + half * radius) * along - near) / width;
+            let slabs = clamp(vec2<i32>(floor(slab_of)), vec2<i32>(i32(head)), vec2<i32>(i32(head + span)));
+            j0 = u32(slabs.x);
+            j1 = u32(slabs.y);
         }
-        // Its part in each slab it may reach (the same count for every pixel of the tile), the slabs at or past the
-        // ray's end left out.
-        var below = erf_approx(k_erf * clamp(((near + f32(head) * width) * per_depth - closest) / radius, -half, half));
-        for (var s = 0u; s <= span; s++) {
-            let j = head + s;
+        // Its part in each: an erf a boundary, the slabs at or past the ray's end left out, the last cut there.
+        var below = erf_approx(k_erf * clamp(((near + f32(j0) * width) * per_depth - closest) / radius, -half, half));
+        for (var j = j0; j <= j1; j++) {
             let slab_front = near + f32(j) * width;
-            let b = clamp(((slab_front + width) * per_depth - closest) / radius, -half, half);
-            let above = erf_approx(k_erf * b);
+            // The surface ends the smoke where it lies, inside its slab.
+            let back = min(slab_front + width, until);
+            let above = erf_approx(k_erf * clamp((back * per_depth - closest) / radius, -half, half));
             let tau = weight * (above - below);
             below = above;
-            if hit && tau > 0.0 && slab_front < until {
+            if tau > 0.0 && slab_front < until {
                 ring[j % RING] += vec4<f32>(tau * lit, tau);
             }
         }

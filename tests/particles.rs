@@ -685,3 +685,68 @@ fn smoke_in_front_absorbs_a_sparks_light_and_the_glowing_cloud_converges() {
     );
     assert!(errors[2] < 1e-3, "{errors:?}");
 }
+
+/// A particle's optical depth along `ray` from its entry to `t_end` (where a surface stops the ray), by the
+/// midpoint rule over the kernel, apart from `segment_integral`.
+fn brute_depth_until(p: &Particle, ray: &Ray, t_end: f64) -> f64 {
+    let closest = (p.position - ray.origin).dot(ray.direction);
+    let miss = (ray.at(closest) - p.position).length_squared();
+    let half = (p.radius * p.radius - miss).max(0.0).sqrt();
+    let (t0, t1) = (closest - half, (closest + half).min(t_end));
+    if t1 <= t0 {
+        return 0.0;
+    }
+    let n = 100_000;
+    let dt = (t1 - t0) / n as f64;
+    (0..n)
+        .map(|k| {
+            let x = ray.at(t0 + (k as f64 + 0.5) * dt);
+            p.density * 0.446 * (-2.0 * ((x - p.position) / p.radius).length_squared()).exp() * dt
+        })
+        .sum()
+}
+
+/// The smoke in front of a surface is integrated up to the surface itself, inside its slab: a surface swept
+/// through a particle in small steps dims the light by exp(-tau) of the particle's part in front of it, whatever
+/// the slicing, with no steps where it crosses a slab's boundary (a sphere behind smoke showed stepped bands when
+/// the slab the surface lay in was taken whole or left out). And a glowing particle shows the emission of that
+/// part, `L_e (1 - exp(-tau))`.
+#[test]
+fn smoke_in_front_of_a_surface_is_integrated_up_to_the_surface() {
+    use energywave::particles::light::ParticleLight;
+    use energywave::reference::particles::smoke_pixel;
+    let emission = [1.5, 0.6, 0.2];
+    let p = Particle {
+        position: DVec3::new(0.05, 0.1, 0.0),
+        radius: 0.5,
+        density: 4.0,
+        color: [0.0; 3],
+        emission,
+    };
+    let (eye, axis, ray) = view(DVec3::new(0.0, 0.0, 0.0));
+    let along = ray.direction.dot(axis);
+    let closest = (p.position - ray.origin).dot(ray.direction);
+    let mut worst = 0.0f64;
+    for width in [0.4, 0.1, 0.03] {
+        let slicing = Slicing::covering(&[p], eye, axis, width);
+        for k in 0..=60 {
+            // The surface from before the particle to past it.
+            let t = closest - 0.6 + 1.2 * k as f64 / 60.0;
+            let [front, back] = smoke_pixel(
+                &[p],
+                &[ParticleLight::default()],
+                &ray,
+                &slicing,
+                t * along,
+                f64::INFINITY,
+            );
+            assert_eq!(back.transmittance, 1.0);
+            let tau = brute_depth_until(&p, &ray, t);
+            worst = worst.max((front.transmittance - (-tau).exp()).abs());
+            let want = emission[0] * (1.0 - (-tau).exp());
+            worst = worst.max((front.radiance[0] - want).abs() / emission[0]);
+        }
+    }
+    // Measured: 6e-12 (the midpoint rule's own error); 0.28 with the slab the surface lies in taken whole.
+    assert!(worst < 1e-7, "{worst}");
+}

@@ -207,7 +207,8 @@ pub fn marched_glowing(
 /// One pixel of a frame's smoke, as the GPU pass renders it (`gpu::particle_pass`, METHOD.md section 10): the
 /// sheet buffer along `ray` over `slicing`, each segment scattering its particle's color times the light that
 /// particle scatters back along the ray (`lights[k]`, `particles::light`) and giving off its emission, the slabs whose front lies at or past
-/// `until` (the depth along the view axis of the first object on the ray; infinite for none) left out, and those
+/// `until` (the depth along the view axis of the first object on the ray; infinite for none) left out and the
+/// slab it lies in cut there (the smoke in front of a surface integrated up to the surface itself), and those
 /// past where the light through the pixel falls below `particles::TRANSMITTANCE_CUTOFF`. Two
 /// images: the slabs whose middle lies in front of `split` (the depth of the billboard's plane on the ray), which
 /// go over the glow, and the others, under it.
@@ -223,6 +224,12 @@ pub fn smoke_pixel(
     let mut colored = vec![DVec3::ZERO; slicing.count as usize];
     let toward_eye = -ray.direction;
     let along = ray.direction.dot(slicing.axis);
+    // The surface ends the smoke where it lies, inside its slab (the slab's part in front of it kept).
+    let t_until = if along > 0.0 {
+        until / along
+    } else {
+        f64::INFINITY
+    };
     for (p, light) in particles.iter().zip(lights) {
         let Some((t_in, t_out)) = p.chord(ray) else {
             continue;
@@ -231,7 +238,11 @@ pub fn smoke_pixel(
             + DVec3::from_array(p.emission);
         for j in slicing.slabs_between(ray, t_in, t_out) {
             let (t0, t1) = slicing.slab(ray, j);
-            let tau = p.optical_depth(ray, t0.max(t_in), t1.min(t_out));
+            let (a, b) = (t0.max(t_in), t1.min(t_out).min(t_until));
+            if b <= a {
+                continue;
+            }
+            let tau = p.optical_depth(ray, a, b);
             depth[j as usize] += tau;
             colored[j as usize] += tau * lit;
         }
