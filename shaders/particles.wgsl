@@ -75,7 +75,9 @@ const KERNEL_FALLOFF: f32 = 2.0;
 // A pixel's state between dispatches, in vec4s: the front image, the image so far, the marks, the ring.
 const STATE: u32 = 35u;
 
-@group(0) @binding(0) var<uniform> params: SmokeParams;
+// In a storage buffer: lavapipe compiles a shader anew for every value of a uniform that bounds a loop (the slabs
+// a pixel's chord crosses follow the view's slices).
+@group(0) @binding(0) var<storage, read> params: SmokeParams;
 @group(0) @binding(1) var<storage, read> particles: array<SmokeParticle>;
 // Each particle's ball (center, radius), read alone first: a pixel misses most of its tile's particles.
 @group(0) @binding(9) var<storage, read> balls: array<vec4<f32>>;

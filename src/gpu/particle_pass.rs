@@ -11,8 +11,8 @@ use wgpu::util::DeviceExt;
 
 use super::context::GpuError;
 use super::context::{
-    RenderPipelineSpec, compute_pass, over, pass_layouts, render_pipeline, storage_buffer_entry,
-    uniform_buffer,
+    RenderPipelineSpec, compute_pass, fragment_storage_entry, over, pass_layouts, render_pipeline,
+    storage_buffer_entry,
 };
 use super::formats::FRAME_FORMAT;
 use super::pass::{FramePass, Gpu, Recording, Stage};
@@ -201,7 +201,9 @@ impl ParticlePass {
             count: None,
         };
         let splat_entries = [
-            uniform(0, compute, false),
+            // A storage buffer, not a uniform: lavapipe compiles a shader anew for every value of a uniform that
+            // bounds a loop, and the slabs a pixel's loop crosses follow the view's (3 s a moved view).
+            storage_buffer_entry(0),
             storage_buffer_entry(1),
             storage_buffer_entry(2),
             storage_buffer_entry(3),
@@ -243,7 +245,7 @@ impl ParticlePass {
             device,
             "particles.draw",
             &[
-                uniform(0, wgpu::ShaderStages::FRAGMENT, false),
+                fragment_storage_entry(0),
                 sampled(13),
                 sampled(14),
                 wgpu::BindGroupLayoutEntry {
@@ -281,7 +283,12 @@ impl ParticlePass {
             splat_layout,
             draw,
             draw_layout,
-            params: uniform_buffer::<SmokeParams>(device, "energywave.particles.params"),
+            params: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("energywave.particles.params"),
+                size: size_of::<SmokeParams>() as u64,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
             chunks: chunk_buffer(device, chunk_stride, 1),
             chunk_stride,
             sampler: device.create_sampler(&wgpu::SamplerDescriptor {
