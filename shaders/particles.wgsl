@@ -1,4 +1,4 @@
-// Particle sets by image-aligned sheet-buffer splatting (METHOD.md section 9, after paper 002_): the smoke's own
+// Particle sets by image-aligned sheet-buffer splatting (docs/METHOD.md section 9, after paper 002_): the smoke's own
 // image, a ray through each pixel's center, slabs perpendicular to the view. A pixel adds, in each slab, the
 // optical depth of the particles' parts that lie in it (commutative: no order among them, so no popping) and their
 // color times the light each particle scatters back along the ray plus the light it gives off by itself, then

@@ -1,4 +1,4 @@
-//! Particle sets on the GPU (`shaders/particles.wgsl`, METHOD.md section 9): the smoke's image by sheet-buffer
+//! Particle sets on the GPU (`shaders/particles.wgsl`, docs/METHOD.md section 9): the smoke's image by sheet-buffer
 //! splatting, a compute pass over the pixels of the tiles that have particles, then laid over the frame's
 //! background and objects before the glow, filtered. The particles and their light come from the frame
 //! (`Frame::particles`, lit once per edit); the slices and each tile's particles from its camera

@@ -1,4 +1,4 @@
-//! The wave's light on each particle (METHOD.md section 10), worked out once per edit in f64 and independent of
+//! The wave's light on each particle (docs/METHOD.md section 9), worked out once per edit in f64 and independent of
 //! the camera: every source lights a particle from the point of it its term reads at the particle's center,
 //! with its color and its term's strength there (`objects::lighting::Lights`), dimmed by the optical depth of the
 //! particles between that point and the center (the particle's own half included: its mean shadow), and

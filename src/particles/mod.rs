@@ -1,11 +1,11 @@
-//! Particle sets: smoke, dust and sparks around the glow (METHOD.md section 10, after paper 002_, Beliaev and
+//! Particle sets: smoke, dust and sparks around the glow (docs/METHOD.md section 9, after paper 002_, Beliaev and
 //! Zaytseva, image-aligned sheet-buffer splatting). A particle spreads its material over a ball by the paper's
 //! reconstruction kernel; the medium's extinction is the sum of the particles' kernels times their densities.
 //! Here the particle model and the kernel in f64, with the kernel's integral along a line in closed form (what a
 //! splat's pre-integrated segment holds), and the wave's light in the medium; the renderer that slices them is
 //! `reference::particles`.
 //!
-//! Conventions (METHOD.md section 10, as we read the paper):
+//! Conventions (docs/METHOD.md section 9, as we read the paper):
 //! - `G(r) = 0.446 exp(-2 r^2)` for `r = |x - p| / R < 1`, zero beyond (the paper's eq. 6, truncated at the
 //!   particle's ball). 0.446 is the paper's constant, kept as its peak, not a normalisation.
 //! - The extinction coefficient, per scene unit, is `sigma(x) = sum_k rho_k G(|x - p_k| / R_k)`: a particle's
@@ -316,7 +316,7 @@ pub fn optical_depth_between(particles: &[Particle], a: DVec3, b: DVec3) -> f64 
         .sum()
 }
 
-/// The wave's light at `x` in the medium, in-scattered toward `eye` (METHOD.md section 10): every source a
+/// The wave's light at `x` in the medium, in-scattered toward `eye` (docs/METHOD.md section 9): every source a
 /// light at the point of it its term reads from `x`, of its color and of the strength its term of psi has at
 /// `x` (as it lights objects, `objects::lighting`), dimmed by the particles between that point and `x`, times
 /// the phase at the angle between its light and the view; plus the ambient share objects get too:

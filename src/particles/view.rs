@@ -1,4 +1,4 @@
-//! A frame's particles as both renderers read them (METHOD.md section 10): the smoke's own image of `size`
+//! A frame's particles as both renderers read them (docs/METHOD.md section 9): the smoke's own image of `size`
 //! pixels over the frame (rays from the eye through its pixel centers), the slices perpendicular to the view, and
 //! for the GPU each tile's particles in the order of the first slab they reach. The CPU twin
 //! (`reference::particles::smoke_pixel`) takes the same rays and slices.

@@ -1,4 +1,4 @@
-//! Particle sets rendered by image-aligned sheet-buffer splatting, along one ray, in f64 (METHOD.md section 10;
+//! Particle sets rendered by image-aligned sheet-buffer splatting, along one ray, in f64 (docs/METHOD.md section 9;
 //! paper 002_): slices parallel to the image plane cut every particle into segments; within a slice the
 //! segments are added (commutative: no order among them, so no color popping where particles interpenetrate),
 //! and the slices are composited in order. Each segment's optical depth is the kernel integrated exactly over
@@ -63,7 +63,7 @@ pub fn sheet_buffer(
     sheet_buffer_glowing(particles, ray, slicing, albedo, light, &Glow::NONE)
 }
 
-/// [`sheet_buffer`] with the wave's `glow` along the ray as an emitter inside the medium (METHOD.md section 10):
+/// [`sheet_buffer`] with the wave's `glow` along the ray as an emitter inside the medium (docs/METHOD.md section 9):
 /// the glow in front of the slabs comes through whole, the glow within a slab is dimmed by what lies in front of
 /// it and, spread evenly over the slab, by `(1 - exp(-tau)) / tau` of its own optical depth, the glow behind
 /// them by their transmittance. Without particles it is the glow's integral itself.
@@ -204,7 +204,7 @@ pub fn marched_glowing(
     }
 }
 
-/// One pixel of a frame's smoke, as the GPU pass renders it (`gpu::particle_pass`, METHOD.md section 10): the
+/// One pixel of a frame's smoke, as the GPU pass renders it (`gpu::particle_pass`, docs/METHOD.md section 9): the
 /// sheet buffer along `ray` over `slicing`, each segment scattering its particle's color times the light that
 /// particle scatters back along the ray (`lights[k]`, `particles::light`) and giving off its emission, the slabs whose front lies at or past
 /// `until` (the depth along the view axis of the first object on the ray; infinite for none) left out and the
