@@ -17,6 +17,7 @@ use super::context::{
 use super::formats::FRAME_FORMAT;
 use super::pass::{FramePass, Gpu, Recording, Stage};
 use crate::frame::{Frame, FrameSetup};
+use crate::objects::Lit;
 use crate::objects::lighting::AMBIENT;
 use crate::particles::light::LitParticles;
 use crate::particles::view::{RING, SmokeView, TILE};
@@ -108,6 +109,13 @@ pub struct ParticlePass {
     prepared: Option<Prepared>,
     /// Whether the frame being recorded has smoke.
     smoke: bool,
+    /// What the smoke image in the prepared textures was splatted for: the plan (cleared where it is made anew)
+    /// and the objects whose depth ended its rays (their light's `Arc`, new whenever they change). A frame for
+    /// the same splats nothing and lays the same image over the frame again (the viewer's still frames: the
+    /// field's bands refining, the UI).
+    splatted: Option<Option<Arc<Lit>>>,
+    /// Whether the frame being recorded splats.
+    pending: bool,
 }
 
 /// A smoke image read back: per pixel, rows from the top, the front and the back image's (radiance,
@@ -299,6 +307,8 @@ impl ParticlePass {
             }),
             prepared: None,
             smoke: false,
+            splatted: None,
+            pending: false,
         }
     }
 
@@ -315,6 +325,7 @@ impl ParticlePass {
         let (device, queue, setup) = (gpu.device, gpu.queue, data.setup);
         let Some(lit) = data.particles.clone() else {
             self.prepared = None;
+            self.splatted = None;
             return false;
         };
         let key = ViewKey::of(setup, frame, resolution);
@@ -428,6 +439,7 @@ impl ParticlePass {
                 entry(15, wgpu::BindingResource::Sampler(&self.sampler)),
             ],
         });
+        self.splatted = None;
         self.prepared = Some(Prepared {
             lit,
             key,
@@ -620,6 +632,19 @@ impl FramePass for ParticlePass {
         if stage == Stage::SmokeBehind {
             let (size, resolution) = (r.targets.size, r.brightness.resolution);
             self.smoke = self.prepare_smoke(r.gpu, r.frame, size, resolution);
+            let objects = r.frame.objects.as_ref().map(|o| o.lit.clone());
+            let same = |seen: &Option<Arc<Lit>>| match (seen, &objects) {
+                (None, None) => true,
+                (Some(a), Some(b)) => Arc::ptr_eq(a, b),
+                _ => false,
+            };
+            if !self.splatted.as_ref().is_some_and(same) {
+                self.splatted = None;
+            }
+            self.pending = self.smoke && self.splatted.is_none();
+            if self.pending {
+                self.splatted = Some(objects);
+            }
         }
         Ok(())
     }
@@ -631,7 +656,9 @@ impl FramePass for ParticlePass {
         let targets = r.targets;
         match stage {
             Stage::SmokeBehind => {
-                self.encode(r.gpu.device, encoder, &targets.depth_value_view);
+                if self.pending {
+                    self.encode(r.gpu.device, encoder, &targets.depth_value_view);
+                }
                 let mut pass = over(
                     encoder,
                     "energywave.frame.particles",
