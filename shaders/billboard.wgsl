@@ -39,6 +39,10 @@ override TINTED: bool = true;
 // in front of the billboard shows no glow, and the glow elsewhere is interpolated from the texels whose rays
 // end about where the pixel's does (sample_near_clip), so that an object's edge is as sharp as its pixels.
 override OBJECTS: bool = false;
+// The field's last layer holds B without the translucent objects' dimming (shaders/through.wgsl): the glow's edge
+// fades by it, not by the glow dimmed by them (which would cut the glow off wherever an object dims it below the
+// cutoff, in wedges along the object's chords).
+override THROUGH: bool = false;
 
 @group(0) @binding(0) var<uniform> params: BillboardParams;
 // The field pass's texture: layer 0 B, layers 1 to 3 the tint sum B_i (Ce_i - Ce), G = B Ce + tint.
@@ -115,9 +119,8 @@ fn view_depth(d: f32) -> f32 {
 // `clip`, the pixel's own), their weights renormalised; where none does, the texel whose clip is nearest. An
 // object's edge then cuts the glow as sharply as its pixels rather than in a staircase of texels: the glow on
 // either side is read from the texels on that side. Twin of reference::billboard::sample_near_clip. Written out
-// corner by corner (no array indexed in a loop, which lavapipe keeps in memory), with a fast path where all
-// four texels match.
-fn sample_near_clip(uv: vec2<f32>, clip: f32) -> vec4<f32> {
+// corner by corner (no array indexed in a loop, which lavapipe keeps in memory).
+fn sample_near_clip(uv: vec2<f32>, clip: f32) -> NearClip {
     let s = bilinear_at(uv);
     let w = i32(params.resolution);
     let c00 = vec2<i32>(s.i0.x, s.i0.y);
@@ -131,47 +134,51 @@ fn sample_near_clip(uv: vec2<f32>, clip: f32) -> vec4<f32> {
         clips[c11.y * w + c11.x],
     ) - vec4<f32>(clip));
     let near = gap <= vec4<f32>(CLIP_MATCH);
-    // Away from every edge, all four match: the plain bilinear sample.
-    if all(near) {
-        return mix(
-            mix(texel_at(c00), texel_at(c10), s.f.x),
-            mix(texel_at(c01), texel_at(c11), s.f.x),
-            s.f.y,
-        );
-    }
-    let weights = vec4<f32>((1.0 - s.f.x) * (1.0 - s.f.y), s.f.x * (1.0 - s.f.y), (1.0 - s.f.x) * s.f.y, s.f.x * s.f.y);
-    let kept = select(vec4<f32>(0.0), weights, near);
-    let total = kept.x + kept.y + kept.z + kept.w;
-    if total > 0.0 {
-        var sum = vec4<f32>(0.0);
-        if near.x {
-            sum += kept.x * texel_at(c00);
+    let bilinear = vec4<f32>((1.0 - s.f.x) * (1.0 - s.f.y), s.f.x * (1.0 - s.f.y), (1.0 - s.f.x) * s.f.y, s.f.x * s.f.y);
+    // Away from every edge, all four match: the plain bilinear weights.
+    var weights = bilinear;
+    if !all(near) {
+        let kept = select(vec4<f32>(0.0), bilinear, near);
+        let total = kept.x + kept.y + kept.z + kept.w;
+        if total > 0.0 {
+            weights = kept / total;
+        } else {
+            // None matches: the texel whose clip is nearest.
+            var best = gap.x;
+            weights = vec4<f32>(1.0, 0.0, 0.0, 0.0);
+            if gap.y < best {
+                best = gap.y;
+                weights = vec4<f32>(0.0, 1.0, 0.0, 0.0);
+            }
+            if gap.z < best {
+                best = gap.z;
+                weights = vec4<f32>(0.0, 0.0, 1.0, 0.0);
+            }
+            if gap.w < best {
+                weights = vec4<f32>(0.0, 0.0, 0.0, 1.0);
+            }
         }
-        if near.y {
-            sum += kept.y * texel_at(c10);
-        }
-        if near.z {
-            sum += kept.z * texel_at(c01);
-        }
-        if near.w {
-            sum += kept.w * texel_at(c11);
-        }
-        return sum / total;
     }
-    var at = c00;
-    var best = gap.x;
-    if gap.y < best {
-        best = gap.y;
-        at = c10;
+    var out = NearClip(
+        weights.x * texel_at(c00) + weights.y * texel_at(c10) + weights.z * texel_at(c01) + weights.w * texel_at(c11),
+        0.0,
+    );
+    if THROUGH {
+        out.undimmed = weights.x * undimmed_at(c00) + weights.y * undimmed_at(c10) + weights.z * undimmed_at(c01)
+            + weights.w * undimmed_at(c11);
     }
-    if gap.z < best {
-        best = gap.z;
-        at = c01;
-    }
-    if gap.w < best {
-        at = c11;
-    }
-    return texel_at(at);
+    return out;
+}
+
+// A pixel's field (B, tint) and, where the scene has translucent objects, its B undimmed by them.
+struct NearClip {
+    field: vec4<f32>,
+    undimmed: f32,
+}
+
+// The layer past B and the tint (THROUGH).
+fn undimmed_at(at: vec2<i32>) -> f32 {
+    return textureLoad(field, at, select(1, 4, TINTED), 0).r;
 }
 
 fn texel_at(at: vec2<i32>) -> vec4<f32> {
@@ -190,6 +197,8 @@ fn texel_at(at: vec2<i32>) -> vec4<f32> {
 @fragment
 fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     var field: vec4<f32>;
+    // What the glow's edge fades by: B, or B undimmed by the translucent objects.
+    var edge_b = 0.0;
     if OBJECTS {
         // An opaque object in front of the billboard hides the glow at this pixel; a translucent one (the depth's
         // lowest bit set, shaders/objects.wgsl) lets through the glow the field blended for it.
@@ -204,15 +213,18 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
                 let tau = view_depth(d) / view_depth(in.position.z);
                 clip = clamp((tau - 1.0) / (params.nu - 1.0), 0.0, 1.0);
             }
-            field = sample_near_clip(in.uv, clip);
+            let near = sample_near_clip(in.uv, clip);
+            field = near.field;
+            edge_b = select(field.x, near.undimmed, THROUGH);
         }
     } else {
         field = sample_field(in.uv);
+        edge_b = field.x;
     }
     // The glow's edge (scene::edge_fade), by |B| (a negative glow has its edge too): B and the tint alike, so
     // the colored sum G fades with B. A select, not a branch: the cutoff is a value per edit.
     let c = params.cutoff;
-    let fade = select(1.0, smoothstep(c, 2.0 * c, abs(field.x)), c > 0.0);
+    let fade = select(1.0, smoothstep(c, 2.0 * c, abs(edge_b)), c > 0.0);
     // And where the billboard's edge lies inside the frame, the glow fades out before it, not cut off square.
     field = field * (fade * edge_window(in.uv));
     let b = field.x;

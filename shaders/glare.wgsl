@@ -11,7 +11,7 @@ struct GlareParams {
     threshold: f32,
     strength: f32,
     radius: u32,   // the kernel's half-width: weights[0 ..= 2 radius]
-    pad0: u32,
+    undimmed: u32, // the layer of B undimmed by translucent objects (shaders/through.wgsl), glared as B; 0: none
 }
 
 @group(0) @binding(0) var<storage, read> glare: GlareParams;
@@ -22,14 +22,16 @@ struct GlareParams {
 
 // Layer `layer`'s excess at texel p: B's, or the tint's in the texel's color.
 fn excess(p: vec2<i32>, layer: u32) -> f32 {
-    let b = textureLoad(field, p, 0, 0).x;
+    // B undimmed has its own excess, as B has.
+    let own = layer == glare.undimmed && layer != 0u;
+    let b = textureLoad(field, p, select(0u, layer, own), 0).x;
     if b <= glare.threshold {
         return 0.0;
     }
     // Compressed, E / (1 + E) (the CPU twin says why).
     let e0 = b - glare.threshold;
     let e = e0 / (1.0 + e0);
-    if layer == 0u {
+    if layer == 0u || own {
         return e;
     }
     return e * textureLoad(field, p, layer, 0).x / b;

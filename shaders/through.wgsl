@@ -1,12 +1,13 @@
 // The glow seen through translucent objects: each texel's glow up to the first surface of any object (front),
 // up to the last translucent surface it crosses (exit) and up to the first opaque one (the field the frame
 // integrates, behind), blended by the shares of the glow inside and past the translucent objects that reach the
-// eye: front + inside (exit - front) + behind (behind - exit), every layer (B, then the tint). One layer a z.
+// eye: front + inside (exit - front) + behind (behind - exit), every layer (B, then the tint). One layer a z; the
+// last holds B up to the first opaque surface undimmed, what the glow's edge fades by (shaders/billboard.wgsl).
 // Rust side: src/gpu/through_pass.rs. CPU twin: reference::field_pass::see_through.
 
 struct ThroughParams {
     resolution: u32,
-    pad0: u32,
+    layers: u32,        // the field's; the output has one more: B behind them undimmed
     pad1: u32,
     pad2: u32,
 }
@@ -27,6 +28,10 @@ fn see_through(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let p = vec2<i32>(id.xy);
+    if id.z == through.layers {
+        textureStore(output, p, i32(id.z), vec4<f32>(textureLoad(behind, p, 0, 0).x, 0.0, 0.0, 1.0));
+        return;
+    }
     let layer = i32(id.z);
     let k = 3u * (id.y * w + id.x);
     let a = textureLoad(front, p, layer, 0).x;

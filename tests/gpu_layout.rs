@@ -212,7 +212,7 @@ fn rust_mirrors_match_the_wgsl_layouts() {
         &through,
         "ThroughParams",
         size_of::<energywave::gpu::through_pass::gpu_data::ThroughParams>(),
-        fields!(energywave::gpu::through_pass::gpu_data::ThroughParams: resolution, pad0, pad1, pad2),
+        fields!(energywave::gpu::through_pass::gpu_data::ThroughParams: resolution, layers, pad1, pad2),
     );
     let tau = parse_and_validate("tau_table", shaders::TAU_TABLE_PASS);
     check_struct(

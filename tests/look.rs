@@ -22,6 +22,7 @@ fn frames(scene: &Scene) -> (Vec<[f64; 4]>, Vec<[f64; 4]>) {
         resolution: glow.resolution,
         values: vec![0.0; n],
         tint: vec![[0.0; 3]; n],
+        undimmed: Vec::new(),
     };
     (
         reference::compose_frame_over(&FrameSetup::new(scene, bb), &glow, (w, h), Backdrop::Opaque),

@@ -505,14 +505,22 @@ fn gpu() -> std::sync::MutexGuard<'static, energywave::gpu::HeadlessRenderer> {
 }
 
 /// Both presets, drawn by the GPU and by the f64 twin: the translucent objects' scattered light, the glow seen
-/// through them, opaque, transparent and held out.
+/// through them, opaque, transparent and held out; and the first with a glare (which glares the glow undimmed by
+/// the objects as it glares the glow, for the glow's edge).
 #[test]
 fn the_presets_compose_alike_on_the_gpu_and_the_cpu() {
     use energywave::frame::FrameSetup;
     use energywave::reference::{self, Backdrop};
-    for name in ["translucent_cavity", "crystal_beam"] {
+    for (name, glare) in [
+        ("translucent_cavity", false),
+        ("crystal_beam", false),
+        ("translucent_cavity", true),
+    ] {
         let mut scene = scene(name);
         scene.billboard.resolution = 64;
+        if glare {
+            scene.glare = Some(energywave::scene::Glare::default());
+        }
         let (w, h) = (96, 72);
         let bb = scene.place_billboard(w as f64 / h as f64);
         let setup = FrameSetup::new(&scene, bb);
@@ -1084,4 +1092,75 @@ fn a_sphere_lit_from_outside_scatters_as_its_closed_form() {
             "sigma {sigma}: Z {z} against {quadrature}"
         );
     }
+}
+
+/// The glow's edge (`colors.cutoff`) is the glow's own: a bright glow dimmed by a translucent object below the
+/// cutoff still shows through it, dimmed, rather than being cut off there (the cube of translucent_cavity.toml
+/// was crossed by dark wedges: the fade took B after the object had dimmed it, so every pixel whose dimmed glow
+/// fell below the cutoff lost its glow altogether). A point glowing behind a translucent sphere, seen through it:
+/// the texture's undimmed B is the glow without the object, and the frame shows the dimmed glow whole.
+#[test]
+fn a_glow_dimmed_by_a_translucent_object_below_the_cutoff_still_shows_through_it() {
+    use energywave::frame::FrameSetup;
+    use energywave::reference::{self, Backdrop, BrightnessTexture};
+    let mut s = scene("translucent_cavity");
+    s.sources.tori.clear();
+    s.sources.points.push(energywave::field::Point {
+        position: DVec3::new(0.0, 0.0, -1.2),
+        coefficient: 1.0,
+        look: Default::default(),
+    });
+    s.objects = vec![Object {
+        shape: Shape::Sphere {
+            center: DVec3::ZERO,
+            radius: 0.6,
+        },
+        color: [0.2; 3],
+        translucent: material(3.0, 12),
+    }];
+    s.camera.eye = DVec3::new(0.0, 0.0, 4.0);
+    s.camera.target = DVec3::ZERO;
+    s.colors.cutoff = 0.2;
+    let setup = FrameSetup::placed(&s, 1.0);
+    let glow = reference::render_brightness(&setup);
+    let bare = Scene {
+        objects: Vec::new(),
+        ..s.clone()
+    };
+    let free = reference::render_brightness(&FrameSetup::placed(&bare, 1.0));
+    let w = glow.resolution as usize;
+    let center = (w / 2) * w + w / 2;
+    let (dimmed, undimmed) = (glow.values[center], glow.undimmed[center]);
+    // The undimmed glow is the glow without the object, texel by texel.
+    let off = (glow.undimmed.iter().zip(&free.values))
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    assert!(
+        off < 1e-9,
+        "undimmed against the glow without the object: {off}"
+    );
+    // The case the test is for: bright behind the sphere, dimmed below the cutoff by it.
+    assert!(
+        undimmed > 2.0 * s.colors.cutoff && dimmed < s.colors.cutoff && dimmed > 0.02,
+        "B {dimmed} dimmed, {undimmed} undimmed"
+    );
+    // The frame with the glow against the frame without it, at the center pixel: the glow's own share,
+    // b (Ce - Cb), with b the dimmed B whole (the fade by the undimmed B is 1 there).
+    let n = glow.values.len();
+    let none = BrightnessTexture {
+        resolution: glow.resolution,
+        values: vec![0.0; n],
+        tint: vec![[0.0; 3]; n],
+        undimmed: vec![0.0; n],
+    };
+    let size = (33, 33);
+    let with = reference::compose_frame_over(&setup, &glow, size, Backdrop::Opaque);
+    let without = reference::compose_frame_over(&setup, &none, size, Backdrop::Opaque);
+    let pixel = 16 * 33 + 16;
+    let ce = s.colors.energy_color();
+    let shown = (with[pixel][0] - without[pixel][0]) / (ce[0] - without[pixel][0]);
+    assert!(
+        (shown / dimmed - 1.0).abs() < 0.1,
+        "the glow shown through the sphere {shown}, its dimmed B {dimmed}"
+    );
 }

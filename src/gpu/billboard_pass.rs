@@ -125,7 +125,9 @@ pub fn billboard_params(
 /// The pipeline of the billboard pass for one target format.
 pub struct BillboardRenderer {
     /// B alone, and B with the tint (`field_pass::layers_of`); each without objects and with them.
-    pipelines: [[wgpu::RenderPipeline; 2]; 2],
+    /// By the tint (B alone, with the tint) and the objects (none, some, some translucent: the shader's
+    /// OBJECTS and THROUGH).
+    pipelines: [[wgpu::RenderPipeline; 3]; 2],
     layout: wgpu::BindGroupLayout,
     params: wgpu::Buffer,
     /// Each texel's share of its ray before the first surface (`objects::clip`), where the scene has objects.
@@ -175,7 +177,7 @@ impl BillboardRenderer {
         // tint's loads cost lavapipe 14 % of the billboard even where it is never taken (measured, a 4096^2
         // frame).
         let pipelines = [0.0, 1.0].map(|tinted| {
-            [0.0, 1.0].map(|objects| {
+            [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0)].map(|(objects, through)| {
                 render_pipeline(
                     device,
                     RenderPipelineSpec {
@@ -185,7 +187,11 @@ impl BillboardRenderer {
                         vertex_buffers: &[],
                         topology: wgpu::PrimitiveTopology::TriangleStrip,
                         fragment_entry: "fs_main",
-                        constants: &[("TINTED", tinted), ("OBJECTS", objects)],
+                        constants: &[
+                            ("TINTED", tinted),
+                            ("OBJECTS", objects),
+                            ("THROUGH", through),
+                        ],
                         targets: &[Some(wgpu::ColorTargetState {
                             format,
                             blend: None,
@@ -266,7 +272,11 @@ impl FramePass for BillboardRenderer {
                 },
             ],
         });
-        let pipeline = [(r.brightness.layers > 1) as usize, objects as usize];
+        let through = objects && r.brightness.undimmed;
+        let pipeline = [
+            (r.brightness.layers > 1) as usize,
+            objects as usize + through as usize,
+        ];
         self.pending = Some((bind_group, pipeline));
         Ok(())
     }

@@ -167,6 +167,7 @@ impl SceneRenderer {
             resolution: setup.resolution,
             layers: crate::gpu::field_pass::layers_of(setup.scene),
             fresh: true,
+            undimmed: false,
         })
     }
 

@@ -21,7 +21,7 @@ pub mod gpu_data {
         pub threshold: f32, // 0
         pub strength: f32,  // 4
         pub radius: u32,    // 8
-        pub pad0: u32,      // 12
+        pub undimmed: u32,  // 12: the layer of B undimmed by translucent objects, 0 for none
     }
     const _: () = assert!(size_of::<GlareParams>() == 16);
 }
@@ -108,7 +108,9 @@ impl GlarePass {
         field: &Brightness,
         glare: &Glare,
     ) -> wgpu::TextureView {
-        let (resolution, layers) = (field.resolution, field.layers);
+        // With B undimmed by translucent objects in a layer past the others (`through_pass`), glared as B is.
+        let undimmed = if field.undimmed { field.layers } else { 0 };
+        let (resolution, layers) = (field.resolution, field.layers + field.undimmed as u32);
         self.pending = None;
         let key = (field.view.clone(), *glare, resolution, layers);
         if !field.fresh && self.last.as_ref() == Some(&key) {
@@ -130,7 +132,7 @@ impl GlarePass {
             threshold: glare.threshold as f32,
             strength: glare.strength as f32,
             radius: (weights.len() / 2) as u32,
-            pad0: 0,
+            undimmed,
         };
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         queue.write_buffer(&self.weights, 0, bytemuck::cast_slice(&weights));

@@ -40,6 +40,9 @@ pub struct Brightness {
     pub layers: u32,
     /// Whether its texels changed since the last frame (the glare reuses its last where not).
     pub fresh: bool,
+    /// Whether a layer past `layers` holds B without the translucent objects' dimming (`through_pass`): what the
+    /// glow's edge fades by, so that a glow dimmed by an object is not also cut off at its edge.
+    pub undimmed: bool,
 }
 
 /// How the frame is drawn, besides its scene.

@@ -22,7 +22,7 @@ pub mod gpu_data {
     #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
     pub struct ThroughParams {
         pub resolution: u32, // 0
-        pub pad0: u32,       // 4
+        pub layers: u32,     // 4
         pub pad1: u32,       // 8
         pub pad2: u32,       // 12
     }
@@ -131,16 +131,17 @@ impl ThroughPass {
             }
             return Err(e);
         }
+        // One layer more than the field's: B behind them undimmed, which the glow's edge fades by.
         let stale = self.output.as_ref().is_none_or(|(t, _)| {
             t.width() != resolution
-                || t.depth_or_array_layers() != field_texture_layers(device, layers)
+                || t.depth_or_array_layers() != field_texture_layers(device, layers + 1)
         });
         if stale {
             self.output = Some(field_texture(
                 device,
                 "energywave.through.output",
                 resolution,
-                layers,
+                layers + 1,
             ));
         }
         self.shares.upload(device, queue, &shares);
@@ -149,6 +150,7 @@ impl ThroughPass {
             0,
             bytemuck::bytes_of(&ThroughParams {
                 resolution,
+                layers,
                 ..Default::default()
             }),
         );
@@ -171,7 +173,7 @@ impl ThroughPass {
             fields,
             group,
             groups: resolution.div_ceil(8),
-            layers,
+            layers: layers + 1,
         });
         Ok(Some(output.clone()))
     }
@@ -213,6 +215,7 @@ impl FramePass for ThroughPass {
     fn prepare(&mut self, _: Stage, r: &mut Recording<'_>) -> Result<(), GpuError> {
         if let Some(view) = self.prepare_blend(r.gpu, r.frame.setup, &r.brightness)? {
             r.brightness.view = view;
+            r.brightness.undimmed = true;
         }
         Ok(())
     }

@@ -112,7 +112,7 @@ pub fn sample_near_clip(
     clips: &[f64],
     (u, v): (f64, f64),
     clip: f64,
-) -> (f64, [f64; 3]) {
+) -> (f64, [f64; 3], f64) {
     let w = texture.resolution;
     let w_i = w as i64;
     let (x, y) = (u * w as f64 - 0.5, v * w as f64 - 0.5);
@@ -126,7 +126,12 @@ pub fn sample_near_clip(
         (at(x0, y0 + 1), (1.0 - fx) * fy),
         (at(x0 + 1, y0 + 1), fx * fy),
     ];
-    let (mut b, mut tint, mut total) = (0.0, [0.0; 3], 0.0);
+    // B undimmed by translucent objects, where the texture has it (what the glow's edge fades by), else B.
+    let undimmed = |k: usize| match texture.undimmed.is_empty() {
+        true => texture.values[k],
+        false => texture.undimmed[k],
+    };
+    let (mut b, mut tint, mut edge, mut total) = (0.0, [0.0; 3], 0.0, 0.0);
     let mut nearest = (corners[0].0, f64::INFINITY);
     for (k, weight) in corners {
         let gap = (clips[k] - clip).abs();
@@ -136,13 +141,15 @@ pub fn sample_near_clip(
         if gap <= CLIP_MATCH {
             b += weight * texture.values[k];
             (0..3).for_each(|c| tint[c] += weight * texture.tint[k][c]);
+            edge += weight * undimmed(k);
             total += weight;
         }
     }
     if total > 0.0 {
-        (b / total, tint.map(|x| x / total))
+        (b / total, tint.map(|x| x / total), edge / total)
     } else {
-        (texture.values[nearest.0], texture.tint[nearest.0])
+        let k = nearest.0;
+        (texture.values[k], texture.tint[k], undimmed(k))
     }
 }
 
@@ -267,19 +274,21 @@ fn compose(
                 if let Some((u, v)) = billboard.hit(scene.camera.eye, dir) {
                     // Only the opaque objects end the glow (`setup.clip_objects`); without them, none.
                     let ends = clips.as_ref().map(|_| ());
-                    let (b, tint) = match (&ends, hit) {
-                        (None, _) => (
-                            sample_bilinear(&texture.values, texture.resolution, u, v),
-                            std::array::from_fn(|c| {
+                    // B, the tint, and what the glow's edge fades by (B, or B undimmed by translucent objects).
+                    let (b, tint, edge) = match (&ends, hit) {
+                        (None, _) => {
+                            let b = sample_bilinear(&texture.values, texture.resolution, u, v);
+                            let tint = std::array::from_fn(|c| {
                                 sample_bilinear_by(texture.resolution, u, v, |k| texture.tint[k][c])
-                            }),
-                        ),
+                            });
+                            (b, tint, b)
+                        }
                         // An opaque object in front of the billboard hides the glow at this pixel (a
                         // translucent one lets through the glow blended for it).
                         (Some(_), Some((t, _, false)))
                             if t < billboard_distance(billboard, scene.camera.eye, dir) =>
                         {
-                            (0.0, [0.0; 3])
+                            (0.0, [0.0; 3], 0.0)
                         }
                         (Some(_), hit) => {
                             // The pixel's own clip: where along S -> E its ray meets the object behind the
@@ -291,7 +300,7 @@ fn compose(
                             sample_near_clip(texture, clips.as_deref().unwrap_or(&[]), (u, v), clip)
                         }
                     };
-                    let fade = crate::scene::edge_fade(b, scene.colors.cutoff)
+                    let fade = crate::scene::edge_fade(edge, scene.colors.cutoff)
                         * crate::geometry::edge_window(u, v, billboard.edge);
                     let (b, tint) = (b * fade, tint.map(|t| t * fade));
                     let g = glow(b, tint, scene.colors.energy_color());

@@ -128,6 +128,9 @@ pub struct BrightnessTexture {
     pub resolution: u32,
     pub values: Vec<f64>,
     pub tint: Vec<[f64; 3]>,
+    /// Where translucent objects dim the glow: B behind them undimmed (up to the first opaque surface), what the
+    /// glow's edge fades by (`compose_frame`); empty elsewhere.
+    pub undimmed: Vec<f64>,
 }
 
 /// Integrates B and the tint for every texel of the frame's billboard (METHOD.md section 3). Where the scene has
@@ -178,6 +181,7 @@ pub fn see_through(
                 })
             })
             .collect(),
+        undimmed: behind.values.clone(),
     }
 }
 
@@ -216,6 +220,7 @@ fn render_clipped(setup: &FrameSetup, clips: Option<&[f64]>) -> BrightnessTextur
         resolution: w,
         values: values.iter().map(|v| v[0]).collect(),
         tint: values.iter().map(|v| [v[1], v[2], v[3]]).collect(),
+        undimmed: Vec::new(),
     }
 }
 

@@ -54,6 +54,19 @@ pub fn apply(texture: &BrightnessTexture, glare: &Glare) -> BrightnessTexture {
         tint: (texture.tint.iter().zip(&blurred))
             .map(|(t, g)| [t[0] + s * g[1], t[1] + s * g[2], t[2] + s * g[3]])
             .collect(),
+        // B undimmed by translucent objects glares as B does, from its own excess.
+        undimmed: match texture.undimmed.is_empty() {
+            true => Vec::new(),
+            false => {
+                let own = BrightnessTexture {
+                    resolution: texture.resolution,
+                    values: texture.undimmed.clone(),
+                    tint: texture.tint.clone(),
+                    undimmed: Vec::new(),
+                };
+                apply(&own, glare).values
+            }
+        },
     }
 }
 
@@ -68,6 +81,7 @@ mod tests {
             resolution: w,
             values,
             tint,
+            undimmed: Vec::new(),
         }
     }
 

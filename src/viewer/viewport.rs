@@ -421,6 +421,7 @@ impl ViewportGpu {
             resolution,
             layers: layers_of(scene),
             fresh,
+            undimmed: false,
         })
     }
 
