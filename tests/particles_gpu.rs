@@ -510,20 +510,15 @@ file = "two.ply"
     assert!(smallest > 0.0 && largest < 3.0 * smallest, "{jumps:?}");
 }
 
-/// The GPU's smoke image of `scene` in a frame of `w` x `h` and the twin's over the same plan: the largest
-/// difference of the whole smoke (front over back) over every pixel, the least transmittance of the twin's, and the
-/// most particles a tile of the plan holds.
-fn whole_against_the_twin(scene: &Scene, w: u32, h: u32) -> (f64, f64, usize) {
-    let mut gpu = gpu();
-    gpu.render(scene, w, h, false).unwrap();
-    let (image, view) = gpu.smoke_image().unwrap().expect("the scene has particles");
-    drop(gpu);
-    let setup = FrameSetup::placed(scene, w as f64 / h as f64);
-    let lit = setup.particles().unwrap();
+/// The twin's smoke image over `view`'s plan, the whole smoke (front over back) a pixel, rows from the top.
+fn twin_image(
+    lit: &energywave::particles::light::LitParticles,
+    view: &energywave::particles::view::SmokeView,
+) -> Vec<[f64; 4]> {
     let [sw, sh] = view.size;
-    let (mut worst, mut least) = (0.0f64, 1.0f64);
-    for y in 0..sh {
-        for x in 0..sw {
+    (0..sw * sh)
+        .map(|i| {
+            let (x, y) = (i % sw, i / sw);
             let [f, b] = smoke_pixel(
                 &lit.particles,
                 &lit.lights,
@@ -532,14 +527,30 @@ fn whole_against_the_twin(scene: &Scene, w: u32, h: u32) -> (f64, f64, usize) {
                 f64::INFINITY,
                 view.split_at(x, y),
             );
-            let want = over(of(&f), of(&b));
-            let got = image[(y * sw + x) as usize].map(|c| c.map(f64::from));
-            let got = over(got[0], got[1]);
-            for k in 0..4 {
-                worst = worst.max((got[k] - want[k]).abs());
-            }
-            least = least.min(want[3]);
+            over(of(&f), of(&b))
+        })
+        .collect()
+}
+
+/// The GPU's smoke image of `scene` in a frame of `w` x `h` and the twin's over the same plan: the largest
+/// difference of the whole smoke (front over back) over every pixel, the least transmittance of the twin's, and the
+/// most particles a tile of the plan holds.
+fn whole_against_the_twin(scene: &Scene, w: u32, h: u32) -> (f64, f64, usize) {
+    let mut gpu = gpu();
+    gpu.render(scene, w, h, false).unwrap();
+    let (image, view) = gpu.smoke_image().unwrap().expect("the scene has particles");
+    drop(gpu);
+    let lit = FrameSetup::placed(scene, w as f64 / h as f64)
+        .particles()
+        .unwrap();
+    let (mut worst, mut least) = (0.0f64, 1.0f64);
+    for (want, got) in twin_image(&lit, &view).iter().zip(&image) {
+        let got = got.map(|c| c.map(f64::from));
+        let got = over(got[0], got[1]);
+        for k in 0..4 {
+            worst = worst.max((got[k] - want[k]).abs());
         }
+        least = least.min(want[3]);
     }
     let (_, work) = view.tile_lists(&lit.particles);
     let busiest = work.first().map_or(0, |w| (w[2] - w[1]) as usize);
@@ -613,21 +624,7 @@ fn particles_of_three_sizes_swept_through_equal_front_depths_do_not_pop_on_eithe
         let (image, view) = gpu.smoke_image().unwrap().unwrap();
         drop(gpu);
         let lit = FrameSetup::placed(&scene, 1.0).particles().unwrap();
-        let [sw, sh] = view.size;
-        let twin: Vec<[f64; 4]> = (0..sw * sh)
-            .map(|i| {
-                let (x, y) = (i % sw, i / sw);
-                let [f, b] = smoke_pixel(
-                    &lit.particles,
-                    &lit.lights,
-                    &view.ray(x, y),
-                    &view.slicing,
-                    f64::INFINITY,
-                    view.split_at(x, y),
-                );
-                over(of(&f), of(&b))
-            })
-            .collect();
+        let twin = twin_image(&lit, &view);
         let gpu_whole: Vec<[f64; 4]> = (image.iter())
             .map(|[f, b]| over(f.map(f64::from), b.map(f64::from)))
             .collect();

@@ -111,6 +111,8 @@ pub fn particle_rows(warmup: usize, frames: usize) -> Result<Vec<ParticleRow>, G
         let (mut with, mut without) = (Vec::new(), Vec::new());
         for k in 0..warmup + frames {
             let t = Instant::now();
+            // Splatted anew as a moved view's frame is (a frame of the same view lays the last image again).
+            gpu.splat_again();
             gpu.render(&scene, w, h, false)?;
             let a = t.elapsed().as_secs_f64() * 1e3;
             let t = Instant::now();

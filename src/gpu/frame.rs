@@ -125,6 +125,11 @@ impl SceneRenderer {
         &self.particles
     }
 
+    /// The particle pass, to have it splat the smoke again (`ParticlePass::splat_again`).
+    pub fn particles_mut(&mut self) -> &mut ParticlePass {
+        &mut self.particles
+    }
+
     /// Records the field of `setup` and the glow seen through its translucent objects over it; whether it has
     /// any (then `through_texture` holds the blend, else the field's texture holds the glow).
     pub fn see_through(

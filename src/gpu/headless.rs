@@ -36,6 +36,12 @@ impl HeadlessRenderer {
         (self.renderer.particles()).read_image(&self.ctx.device, &self.ctx.queue)
     }
 
+    /// Has the next frame splat the smoke again where it would lay the last image again (a benchmark's frames of
+    /// one view, each timed as a moved view's).
+    pub fn splat_again(&mut self) {
+        self.renderer.particles_mut().splat_again();
+    }
+
     /// A renderer on an existing context.
     pub fn from_context(ctx: GpuContext) -> Self {
         let renderer = SceneRenderer::new(&ctx.device, &ctx.queue);

@@ -578,6 +578,12 @@ impl ParticlePass {
         }
     }
 
+    /// Has the next frame splat the smoke again even where nothing it depends on changed (a benchmark's frame
+    /// of the same view, timed as a moved view's).
+    pub fn splat_again(&mut self) {
+        self.splatted = None;
+    }
+
     /// The last frame's smoke image read back (waits for the GPU): per pixel, rows from the top, the front and
     /// the back image's (radiance, transmittance); with the plan it was made by.
     pub fn read_image(
