@@ -522,7 +522,7 @@ mod tests {
                 particles: 500,
                 light: Timing::of(vec![3.0]),
                 plan: Timing::of(vec![2.0]),
-                segments: 4000,
+                entries: 4000,
                 frame: Timing::of(vec![60.0]),
                 bare: Timing::of(vec![50.0]),
                 paper_unlit_ms: Some(58.1),
