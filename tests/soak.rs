@@ -174,9 +174,10 @@ fn thousands_of_frames_of_random_edits() {
         "{FRAMES} frames; the second half's peak of resident memory is {} KiB over the second quarter's",
         growth / 1024
     );
-    // Measured over five runs: 20 to 87 MiB, in steps of 20 to 80 MiB as structures compile; the leak this
-    // guards against grew by gigabytes.
-    assert!(growth < 160 << 20, "memory grew by {} MiB", growth >> 20);
+    // Measured over five runs: 20 to 87 MiB, in steps of 20 to 80 MiB as structures compile, and once 174 MiB in
+    // a full suite's run (18 and 69 MiB run alone after it, the same build): the compiles' timing on two loaded
+    // cores moves the peaks. The leak this guards against grew by gigabytes.
+    assert!(growth < 320 << 20, "memory grew by {} MiB", growth >> 20);
     assert!(
         v.field_renders() > FRAMES as u64 / 3,
         "the field was integrated again as edits came"
