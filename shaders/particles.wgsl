@@ -10,8 +10,10 @@
 // (particles::view::GlowPlace): the slabs whose middle lies in front of it make the front image, laid over the
 // glow; the others the back image, under it. Only the tiles with particles are dispatched, the busiest first; a
 // dispatch takes at most `params.chunk` particles a tile (lavapipe stops a loop past 65535 iterations in all),
-// the tiles with more carry their pixels' state to the next in `state`. Every loop's trip count is the same for
-// the tile's pixels (llvmpipe's GL has read wrong after loops whose counts differ between lanes). The last
+// the tiles with more carry their pixels' state to the next in `state`. The loops over a tile's particles and
+// over the slabs they close run as often for every pixel of the tile; the slab loop runs over the pixel's own
+// chord, none where it misses (a count that differs between lanes, which llvmpipe's GL has read wrong after
+// elsewhere: the GPU-against-twin tests run on GL). The last
 // dispatch writes the front and back images as textures, which `fs_back` lays over the frame's background and
 // objects and `fs_front` over the glow, filtered, premultiplied. Rust side: src/gpu/particle_pass.rs (gpu_data;
 // keep in sync). CPU twin: src/reference/particles.rs (smoke_pixel).
