@@ -548,17 +548,7 @@ fn unshadowed_particle_light_bounds_the_shadowed_light() {
 /// over the chord the ray cuts from its ball (where the kernel is smooth), apart from `segment_integral`'s closed
 /// form.
 fn brute_depth(p: &Particle, ray: &Ray) -> f64 {
-    let closest = (p.position - ray.origin).dot(ray.direction);
-    let miss = (ray.at(closest) - p.position).length_squared();
-    let half = (p.radius * p.radius - miss).max(0.0).sqrt();
-    let n = 200_000;
-    let dt = 2.0 * half / n as f64;
-    (0..n)
-        .map(|k| {
-            let x = ray.at(closest - half + (k as f64 + 0.5) * dt);
-            p.density * 0.446 * (-2.0 * ((x - p.position) / p.radius).length_squared()).exp() * dt
-        })
-        .sum()
+    brute_depth_until(p, ray, f64::INFINITY, 200_000)
 }
 
 /// A particle that glows by itself (emission `L_e`, METHOD.md section 9): the medium emits `sigma L_e`, so along
@@ -687,8 +677,8 @@ fn smoke_in_front_absorbs_a_sparks_light_and_the_glowing_cloud_converges() {
 }
 
 /// A particle's optical depth along `ray` from its entry to `t_end` (where a surface stops the ray), by the
-/// midpoint rule over the kernel, apart from `segment_integral`.
-fn brute_depth_until(p: &Particle, ray: &Ray, t_end: f64) -> f64 {
+/// midpoint rule in `n` steps over the kernel, apart from `segment_integral`.
+fn brute_depth_until(p: &Particle, ray: &Ray, t_end: f64, n: u32) -> f64 {
     let closest = (p.position - ray.origin).dot(ray.direction);
     let miss = (ray.at(closest) - p.position).length_squared();
     let half = (p.radius * p.radius - miss).max(0.0).sqrt();
@@ -696,7 +686,6 @@ fn brute_depth_until(p: &Particle, ray: &Ray, t_end: f64) -> f64 {
     if t1 <= t0 {
         return 0.0;
     }
-    let n = 100_000;
     let dt = (t1 - t0) / n as f64;
     (0..n)
         .map(|k| {
@@ -741,7 +730,7 @@ fn smoke_in_front_of_a_surface_is_integrated_up_to_the_surface() {
                 f64::INFINITY,
             );
             assert_eq!(back.transmittance, 1.0);
-            let tau = brute_depth_until(&p, &ray, t);
+            let tau = brute_depth_until(&p, &ray, t, 100_000);
             worst = worst.max((front.transmittance - (-tau).exp()).abs());
             let want = emission[0] * (1.0 - (-tau).exp());
             worst = worst.max((front.radiance[0] - want).abs() / emission[0]);
