@@ -1,7 +1,10 @@
 //! The viewer's copy of its offscreen frame into the window's (egui's) render pass, converting to the
 //! window's format and softening the staircase of the objects' silhouettes (`shaders/blit.wgsl`).
 
-use super::context::{RenderPipelineSpec, depth_value_entry, pass_layouts, render_pipeline};
+use super::context::{
+    RenderPipelineSpec, depth_value_entry, filtered_texture_entry, filtering_sampler_entry,
+    pass_layouts, render_pipeline,
+};
 use super::shaders::BLIT_PASS as BLIT_SHADER;
 
 /// The copy's pipeline for one target format, and what a frame's bind group is made of.
@@ -23,22 +26,8 @@ impl BlitPass {
             device,
             "blit",
             &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 1,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-                    count: None,
-                },
+                filtered_texture_entry(0),
+                filtering_sampler_entry(1),
                 depth_value_entry(2),
             ],
         );

@@ -11,8 +11,8 @@ use wgpu::util::DeviceExt;
 
 use super::context::GpuError;
 use super::context::{
-    RenderPipelineSpec, compute_pass, fragment_storage_entry, over, pass_layouts, render_pipeline,
-    storage_buffer_entry,
+    RenderPipelineSpec, compute_pass, filtered_texture_entry, filtering_sampler_entry,
+    fragment_storage_entry, over, pass_layouts, render_pipeline, storage_buffer_entry,
 };
 use super::formats::FRAME_FORMAT;
 use super::pass::{FramePass, Gpu, Recording, Stage};
@@ -235,16 +235,6 @@ impl ParticlePass {
         ];
         let (splat, splat_layout) =
             compute_pass(device, "particles.splat", &source, "splat", &splat_entries);
-        let sampled = |binding| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::FRAGMENT,
-            ty: wgpu::BindingType::Texture {
-                sample_type: wgpu::TextureSampleType::Float { filterable: true },
-                view_dimension: wgpu::TextureViewDimension::D2,
-                multisampled: false,
-            },
-            count: None,
-        };
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("energywave.particles.draw.shader"),
             source: wgpu::ShaderSource::Wgsl(source.as_str().into()),
@@ -254,14 +244,9 @@ impl ParticlePass {
             "particles.draw",
             &[
                 fragment_storage_entry(0),
-                sampled(13),
-                sampled(14),
-                wgpu::BindGroupLayoutEntry {
-                    binding: 15,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-                    count: None,
-                },
+                filtered_texture_entry(13),
+                filtered_texture_entry(14),
+                filtering_sampler_entry(15),
             ],
         );
         let draw = ["fs_front", "fs_back"].map(|fragment_entry| {
