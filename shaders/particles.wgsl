@@ -6,9 +6,11 @@
 // has its particles in the order of the first slab their ball reaches, and a pixel passes over each once, adding
 // its exact footprint (an erf a slab boundary) to the few slabs its chord crosses, kept open in a ring of RING;
 // a slab is closed (composited) once the next particle starts past it. A pixel stops adding once the light that
-// still comes through it is below CUTOFF. The glow is taken to lie where its weight along the ray does
-// (particles::view::GlowPlace): the slabs whose middle lies in front of it make the front image, laid over the
-// glow; the others the back image, under it. Only the tiles with particles are dispatched, the busiest first; a
+// still comes through it is below CUTOFF. The glow is spread through the slabs as its weight along the ray lies
+// (particles::view::GlowPlace, 13 depths a ray): a slab's light is covered by the share of the glow in front of
+// it, and the glow within and behind a slab is dimmed by it (reference::particles::SmokeLayers); the pixel is
+// written as two images, the front one laid over the glow and the back one under it, which compose to
+// `S - B occluded + B seen Ce + (1 - B) T X`. Only the tiles with particles are dispatched, the busiest first; a
 // dispatch takes at most `params.chunk` particles a tile (lavapipe stops a loop past 65535 iterations in all),
 // the tiles with more carry their pixels' state to the next in `state`. The loops over a tile's particles and
 // over the slabs they close run as often for every pixel of the tile; the slab loop runs over the pixel's own
@@ -56,6 +58,15 @@ struct SmokeParticle {
     off_b: vec4<f32>,
 }
 
+// Where the glow lies along a pixel's ray: 13 depths along the view axis (particles::view::GlowDepths), the last
+// repeated to fill four vec4s; the share of the glow in front of a depth is piecewise linear through them.
+struct GlowDepths {
+    a: vec4<f32>,
+    b: vec4<f32>,
+    c: vec4<f32>,
+    d: vec4<f32>,
+}
+
 // Which dispatch of the frame this is.
 struct SmokeChunk {
     index: u32,
@@ -74,8 +85,15 @@ const CUTOFF: f32 = 1e-4;
 // particles::KERNEL_PEAK and KERNEL_FALLOFF.
 const KERNEL_PEAK: f32 = 0.446;
 const KERNEL_FALLOFF: f32 = 2.0;
-// A pixel's state between dispatches, in vec4s: the front image, the image so far, the marks, the ring.
+// A pixel's state between dispatches, in vec4s: the smoke so far, what the glow covers of it and what it loses of
+// the glow, the marks, the ring.
 const STATE: u32 = 35u;
+// particles::view::GLOW_LEVELS, as the shares of the glow between each two of a ray's depths.
+const GLOW_SHARE_A: vec4<f32> = vec4<f32>(1.0 / 64.0, 3.0 / 64.0, 1.0 / 16.0, 0.125);
+const GLOW_SHARE_B: vec4<f32> = vec4<f32>(0.125, 0.125, 0.125, 0.125);
+const GLOW_SHARE_C: vec4<f32> = vec4<f32>(0.125, 1.0 / 16.0, 3.0 / 64.0, 1.0 / 64.0);
+// reference::particles::SEEN_FLOOR.
+const SEEN_FLOOR: f32 = 1e-4;
 
 // In a storage buffer: lavapipe compiles a shader anew for every value of a uniform that bounds a loop (the slabs
 // a pixel's chord crosses follow the view's slices).
@@ -88,9 +106,9 @@ const STATE: u32 = 35u;
 @group(0) @binding(2) var<storage, read> entries: array<vec2<u32>>;
 // The tiles with particles, the busiest first (the workgroups of a dispatch): (tile, first entry, end entry).
 @group(0) @binding(3) var<storage, read> work: array<vec4<u32>>;
-// The glow's depth along the view axis at the glow cells' corners (one more than cells a row): the slabs in front of
-// it go over the glow (particles::view::SmokeView::split_at).
-@group(0) @binding(8) var<storage, read> glow: array<f32>;
+// Where the glow lies along the rays of the glow cells' corners (one more than cells a row), four vec4s a corner
+// (particles::view::SmokeView::glow_at).
+@group(0) @binding(8) var<storage, read> glow: array<vec4<f32>>;
 // STATE a pixel of the tiles that take more than one dispatch, by their place in `work`.
 @group(0) @binding(4) var<storage, read_write> state: array<vec4<f32>>;
 // The objects' depth in the frame's projection (the bits gpu::formats::DEPTH_VALUE_FORMAT holds).
@@ -127,35 +145,110 @@ fn light_toward(p: SmokeParticle, v: vec3<f32>) -> vec3<f32> {
     return max(vec3<f32>(p.diag_r.w, p.diag_g.w, p.diag_b.w) + q, vec3<f32>(0.0));
 }
 
-// A pixel's composite so far: the front image once the glow's depth is passed, the image so far, whether the glow's
-// depth is passed, whether the pixel is done (its light spent or its ray ended).
+// The share of the glow on a ray in front of depth `d` (particles::view::glow_before).
+fn glow_before(g: GlowDepths, d: f32) -> f32 {
+    let tiny = vec4<f32>(1e-30);
+    let a = clamp((d - g.a) / max(vec4<f32>(g.a.yzw, g.b.x) - g.a, tiny), vec4<f32>(0.0), vec4<f32>(1.0));
+    let b = clamp((d - g.b) / max(vec4<f32>(g.b.yzw, g.c.x) - g.b, tiny), vec4<f32>(0.0), vec4<f32>(1.0));
+    let c = clamp((d - g.c) / max(vec4<f32>(g.c.yzw, g.d.x) - g.c, tiny), vec4<f32>(0.0), vec4<f32>(1.0));
+    return dot(GLOW_SHARE_A, a) + dot(GLOW_SHARE_B, b) + dot(GLOW_SHARE_C, c);
+}
+
+// reference::particles::held_within: the share of a light spread evenly through a slab of optical depth tau (and
+// opacity 1 - exp(-tau)) that the slab holds back.
+fn held_within(tau: f32, opacity: f32) -> f32 {
+    if tau < 1e-2 {
+        return tau * (0.5 - tau * (1.0 / 6.0 - tau / 24.0));
+    }
+    return 1.0 - opacity / tau;
+}
+
+// A pixel's smoke so far (reference::particles::SmokeLayers): its light and transmittance, the light the glow
+// covers and the share of the glow lost, whether the pixel is done (its light spent or its ray ended), and the
+// share of the glow in front of slab `next`'s front, kept from the slab before it.
 struct Composite {
-    front: vec4<f32>,
     acc: vec4<f32>,
-    passed: bool,
+    occ: vec4<f32>,
     done: bool,
+    next: u32,
+    next_share: f32,
+}
+
+// Where the glow lies along the pixel's ray, up to its end (`until`), as `share_before` reads it: each stretch
+// between two of its depths as its start and the reciprocal of its length (worked out once a pixel: the share is
+// read at every slab that holds smoke), and the reciprocal of the share in front of `until`.
+struct GlowRay {
+    start_a: vec4<f32>,
+    start_b: vec4<f32>,
+    start_c: vec4<f32>,
+    per_a: vec4<f32>,
+    per_b: vec4<f32>,
+    per_c: vec4<f32>,
+    last: f32,
+    until: f32,
+    per_whole: f32,
+}
+
+fn glow_ray_of(g: GlowDepths, until: f32) -> GlowRay {
+    let tiny = vec4<f32>(1e-30);
+    var r: GlowRay;
+    r.start_a = g.a;
+    r.start_b = g.b;
+    r.start_c = g.c;
+    r.per_a = 1.0 / max(vec4<f32>(g.a.yzw, g.b.x) - g.a, tiny);
+    r.per_b = 1.0 / max(vec4<f32>(g.b.yzw, g.c.x) - g.b, tiny);
+    r.per_c = 1.0 / max(vec4<f32>(g.c.yzw, g.d.x) - g.c, tiny);
+    r.last = g.d.x;
+    r.until = until;
+    // The field pass integrates the glow up to the surface: the shares are of that part (all of it in front
+    // where none lies before the surface).
+    var whole = 1.0;
+    if until < 3.0e38 {
+        whole = glow_before(g, until);
+    }
+    r.per_whole = select(0.0, 1.0 / whole, whole > 0.0);
+    return r;
+}
+
+// The share of the glow on the pixel's ray in front of depth `d`, of the glow up to its end.
+fn share_before(g: GlowRay, d: f32) -> f32 {
+    let at = min(d, g.until);
+    // None of it in front of the first depth; all of it past the last (and where none lies before the end).
+    if at <= g.start_a.x {
+        return select(0.0, 1.0, g.per_whole == 0.0);
+    }
+    if at >= g.last || g.per_whole == 0.0 {
+        return 1.0;
+    }
+    let a = clamp((at - g.start_a) * g.per_a, vec4<f32>(0.0), vec4<f32>(1.0));
+    let b = clamp((at - g.start_b) * g.per_b, vec4<f32>(0.0), vec4<f32>(1.0));
+    let c = clamp((at - g.start_c) * g.per_c, vec4<f32>(0.0), vec4<f32>(1.0));
+    return min((dot(GLOW_SHARE_A, a) + dot(GLOW_SHARE_B, b) + dot(GLOW_SHARE_C, c)) * g.per_whole, 1.0);
 }
 
 // Slab j's sums (sum of tau color light, sum of tau) composited behind what `c` holds: its light over its opacity
-// 1 - exp(-tau). The first slab whose middle lies past the glow begins the back image, what came before it kept as
-// the front image. Once the light through the pixel is below CUTOFF it is done.
-fn close_slab(c: ptr<function, Composite>, open: vec4<f32>, j: u32, split: f32) {
+// 1 - exp(-tau), covered by the share of the glow in front of it; the glow behind it dimmed by its opacity, the
+// glow within it by what it holds back. Once the light through the pixel is below CUTOFF it is done.
+fn close_slab(c: ptr<function, Composite>, open: vec4<f32>, j: u32, glow_ray: GlowRay) {
     if open.w <= 0.0 || (*c).done {
         return;
     }
-    if !(*c).passed && params.near + (f32(j) + 0.5) * params.width >= split {
-        (*c).front = (*c).acc;
-        (*c).acc = vec4<f32>(0.0, 0.0, 0.0, 1.0);
-        (*c).passed = true;
+    let front = params.near + f32(j) * params.width;
+    var f0 = (*c).next_share;
+    if (*c).next != j {
+        f0 = share_before(glow_ray, front);
     }
+    let f1 = share_before(glow_ray, front + params.width);
+    (*c).next = j + 1u;
+    (*c).next_share = f1;
     let through = exp(-open.w);
+    let opacity = 1.0 - through;
     let acc = (*c).acc;
-    (*c).acc = vec4<f32>(acc.xyz + acc.w * open.xyz / open.w * (1.0 - through), acc.w * through);
-    var left = (*c).acc.w;
-    if (*c).passed {
-        left *= (*c).front.w;
-    }
-    (*c).done = left < CUTOFF;
+    let light = acc.w * open.xyz / open.w * opacity;
+    let lost = acc.w * ((1.0 - f1) * opacity + (f1 - f0) * held_within(open.w, opacity));
+    (*c).acc = vec4<f32>(acc.xyz + light, acc.w * through);
+    (*c).occ += vec4<f32>(light * (0.5 * (f0 + f1)), lost);
+    (*c).done = (*c).acc.w < CUTOFF;
 }
 
 @compute @workgroup_size(4, 4)
@@ -186,31 +279,36 @@ fn splat(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) 
             until = view_depth(d);
         }
     }
-    // Where the glow lies along the ray, bilinear between the glow cells' corners.
+    // Where the glow lies along the ray, each depth bilinear between the glow cells' corners'.
     let g = (vec2<f32>(xy) + 0.5) / f32(GLOW_CELL);
     let cells = (params.size + GLOW_CELL - 1u) / GLOW_CELL;
     let c = min(vec2<u32>(g), cells - 1u);
     let f = g - vec2<f32>(c);
     let row = cells.x + 1u;
-    let at = c.y * row + c.x;
-    let top = glow[at] + (glow[at + 1u] - glow[at]) * f.x;
-    let bottom = glow[at + row] + (glow[at + row + 1u] - glow[at + row]) * f.x;
-    let split = top + (bottom - top) * f.y;
+    let at = 4u * (c.y * row + c.x);
+    let below = 4u * row;
+    var depths: GlowDepths;
+    depths.a = mix(mix(glow[at], glow[at + 4u], f.x), mix(glow[at + below], glow[at + below + 4u], f.x), f.y);
+    depths.b = mix(mix(glow[at + 1u], glow[at + 5u], f.x), mix(glow[at + below + 1u], glow[at + below + 5u], f.x), f.y);
+    depths.c = mix(mix(glow[at + 2u], glow[at + 6u], f.x), mix(glow[at + below + 2u], glow[at + below + 6u], f.x), f.y);
+    depths.d = mix(mix(glow[at + 3u], glow[at + 7u], f.x), mix(glow[at + below + 3u], glow[at + below + 7u], f.x), f.y);
+    let glow_ray = glow_ray_of(depths, until);
     let none = vec4<f32>(0.0, 0.0, 0.0, 1.0);
-    var comp = Composite(none, none, false, false);
+    var comp = Composite(none, vec4<f32>(0.0), false, 0xffffffffu, 0.0);
     // The open slabs lo..end (the same for the tile's pixels), slab j's sums at ring[j % RING].
     var ring: array<vec4<f32>, RING>;
     var lo = 0u;
     var end = 0u;
     let slot = (group.x * TILE * TILE + local.y * TILE + local.x) * STATE;
     if chunk.index > 0u {
-        comp.front = state[slot];
-        comp.acc = state[slot + 1u];
+        comp.acc = state[slot];
+        comp.occ = state[slot + 1u];
         let marks = bitcast<vec4<u32>>(state[slot + 2u]);
         lo = marks.x;
         end = marks.y;
-        comp.passed = (marks.z & 1u) != 0u;
-        comp.done = (marks.z & 2u) != 0u;
+        comp.done = (marks.z & 1u) != 0u;
+        comp.next = marks.z >> 1u;
+        comp.next_share = bitcast<f32>(marks.w);
         for (var k = 0u; k < RING; k++) {
             ring[k] = state[slot + 3u + k];
         }
@@ -229,7 +327,7 @@ fn splat(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) 
         // No particle after this one reaches a slab before its first: those are final.
         let closing = min(end, head);
         for (; lo < closing; lo++) {
-            close_slab(&comp, ring[lo % RING], lo, split);
+            close_slab(&comp, ring[lo % RING], lo, glow_ray);
             ring[lo % RING] = vec4<f32>(0.0);
         }
         lo = max(lo, head);
@@ -276,22 +374,24 @@ fn splat(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) 
     // with more left carry their state to the next (they are the first ones of it: the busiest first).
     if job.z - job.y <= (chunk.index + 1u) * params.chunk {
         for (; lo < end; lo++) {
-            close_slab(&comp, ring[lo % RING], lo, split);
+            close_slab(&comp, ring[lo % RING], lo, glow_ray);
         }
-        if !comp.passed {
-            comp.front = comp.acc;
-            comp.acc = none;
-        }
+        // The two images (reference::particles::SmokeLayers::images): front over the glow, back under it.
+        let seen = max(max(1.0 - comp.occ.w, comp.acc.w), SEEN_FLOOR);
+        let front = vec4<f32>(comp.acc.xyz - comp.occ.xyz, seen);
+        let back = vec4<f32>(comp.occ.xyz / seen, comp.acc.w / seen);
         let pixel = xy.y * params.size.x + xy.x;
-        image[2u * pixel] = comp.front;
-        image[2u * pixel + 1u] = comp.acc;
-        // Their light and coverage, as the draw passes blend them.
-        textureStore(front_out, vec2<i32>(xy), vec4<f32>(comp.front.xyz, 1.0 - comp.front.w));
-        textureStore(back_out, vec2<i32>(xy), vec4<f32>(comp.acc.xyz, 1.0 - comp.acc.w));
+        image[2u * pixel] = front;
+        image[2u * pixel + 1u] = back;
+        // What the draw passes filter (the sums, linear in each pixel's smoke; the images are made after
+        // filtering, as a share of the glow divides the back one): the smoke's light less what the glow covers,
+        // and the share of the glow lost; what the glow covers, and the smoke's coverage.
+        textureStore(front_out, vec2<i32>(xy), vec4<f32>(comp.acc.xyz - comp.occ.xyz, 1.0 - seen));
+        textureStore(back_out, vec2<i32>(xy), vec4<f32>(comp.occ.xyz, 1.0 - comp.acc.w));
     } else {
-        state[slot] = comp.front;
-        state[slot + 1u] = comp.acc;
-        let marks = vec4<u32>(lo, end, u32(comp.passed) | (u32(comp.done) << 1u), 0u);
+        state[slot] = comp.acc;
+        state[slot + 1u] = comp.occ;
+        let marks = vec4<u32>(lo, end, u32(comp.done) | (comp.next << 1u), bitcast<u32>(comp.next_share));
         state[slot + 2u] = bitcast<vec4<f32>>(marks);
         for (var k = 0u; k < RING; k++) {
             state[slot + 3u + k] = ring[k];
@@ -312,19 +412,29 @@ fn vs_main(@builtin(vertex_index) index: u32) -> VertexOut {
     return out;
 }
 
-// The images as the passes read them (`front_out` and `back_out` written: light and coverage), filtered between the
-// smoke image's pixel centers, clamped at its edges.
+// The sums as the passes read them (`front_out` and `back_out` written), filtered between the smoke image's pixel
+// centers, clamped at its edges.
 @group(0) @binding(13) var front_in: texture_2d<f32>;
 @group(0) @binding(14) var back_in: texture_2d<f32>;
 @group(0) @binding(15) var smoke_sampler: sampler;
 
-// An image's light and coverage 1 - T at a frame pixel, premultiplied, for the blend over what lies behind.
+// The two images at a frame pixel, light and coverage 1 - T, premultiplied, for the blend over what lies behind
+// (reference::particles::SmokeLayers::images, of the filtered sums).
+fn images_at(position: vec2<f32>) -> array<vec4<f32>, 2> {
+    let uv = position / vec2<f32>(params.frame);
+    let f = textureSampleLevel(front_in, smoke_sampler, uv, 0.0);
+    let b = textureSampleLevel(back_in, smoke_sampler, uv, 0.0);
+    let through = 1.0 - b.w;
+    let seen = max(max(1.0 - f.w, through), SEEN_FLOOR);
+    return array<vec4<f32>, 2>(vec4<f32>(f.xyz, 1.0 - seen), vec4<f32>(b.xyz / seen, 1.0 - through / seen));
+}
+
 @fragment
 fn fs_front(in: VertexOut) -> @location(0) vec4<f32> {
-    return textureSampleLevel(front_in, smoke_sampler, in.position.xy / vec2<f32>(params.frame), 0.0);
+    return images_at(in.position.xy)[0];
 }
 
 @fragment
 fn fs_back(in: VertexOut) -> @location(0) vec4<f32> {
-    return textureSampleLevel(back_in, smoke_sampler, in.position.xy / vec2<f32>(params.frame), 0.0);
+    return images_at(in.position.xy)[1];
 }

@@ -86,8 +86,8 @@ use gpu_data::{SmokeChunk, SmokeParams, SmokeParticle};
 pub const CHUNK: u32 = 960;
 const _: () = assert!(CHUNK * (2 * RING + 1) + RING < 65535);
 
-/// A pixel's state between dispatches, in vec4s (`STATE` in the shader): the front image, the image so far, the
-/// marks, the open slabs.
+/// A pixel's state between dispatches, in vec4s (`STATE` in the shader): the smoke so far, what the glow covers of
+/// it and loses of the glow (`reference::particles::SmokeLayers`), the marks, the open slabs.
 const STATE: u64 = 3 + RING as u64;
 
 /// The format of the images the draw passes filter: their light and coverage.
@@ -549,7 +549,7 @@ impl ParticlePass {
         }
     }
 
-    /// Lays the smoke's front image (in front of the billboard's plane) or its back image over what `pass` draws
+    /// Lays the smoke's front image (over the glow) or its back image (under it) over what `pass` draws
     /// into (premultiplied: its light, plus what lies behind times its transmittance).
     fn draw(&self, pass: &mut wgpu::RenderPass<'_>, front: bool) {
         if let Some(p) = &self.prepared
@@ -613,8 +613,8 @@ impl ParticlePass {
 }
 
 impl FramePass for ParticlePass {
-    /// The smoke behind the billboard's plane over the background and the objects, its rays ended by the
-    /// objects; the smoke in front of the plane over the glow.
+    /// The smoke's back image (what the glow covers of it) over the background and the objects, its rays ended
+    /// by the objects; its front image over the glow.
     fn stages(&self) -> &'static [Stage] {
         &[Stage::SmokeBehind, Stage::SmokeInFront]
     }

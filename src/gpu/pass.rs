@@ -21,11 +21,11 @@ pub enum Stage {
     Behind,
     /// The objects with their depth, which the smoke and the billboard read (`object_pass`).
     Objects,
-    /// The smoke behind the billboard's plane, over the background and the objects (`particle_pass`).
+    /// The smoke's back image (what the glow covers), over the background and the objects (`particle_pass`).
     SmokeBehind,
     /// The billboard blended over a copy of what lies behind it (`billboard_pass`).
     Billboard,
-    /// The smoke in front of the billboard's plane, over the glow (`particle_pass`).
+    /// The smoke's front image, over the glow (`particle_pass`).
     SmokeInFront,
 }
 

@@ -16,7 +16,7 @@ use crate::integrate::zeta;
 /// pixels' radius at 256 x 256 on lavapipe took 1.9 s in tiles of 16 or 8, 1.2 s in tiles of 4).
 pub const TILE: u32 = 4;
 
-/// The cells the glow's depth is placed on, in pixels: psi is sampled along the rays of their corners only (it
+/// The cells the glow is placed on, in pixels: psi is sampled along the rays of their corners only (it
 /// varies smoothly across the image; at the tiles' corners it took 43 ms a view on the default beam at 256 x 256,
 /// at these 12 ms).
 pub const GLOW_CELL: u32 = 16;
@@ -37,14 +37,59 @@ pub const RING: u32 = 32;
 /// The samples of psi along a ray that place its glow (`GlowPlace`).
 pub const GLOW_SAMPLES: u32 = 48;
 
+/// How much finer `GlowPlace` samples the steps where the glow bends sharply.
+pub const GLOW_REFINE: u32 = 8;
+
+/// The shares of the glow along a ray whose depths a ray keeps (`GlowDepths`): finer toward both ends, where a
+/// source's long falloff leaves a thin share far from its peak that an even spread would carry too far.
+pub const GLOW_LEVELS: [f64; GLOW_DEPTHS] = [
+    0.0,
+    1.0 / 64.0,
+    1.0 / 16.0,
+    0.125,
+    0.25,
+    0.375,
+    0.5,
+    0.625,
+    0.75,
+    0.875,
+    15.0 / 16.0,
+    63.0 / 64.0,
+    1.0,
+];
+
+/// How many depths place the glow along a ray.
+pub const GLOW_DEPTHS: usize = 13;
+
+/// The floats a glow cell's corner takes in `SmokeView::glow`: its `GLOW_DEPTHS` depths, the last repeated up to
+/// four vec4s (what the GPU pass loads).
+pub const GLOW_STRIDE: usize = 16;
+
+/// Where the glow lies along a ray: the depths along the view axis in front of which `GLOW_LEVELS` of it lie,
+/// non-decreasing; between two of them the glow is spread evenly (`glow_before`).
+pub type GlowDepths = [f64; GLOW_DEPTHS];
+
+/// The share of the glow on a ray that lies in front of depth `d` along the view axis: piecewise linear through
+/// `(depths[i], GLOW_LEVELS[i])`, 0 in front of the first depth and 1 past the last (a step where two depths
+/// are equal).
+pub fn glow_before(depths: &GlowDepths, d: f64) -> f64 {
+    (0..GLOW_DEPTHS - 1)
+        .map(|i| {
+            let (lo, hi) = (depths[i], depths[i + 1]);
+            let part = ((d - lo) / (hi - lo).max(1e-30)).clamp(0.0, 1.0);
+            (GLOW_LEVELS[i + 1] - GLOW_LEVELS[i]) * part
+        })
+        .sum()
+}
+
 /// The smoke image of a frame: its size, its rays and its slices, and where the glow lies along its rays.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SmokeView {
     pub camera: Camera,
     pub size: [u32; 2],
     pub slicing: Slicing,
-    /// The glow's depth along the view axis at the glow cells' corners (`glow_cells + 1` a row, rows from the top), f32 as
-    /// the GPU reads it: the slabs in front of it go over the glow, the others under it (`split_at`).
+    /// Where the glow lies along the rays of the glow cells' corners (`glow_cells + 1` a row, rows from the top):
+    /// `GLOW_STRIDE` floats a corner, its `GlowDepths` in f32 as the GPU reads them (`glow_at`).
     pub glow: Vec<f32>,
 }
 
@@ -61,32 +106,90 @@ pub struct GlowPlace<'a> {
 }
 
 impl GlowPlace<'_> {
-    /// The depth along the view `axis` of the glow on `ray`: the mean of the depth weighed by what the field
-    /// pass integrates there, `|psi zeta|`, over `GLOW_SAMPLES` midpoints from S to E (the centre of a source's
-    /// falloff along a ray passing it is where the ray passes nearest, whatever the samples miss of its peak);
-    /// the billboard's depth where psi is 0 all along.
-    pub fn depth(&self, ray: &Ray, axis: DVec3) -> f64 {
+    /// Where the glow lies on `ray`, as depths along the view `axis`: what the field pass integrates there,
+    /// `|psi zeta|`, sampled at `GLOW_SAMPLES` midpoints from S to E, each sample's weight spread evenly over its
+    /// step, and the depths where that weight's running share reaches each of `GLOW_LEVELS`. All at the
+    /// billboard's depth where psi is 0 all along (the glow as one layer there).
+    pub fn depths(&self, ray: &Ray, axis: DVec3) -> GlowDepths {
         let b = self.billboard;
         let along = ray.direction.dot(axis);
         let t_s = (b.center - ray.origin).dot(b.normal) / ray.direction.dot(b.normal);
         if !(t_s > 0.0 && t_s.is_finite()) {
-            return (b.center - ray.origin).dot(axis);
+            return [(b.center - ray.origin).dot(axis); GLOW_DEPTHS];
         }
         let t_e = self.nu * t_s;
         let field = self.sources.field();
-        let (mut weight, mut moment) = (0.0, 0.0);
-        for k in 0..GLOW_SAMPLES {
-            let s = (k as f64 + 0.5) / GLOW_SAMPLES as f64;
+        let weight = |s: f64| {
             let t = t_s + s * (t_e - t_s);
-            let w = (field.psi(ray.at(t), self.epsilon) * zeta(s, self.alpha, self.beta)).abs();
-            weight += w;
-            moment += w * t;
+            (field.psi(ray.at(t), self.epsilon) * zeta(s, self.alpha, self.beta)).abs()
+        };
+        let n = GLOW_SAMPLES as usize;
+        let coarse: Vec<f64> = (0..n)
+            .map(|k| weight((k as f64 + 0.5) / n as f64))
+            .collect();
+        let whole: f64 = coarse.iter().sum();
+        if !(whole > 0.0 && whole.is_finite()) {
+            return [along * t_s; GLOW_DEPTHS];
         }
-        if weight > 0.0 && moment.is_finite() {
-            along * moment / weight
-        } else {
-            along * t_s
+        // Where the weight bends sharply within a step (a source the ray passes nearer than a few steps), that
+        // step and its neighbours are sampled again `GLOW_REFINE` times finer: the share a step holds is spread
+        // evenly over it, which would spread a sharp peak over a step or two.
+        let at = |k: usize| coarse.get(k).copied().unwrap_or(0.0);
+        let sharp = |k: usize| {
+            let bend = (at(k.wrapping_sub(1)) + at(k + 1) - 2.0 * at(k)).abs();
+            coarse[k] * n as f64 > 0.25 * whole && bend > 0.5 * coarse[k]
+        };
+        let mut fine = vec![false; n];
+        for k in (0..n).filter(|&k| sharp(k)) {
+            fine[k.saturating_sub(1)..(k + 2).min(n)].fill(true);
         }
+        // The steps as (start, length, weight) along the ray in units of s, finer where refined.
+        let mut parts: Vec<(f64, f64, f64)> = Vec::with_capacity(n);
+        for (k, &w) in coarse.iter().enumerate() {
+            let start = k as f64 / n as f64;
+            if fine[k] {
+                let r = GLOW_REFINE as f64;
+                parts.extend((0..GLOW_REFINE).map(|i| {
+                    let s0 = start + i as f64 / (r * n as f64);
+                    (
+                        s0,
+                        1.0 / (r * n as f64),
+                        weight(s0 + 0.5 / (r * n as f64)) / r,
+                    )
+                }));
+            } else {
+                parts.push((start, 1.0 / n as f64, w));
+            }
+        }
+        let whole: f64 = parts.iter().map(|p| p.2).sum();
+        let depth_at = |s: f64| along * (t_s + s * (t_e - t_s));
+        // The first and the last part that hold any of it bound the glow; within a part it is spread evenly.
+        let first = parts.iter().position(|p| p.2 > 0.0).unwrap_or(0);
+        let last = parts.iter().rposition(|p| p.2 > 0.0).unwrap_or(0);
+        let mut depths = [0.0; GLOW_DEPTHS];
+        depths[0] = depth_at(parts[first].0);
+        depths[GLOW_DEPTHS - 1] = depth_at(parts[last].0 + parts[last].1);
+        let (mut k, mut below) = (first, 0.0);
+        for (depth, &level) in depths
+            .iter_mut()
+            .zip(&GLOW_LEVELS)
+            .skip(1)
+            .take(GLOW_DEPTHS - 2)
+        {
+            let wanted = level * whole;
+            while k < last && below + parts[k].2 < wanted {
+                below += parts[k].2;
+                k += 1;
+            }
+            let (start, length, w) = parts[k];
+            let within = if w > 0.0 {
+                ((wanted - below) / w).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            *depth = depth_at(start + within * length);
+        }
+        depths
     }
 }
 
@@ -125,14 +228,15 @@ impl SmokeView {
         let [gx, gy] = view.glow_cells();
         view.glow = (0..(gx + 1) * (gy + 1))
             .into_par_iter()
-            .map(|k| {
+            .flat_map_iter(|k| {
                 let (i, j) = (k % (gx + 1), k / (gx + 1));
                 let at = |c: u32, n: u32| (c * GLOW_CELL).min(n) as f64;
                 let ray = Ray {
                     origin: camera.eye,
                     direction: camera.pixel_ray(at(i, size[0]), at(j, size[1]), size[0], size[1]),
                 };
-                glow.depth(&ray, axis) as f32
+                let depths = glow.depths(&ray, axis);
+                (0..GLOW_STRIDE).map(move |i| depths[i.min(GLOW_DEPTHS - 1)] as f32)
             })
             .collect();
         view
@@ -164,9 +268,9 @@ impl SmokeView {
         }
     }
 
-    /// The glow's depth along the view axis at the center of pixel `(x, y)`: bilinear between the glow cells'
-    /// corners (`glow`), in f32 as the GPU pass works it out.
-    pub fn split_at(&self, x: u32, y: u32) -> f64 {
+    /// Where the glow lies along the ray through the center of pixel `(x, y)`: each depth bilinear between the
+    /// glow cells' corners' (`glow`), in f32 as the GPU pass works it out.
+    pub fn glow_at(&self, x: u32, y: u32) -> GlowDepths {
         let [gx, gy] = self.glow_cells();
         let g = [
             (x as f32 + 0.5) / GLOW_CELL as f32,
@@ -174,10 +278,12 @@ impl SmokeView {
         ];
         let i = [(g[0] as u32).min(gx - 1), (g[1] as u32).min(gy - 1)];
         let f = [g[0] - i[0] as f32, g[1] - i[1] as f32];
-        let at = |a: u32, b: u32| self.glow[(b * (gx + 1) + a) as usize];
-        let top = at(i[0], i[1]) + (at(i[0] + 1, i[1]) - at(i[0], i[1])) * f[0];
-        let bottom = at(i[0], i[1] + 1) + (at(i[0] + 1, i[1] + 1) - at(i[0], i[1] + 1)) * f[0];
-        (top + (bottom - top) * f[1]) as f64
+        std::array::from_fn(|d| {
+            let at = |a: u32, b: u32| self.glow[(b * (gx + 1) + a) as usize * GLOW_STRIDE + d];
+            let top = at(i[0], i[1]) + (at(i[0] + 1, i[1]) - at(i[0], i[1])) * f[0];
+            let bottom = at(i[0], i[1] + 1) + (at(i[0] + 1, i[1] + 1) - at(i[0], i[1] + 1)) * f[0];
+            (top + (bottom - top) * f[1]) as f64
+        })
     }
 
     /// The ray through the center of pixel `(x, y)` of the smoke image.
@@ -189,7 +295,7 @@ impl SmokeView {
         }
     }
 
-    /// The cells the glow's depth is placed on (their corners'), `GLOW_CELL` pixels a side.
+    /// The cells the glow is placed on (their corners'), `GLOW_CELL` pixels a side.
     pub fn glow_cells(&self) -> [u32; 2] {
         self.size.map(|s| s.div_ceil(GLOW_CELL))
     }

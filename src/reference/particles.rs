@@ -10,6 +10,7 @@
 
 use glam::DVec3;
 
+use crate::particles::view::{GlowDepths, glow_before};
 use crate::particles::{Particle, Ray, Slicing, extinction, kernel};
 
 /// What a ray through the medium gives: the light its particles scatter toward the eye, and the share of what
@@ -206,20 +207,84 @@ pub fn marched_glowing(
 
 /// One pixel of a frame's smoke, as the GPU pass renders it (`gpu::particle_pass`, docs/METHOD.md section 9): the
 /// sheet buffer along `ray` over `slicing`, each segment scattering its particle's color times the light that
-/// particle scatters back along the ray (`lights[k]`, `particles::light`) and giving off its emission, the slabs whose front lies at or past
-/// `until` (the depth along the view axis of the first object on the ray; infinite for none) left out and the
-/// slab it lies in cut there (the smoke in front of a surface integrated up to the surface itself), and those
-/// past where the light through the pixel falls below `particles::TRANSMITTANCE_CUTOFF`. Two
-/// images: the slabs whose middle lies in front of `split` (the depth of the billboard's plane on the ray), which
-/// go over the glow, and the others, under it.
+/// particle scatters back along the ray (`lights[k]`, `particles::light`) and giving off its emission, the slabs
+/// whose front lies at or past `until` (the depth along the view axis of the first object on the ray; infinite
+/// for none) left out and the slab it lies in cut there (the smoke in front of a surface integrated up to the
+/// surface itself), and those past where the light through the pixel falls below
+/// `particles::TRANSMITTANCE_CUTOFF`. The glow lies along the ray as `glow` places it (`particles::view`), up to
+/// `until`; the pixel is returned as the two images the frame composes, the front one over the glow and the back
+/// one under it ([`SmokeLayers::images`]).
 pub fn smoke_pixel(
     particles: &[Particle],
     lights: &[crate::particles::light::ParticleLight],
     ray: &Ray,
     slicing: &Slicing,
     until: f64,
-    split: f64,
+    glow: &GlowDepths,
 ) -> [Composite; 2] {
+    smoke_layers(particles, lights, ray, slicing, until, glow).images()
+}
+
+/// The smoke along a pixel's ray with the glow spread through its slabs (docs/METHOD.md section 9): what the frame
+/// of the glow `B` (the field's integral along the ray, of color `Ce`) over what lies behind, `X`, is,
+/// `S - B occluded + B seen Ce + (1 - B) transmittance X` before the billboard's clamp, linear in B so that the
+/// smoke is worked out once for every field the viewer refines.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SmokeLayers {
+    /// The light the smoke scatters and gives off toward the eye, each slab's dimmed by the slabs in front.
+    pub radiance: DVec3,
+    /// Each slab's share of `radiance` times the share of the glow in front of it: what the glow's blend
+    /// covers (the method's `(1 - B)` over what lies behind the glow).
+    pub occluded: DVec3,
+    /// The share of the glow that comes through the smoke: each part of it dimmed by the slabs in front, and
+    /// within its own slab by `(1 - exp(-tau)) / tau` (at least `transmittance` and `SEEN_FLOOR`).
+    pub seen: f64,
+    /// The light through all of the smoke.
+    pub transmittance: f64,
+}
+
+/// The least share of the glow a pixel's front image passes (`SmokeLayers::images`): the back image is divided
+/// by it (a glow seen less than this is off by at most this share of it).
+pub const SEEN_FLOOR: f64 = 1e-4;
+
+impl SmokeLayers {
+    /// The two images the frame composes as before the glow was spread, front over `blend(B, back over X)`:
+    /// front `(radiance - occluded, seen)`, back `(occluded / seen, transmittance / seen)`. Front over back is
+    /// the whole smoke, and with all of the glow at one depth they are the slabs in front of it and those behind.
+    pub fn images(&self) -> [Composite; 2] {
+        let seen = self.seen.max(self.transmittance).max(SEEN_FLOOR);
+        [
+            Composite {
+                radiance: (self.radiance - self.occluded).to_array(),
+                transmittance: seen,
+            },
+            Composite {
+                radiance: (self.occluded / seen).to_array(),
+                transmittance: self.transmittance / seen,
+            },
+        ]
+    }
+}
+
+/// `1 - (1 - exp(-tau)) / tau`: the share of a light spread evenly through a slab of optical depth `tau` that the
+/// slab itself holds back (a series where it cancels).
+pub fn held_within(tau: f64) -> f64 {
+    if tau < 1e-3 {
+        tau * (0.5 - tau / 6.0)
+    } else {
+        1.0 + (-tau).exp_m1() / tau
+    }
+}
+
+/// [`smoke_pixel`]'s smoke before it is made the two images.
+pub fn smoke_layers(
+    particles: &[Particle],
+    lights: &[crate::particles::light::ParticleLight],
+    ray: &Ray,
+    slicing: &Slicing,
+    until: f64,
+    glow: &GlowDepths,
+) -> SmokeLayers {
     let mut depth = vec![0.0; slicing.count as usize];
     let mut colored = vec![DVec3::ZERO; slicing.count as usize];
     let toward_eye = -ray.direction;
@@ -247,8 +312,26 @@ pub fn smoke_pixel(
             colored[j as usize] += tau * lit;
         }
     }
-    let none = (DVec3::ZERO, 1.0);
-    let mut images = [none, none];
+    // The glow's share in front of a depth, of the glow up to the surface (the field pass integrates no further);
+    // all of it in front where none lies before the surface.
+    let whole = if until.is_finite() {
+        glow_before(glow, until)
+    } else {
+        1.0
+    };
+    let before = |d: f64| {
+        if whole > 0.0 {
+            (glow_before(glow, d.min(until)) / whole).min(1.0)
+        } else {
+            1.0
+        }
+    };
+    let mut layers = SmokeLayers {
+        radiance: DVec3::ZERO,
+        occluded: DVec3::ZERO,
+        seen: 1.0,
+        transmittance: 1.0,
+    };
     for (j, (&tau, &colored)) in depth.iter().zip(&colored).enumerate() {
         let front = slicing.near + j as f64 * slicing.width;
         if front >= until || along <= 0.0 {
@@ -257,26 +340,29 @@ pub fn smoke_pixel(
         if tau <= 0.0 {
             continue;
         }
-        let (radiance, transmittance) =
-            &mut images[(front + 0.5 * slicing.width >= split) as usize];
+        let (f0, f1) = (before(front), before(front + slicing.width));
+        let t = layers.transmittance;
         let opacity = -(-tau).exp_m1();
-        *radiance += *transmittance * colored / tau * opacity;
-        *transmittance *= (-tau).exp();
-        if images[0].1 * images[1].1 < crate::particles::TRANSMITTANCE_CUTOFF {
+        let light = t * colored / tau * opacity;
+        layers.radiance += light;
+        layers.occluded += light * 0.5 * (f0 + f1);
+        // The glow behind the slab loses its opacity; the glow within it, spread evenly, what it holds back.
+        layers.seen -= t * ((1.0 - f1) * opacity + (f1 - f0) * held_within(tau));
+        layers.transmittance *= (-tau).exp();
+        if layers.transmittance < crate::particles::TRANSMITTANCE_CUTOFF {
             break;
         }
     }
-    images.map(|(radiance, transmittance)| Composite {
-        radiance: radiance.to_array(),
-        transmittance,
-    })
+    // No less than the light through all of it (rounding), nor than the floor the back image is divided by.
+    layers.seen = layers.seen.max(layers.transmittance).max(SEEN_FLOOR);
+    layers
 }
 
-/// A frame's smoke as the GPU pass renders it (`gpu::particle_pass`): the image over its plan, each pixel the
-/// front and back images of `smoke_pixel`, and the frame it lies over.
+/// A frame's smoke as the GPU pass renders it (`gpu::particle_pass`): the image over its plan, each pixel's smoke
+/// (`smoke_layers`), and the frame it lies over.
 pub struct SmokeImage {
     pub view: crate::particles::view::SmokeView,
-    pub pixels: Vec<[Composite; 2]>,
+    pub pixels: Vec<SmokeLayers>,
     frame: [u32; 2],
 }
 
@@ -302,13 +388,13 @@ impl SmokeImage {
                     (((c as f64 + 0.5) * f as f64 / n as f64) as u32).min(f - 1)
                 };
                 let end = until(at(x, w, frame[0]), at(y, h, frame[1]));
-                smoke_pixel(
+                smoke_layers(
                     &lit.particles,
                     &lit.lights,
                     &view.ray(x, y),
                     &view.slicing,
                     end,
-                    view.split_at(x, y),
+                    &view.glow_at(x, y),
                 )
             })
             .collect();
@@ -319,8 +405,10 @@ impl SmokeImage {
         })
     }
 
-    /// The front and the back image at frame pixel `(x, y)`, bilinear between the smoke's pixel centers as the
-    /// GPU's draw reads them: `[radiance, transmittance]` each.
+    /// The front and back images at frame pixel `(x, y)`, `[radiance, transmittance]` each, as the GPU's draw
+    /// makes them: the smoke's sums bilinear between the smoke's pixel centers, then made the two images
+    /// ([`SmokeLayers::images`]; filtered after, the back image's division by the glow's share would carry a
+    /// dense pixel's light onto its neighbours).
     pub fn at(&self, x: u32, y: u32) -> [[f64; 4]; 2] {
         let [w, h] = self.view.size;
         let g = [
@@ -329,18 +417,22 @@ impl SmokeImage {
         ];
         let i0 = [g[0].floor(), g[1].floor()];
         let f = [g[0] - i0[0], g[1] - i0[1]];
-        let px = |dx: f64, dy: f64, which: usize| {
+        let px = |dx: f64, dy: f64| {
             let cx = (i0[0] + dx).clamp(0.0, w as f64 - 1.0) as u32;
             let cy = (i0[1] + dy).clamp(0.0, h as f64 - 1.0) as u32;
-            let c = &self.pixels[(cy * w + cx) as usize][which];
-            [c.radiance[0], c.radiance[1], c.radiance[2], c.transmittance]
+            self.pixels[(cy * w + cx) as usize]
         };
-        std::array::from_fn(|which| {
-            std::array::from_fn(|k| {
-                let top = px(0.0, 0.0, which)[k] * (1.0 - f[0]) + px(1.0, 0.0, which)[k] * f[0];
-                let bottom = px(0.0, 1.0, which)[k] * (1.0 - f[0]) + px(1.0, 1.0, which)[k] * f[0];
-                top * (1.0 - f[1]) + bottom * f[1]
-            })
+        let mix = |a: SmokeLayers, b: SmokeLayers, t: f64| SmokeLayers {
+            radiance: a.radiance.lerp(b.radiance, t),
+            occluded: a.occluded.lerp(b.occluded, t),
+            seen: a.seen + (b.seen - a.seen) * t,
+            transmittance: a.transmittance + (b.transmittance - a.transmittance) * t,
+        };
+        let top = mix(px(0.0, 0.0), px(1.0, 0.0), f[0]);
+        let bottom = mix(px(0.0, 1.0), px(1.0, 1.0), f[0]);
+        mix(top, bottom, f[1]).images().map(|c| {
+            let [r, g, b] = c.radiance;
+            [r, g, b, c.transmittance]
         })
     }
 }
