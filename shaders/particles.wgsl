@@ -419,22 +419,18 @@ fn vs_main(@builtin(vertex_index) index: u32) -> VertexOut {
 @group(0) @binding(15) var smoke_sampler: sampler;
 
 // The two images at a frame pixel, light and coverage 1 - T, premultiplied, for the blend over what lies behind
-// (reference::particles::SmokeLayers::images, of the filtered sums).
-fn images_at(position: vec2<f32>) -> array<vec4<f32>, 2> {
-    let uv = position / vec2<f32>(params.frame);
-    let f = textureSampleLevel(front_in, smoke_sampler, uv, 0.0);
-    let b = textureSampleLevel(back_in, smoke_sampler, uv, 0.0);
-    let through = 1.0 - b.w;
-    let seen = max(max(1.0 - f.w, through), SEEN_FLOOR);
-    return array<vec4<f32>, 2>(vec4<f32>(f.xyz, 1.0 - seen), vec4<f32>(b.xyz / seen, 1.0 - through / seen));
-}
-
+// (reference::particles::SmokeLayers::images, of the filtered sums). The front one is its sums as they are (each
+// pixel's share of the glow seen is at least its transmittance and SEEN_FLOOR, and so is a blend of them).
 @fragment
 fn fs_front(in: VertexOut) -> @location(0) vec4<f32> {
-    return images_at(in.position.xy)[0];
+    return textureSampleLevel(front_in, smoke_sampler, in.position.xy / vec2<f32>(params.frame), 0.0);
 }
 
 @fragment
 fn fs_back(in: VertexOut) -> @location(0) vec4<f32> {
-    return images_at(in.position.xy)[1];
+    let uv = in.position.xy / vec2<f32>(params.frame);
+    let seen = max(1.0 - textureSampleLevel(front_in, smoke_sampler, uv, 0.0).w, SEEN_FLOOR);
+    let b = textureSampleLevel(back_in, smoke_sampler, uv, 0.0);
+    // At most 1 through: the sums are stored in f16, each rounded alone.
+    return vec4<f32>(b.xyz / seen, 1.0 - min((1.0 - b.w) / seen, 1.0));
 }
