@@ -39,6 +39,14 @@ struct SmokeParams {
     depth_far: f32,
     pad1: f32,
     pad2: f32,
+    bb_center: vec3<f32>, // the billboard: its center, side, axes and normal (geometry::Billboard)
+    bb_size: f32,
+    bb_right: vec3<f32>,
+    glass_w: u32,       // the texels a side of `glass`, 0 for none
+    bb_up: vec3<f32>,
+    glass_offset: u32,  // where `glow` holds the texels' crossings
+    bb_normal: vec3<f32>,
+    pad4: f32,
 }
 
 // A particle as the GPU reads it (128 bytes: a million fit one storage binding): its light as
@@ -86,8 +94,8 @@ const CUTOFF: f32 = 1e-4;
 const KERNEL_PEAK: f32 = 0.446;
 const KERNEL_FALLOFF: f32 = 2.0;
 // A pixel's state between dispatches, in vec4s: the smoke so far, what the glow covers of it and what it loses of
-// the glow, the marks, the ring.
-const STATE: u32 = 35u;
+// the glow, the marks, the ring, the light through the smoke behind a translucent surface.
+const STATE: u32 = 36u;
 // particles::view::GLOW_LEVELS, as the shares of the glow between each two of a ray's depths.
 const GLOW_SHARE_A: vec4<f32> = vec4<f32>(1.0 / 64.0, 3.0 / 64.0, 1.0 / 16.0, 0.125);
 const GLOW_SHARE_B: vec4<f32> = vec4<f32>(0.125, 0.125, 0.125, 0.125);
@@ -107,7 +115,9 @@ const SEEN_FLOOR: f32 = 1e-4;
 // The tiles with particles, the busiest first (the workgroups of a dispatch): (tile, first entry, end entry).
 @group(0) @binding(3) var<storage, read> work: array<vec4<u32>>;
 // Where the glow lies along the rays of the glow cells' corners (one more than cells a row), four vec4s a corner
-// (particles::view::SmokeView::glow_at).
+// (particles::view::SmokeView::glow_at); then, from `params.glass_offset`, how each field texel's ray crosses the
+// translucent objects, a vec4 a texel, rows from the top: its exit clip and the shares of the glow inside and
+// behind them that reach the eye (objects::clip::crossings). One buffer: GL gives a compute stage as few as 8.
 @group(0) @binding(8) var<storage, read> glow: array<vec4<f32>>;
 // STATE a pixel of the tiles that take more than one dispatch, by their place in `work`.
 @group(0) @binding(4) var<storage, read_write> state: array<vec4<f32>>;
@@ -172,6 +182,8 @@ struct Composite {
     done: bool,
     next: u32,
     next_share: f32,
+    // The light through the slabs past a translucent surface, among themselves.
+    glassed: f32,
 }
 
 // Where the glow lies along the pixel's ray, up to its end (`until`), as `share_before` reads it: each stretch
@@ -187,9 +199,13 @@ struct GlowRay {
     last: f32,
     until: f32,
     per_whole: f32,
+    // The depth of a translucent surface the ray meets first (3e38 for none), and the light that comes through the
+    // translucent objects to what lies behind them.
+    glass: f32,
+    behind: f32,
 }
 
-fn glow_ray_of(g: GlowDepths, until: f32) -> GlowRay {
+fn glow_ray_of(g: GlowDepths, until: f32, glass: f32, behind: f32) -> GlowRay {
     let tiny = vec4<f32>(1e-30);
     var r: GlowRay;
     r.start_a = g.a;
@@ -200,6 +216,8 @@ fn glow_ray_of(g: GlowDepths, until: f32) -> GlowRay {
     r.per_c = 1.0 / max(vec4<f32>(g.c.yzw, g.d.x) - g.c, tiny);
     r.last = g.d.x;
     r.until = until;
+    r.glass = glass;
+    r.behind = behind;
     // The field pass integrates the glow up to the surface: the shares are of that part (all of it in front
     // where none lies before the surface).
     var whole = 1.0;
@@ -234,6 +252,19 @@ fn close_slab(c: ptr<function, Composite>, open: vec4<f32>, j: u32, glow_ray: Gl
         return;
     }
     let front = params.near + f32(j) * params.width;
+    // Past a translucent surface (reference::particles::smoke_layers): the slab is seen through the objects, its
+    // light dimmed by the light they let through and by the slabs in front, covered by the glow as the surface
+    // is; it dims neither the surface nor the glow (the objects are drawn opaque, the glow through them is the
+    // see-through pass's).
+    if front >= glow_ray.glass {
+        let through = exp(-open.w);
+        let light = (*c).acc.w * (*c).glassed * glow_ray.behind * open.xyz / open.w * (1.0 - through);
+        (*c).acc = vec4<f32>((*c).acc.xyz + light, (*c).acc.w);
+        (*c).occ = vec4<f32>((*c).occ.xyz + light, (*c).occ.w);
+        (*c).glassed *= through;
+        (*c).done = (*c).glassed < CUTOFF;
+        return;
+    }
     var f0 = (*c).next_share;
     if (*c).next != j {
         f0 = share_before(glow_ray, front);
@@ -270,15 +301,32 @@ fn splat(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) 
     // The first object on the ray ends it: the slabs whose front lies at or past its depth are left out, the one it
     // lies in cut there.
     var until = 3.0e38;
+    var glass_at = 3.0e38;
+    var behind = 1.0;
     if params.objects != 0u {
-        let at = vec2<u32>((vec2<f32>(xy) + 0.5) * vec2<f32>(params.frame) / vec2<f32>(params.size));
-        // A translucent surface (the depth's lowest bit set, shaders/objects.wgsl) does not end the smoke.
-        let bits = textureLoad(depth, vec2<i32>(min(at, params.frame - 1u)), 0).r;
+        let at = min(vec2<u32>((vec2<f32>(xy) + 0.5) * vec2<f32>(params.frame) / vec2<f32>(params.size)), params.frame - 1u);
+        // A translucent surface (the depth's lowest bit set, shaders/objects.wgsl) does not end the smoke: the
+        // smoke past it is seen through the objects, dimmed by the light the field texel's ray keeps through them
+        // (the texel the ray through the depth's pixel meets, nearest).
+        let bits = textureLoad(depth, vec2<i32>(at), 0).r;
         let d = bitcast<f32>(bits);
         if d < 1.0 && (bits & 1u) == 0u {
             until = view_depth(d);
+        } else if d < 1.0 && params.glass_w > 0u {
+            glass_at = view_depth(d);
+            let p = 2.0 * (vec2<f32>(at) + 0.5) / vec2<f32>(params.frame) - 1.0;
+            let ray = params.forward + params.right * (p.x * params.tan_half * params.aspect) - params.up * (p.y * params.tan_half);
+            let t = dot(params.bb_center - params.eye, params.bb_normal) / dot(ray, params.bb_normal);
+            let h = params.eye + ray * t - params.bb_center;
+            let uv = vec2<f32>(dot(h, params.bb_right) / params.bb_size + 0.5, 0.5 - dot(h, params.bb_up) / params.bb_size);
+            if t > 0.0 && all(uv >= vec2<f32>(0.0)) && all(uv <= vec2<f32>(1.0)) {
+                let texel = min(vec2<u32>(uv * f32(params.glass_w)), vec2<u32>(params.glass_w - 1u));
+                behind = glow[params.glass_offset + texel.y * params.glass_w + texel.x].z;
+            }
         }
     }
+    // Where a particle's part in a slab ends: at the first surface, opaque or translucent.
+    let cut_at = min(until, glass_at);
     // Where the glow lies along the ray, each depth bilinear between the glow cells' corners'.
     let g = (vec2<f32>(xy) + 0.5) / f32(GLOW_CELL);
     let cells = (params.size + GLOW_CELL - 1u) / GLOW_CELL;
@@ -292,9 +340,9 @@ fn splat(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) 
     depths.b = mix(mix(glow[at + 1u], glow[at + 5u], f.x), mix(glow[at + below + 1u], glow[at + below + 5u], f.x), f.y);
     depths.c = mix(mix(glow[at + 2u], glow[at + 6u], f.x), mix(glow[at + below + 2u], glow[at + below + 6u], f.x), f.y);
     depths.d = mix(mix(glow[at + 3u], glow[at + 7u], f.x), mix(glow[at + below + 3u], glow[at + below + 7u], f.x), f.y);
-    let glow_ray = glow_ray_of(depths, until);
+    let glow_ray = glow_ray_of(depths, until, glass_at, behind);
     let none = vec4<f32>(0.0, 0.0, 0.0, 1.0);
-    var comp = Composite(none, vec4<f32>(0.0), false, 0xffffffffu, 0.0);
+    var comp = Composite(none, vec4<f32>(0.0), false, 0xffffffffu, 0.0, 1.0);
     // The open slabs lo..end (the same for the tile's pixels), slab j's sums at ring[j % RING].
     var ring: array<vec4<f32>, RING>;
     var lo = 0u;
@@ -312,6 +360,7 @@ fn splat(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) 
         for (var k = 0u; k < RING; k++) {
             ring[k] = state[slot + 3u + k];
         }
+        comp.glassed = state[slot + 3u + RING].x;
     }
     let toward_eye = -dir;
     // What the loop reads, in registers (lavapipe loads a buffer again at every pass of a loop).
@@ -360,8 +409,9 @@ fn splat(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) 
         var below = erf_approx(k_erf * clamp(((near + f32(j0) * width) * per_depth - closest) / radius, -half, half));
         for (var j = j0; j <= j1; j++) {
             let slab_front = near + f32(j) * width;
-            // The surface ends the smoke where it lies, inside its slab.
-            let back = min(slab_front + width, until);
+            // The first surface cuts the smoke where it lies, inside its slab: an opaque one ends it, the slabs
+            // past a translucent one are seen through it.
+            let back = select(slab_front + width, min(slab_front + width, cut_at), slab_front < cut_at);
             let above = erf_approx(k_erf * clamp((back * per_depth - closest) / radius, -half, half));
             let tau = weight * (above - below);
             below = above;
@@ -396,6 +446,7 @@ fn splat(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) 
         for (var k = 0u; k < RING; k++) {
             state[slot + 3u + k] = ring[k];
         }
+        state[slot + 3u + RING] = vec4<f32>(comp.glassed, 0.0, 0.0, 0.0);
     }
 }
 

@@ -243,7 +243,8 @@ fn rust_mirrors_match_the_wgsl_layouts() {
             "SmokeParams",
             size_of::<SmokeParams>(),
             fields!(SmokeParams: eye, tan_half, forward, aspect, right, near, up, width, size, tiles_x, chunk,
-                frame, objects, pad0, depth_near, depth_far, pad1, pad2),
+                frame, objects, pad0, depth_near, depth_far, pad1, pad2, bb_center, bb_size, bb_right, glass_w, bb_up,
+                glass_offset, bb_normal, pad4),
         );
         check_struct(
             &particles,

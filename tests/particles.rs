@@ -728,7 +728,7 @@ fn smoke_in_front_of_a_surface_is_integrated_up_to_the_surface() {
                 &[ParticleLight::default()],
                 &ray,
                 &slicing,
-                t * along,
+                (t * along, None),
                 &[1e6; GLOW_DEPTHS],
             );
             let radiance = front.radiance[0] + front.transmittance * back.radiance[0];
@@ -832,7 +832,14 @@ fn the_glow_spread_through_the_slabs_is_the_f64_cores_glow_inside_the_smoke() {
         }
         for d in [8.0, 32.0] {
             let slicing = Slicing::covering(&particles, eye, axis, 0.55 / d);
-            let layers = smoke_layers(&particles, &lights, &ray, &slicing, f64::INFINITY, &depths);
+            let layers = smoke_layers(
+                &particles,
+                &lights,
+                &ray,
+                &slicing,
+                (f64::INFINITY, None),
+                &depths,
+            );
             let core = sheet_buffer_glowing(&dark, &ray, &slicing, 0.0, light, &glow);
             worst_core = worst_core.max((layers.seen - core.radiance[0] / whole).abs());
             if d == 32.0 {

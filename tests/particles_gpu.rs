@@ -113,7 +113,7 @@ fn smoke_image_against_the_twin(scene: &Scene) -> f64 {
                 &lit.lights,
                 &ray,
                 &view.slicing,
-                f64::INFINITY,
+                (f64::INFINITY, None),
                 &view.glow_at(x, y),
             );
             let got = image[(y * sw + x) as usize].map(|c| c.map(f64::from));
@@ -439,7 +439,7 @@ fn smoke_errors(scene: &Scene) -> [f64; 4] {
                 &lit.lights,
                 &ray,
                 &view.slicing,
-                f64::INFINITY,
+                (f64::INFINITY, None),
                 &view.glow_at(x, y),
             );
             let cpu = whole(of(&f), of(&b));
@@ -567,7 +567,7 @@ fn twin_image(
                 &lit.lights,
                 &view.ray(x, y),
                 &view.slicing,
-                f64::INFINITY,
+                (f64::INFINITY, None),
                 &view.glow_at(x, y),
             );
             over(of(&f), of(&b))
@@ -692,4 +692,162 @@ fn particles_of_three_sizes_swept_through_equal_front_depths_do_not_pop_on_eithe
         assert!(largest < 2e-3, "{jumps:?}");
         assert!(smallest > 0.0 && largest < 3.0 * smallest, "{jumps:?}");
     }
+}
+
+/// A translucent sphere in front of a glowing cloud, with particles or without.
+fn glass_and_cloud(particles: bool) -> Scene {
+    let cloud = r#"
+[[particles]]
+emitter = "box"
+center = [0.0, 0.0, -1.5]
+size = [3.0, 3.0, 0.6]
+count = 400
+particle_radius = 0.25
+density = 3.0
+color = [0.0, 0.0, 0.0]
+albedo = 0.0
+emission = [1.0, 0.6, 0.3]
+emission_intensity = 1.0
+"#;
+    scene(&format!(
+        r#"
+[camera]
+eye = [0.0, 0.0, 8.0]
+fov_y = 30.0
+[colors]
+energy = [0.4, 0.6, 1.0]
+background = [0.0, 0.0, 0.0]
+[[points]]
+position = [2.6, 1.8, -3.0]
+coefficient = 0.3
+[[objects]]
+shape = "sphere"
+center = [0.0, 0.0, 1.5]
+radius = 1.0
+color = [0.9, 0.95, 1.0]
+[objects.translucent]
+extinction = 0.4
+eta = 1.3
+resolution = 12
+{}"#,
+        if particles { cloud } else { "" }
+    ))
+}
+
+/// Smoke behind a translucent object is seen through it (docs/METHOD.md section 10): its light dimmed by the light
+/// the object lets through to it, on rays through a glass sphere into a glowing cloud behind it, against the
+/// medium marched with the object's exact transmittance to each point (`objects::translucent::transmittance`: the
+/// Fresnel transmittance at both surfaces, `exp(-tau)` between); it no longer lies over the sphere undimmed, and
+/// the GPU's frame is the twin's, opaque and transparent.
+#[test]
+fn smoke_behind_a_translucent_object_shows_through_it_dimmed_by_the_light_it_lets_through() {
+    use energywave::particles::view::GLOW_DEPTHS;
+    use energywave::particles::{Ray, Slicing, extinction, kernel};
+    use energywave::reference::particles::{Glass, smoke_layers};
+    use glam::DVec3;
+    let scene = glass_and_cloud(true);
+    let setup = FrameSetup::placed(&scene, 1.0);
+    let lit = setup.particles().unwrap();
+    let (eye, forward) = (scene.camera.eye, scene.camera.frame().forward);
+    let slicing = Slicing::covering(&lit.particles, eye, forward, 0.04);
+    let (center, radius) = (DVec3::new(0.0, 0.0, 1.5), 1.0);
+    let mut worst = 0.0f64;
+    for target in [(0.0, 0.0), (0.3, -0.2), (-0.45, 0.35)] {
+        let ray = Ray {
+            origin: eye,
+            direction: (DVec3::new(target.0, target.1, 0.0) - eye).normalize(),
+        };
+        // The sphere's front along the ray, and the light it lets through to what lies past it.
+        let to = ray.origin - center;
+        let b = to.dot(ray.direction);
+        let front = -b - (b * b - (to.length_squared() - radius * radius)).sqrt();
+        let past =
+            energywave::objects::translucent::transmittance(&scene.objects, eye, ray.at(30.0));
+        let glass = Glass {
+            depth: front * ray.direction.dot(forward),
+            behind: past,
+        };
+        let far = [1e6; GLOW_DEPTHS];
+        let seen = smoke_layers(
+            &lit.particles,
+            &lit.lights,
+            &ray,
+            &slicing,
+            (f64::INFINITY, Some(glass)),
+            &far,
+        );
+        let bare = smoke_layers(
+            &lit.particles,
+            &lit.lights,
+            &ray,
+            &slicing,
+            (f64::INFINITY, None),
+            &far,
+        );
+        // The medium marched: each step's emission, dimmed by the smoke in front and by the object's exact
+        // transmittance to it.
+        let (t0, t1, n) = (7.0, 12.0, 40_000);
+        let dt = (t1 - t0) / n as f64;
+        let (mut radiance, mut through) = (DVec3::ZERO, 1.0);
+        for k in 0..n {
+            let x = ray.at(t0 + (k as f64 + 0.5) * dt);
+            let sigma = extinction(&lit.particles, x);
+            if sigma <= 0.0 {
+                continue;
+            }
+            let emitted: DVec3 = (lit.particles.iter())
+                .map(|p| {
+                    p.density
+                        * kernel((x - p.position).length() / p.radius)
+                        * DVec3::from_array(p.emission)
+                })
+                .sum::<DVec3>()
+                / sigma;
+            let object = energywave::objects::translucent::transmittance(&scene.objects, eye, x);
+            radiance += through * object * emitted * -(-sigma * dt).exp_m1();
+            through *= (-sigma * dt).exp();
+        }
+        assert!(
+            bare.radiance.x > 0.2,
+            "the cloud glows on this ray: {}",
+            bare.radiance
+        );
+        assert!(past > 0.2 && past < 0.8, "the sphere dims: {past}");
+        worst = worst.max((seen.radiance - radiance).abs().max_element() / bare.radiance.x);
+        // Past the surface the smoke covers nothing: the light through the frame is the surface's.
+        assert_eq!(seen.transmittance, 1.0);
+        assert!((seen.occluded - seen.radiance).length() < 1e-12);
+    }
+    // Measured: 1.0e-5 of the cloud's light (the slabs' convergence).
+    assert!(
+        worst < 1e-3,
+        "largest difference {worst} of the smoke's light"
+    );
+    // The frame: the GPU's is the twin's, and the smoke shows through the sphere, dimmed.
+    frames_agree(&scene, Backdrop::Opaque);
+    frames_agree(&scene, Backdrop::Transparent);
+    let (w, h) = (64, 64);
+    let center_pixel = |s: &Scene| {
+        gpu().render(s, w, h, false).unwrap().pixels[(h / 2 * w + w / 2) as usize].map(f64::from)
+    };
+    let with = center_pixel(&scene);
+    let without = center_pixel(&glass_and_cloud(false));
+    let ray = Ray {
+        origin: eye,
+        direction: forward,
+    };
+    let bare = smoke_layers(
+        &lit.particles,
+        &lit.lights,
+        &ray,
+        &slicing,
+        (f64::INFINITY, None),
+        &[1e6; GLOW_DEPTHS],
+    );
+    let gain = with[0] - without[0];
+    assert!(
+        gain > 0.1 * bare.radiance.x && gain < 0.8 * bare.radiance.x,
+        "{with:?} {without:?} {}",
+        bare.radiance
+    );
 }

@@ -48,8 +48,16 @@ pub mod gpu_data {
         pub depth_far: f32,
         pub pad1: f32,
         pub pad2: f32,
+        pub bb_center: [f32; 3],
+        pub bb_size: f32,
+        pub bb_right: [f32; 3],
+        pub glass_w: u32,
+        pub bb_up: [f32; 3],
+        pub glass_offset: u32,
+        pub bb_normal: [f32; 3],
+        pub pad4: f32,
     }
-    const _: () = assert!(size_of::<SmokeParams>() == 112);
+    const _: () = assert!(size_of::<SmokeParams>() == 176);
 
     /// `SmokeParticle` in `shaders/particles.wgsl`.
     #[repr(C)]
@@ -87,8 +95,9 @@ pub const CHUNK: u32 = 960;
 const _: () = assert!(CHUNK * (2 * RING + 1) + RING < 65535);
 
 /// A pixel's state between dispatches, in vec4s (`STATE` in the shader): the smoke so far, what the glow covers of
-/// it and loses of the glow (`reference::particles::SmokeLayers`), the marks, the open slabs.
-const STATE: u64 = 3 + RING as u64;
+/// it and loses of the glow (`reference::particles::SmokeLayers`), the marks, the open slabs, the light through
+/// the slabs past a translucent surface.
+const STATE: u64 = 4 + RING as u64;
 
 /// The format of the images the draw passes filter: their light and coverage.
 const IMAGE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
@@ -158,7 +167,11 @@ struct Prepared {
     balls: wgpu::Buffer,
     entries: wgpu::Buffer,
     work: wgpu::Buffer,
+    /// Where the glow lies along the glow cells' corners' rays, then the field texels' crossings of the
+    /// translucent objects (`glass`), a vec4 each.
     glow: wgpu::Buffer,
+    /// The crossings (`FrameSetup::crossings_at` at the plan's resolution), none without translucent objects.
+    glass: Option<Arc<Vec<f32>>>,
     state: wgpu::Buffer,
     /// The front and back images, two a pixel, in f32 (read back by `read_image`).
     image: wgpu::Buffer,
@@ -314,9 +327,17 @@ impl ParticlePass {
             return false;
         };
         let key = ViewKey::of(setup, frame, resolution);
+        // The smoke past a translucent surface is dimmed by the light its field texel keeps through the objects.
+        let glass = setup.crossings_at(resolution);
+        let same_glass = |p: &Prepared| match (&p.glass, &glass) {
+            (None, None) => true,
+            (Some(a), Some(b)) => Arc::ptr_eq(a, b),
+            _ => false,
+        };
         if let Some(p) = &self.prepared
             && Arc::ptr_eq(&p.lit, &lit)
             && p.key == key
+            && same_glass(p)
         {
             self.write_params(queue, setup, frame);
             return true;
@@ -395,7 +416,11 @@ impl ParticlePass {
         let work: Vec<[u32; 4]> = work.iter().map(|&[t, a, b]| [t, a, b, 0]).collect();
         let entries = storage(device, "entries", bytemuck::cast_slice(&entries));
         let work = storage(device, "work", bytemuck::cast_slice(&work));
-        let glow = storage(device, "glow", bytemuck::cast_slice(&view.glow));
+        let mut glow = view.glow.clone();
+        if let Some(x) = &glass {
+            glow.extend(x.chunks_exact(3).flat_map(|c| [c[0], c[1], c[2], 0.0]));
+        }
+        let glow = storage(device, "glow", bytemuck::cast_slice(&glow));
         // The tiles a second dispatch takes carry their pixels' state.
         let carried = groups.get(1).copied().unwrap_or(0).max(1) as u64;
         let state = device.create_buffer(&wgpu::BufferDescriptor {
@@ -434,6 +459,7 @@ impl ParticlePass {
             entries,
             work,
             glow,
+            glass,
             state,
             image,
             textures,
@@ -454,6 +480,11 @@ impl ParticlePass {
         let f = camera.frame();
         let v = |x: glam::DVec3| x.as_vec3().to_array();
         let (depth_near, depth_far) = super::billboard_pass::depth_range(camera, &setup.billboard);
+        let b = &setup.billboard;
+        let glass_w = p
+            .glass
+            .as_ref()
+            .map_or(0, |x| ((x.len() / 3) as f64).sqrt().round() as u32);
         let params = SmokeParams {
             eye: v(camera.eye),
             tan_half: camera.tan_half_fov() as f32,
@@ -470,6 +501,13 @@ impl ParticlePass {
             objects: !setup.scene.objects.is_empty() as u32,
             depth_near: depth_near as f32,
             depth_far: depth_far as f32,
+            bb_center: v(b.center),
+            bb_size: b.size as f32,
+            bb_right: v(b.right),
+            glass_w,
+            bb_up: v(b.up),
+            glass_offset: (p.view.glow.len() / 4) as u32,
+            bb_normal: v(b.normal),
             ..Default::default()
         };
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));

@@ -240,13 +240,36 @@ fn compose(
     let drawn = backdrop != Backdrop::Holdout;
     // The particles' smoke, its rays ended by the objects; the back image under the glow, the front one over it.
     let forward = scene.camera.frame().forward;
+    // The smoke past a translucent surface is dimmed by the light its field texel keeps through the objects
+    // (the texel its pixel's ray meets, nearest, as the GPU reads it).
+    let crossings = setup.crossings_at(texture.resolution);
     let smoke =
         super::particles::SmokeImage::of(setup, [width, height], texture.resolution, |x, y| {
+            let eye = scene.camera.eye;
             let dir = (scene.camera).pixel_ray(x as f64 + 0.5, y as f64 + 0.5, width, height);
-            let hit = objects
-                .as_ref()
-                .and_then(|o| o.hit_opaque(scene.camera.eye, dir));
-            hit.map_or(f64::INFINITY, |t| t * dir.dot(forward))
+            let depth = |t: f64| t * dir.dot(forward);
+            let o = objects.as_ref();
+            let until = o
+                .and_then(|o| o.hit_opaque(eye, dir))
+                .map_or(f64::INFINITY, depth);
+            let glass = o
+                .and_then(|o| o.hit_surface(eye, dir))
+                .filter(|h| h.2)
+                .map(|(t, _, _)| {
+                    let w = texture.resolution;
+                    let behind = (crossings.as_ref().zip(billboard.hit(eye, dir))).map_or(
+                        1.0,
+                        |(c, (u, v))| {
+                            let texel = |s: f64| ((s * w as f64) as u32).min(w - 1) as usize;
+                            c[3 * (texel(v) * w as usize + texel(u)) + 2] as f64
+                        },
+                    );
+                    super::particles::Glass {
+                        depth: depth(t),
+                        behind,
+                    }
+                });
+            (until, glass)
         });
     let glared = scene.glare.map(|g| super::glare::apply(texture, &g));
     let texture = glared.as_ref().unwrap_or(texture);

@@ -212,17 +212,27 @@ pub fn marched_glowing(
 /// for none) left out and the slab it lies in cut there (the smoke in front of a surface integrated up to the
 /// surface itself), and those past where the light through the pixel falls below
 /// `particles::TRANSMITTANCE_CUTOFF`. The glow lies along the ray as `glow` places it (`particles::view`), up to
-/// `until`; the pixel is returned as the two images the frame composes, the front one over the glow and the back
-/// one under it ([`SmokeLayers::images`]).
+/// `until`; the smoke past a translucent surface the ray meets first (`glass`) is seen through the objects. The
+/// pixel is returned as the two images the frame composes, the front one over the glow and the back one under it
+/// ([`SmokeLayers::images`]).
 pub fn smoke_pixel(
     particles: &[Particle],
     lights: &[crate::particles::light::ParticleLight],
     ray: &Ray,
     slicing: &Slicing,
-    until: f64,
+    (until, glass): (f64, Option<Glass>),
     glow: &GlowDepths,
 ) -> [Composite; 2] {
-    smoke_layers(particles, lights, ray, slicing, until, glow).images()
+    smoke_layers(particles, lights, ray, slicing, (until, glass), glow).images()
+}
+
+/// A translucent surface a pixel's ray meets first: its depth along the view axis, and the light the translucent
+/// objects let through to what lies behind them on the ray (`objects::clip::crossings`' share behind: the Fresnel
+/// transmittance at every surface crossed, `exp(-tau)` between).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Glass {
+    pub depth: f64,
+    pub behind: f64,
 }
 
 /// The smoke along a pixel's ray with the glow spread through its slabs (docs/METHOD.md section 9): what the frame
@@ -276,25 +286,34 @@ pub fn held_within(tau: f64) -> f64 {
     }
 }
 
-/// [`smoke_pixel`]'s smoke before it is made the two images.
+/// [`smoke_pixel`]'s smoke before it is made the two images. Past a translucent surface (`glass`, docs/METHOD.md
+/// section 10) the slabs are seen through the objects: a particle's part is cut at the surface as at an opaque
+/// one, and the slabs past it add their light dimmed by the light the objects let through and by the slabs in
+/// front (and among themselves), covered by the glow as the surface is, dimming neither the surface (drawn in
+/// front of them) nor the glow (the see-through pass's, worked out without the smoke).
 pub fn smoke_layers(
     particles: &[Particle],
     lights: &[crate::particles::light::ParticleLight],
     ray: &Ray,
     slicing: &Slicing,
-    until: f64,
+    (until, glass): (f64, Option<Glass>),
     glow: &GlowDepths,
 ) -> SmokeLayers {
+    let (glass_at, behind) = glass.map_or((f64::INFINITY, 1.0), |g| (g.depth, g.behind));
     let mut depth = vec![0.0; slicing.count as usize];
     let mut colored = vec![DVec3::ZERO; slicing.count as usize];
     let toward_eye = -ray.direction;
     let along = ray.direction.dot(slicing.axis);
-    // The surface ends the smoke where it lies, inside its slab (the slab's part in front of it kept).
-    let t_until = if along > 0.0 {
-        until / along
-    } else {
-        f64::INFINITY
+    // The surface ends the smoke where it lies, inside its slab (the slab's part in front of it kept); a
+    // translucent one cuts the slab it lies in there.
+    let t_of = |d: f64| {
+        if along > 0.0 {
+            d / along
+        } else {
+            f64::INFINITY
+        }
     };
+    let (t_until, t_glass) = (t_of(until), t_of(glass_at));
     for (p, light) in particles.iter().zip(lights) {
         let Some((t_in, t_out)) = p.chord(ray) else {
             continue;
@@ -303,7 +322,10 @@ pub fn smoke_layers(
             + DVec3::from_array(p.emission);
         for j in slicing.slabs_between(ray, t_in, t_out) {
             let (t0, t1) = slicing.slab(ray, j);
-            let (a, b) = (t0.max(t_in), t1.min(t_out).min(t_until));
+            let (a, mut b) = (t0.max(t_in), t1.min(t_out).min(t_until));
+            if slicing.near + j as f64 * slicing.width < glass_at {
+                b = b.min(t_glass);
+            }
             if b <= a {
                 continue;
             }
@@ -332,12 +354,24 @@ pub fn smoke_layers(
         seen: 1.0,
         transmittance: 1.0,
     };
+    // The light through the slabs past the translucent surface, among themselves.
+    let mut glassed = 1.0;
     for (j, (&tau, &colored)) in depth.iter().zip(&colored).enumerate() {
         let front = slicing.near + j as f64 * slicing.width;
         if front >= until || along <= 0.0 {
             break;
         }
         if tau <= 0.0 {
+            continue;
+        }
+        if front >= glass_at {
+            let light = layers.transmittance * glassed * behind * colored / tau * -(-tau).exp_m1();
+            layers.radiance += light;
+            layers.occluded += light;
+            glassed *= (-tau).exp();
+            if glassed < crate::particles::TRANSMITTANCE_CUTOFF {
+                break;
+            }
             continue;
         }
         let (f0, f1) = (before(front), before(front + slicing.width));
@@ -368,13 +402,14 @@ pub struct SmokeImage {
 
 impl SmokeImage {
     /// The smoke of `setup`'s frame of `frame` pixels over a field of `resolution` texels a side, none without
-    /// particles; `until(x, y)` is the depth along the view axis of the first object on the ray of frame pixel
-    /// `(x, y)` (infinite for none), which ends the rays of the smoke's pixels that fall in it.
+    /// particles; `until(x, y)` is the depth along the view axis of the first opaque object on the ray of frame
+    /// pixel `(x, y)` (infinite for none), which ends the rays of the smoke's pixels that fall in it, and the
+    /// translucent surface the ray meets first, where one does.
     pub fn of(
         setup: &crate::frame::FrameSetup,
         frame: [u32; 2],
         resolution: u32,
-        until: impl Fn(u32, u32) -> f64 + Sync,
+        until: impl Fn(u32, u32) -> (f64, Option<Glass>) + Sync,
     ) -> Option<SmokeImage> {
         use rayon::prelude::*;
         let lit = setup.particles()?;
@@ -387,13 +422,13 @@ impl SmokeImage {
                 let at = |c: u32, n: u32, f: u32| {
                     (((c as f64 + 0.5) * f as f64 / n as f64) as u32).min(f - 1)
                 };
-                let end = until(at(x, w, frame[0]), at(y, h, frame[1]));
+                let ends = until(at(x, w, frame[0]), at(y, h, frame[1]));
                 smoke_layers(
                     &lit.particles,
                     &lit.lights,
                     &view.ray(x, y),
                     &view.slicing,
-                    end,
+                    ends,
                     &view.glow_at(x, y),
                 )
             })
