@@ -342,7 +342,9 @@ fn splat(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) 
     depths.d = mix(mix(glow[at + 3u], glow[at + 7u], f.x), mix(glow[at + below + 3u], glow[at + below + 7u], f.x), f.y);
     let glow_ray = glow_ray_of(depths, until, glass_at, behind);
     let none = vec4<f32>(0.0, 0.0, 0.0, 1.0);
-    var comp = Composite(none, vec4<f32>(0.0), false, 0xffffffffu, 0.0, 1.0);
+    // No slab's share cached yet (a slab index no ray reaches, kept below 2^30: saved shifted by one bit in a
+    // float's bits between dispatches, it must not make a NaN).
+    var comp = Composite(none, vec4<f32>(0.0), false, 0x3fffffffu, 0.0, 1.0);
     // The open slabs lo..end (the same for the tile's pixels), slab j's sums at ring[j % RING].
     var ring: array<vec4<f32>, RING>;
     var lo = 0u;
@@ -415,6 +417,11 @@ fn splat(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) 
             let above = erf_approx(k_erf * clamp((back * per_depth - closest) / radius, -half, half));
             let tau = weight * (above - below);
             below = above;
+            // Cut at a translucent surface, the slab's part past it is left out: the next slab starts at its own
+            // front (reference::particles::smoke_layers alike).
+            if back < slab_front + width && cut_at < until {
+                below = erf_approx(k_erf * clamp(((slab_front + width) * per_depth - closest) / radius, -half, half));
+            }
             if tau > 0.0 && slab_front < until {
                 ring[j % RING] += vec4<f32>(tau * lit, tau);
             }

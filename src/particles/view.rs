@@ -162,6 +162,9 @@ impl GlowPlace<'_> {
             }
         }
         let whole: f64 = parts.iter().map(|p| p.2).sum();
+        if !(whole > 0.0 && whole.is_finite()) {
+            return [along * t_s; GLOW_DEPTHS];
+        }
         let depth_at = |s: f64| along * (t_s + s * (t_e - t_s));
         // The first and the last part that hold any of it bound the glow; within a part it is spread evenly.
         let first = parts.iter().position(|p| p.2 > 0.0).unwrap_or(0);
