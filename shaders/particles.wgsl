@@ -155,15 +155,6 @@ fn light_toward(p: SmokeParticle, v: vec3<f32>) -> vec3<f32> {
     return max(vec3<f32>(p.diag_r.w, p.diag_g.w, p.diag_b.w) + q, vec3<f32>(0.0));
 }
 
-// The share of the glow on a ray in front of depth `d` (particles::view::glow_before).
-fn glow_before(g: GlowDepths, d: f32) -> f32 {
-    let tiny = vec4<f32>(1e-30);
-    let a = clamp((d - g.a) / max(vec4<f32>(g.a.yzw, g.b.x) - g.a, tiny), vec4<f32>(0.0), vec4<f32>(1.0));
-    let b = clamp((d - g.b) / max(vec4<f32>(g.b.yzw, g.c.x) - g.b, tiny), vec4<f32>(0.0), vec4<f32>(1.0));
-    let c = clamp((d - g.c) / max(vec4<f32>(g.c.yzw, g.d.x) - g.c, tiny), vec4<f32>(0.0), vec4<f32>(1.0));
-    return dot(GLOW_SHARE_A, a) + dot(GLOW_SHARE_B, b) + dot(GLOW_SHARE_C, c);
-}
-
 // reference::particles::held_within: the share of a light spread evenly through a slab of optical depth tau (and
 // opacity 1 - exp(-tau)) that the slab holds back.
 fn held_within(tau: f32, opacity: f32) -> f32 {
@@ -222,10 +213,19 @@ fn glow_ray_of(g: GlowDepths, until: f32, glass: f32, behind: f32) -> GlowRay {
     // where none lies before the surface).
     var whole = 1.0;
     if until < 3.0e38 {
-        whole = glow_before(g, until);
+        whole = glow_share(r, until);
     }
     r.per_whole = select(0.0, 1.0 / whole, whole > 0.0);
     return r;
+}
+
+// The share of all the glow on the ray in front of depth `at` (particles::view::glow_before): piecewise linear
+// through its depths.
+fn glow_share(g: GlowRay, at: f32) -> f32 {
+    let a = clamp((at - g.start_a) * g.per_a, vec4<f32>(0.0), vec4<f32>(1.0));
+    let b = clamp((at - g.start_b) * g.per_b, vec4<f32>(0.0), vec4<f32>(1.0));
+    let c = clamp((at - g.start_c) * g.per_c, vec4<f32>(0.0), vec4<f32>(1.0));
+    return dot(GLOW_SHARE_A, a) + dot(GLOW_SHARE_B, b) + dot(GLOW_SHARE_C, c);
 }
 
 // The share of the glow on the pixel's ray in front of depth `d`, of the glow up to its end.
@@ -238,10 +238,7 @@ fn share_before(g: GlowRay, d: f32) -> f32 {
     if at >= g.last || g.per_whole == 0.0 {
         return 1.0;
     }
-    let a = clamp((at - g.start_a) * g.per_a, vec4<f32>(0.0), vec4<f32>(1.0));
-    let b = clamp((at - g.start_b) * g.per_b, vec4<f32>(0.0), vec4<f32>(1.0));
-    let c = clamp((at - g.start_c) * g.per_c, vec4<f32>(0.0), vec4<f32>(1.0));
-    return min((dot(GLOW_SHARE_A, a) + dot(GLOW_SHARE_B, b) + dot(GLOW_SHARE_C, c)) * g.per_whole, 1.0);
+    return min(glow_share(g, at) * g.per_whole, 1.0);
 }
 
 // Slab j's sums (sum of tau color light, sum of tau) composited behind what `c` holds: its light over its opacity

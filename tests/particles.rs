@@ -875,7 +875,7 @@ fn the_glow_spread_through_the_slabs_is_the_f64_cores_glow_inside_the_smoke() {
 fn the_glows_depths_are_where_its_share_along_the_ray_reaches_each_level() {
     use energywave::frame::FrameSetup;
     use energywave::integrate::zeta;
-    use energywave::particles::view::{GLOW_LEVELS, GLOW_SAMPLES, GlowPlace};
+    use energywave::particles::view::{GLOW_LEVELS, GLOW_SAMPLES};
     let scene = energywave::scene::Scene::parse(
         r#"
 [camera]
@@ -892,14 +892,7 @@ coefficient = 0.6
     )
     .unwrap();
     let setup = FrameSetup::placed(&scene, 1.0);
-    let place = GlowPlace {
-        sources: &scene.sources,
-        epsilon: scene.integration.epsilon,
-        billboard: &setup.billboard,
-        nu: setup.reach.nu,
-        alpha: setup.integration.alpha,
-        beta: setup.integration.beta,
-    };
+    let place = setup.glow_place();
     let axis = scene.camera.frame().forward;
     let field = scene.sources.field();
     let b = &setup.billboard;

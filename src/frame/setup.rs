@@ -293,15 +293,21 @@ impl<'a> FrameSetup<'a> {
             &scene.camera,
             smoke_size(frame, resolution),
             scene.slice_width * coarser,
-            &GlowPlace {
-                sources: &scene.sources,
-                epsilon: scene.integration.epsilon,
-                billboard: &setup.billboard,
-                nu: setup.reach.nu,
-                alpha: setup.integration.alpha,
-                beta: setup.integration.beta,
-            },
+            &setup.glow_place(),
         )
+    }
+
+    /// What places the glow along this frame's rays (`SmokeView`'s depths): its sources and the field pass's
+    /// reach and decay along each ray.
+    pub fn glow_place(&self) -> GlowPlace<'_> {
+        GlowPlace {
+            sources: &self.scene.sources,
+            epsilon: self.scene.integration.epsilon,
+            billboard: &self.billboard,
+            nu: self.reach.nu,
+            alpha: self.integration.alpha,
+            beta: self.integration.beta,
+        }
     }
 
     /// The clips of a texture of `w` x `w` texels over the same billboard (a coarse field's, while the view
