@@ -93,6 +93,10 @@ impl ShapeKind {
 
 /// The rotation of `degrees` about x, then y, then z (world axes): `Rz Ry Rx`.
 pub fn rotation_matrix(degrees: DVec3) -> DMat3 {
+    // Most objects are not rotated: no sines to work out for every ray that meets them.
+    if degrees == DVec3::ZERO {
+        return DMat3::IDENTITY;
+    }
     let r = degrees * (std::f64::consts::PI / 180.0);
     DMat3::from_rotation_z(r.z) * DMat3::from_rotation_y(r.y) * DMat3::from_rotation_x(r.x)
 }
