@@ -1841,3 +1841,61 @@ fn a_frames_objects_are_resolved_once_in_the_renderers_cache() {
     assert_eq!(*again.clips().unwrap(), *a.clips().unwrap());
     assert_eq!(*again.objects().unwrap(), *lit);
 }
+
+/// Where an opaque wall hides many texels' rays whole, the field pass dispatches only the texels it leaves
+/// (`FieldRenderer::listed_texels`), the hidden ones zero: in place of a refinement where it leaves a quarter or
+/// less, and for a field integrated at every texel where it hides an eighth or more; a refined field that the
+/// wall leaves more of is refined as before. Every way, the GPU's field is its f64 twin's texel by texel.
+#[test]
+fn a_field_mostly_hidden_by_a_wall_integrates_the_texels_left_as_its_twin() {
+    use energywave::frame::Refine;
+    let mut g = gpu();
+    for (top, every_texel, listed) in [
+        // The wall's top edge, in the scene's y, and whether the field lists the texels left.
+        (1.1, false, true),
+        (1.1, true, true),
+        (-0.2, false, false),
+        (-0.2, true, true),
+    ] {
+        let mut objects = blockers();
+        objects.push(Object {
+            shape: Shape::Box {
+                center: DVec3::new(0.0, top - 5.0, 3.0),
+                size: DVec3::new(30.0, 10.0, 0.2),
+                rotation: DVec3::ZERO,
+            },
+            color: [0.8; 3],
+            translucent: None,
+        });
+        let mut scene = point_scene(objects, Integrator::Adaptive);
+        scene.billboard.resolution = 128;
+        let bb = scene.place_billboard(1.0);
+        let mut setup = FrameSetup::new(&scene, bb);
+        if every_texel {
+            setup.refine = Refine::EveryTexel;
+        }
+        let refine = setup.refine;
+        assert_eq!(refine.levels(128).is_some(), !every_texel);
+        let gpu_b = g.brightness(&setup).unwrap();
+        let cpu = reference::render_brightness(&setup).values;
+        let hidden = cpu.iter().filter(|&&b| b == 0.0).count();
+        let left = setup.clips().unwrap().iter().filter(|&&c| c > 0.0).count();
+        let share = hidden as f64 / cpu.len() as f64;
+        assert_eq!(
+            g.field().listed_texels().map(|n| n as usize),
+            listed.then_some(left),
+            "wall up to {top}, {refine:?}: {share:.2} hidden"
+        );
+        // The refined field predicts some texels, within its threshold.
+        let allowed = refine.tolerance().unwrap_or(0.0) + 1e-4;
+        for k in 0..cpu.len() {
+            assert!(
+                (gpu_b[k] as f64 - cpu[k]).abs() <= allowed * cpu[k].abs().max(1.0),
+                "wall up to {top}, {refine:?}, texel {k}: GPU {} against CPU {}",
+                gpu_b[k],
+                cpu[k]
+            );
+        }
+        println!("wall up to {top}: {share:.2} of the texels hidden, {left} left");
+    }
+}

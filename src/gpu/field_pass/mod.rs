@@ -62,6 +62,9 @@ struct Progress {
     bands: u32,
     levels: Vec<(u32, std::ops::Range<u32>)>,
     band_height: u32,
+    /// Where only the texels with something to integrate are dispatched (`sparse_texels`): the workgroups of
+    /// the direct dispatch over their list (x, y), and how many they are.
+    sparse: Option<[u32; 3]>,
     next_band: u32,
     dispatches: u64,
     /// The mean of the jittered frames rendered since the scene last changed.
@@ -119,6 +122,7 @@ impl FieldRenderer {
                 band_rows: 0,
                 bands: 0,
                 band_height: 0,
+                sparse: None,
                 levels: Vec::new(),
                 next_band: 0,
                 dispatches: 0,
@@ -222,15 +226,22 @@ impl FieldRenderer {
                 0,
                 bytemuck::bytes_of(&packed.params),
             );
+            // Where objects hide part of the texels' rays, those left are listed and the hidden ones hold zero
+            // (`sparse_texels`): in place of a refinement where a quarter or less are left, in one band.
+            let whole = packed.refinement.is_some() || self.progress.band_rows == 0;
+            let sparse = (whole && packed.params.clipped == 1)
+                .then(|| sparse_texels(&packed.clips, w, packed.refinement.is_some()))
+                .flatten();
+            let refinement = packed.refinement.as_ref().filter(|_| sparse.is_none());
             // Every band dispatches every chunk over its rows: entry `band * chunks + k`. A refined texture
             // records a level a band, each chunk over the level's list.
-            let refined = packed.refinement.is_some();
+            let refined = refinement.is_some();
             self.progress.band_height = match self.progress.band_rows {
-                _ if refined => w,
+                _ if refined || sparse.is_some() => w,
                 0 => w,
                 rows => rows.min(w),
             };
-            self.progress.levels = match &packed.refinement {
+            self.progress.levels = match refinement {
                 Some(r) => (0..=r.levels.coarsest)
                     .rev()
                     .flat_map(|l| match l {
@@ -240,7 +251,7 @@ impl FieldRenderer {
                     .collect(),
                 None => Vec::new(),
             };
-            self.progress.bands = match &packed.refinement {
+            self.progress.bands = match refinement {
                 Some(_) => self.progress.levels.len() as u32,
                 None => w.div_ceil(self.progress.band_height),
             };
@@ -248,6 +259,15 @@ impl FieldRenderer {
             // of a band's work).
             if refined {
                 self.progress.band_height = w.div_ceil(self.progress.bands);
+            }
+            // The list's direct dispatch: rows of a multiple of 8 invocations, about as many rows as columns.
+            self.progress.sparse = sparse.as_ref().map(|texels| {
+                let groups = ((texels.len() as f64).sqrt() / 8.0).max(1.0) as u32;
+                let n = texels.len() as u32;
+                [groups, n.div_ceil(8 * groups).div_ceil(8), n]
+            });
+            if let (Some(texels), Some([groups, ..])) = (&sparse, self.progress.sparse) {
+                rebind |= (self.resources.refiner).list_texels(device, queue, texels, 8 * groups);
             }
             // A refined texture's chunks, once for each part of a level's list (`row_offset` names the part).
             let sets = match refined {
@@ -268,7 +288,7 @@ impl FieldRenderer {
                             true => band,
                             false => band * self.progress.band_height,
                         },
-                        listed: refined as u32,
+                        listed: (refined || sparse.is_some()) as u32,
                         ..*c
                     };
                     let at = (band as usize * packed.chunks.len() + k)
@@ -277,7 +297,7 @@ impl FieldRenderer {
                 }
             }
             queue.write_buffer(&self.resources.chunks, 0, &bytes);
-            if let Some(r) = &packed.refinement {
+            if let Some(r) = refinement {
                 rebind |= (self.resources.refiner).prepare(device, queue, r, packed.params.layers);
             }
             let layers = packed.params.layers;
@@ -300,6 +320,24 @@ impl FieldRenderer {
                 self.resources.scratch =
                     field_texture(device, "energywave.field.scratch", side, FIELD_LAYERS);
                 rebind = true;
+            }
+            if sparse.is_some() {
+                // The texels left out hold zero, as their integral does (every integrand is zero on them).
+                let (texture, _) = self.resources.texture.as_ref().expect("made above");
+                let size = texture.size();
+                queue.write_texture(
+                    texture.as_image_copy(),
+                    &vec![
+                        0u8;
+                        4 * (size.width * size.height * size.depth_or_array_layers) as usize
+                    ],
+                    wgpu::TexelCopyBufferLayout {
+                        offset: 0,
+                        bytes_per_row: Some(4 * size.width),
+                        rows_per_image: Some(size.height),
+                    },
+                    size,
+                );
             }
             if rebind {
                 self.resources.bind_group = Some(self.make_bind_group(device));
@@ -413,7 +451,11 @@ impl FieldRenderer {
             .saturating_add(bands)
             .min(self.progress.bands);
         let stride = self.resources.chunk_stride;
-        match &packed.refinement {
+        match packed
+            .refinement
+            .as_ref()
+            .filter(|_| self.progress.sparse.is_none())
+        {
             Some(_) => {
                 let refiner = &self.resources.refiner;
                 let shaders = &shaders.refine;
@@ -434,11 +476,13 @@ impl FieldRenderer {
                 for band in self.progress.next_band..last {
                     let rows =
                         (self.progress.band_height).min(w - band * self.progress.band_height);
+                    let [x, y, _] =
+                        (self.progress.sparse).unwrap_or([w.div_ceil(8), rows.div_ceil(8), 0]);
                     for (k, c) in packed.chunks.iter().enumerate() {
                         let entry = band as usize * packed.chunks.len() + k;
                         pass.set_pipeline(pipelines.get(c.pipeline as usize));
                         pass.set_bind_group(0, bind_group, &[(entry as u64 * stride) as u32]);
-                        pass.dispatch_workgroups(w.div_ceil(8), rows.div_ceil(8), 1);
+                        pass.dispatch_workgroups(x, y, 1);
                     }
                 }
             }
@@ -595,7 +639,8 @@ impl FieldRenderer {
             .progress
             .uploaded
             .as_ref()
-            .and_then(|p| p.refinement.as_ref());
+            .and_then(|p| p.refinement.as_ref())
+            .filter(|_| self.progress.sparse.is_none());
         let Some(r) = refined else {
             return Ok(None);
         };
@@ -618,6 +663,12 @@ impl FieldRenderer {
         ))
     }
 
+    /// How many texels the uploaded field dispatches where it lists those the objects leave (`sparse_texels`),
+    /// or `None` where it dispatches a band of rows, or a refinement's lists, as usual.
+    pub fn listed_texels(&self) -> Option<u32> {
+        self.progress.sparse.map(|s| s[2])
+    }
+
     /// How many times the texture has been rendered.
     pub fn dispatch_count(&self) -> u64 {
         self.progress.dispatches
@@ -631,3 +682,29 @@ impl FieldRenderer {
 
 #[cfg(test)]
 mod tests;
+
+/// The texels of a `w` x `w` field whose rays have glow to integrate (their `clips`, the share of the ray
+/// before the first surface, above zero), as the field pass's list holds them (`x | y << 16`, rows from the
+/// top); none where too few are hidden for the list to pay: an eighth at least, or where the field would be
+/// `refined`, three quarters (a refinement integrates its coarsest level whole and passes over every texel of
+/// the finer ones). lavapipe and llvmpipe pay for every invocation dispatched, a hidden texel's too (about
+/// 16 ms for 256^2 texels where each integrates nothing): the fields behind a translucent object, which
+/// integrate only the texels whose rays cross one, cost their share of the texels, and a field behind a large
+/// opaque object the texels it leaves.
+fn sparse_texels(clips: &[f32], w: u32, refined: bool) -> Option<Vec<u32>> {
+    if clips.len() != (w as usize) * (w as usize) {
+        return None;
+    }
+    let seen = clips.iter().filter(|&&c| c > 0.0).count();
+    let pays = match refined {
+        true => 4 * seen <= clips.len(),
+        false => 8 * seen <= 7 * clips.len(),
+    };
+    pays.then(|| {
+        (0..w)
+            .flat_map(|y| (0..w).map(move |x| (x, y)))
+            .filter(|&(x, y)| clips[(y * w + x) as usize] > 0.0)
+            .map(|(x, y)| x | y << 16)
+            .collect()
+    })
+}

@@ -181,6 +181,33 @@ impl Refiner {
         }
     }
 
+    /// Uploads a list of texels made on the CPU (`x | y << 16`) as one part (part 0, and the whole), dispatched
+    /// directly with `per_row` invocations a row (`texel_of` in shaders/shared/field_pass.wgsl); returns true
+    /// where the list buffer was replaced (the field pass's bind group must be made again).
+    pub(super) fn list_texels(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        texels: &[u32],
+        per_row: u32,
+    ) -> bool {
+        let n = texels.len() as u64;
+        let size = ((LIST_HEADER + n.max(1)) * 4).next_multiple_of(16);
+        let grown = grow(device, &mut self.list, "list", size, STORAGE);
+        if grown {
+            self.group = None;
+        }
+        let mut words = vec![0u32; LIST_HEADER as usize];
+        words[0] = n as u32;
+        let part = [0, n as u32, per_row, 0];
+        words[4..8].copy_from_slice(&part);
+        let whole = 4 + 4 * PARTS as usize;
+        words[whole..whole + 4].copy_from_slice(&part);
+        words.extend_from_slice(texels);
+        queue.write_buffer(&self.list, 0, bytemuck::cast_slice(&words));
+        grown
+    }
+
     /// Uploads a refinement of a `layers`-layer texture; returns true where the list buffer was replaced (the
     /// field pass's bind group, which reads it, must be made again). The bind group of this pass is made again
     /// by `bind`.
