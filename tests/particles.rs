@@ -937,3 +937,63 @@ coefficient = 0.6
     // Measured: 0.082 of a step (1.8 steps with every step sampled once, the peak spread over its step).
     assert!(worst < 0.25, "{worst} steps");
 }
+
+/// A frame's particles are lit past its objects, and lit again when an object changes: paper 002_'s cloud with
+/// a ball of glass of radius R around its point light lets through, to every particle, the Fresnel
+/// transmittance at normal incidence `1 - ((eta - 1) / (eta + 1))^2` times `exp(-sigma R)` (every ray from the
+/// center leaves the ball square to its surface), in closed form; the ball made opaque leaves the ambient
+/// alone; moved off the light, it leaves the light as it was.
+#[test]
+fn a_frames_particles_are_lit_past_its_objects_and_again_when_they_change() {
+    use energywave::frame::FrameSetup;
+    use energywave::objects::translucent::Translucent;
+    use energywave::objects::{Object, Shape};
+    let mut scene = common::shipped_scene("paper_cloud.toml");
+    let open = FrameSetup::placed(&scene, 1.0).particles().unwrap();
+    let light = scene.sources.points[0].position;
+    let (radius, sigma, eta) = (0.5, 0.8, 1.5);
+    scene.objects = vec![Object {
+        shape: Shape::Sphere {
+            center: light,
+            radius,
+        },
+        color: [1.0; 3],
+        translucent: Some(Box::new(Translucent {
+            extinction: sigma,
+            eta,
+            inner: None,
+            noise: None,
+            resolution: Some(8),
+        })),
+    }];
+    let share = (1.0 - ((eta - 1.0) / (eta + 1.0)).powi(2)) * (-sigma * radius).exp();
+    let glass = FrameSetup::placed(&scene, 1.0).particles().unwrap();
+    for (g, o) in glass.lights.iter().zip(&open.lights) {
+        for c in 0..3 {
+            assert!(
+                (g.iso[c] - share * o.iso[c]).abs() <= 1e-9 * o.iso[c].abs(),
+                "{} against {share} of {}",
+                g.iso[c],
+                o.iso[c]
+            );
+        }
+    }
+    scene.objects[0].translucent = None;
+    let opaque = FrameSetup::placed(&scene, 1.0).particles().unwrap();
+    assert!(
+        opaque
+            .lights
+            .iter()
+            .all(|l| l.iso == [0.0; 3] && l.m == [[0.0; 6]; 3])
+    );
+    let v = DVec3::new(0.0, 0.0, 1.0);
+    assert_eq!(
+        opaque.lights[0].toward(v),
+        [energywave::objects::lighting::AMBIENT; 3]
+    );
+    if let Shape::Sphere { center, .. } = &mut scene.objects[0].shape {
+        *center = DVec3::new(-6.0, -4.5, -1.0);
+    }
+    let aside = FrameSetup::placed(&scene, 1.0).particles().unwrap();
+    assert_eq!(aside.lights, open.lights);
+}

@@ -66,6 +66,8 @@ impl RaysKey {
 pub struct ParticlesKey {
     pub sets: Vec<ParticleSet>,
     pub sources: Sources,
+    /// The objects, which shadow the particles, their colors cleared (the light does not depend on them).
+    pub objects: Vec<Object>,
     pub palette: Palette,
     pub epsilon: f64,
 }
@@ -76,6 +78,12 @@ impl ParticlesKey {
         ParticlesKey {
             sets: scene.particles.clone(),
             sources: scene.sources.clone(),
+            objects: (scene.objects.iter())
+                .map(|o| Object {
+                    color: [0.0; 3],
+                    ..o.clone()
+                })
+                .collect(),
             palette: scene.colors.palette(),
             epsilon: scene.integration.epsilon,
         }
@@ -381,7 +389,12 @@ impl FrameCache {
             return None;
         }
         let value = self.kept(Key::Particles(key.clone()), || {
-            let lit = lit_particles(&key.sets, &key.sources, key.palette, key.epsilon)?;
+            let lit = lit_particles(
+                &key.sets,
+                (&key.sources, &key.objects),
+                key.palette,
+                key.epsilon,
+            )?;
             Some(Value::Particles(Arc::new(lit)))
         })?;
         match value {

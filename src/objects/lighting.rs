@@ -278,6 +278,50 @@ impl Lights {
         }
     }
 
+    /// The share of term `k`'s light that reaches `x` (a point in a medium, on no surface) past `objects`: its
+    /// points' inverse-square weights as in `visibility`, each point's light stopped by an opaque object and
+    /// dimmed by the translucent ones it crosses (`translucent::transmittance`: the Fresnel transmittance at
+    /// every surface, `exp(-tau)` between), over all of its points (no horizon). A point source's light comes
+    /// from `nearest` alone. Where `PROBES` samples and the nearest point let through the same share, the
+    /// whole source does.
+    pub fn passing(&self, objects: &[Object], x: DVec3, k: usize, nearest: DVec3) -> f64 {
+        if objects.is_empty() {
+            return 1.0;
+        }
+        if let Some(Some(bound)) = self.bounds.get(k)
+            && !objects.iter().any(|o| may_come_between(o, x, *bound))
+        {
+            return 1.0;
+        }
+        let through = |p: DVec3| match super::blocked_by_opaque(objects, p, x) {
+            true => 0.0,
+            false => super::translucent::transmittance(objects, p, x),
+        };
+        let near = through(nearest);
+        let share = |points: &[(DVec3, f64)]| -> (f64, f64) {
+            points.iter().fold((0.0, 0.0), |(s, t), &(p, w)| {
+                let seen = through(p);
+                (s + w * seen, t + w)
+            })
+        };
+        let Some(probes) = self.extent_samples(x, k, PROBES) else {
+            return near;
+        };
+        let alike = probes
+            .iter()
+            .all(|&(p, _)| (through(p) - near).abs() <= 1e-12);
+        if alike {
+            return near;
+        }
+        let all = self
+            .extent_samples(x, k, SOFT_SAMPLES)
+            .expect("an extended source");
+        match share(&all) {
+            (s, t) if t > 0.0 => s / t,
+            _ => near,
+        }
+    }
+
     /// `n` stratified points of term `k`'s source with their weights `W / |x - p|^2` (times the measure of the
     /// stratum), or `None` for a point, which has no extent.
     fn extent_samples(&self, x: DVec3, k: usize, n: usize) -> Option<Vec<(DVec3, f64)>> {

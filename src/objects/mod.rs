@@ -366,6 +366,17 @@ pub fn blocked(objects: &[Object], from: DVec3, to: DVec3) -> bool {
         .any(|o| o.hit(from, d, skip, 1.0 - skip).is_some())
 }
 
+/// Whether an opaque object among `objects` crosses the segment `from -> to` (`blocked` without the
+/// translucent ones, which dim the light that crosses them instead).
+pub fn blocked_by_opaque(objects: &[Object], from: DVec3, to: DVec3) -> bool {
+    let d = to - from;
+    let scale = 1.0 + from.abs().max_element().max(to.abs().max_element());
+    let skip = SELF_HIT * scale / d.length().max(1e-300);
+    (objects.iter())
+        .filter(|o| o.translucent.is_none())
+        .any(|o| o.hit(from, d, skip, 1.0 - skip).is_some())
+}
+
 /// The objects' triangles with their vertices' light (albedo, shadow factor and lit color): what the GPU draws
 /// and the CPU twin ray-casts, both shading every pixel from them (`lighting::shaded`).
 #[derive(Clone, Debug, Default, PartialEq)]

@@ -1,8 +1,10 @@
 //! The wave's light on each particle (docs/METHOD.md section 9), worked out once per edit in f64 and independent of
 //! the camera: every source lights a particle from the point of it its term reads at the particle's center,
 //! with its color and its term's strength there (`objects::lighting::Lights`), dimmed by the optical depth of the
-//! particles between that point and the center (the particle's own half included: its mean shadow), and
-//! scattered toward the eye by the paper's phase `3/4 (1 + cos^2 theta)`.
+//! particles between that point and the center (the particle's own half included: its mean shadow) and by the
+//! objects (an opaque one stops it, a translucent one lets through its Fresnel transmittance at each surface and
+//! `exp(-tau)` between; a long source's shadow is soft, as on the objects: `Lights::passing`), and scattered
+//! toward the eye by the paper's phase `3/4 (1 + cos^2 theta)`.
 //!
 //! Since the phase is a quadratic form in the view direction `v`, the light a particle scatters toward any `v` is
 //! `A + v^T M v` per channel, with `A = 3/4 sum_i c_i s_i T_i` and `M = 3/4 sum_i c_i s_i T_i l_i l_i^T` (l_i the
@@ -16,6 +18,7 @@ use glam::{DVec3, IVec3};
 use rayon::prelude::*;
 
 use super::Particle;
+use crate::objects::Object;
 use crate::objects::lighting::{AMBIENT, Lights};
 
 /// The light a particle scatters, as a function of the direction `v` toward the eye: per channel
@@ -42,15 +45,30 @@ impl ParticleLight {
 
 /// Every particle's light from `lights`, through `particles` themselves.
 pub fn light_particles(lights: &Lights, particles: &[Particle]) -> Vec<ParticleLight> {
+    light_particles_among(lights, &[], particles)
+}
+
+/// Every particle's light from `lights`, through `particles` themselves and past `objects`: an opaque object
+/// stops a source's light, a translucent one dims it by the light it lets through (`Lights::passing`: a long
+/// source's shadow soft, as on the objects).
+pub fn light_particles_among(
+    lights: &Lights,
+    objects: &[Object],
+    particles: &[Particle],
+) -> Vec<ParticleLight> {
     let grid = Grid::new(particles);
     particles
         .par_iter()
         .map_init(
             || (vec![0u64; particles.len()], 0u64),
             |(seen, stamp), p| {
-                light_one(lights, p, |from| {
+                light_one(lights, p, |k, from| {
+                    let passing = lights.passing(objects, p.position, k, from);
+                    if passing <= 0.0 {
+                        return 0.0;
+                    }
                     *stamp += 1;
-                    grid.optical_depth(particles, from, p.position, seen, *stamp)
+                    passing * (-grid.optical_depth(particles, from, p.position, seen, *stamp)).exp()
                 })
             },
         )
@@ -61,15 +79,20 @@ pub fn light_particles(lights: &Lights, particles: &[Particle]) -> Vec<ParticleL
 /// shadows, a small part of its cost. What the viewer draws for the moment it works out the shadowed light.
 pub fn light_particles_unshadowed(lights: &Lights, particles: &[Particle]) -> Vec<ParticleLight> {
     (particles.par_iter())
-        .map(|p| light_one(lights, p, |_| 0.0))
+        .map(|p| light_one(lights, p, |_, _| 1.0))
         .collect()
 }
 
-/// The light of `p` from `lights`, each sample dimmed by the optical depth `depth` gives from its place.
-fn light_one(lights: &Lights, p: &Particle, mut depth: impl FnMut(DVec3) -> f64) -> ParticleLight {
+/// The light of `p` from `lights`, each sample (term `k`, from its place) times the share `through` lets reach
+/// the particle.
+fn light_one(
+    lights: &Lights,
+    p: &Particle,
+    mut through: impl FnMut(usize, DVec3) -> f64,
+) -> ParticleLight {
     let mut out = ParticleLight::default();
-    for sample in lights.at(p.position) {
-        let reach = 0.75 * sample.strength * (-depth(sample.from)).exp();
+    for (k, sample) in lights.at(p.position).enumerate() {
+        let reach = 0.75 * sample.strength * through(k, sample.from);
         let l = (p.position - sample.from).normalize_or_zero();
         let outer = [
             l.x * l.x,
@@ -239,12 +262,12 @@ pub struct LitParticles {
     pub lights: Vec<ParticleLight>,
 }
 
-/// The particles of `sets` lit by `sources` (`light_particles`), none without particles. A renderer keeps
+/// The particles of `sets` lit by `sources` past `objects` (`light_particles_among`), none without particles. A renderer keeps
 /// them in its frame cache (`frame::FrameCache::lit_particles`): orbiting, or a frame's renderers and its twin,
 /// never light them again.
 pub fn lit_particles(
     sets: &[super::ParticleSet],
-    sources: &crate::field::Sources,
+    (sources, objects): (&crate::field::Sources, &[Object]),
     palette: crate::field::Palette,
     epsilon: f64,
 ) -> Option<LitParticles> {
@@ -255,7 +278,8 @@ pub fn lit_particles(
     if particles.is_empty() {
         return None;
     }
-    let lights = light_particles(&Lights::new(sources, palette, epsilon), &particles);
+    let lights =
+        light_particles_among(&Lights::new(sources, palette, epsilon), objects, &particles);
     Some(LitParticles { particles, lights })
 }
 
