@@ -971,7 +971,9 @@ fn a_frames_particles_are_lit_past_its_objects_and_again_when_they_change() {
     for (g, o) in glass.lights.iter().zip(&open.lights) {
         for c in 0..3 {
             assert!(
-                (g.iso[c] - share * o.iso[c]).abs() <= 1e-9 * o.iso[c].abs(),
+                // To 1e-8: a shadow ray leaves out 1e-9 of the scene's scale at either end (its ends' own
+                // surfaces), a few 1e-9 of the chord here.
+                (g.iso[c] - share * o.iso[c]).abs() <= 1e-8 * o.iso[c].abs(),
                 "{} against {share} of {}",
                 g.iso[c],
                 o.iso[c]

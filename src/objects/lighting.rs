@@ -6,7 +6,8 @@
 //! as bright as the glow's energy at it (twice the coefficient, twice the light; the same eps keeps a surface
 //! through a source finite), and a long source lights like the line light it is (1 / d) rather than a point
 //! light (1 / d^2) squeezed onto its nearest point. Lambert's cosine with the direction to that point, a
-//! shadow where other objects hide the source, and a small ambient term so that unlit sides keep their shape:
+//! shadow where other objects hide the source (a translucent one dims it by the light it lets through:
+//! `passes`), and a small ambient term so that unlit sides keep their shape:
 //!
 //! `L(X) = albedo * (AMBIENT + sum_i Ce_i psi_i(X) max(0, n . l_i) V_i(X))`.
 //!
@@ -29,7 +30,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use super::tessellate::Surface;
-use super::{Object, Shape, blocked};
+use super::{Object, Shape};
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
 
 use crate::field::{Palette, Sources, brightest, curve, wseries};
@@ -222,15 +223,33 @@ impl Lights {
     }
 
     /// The share `V` of term `k`'s source that `x` (on a surface of normal `n`) sees past `objects` (1 unhidden,
-    /// 0 in full shadow): the inverse-square weights of its points that `x` sees over those of all its points
+    /// 0 in full shadow): the inverse-square weights of its points that reach `x` over those of all its points
     /// above the surface's tangent plane (the module's formula; the cosine with the nearest point accounts for
-    /// the horizon, so a sphere does not shadow itself), by `SOFT_SAMPLES` stratified samples of the source,
-    /// after `PROBES` of them agree or not. A point is seen or not; `nearest` is the light's point for it.
+    /// the horizon, so a sphere does not shadow itself), each point's light stopped by an opaque object and
+    /// dimmed by the translucent ones it crosses (`passes`), by `SOFT_SAMPLES` stratified samples of the
+    /// source, after `PROBES` of them agree or not. A point's light comes from `nearest` alone.
     pub fn visibility(
         &self,
         objects: &[Object],
         x: DVec3,
         n: DVec3,
+        k: usize,
+        nearest: DVec3,
+    ) -> f64 {
+        self.share_past(objects, x, Some(n), k, nearest)
+    }
+
+    /// The share of term `k`'s light that reaches `x` (a point in a medium, on no surface) past `objects`:
+    /// `visibility` over all of the source's points (no horizon). What lights a particle.
+    pub fn passing(&self, objects: &[Object], x: DVec3, k: usize, nearest: DVec3) -> f64 {
+        self.share_past(objects, x, None, k, nearest)
+    }
+
+    fn share_past(
+        &self,
+        objects: &[Object],
+        x: DVec3,
+        horizon: Option<DVec3>,
         k: usize,
         nearest: DVec3,
     ) -> f64 {
@@ -243,82 +262,31 @@ impl Lights {
             return 1.0;
         }
         let above = |points: Vec<(DVec3, f64)>| -> Vec<(DVec3, f64)> {
-            let kept: Vec<_> = points
-                .into_iter()
-                .filter(|(p, _)| n.dot(*p - x) > 0.0)
-                .collect();
-            kept
+            match horizon {
+                Some(n) => (points.into_iter())
+                    .filter(|(p, _)| n.dot(*p - x) > 0.0)
+                    .collect(),
+                None => points,
+            }
         };
         let samples = |count: usize| self.extent_samples(x, k, count).map(above);
+        let near = passes(objects, nearest, x);
         let Some(probes) = samples(PROBES) else {
-            return if blocked(objects, x, nearest) {
-                0.0
-            } else {
-                1.0
-            };
+            return near;
         };
-        let seen = |points: &[(DVec3, f64)]| -> (f64, f64) {
-            points.iter().fold((0.0, 0.0), |(s, t), &(p, w)| {
-                (if blocked(objects, x, p) { s } else { s + w }, t + w)
-            })
-        };
-        let (s, t) = seen(&probes);
-        // All seen or none, and the nearest point alike: no penumbra here (a shadow narrower than the probes'
-        // spacing slips through, as a hard shadow's edge between vertices did).
-        let near_blocked = blocked(objects, x, nearest);
-        if (s == t && !near_blocked) || (s == 0.0 && near_blocked) {
-            return if near_blocked { 0.0 } else { 1.0 };
+        // All alike, and the nearest point too: no penumbra here (a shadow narrower than the probes' spacing
+        // slips through, as a hard shadow's edge between vertices did).
+        if (probes.iter()).all(|&(p, _)| (passes(objects, p, x) - near).abs() <= 1e-12) {
+            return near;
         }
         let all = samples(SOFT_SAMPLES).expect("an extended source");
-        let (s, t) = seen(&all);
+        let (s, t) = all.iter().fold((0.0, 0.0), |(s, t), &(p, w)| {
+            (s + w * passes(objects, p, x), t + w)
+        });
         match t > 0.0 {
             true => s / t,
             // Nothing of it above the horizon: the nearest point decides (its cosine is about 0 anyway).
-            false => (!near_blocked) as u8 as f64,
-        }
-    }
-
-    /// The share of term `k`'s light that reaches `x` (a point in a medium, on no surface) past `objects`: its
-    /// points' inverse-square weights as in `visibility`, each point's light stopped by an opaque object and
-    /// dimmed by the translucent ones it crosses (`translucent::transmittance`: the Fresnel transmittance at
-    /// every surface, `exp(-tau)` between), over all of its points (no horizon). A point source's light comes
-    /// from `nearest` alone. Where `PROBES` samples and the nearest point let through the same share, the
-    /// whole source does.
-    pub fn passing(&self, objects: &[Object], x: DVec3, k: usize, nearest: DVec3) -> f64 {
-        if objects.is_empty() {
-            return 1.0;
-        }
-        if let Some(Some(bound)) = self.bounds.get(k)
-            && !objects.iter().any(|o| may_come_between(o, x, *bound))
-        {
-            return 1.0;
-        }
-        let through = |p: DVec3| match super::blocked_by_opaque(objects, p, x) {
-            true => 0.0,
-            false => super::translucent::transmittance(objects, p, x),
-        };
-        let near = through(nearest);
-        let share = |points: &[(DVec3, f64)]| -> (f64, f64) {
-            points.iter().fold((0.0, 0.0), |(s, t), &(p, w)| {
-                let seen = through(p);
-                (s + w * seen, t + w)
-            })
-        };
-        let Some(probes) = self.extent_samples(x, k, PROBES) else {
-            return near;
-        };
-        let alike = probes
-            .iter()
-            .all(|&(p, _)| (through(p) - near).abs() <= 1e-12);
-        if alike {
-            return near;
-        }
-        let all = self
-            .extent_samples(x, k, SOFT_SAMPLES)
-            .expect("an extended source");
-        match share(&all) {
-            (s, t) if t > 0.0 => s / t,
-            _ => near,
+            false => near,
         }
     }
 
@@ -386,6 +354,23 @@ impl Lights {
                 .collect(),
         )
     }
+}
+
+/// The share of light from `from` that reaches `to` past `objects`: none where an opaque object crosses the
+/// segment, else the light the translucent ones it crosses let through (`translucent::transmittance`: the
+/// Fresnel transmittance at each surface, `exp(-tau)` through the medium). The ends' own surfaces are left out,
+/// as `blocked` leaves them.
+pub fn passes(objects: &[Object], from: DVec3, to: DVec3) -> f64 {
+    if super::blocked_by_opaque(objects, from, to) {
+        return 0.0;
+    }
+    if objects.iter().all(|o| o.translucent.is_none()) {
+        return 1.0;
+    }
+    let d = to - from;
+    let scale = 1.0 + from.abs().max_element().max(to.abs().max_element());
+    let skip = super::SELF_HIT * scale / d.length().max(1e-300);
+    super::translucent::transmittance(objects, from + d * skip, to - d * skip)
 }
 
 /// Whether `object` may cross a segment from `x` to a point of the sphere `(c, r)`: conservatively, by a sphere
