@@ -1169,8 +1169,8 @@ fn a_glow_dimmed_by_a_translucent_object_below_the_cutoff_still_shows_through_it
 /// the transmittance to each of its 17 points off them) are the transmittance worked out afresh from the eye to
 /// each point (`translucent::transmittance`, every object's surfaces and medium found again), weighted as the
 /// crossing weighs them: for a box with a cavity turned about two axes, a sphere overlapping it, a concave mesh
-/// and a noisy medium (sampled, not read off), over rays that graze, cross one object or several, and end at an
-/// opaque wall inside one.
+/// and a noisy medium beside a uniform one (sampled, not read off), over rays that graze, cross one object or
+/// several, and end at an opaque wall inside one.
 #[test]
 fn a_crossings_shares_are_the_transmittance_to_each_of_its_samples() {
     use energywave::objects::translucent::{CROSSING_SAMPLES, crossing, transmittance};
@@ -1191,7 +1191,7 @@ fn a_crossings_shares_are_the_transmittance_to_each_of_its_samples() {
         ("turned cube, sphere", vec![turned.clone(), sphere(0.8, 8)]),
         ("cube", vec![cavity_cube(1.5, 8)]),
         ("L prism", vec![l_prism(1.2, 8)]),
-        ("noisy sphere", vec![noisy]),
+        ("noisy sphere, cube", vec![noisy, cavity_cube(1.5, 8)]),
     ];
     let eye = DVec3::new(0.4, 0.9, 4.0);
     let mut compared = 0;

@@ -347,27 +347,33 @@ pub fn transmittance(objects: &[Object], from: DVec3, to: DVec3) -> f64 {
 /// The translucent objects along a ray `eye + t d`, `t` in `(0, end)`, found once: `transmittance` from the eye
 /// to any point of the ray, read off them, is the function's to rounding (the same surfaces, the same pieces,
 /// each piece's extinction read where the function reads it), at the cost of a walk instead of every object's
-/// surfaces and medium found again. A texel's crossing reads it at 17 points.
-struct Along {
+/// surfaces and medium found again; an object whose medium a noise varies is sampled at each point as the
+/// function samples it. A texel's crossing reads it at 17 points.
+struct Along<'a> {
     /// Each surface crossed: its `t`, its Fresnel transmittance, in no order.
     surfaces: Vec<(f64, f64)>,
     /// Each piece of medium between two surfaces of one object: from `t`, to `t`, `sigma_t |d|` (its optical
     /// thickness per unit of `t`), and the `t` of its object's first surface: the function counts an object's
     /// medium only on a segment that crosses one of its surfaces.
     pieces: Vec<[f64; 4]>,
+    /// The objects whose medium varies within its pieces (a noise): each point's transmittance through them is
+    /// `transmittance`'s own, the factors of the objects apart.
+    sampled: Vec<&'a Object>,
+    eye: DVec3,
+    d: DVec3,
 }
 
-impl Along {
-    /// `None` where a medium varies within its pieces (a noise): there each point's own pieces are sampled.
-    fn of(objects: &[Object], eye: DVec3, d: DVec3, end: f64) -> Option<Along> {
-        let (mut surfaces, mut pieces) = (Vec::new(), Vec::new());
+impl<'a> Along<'a> {
+    fn of(objects: &'a [Object], eye: DVec3, d: DVec3, end: f64) -> Along<'a> {
+        let (mut surfaces, mut pieces, mut sampled) = (Vec::new(), Vec::new(), Vec::new());
         let (dir, length) = (d.normalize(), d.length());
         for o in objects {
             let Some(medium) = Medium::of(o) else {
                 continue;
             };
             if medium.material().noise.is_some() {
-                return None;
+                sampled.push(o);
+                continue;
             }
             let from = surfaces.len();
             let mut at = 0.0;
@@ -398,7 +404,13 @@ impl Along {
                 }
             }
         }
-        Some(Along { surfaces, pieces })
+        Along {
+            surfaces,
+            pieces,
+            sampled,
+            eye,
+            d,
+        }
     }
 
     /// `transmittance` from the eye to `eye + t d`, `t` in `(0, end]`.
@@ -411,7 +423,10 @@ impl Along {
             .filter(|p| p[0] < t && p[3] < t)
             .map(|p| (p[1].min(t) - p[0]) * p[2])
             .sum();
-        fresnel * (-tau).exp()
+        let sampled: f64 = (self.sampled.iter())
+            .map(|o| transmittance(std::slice::from_ref(*o), self.eye, self.eye + self.d * t))
+            .product();
+        fresnel * (-tau).exp() * sampled
     }
 }
 
@@ -463,10 +478,7 @@ pub fn crossing(
     let at = |t: f64| eye + d * t;
     // The surfaces and pieces along the ray found once, the transmittance to each sample read off them.
     let along = Along::of(objects, eye, d, end);
-    let through = |t: f64| match &along {
-        Some(along) => along.transmittance(t),
-        None => transmittance(objects, eye, at(t)),
-    };
+    let through = |t: f64| along.transmittance(t);
     let behind = through(end);
     let (a, b) = (first.max(1.0), exit);
     let inside = if b > a {
