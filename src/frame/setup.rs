@@ -11,7 +11,7 @@ use crate::geometry::{Billboard, Reach};
 use crate::integrate::Integration;
 use crate::objects::Lit;
 use crate::particles::light::LitParticles;
-use crate::particles::view::{GlowPlace, SmokeView, smoke_size};
+use crate::particles::view::{GlowPlace, SmokeView, finest_radius, smoke_size};
 use crate::scene::Scene;
 
 /// One term of the field as a frame integrates it, in the order of `Sources::looks` (points, lines, tori,
@@ -278,7 +278,8 @@ impl<'a> FrameSetup<'a> {
 
     /// The smoke of this frame of `frame` pixels over a field of `resolution` texels a side: its camera, its
     /// slices, its glow placed by its sources. A field coarser than the scene's (the viewer's while the view
-    /// moves) gets a coarser image and slices as much wider, up to four times.
+    /// moves) gets a coarser image and slices as much wider, up to four times; large particles a coarser image
+    /// (`smoke_size`).
     pub fn smoke_view(
         &self,
         particles: &[crate::particles::Particle],
@@ -291,7 +292,11 @@ impl<'a> FrameSetup<'a> {
         SmokeView::new(
             particles,
             &scene.camera,
-            smoke_size(frame, resolution),
+            smoke_size(
+                frame,
+                resolution,
+                finest_radius(particles, &scene.camera, frame[1]),
+            ),
             scene.slice_width * coarser,
             &setup.glow_place(),
         )
