@@ -946,26 +946,12 @@ coefficient = 0.6
 #[test]
 fn a_frames_particles_are_lit_past_its_objects_and_again_when_they_change() {
     use energywave::frame::FrameSetup;
-    use energywave::objects::translucent::Translucent;
-    use energywave::objects::{Object, Shape};
+    use energywave::objects::Shape;
     let mut scene = common::shipped_scene("paper_cloud.toml");
     let open = FrameSetup::placed(&scene, 1.0).particles().unwrap();
     let light = scene.sources.points[0].position;
     let (radius, sigma, eta) = (0.5, 0.8, 1.5);
-    scene.objects = vec![Object {
-        shape: Shape::Sphere {
-            center: light,
-            radius,
-        },
-        color: [1.0; 3],
-        translucent: Some(Box::new(Translucent {
-            extinction: sigma,
-            eta,
-            inner: None,
-            noise: None,
-            resolution: Some(8),
-        })),
-    }];
+    scene.objects = vec![common::glass_sphere(light, radius, sigma, eta)];
     let share = (1.0 - ((eta - 1.0) / (eta + 1.0)).powi(2)) * (-sigma * radius).exp();
     let glass = FrameSetup::placed(&scene, 1.0).particles().unwrap();
     for (g, o) in glass.lights.iter().zip(&open.lights) {

@@ -1249,6 +1249,18 @@ fn a_crossings_shares_are_the_transmittance_to_each_of_its_samples() {
     assert!(compared > 600, "{compared} rays crossed the objects");
 }
 
+/// `translucent_cavity.toml` lit by a single point light of coefficient 1 at `light` instead of its ring.
+fn lit_by_a_point(light: DVec3) -> Scene {
+    let mut scene = scene("translucent_cavity");
+    scene.sources.tori.clear();
+    scene.sources.points.push(energywave::field::Point {
+        position: light,
+        coefficient: 1.0,
+        look: Default::default(),
+    });
+    scene
+}
+
 /// The light a lone particle gets past `objects` over the light it gets with nothing between, every channel and
 /// every entry of its quadratic form by the same factor (one source): that factor.
 fn particle_light_share(scene: &Scene, objects: &[Object], at: DVec3) -> f64 {
@@ -1280,31 +1292,16 @@ fn particle_light_share(scene: &Scene, objects: &[Object], at: DVec3) -> f64 {
 /// opaque object stops the light: behind a glass sphere from a point source, the Fresnel transmittance at both
 /// surfaces at their angles and `exp(-sigma L)` along the chord, all in closed form (the Fresnel equations
 /// written apart); behind the same sphere made opaque, none; beside it, all; inside it, one surface and the
-/// chord's part up to the particle. A ring's light partly hidden by an opaque wall is the share of its
-/// inverse-square weights seen, against 200,000 points of the ring tested against the wall by its planes: the
-/// shadow is soft, within the 32 stratified points' 1/32.
+/// chord's part up to the particle; the light and the particle both inside a glass ball, `exp(-sigma d)`. A
+/// ring's light partly hidden by an opaque wall is the share of its inverse-square weights seen, against 200,000
+/// points of the ring tested against the wall by its planes: the shadow is soft, within the 32 stratified
+/// points' 1/32.
 #[test]
 fn particles_are_lit_through_translucent_objects_dimmed_and_shadowed_by_opaque_ones() {
-    let mut scene = scene("translucent_cavity");
-    scene.sources.tori.clear();
     let light = DVec3::new(-2.0, 0.1, 0.2);
-    scene.sources.points.push(energywave::field::Point {
-        position: light,
-        coefficient: 1.0,
-        look: Default::default(),
-    });
+    let mut scene = lit_by_a_point(light);
     let (center, radius, sigma, eta) = (DVec3::new(0.0, 0.0, 0.0), 0.6, 1.5, 1.4);
-    let glass = Object {
-        shape: Shape::Sphere { center, radius },
-        color: [1.0; 3],
-        translucent: Some(Box::new(Translucent {
-            extinction: sigma,
-            eta,
-            inner: None,
-            noise: None,
-            resolution: Some(8),
-        })),
-    };
+    let glass = common::glass_sphere(center, radius, sigma, eta);
     // The segment from the light to `x` against the sphere, in closed form.
     let closed = |x: DVec3| -> f64 {
         let d = x - light;
@@ -1353,6 +1350,15 @@ fn particles_are_lit_through_translucent_objects_dimmed_and_shadowed_by_opaque_o
             assert!(through > 0.05 && through < 0.5, "{through}");
         }
     }
+    // The light and the particle both inside a glass ball: no surface between them, the medium all the way.
+    let ball = common::glass_sphere(light, 1.0, sigma, eta);
+    let x = light + DVec3::new(0.5, 0.3, -0.2);
+    let want = (-sigma * (x - light).length()).exp();
+    let within = particle_light_share(&scene, std::slice::from_ref(&ball), x);
+    assert!(
+        (within - want).abs() <= 1e-8,
+        "both inside: {within} against {want}"
+    );
     // A ring in the x = -2 plane, a wall between it and the particle hiding its lower part.
     scene.sources.points.clear();
     scene.sources.tori.push(energywave::field::Torus {
@@ -1413,26 +1419,10 @@ fn particles_are_lit_through_translucent_objects_dimmed_and_shadowed_by_opaque_o
 /// the ring.
 #[test]
 fn objects_in_a_translucent_objects_shadow_get_the_light_it_lets_through() {
-    let mut scene = scene("translucent_cavity");
-    scene.sources.tori.clear();
     let light = DVec3::new(0.3, 2.5, -0.2);
-    scene.sources.points.push(energywave::field::Point {
-        position: light,
-        coefficient: 1.0,
-        look: Default::default(),
-    });
+    let mut scene = lit_by_a_point(light);
     let (center, radius, sigma, eta) = (DVec3::new(0.1, 1.0, 0.0), 0.5, 1.2, 1.45);
-    let glass = Object {
-        shape: Shape::Sphere { center, radius },
-        color: [1.0; 3],
-        translucent: Some(Box::new(Translucent {
-            extinction: sigma,
-            eta,
-            inner: None,
-            noise: None,
-            resolution: Some(8),
-        })),
-    };
+    let glass = common::glass_sphere(center, radius, sigma, eta);
     let mut opaque = glass.clone();
     opaque.translucent = None;
     let lights = lights(&scene);

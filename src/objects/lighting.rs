@@ -7,7 +7,7 @@
 //! through a source finite), and a long source lights like the line light it is (1 / d) rather than a point
 //! light (1 / d^2) squeezed onto its nearest point. Lambert's cosine with the direction to that point, a
 //! shadow where other objects hide the source (a translucent one dims it by the light it lets through:
-//! `passes`), and a small ambient term so that unlit sides keep their shape:
+//! `objects::passes`), and a small ambient term so that unlit sides keep their shape:
 //!
 //! `L(X) = albedo * (AMBIENT + sum_i Ce_i psi_i(X) max(0, n . l_i) V_i(X))`.
 //!
@@ -226,7 +226,7 @@ impl Lights {
     /// 0 in full shadow): the inverse-square weights of its points that reach `x` over those of all its points
     /// above the surface's tangent plane (the module's formula; the cosine with the nearest point accounts for
     /// the horizon, so a sphere does not shadow itself), each point's light stopped by an opaque object and
-    /// dimmed by the translucent ones it crosses (`passes`), by `SOFT_SAMPLES` stratified samples of the
+    /// dimmed by the translucent ones it crosses (`objects::passes`), by `SOFT_SAMPLES` stratified samples of the
     /// source, after `PROBES` of them agree or not. A point's light comes from `nearest` alone.
     pub fn visibility(
         &self,
@@ -270,18 +270,22 @@ impl Lights {
             }
         };
         let samples = |count: usize| self.extent_samples(x, k, count).map(above);
-        let near = passes(objects, nearest, x);
+        let near = super::passes(objects, nearest, x);
         let Some(probes) = samples(PROBES) else {
             return near;
         };
         // All alike, and the nearest point too: no penumbra here (a shadow narrower than the probes' spacing
-        // slips through, as a hard shadow's edge between vertices did).
-        if (probes.iter()).all(|&(p, _)| (passes(objects, p, x) - near).abs() <= 1e-12) {
+        // slips through, as a hard shadow's edge between vertices did). A probe of no weight (a curve's weight
+        // series at 0 there) decides nothing.
+        let agree = |&(p, w): &(DVec3, f64)| {
+            w == 0.0 || (super::passes(objects, p, x) - near).abs() <= 1e-12
+        };
+        if probes.iter().all(agree) {
             return near;
         }
         let all = samples(SOFT_SAMPLES).expect("an extended source");
         let (s, t) = all.iter().fold((0.0, 0.0), |(s, t), &(p, w)| {
-            (s + w * passes(objects, p, x), t + w)
+            (s + w * super::passes(objects, p, x), t + w)
         });
         match t > 0.0 {
             true => s / t,
@@ -354,23 +358,6 @@ impl Lights {
                 .collect(),
         )
     }
-}
-
-/// The share of light from `from` that reaches `to` past `objects`: none where an opaque object crosses the
-/// segment, else the light the translucent ones it crosses let through (`translucent::transmittance`: the
-/// Fresnel transmittance at each surface, `exp(-tau)` through the medium). The ends' own surfaces are left out,
-/// as `blocked` leaves them.
-pub fn passes(objects: &[Object], from: DVec3, to: DVec3) -> f64 {
-    if super::blocked_by_opaque(objects, from, to) {
-        return 0.0;
-    }
-    if objects.iter().all(|o| o.translucent.is_none()) {
-        return 1.0;
-    }
-    let d = to - from;
-    let scale = 1.0 + from.abs().max_element().max(to.abs().max_element());
-    let skip = super::SELF_HIT * scale / d.length().max(1e-300);
-    super::translucent::transmittance(objects, from + d * skip, to - d * skip)
 }
 
 /// Whether `object` may cross a segment from `x` to a point of the sphere `(c, r)`: conservatively, by a sphere

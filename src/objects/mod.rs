@@ -377,6 +377,23 @@ pub fn blocked_by_opaque(objects: &[Object], from: DVec3, to: DVec3) -> bool {
         .any(|o| o.hit(from, d, skip, 1.0 - skip).is_some())
 }
 
+/// The share of light from `from` that reaches `to` past `objects`: none where an opaque object crosses the
+/// segment, else the light the translucent ones it crosses let through (`translucent::transmittance`: the
+/// Fresnel transmittance at each surface, `exp(-tau)` through the medium). The ends' own surfaces are left out,
+/// as `blocked` leaves them.
+pub fn passes(objects: &[Object], from: DVec3, to: DVec3) -> f64 {
+    if blocked_by_opaque(objects, from, to) {
+        return 0.0;
+    }
+    if objects.iter().all(|o| o.translucent.is_none()) {
+        return 1.0;
+    }
+    let d = to - from;
+    let scale = 1.0 + from.abs().max_element().max(to.abs().max_element());
+    let skip = SELF_HIT * scale / d.length().max(1e-300);
+    translucent::transmittance(objects, from + d * skip, to - d * skip)
+}
+
 /// The objects' triangles with their vertices' light (albedo, shadow factor and lit color): what the GPU draws
 /// and the CPU twin ray-casts, both shading every pixel from them (`lighting::shaded`).
 #[derive(Clone, Debug, Default, PartialEq)]

@@ -224,3 +224,24 @@ pub fn outline_pixels(scene: &energywave::scene::Scene, w: u32, h: u32) -> Vec<b
         })
         .collect()
 }
+
+/// A uniform translucent sphere (no cavity, no noise, 8 voxels a side): a glass ball.
+#[allow(dead_code)]
+pub fn glass_sphere(
+    center: glam::DVec3,
+    radius: f64,
+    extinction: f64,
+    eta: f64,
+) -> energywave::objects::Object {
+    energywave::objects::Object {
+        shape: energywave::objects::Shape::Sphere { center, radius },
+        color: [1.0; 3],
+        translucent: Some(Box::new(energywave::objects::translucent::Translucent {
+            extinction,
+            eta,
+            inner: None,
+            noise: None,
+            resolution: Some(8),
+        })),
+    }
+}

@@ -49,6 +49,8 @@ struct Resources {
     bind_group: Option<wgpu::BindGroup>,
     /// The refinement's buffers: its list of texels is the field pass's binding 14.
     refiner: refine::Refiner,
+    /// A layer of zeros, where a field lists its texels (`sparse_texels`): copied over the texture first.
+    zeros: Option<wgpu::Buffer>,
 }
 
 /// How far the uploaded inputs' field has come: its bands, and the jittered frames averaged.
@@ -116,6 +118,7 @@ impl FieldRenderer {
                 scratch: field_texture(device, "energywave.field.scratch", 1, FIELD_LAYERS),
                 bind_group: None,
                 refiner: refine::Refiner::new(device),
+                zeros: None,
             },
             progress: Progress {
                 uploaded: None,
@@ -322,22 +325,21 @@ impl FieldRenderer {
                 rebind = true;
             }
             if sparse.is_some() {
-                // The texels left out hold zero, as their integral does (every integrand is zero on them).
-                let (texture, _) = self.resources.texture.as_ref().expect("made above");
-                let size = texture.size();
-                queue.write_texture(
-                    texture.as_image_copy(),
-                    &vec![
-                        0u8;
-                        4 * (size.width * size.height * size.depth_or_array_layers) as usize
-                    ],
-                    wgpu::TexelCopyBufferLayout {
-                        offset: 0,
-                        bytes_per_row: Some(4 * size.width),
-                        rows_per_image: Some(size.height),
-                    },
-                    size,
-                );
+                // A layer of zeros, copied over every layer before the list is integrated (`encode_bands`).
+                let bytes = zero_row_bytes(w) as u64 * w as u64;
+                if self
+                    .resources
+                    .zeros
+                    .as_ref()
+                    .is_none_or(|z| z.size() < bytes)
+                {
+                    self.resources.zeros = Some(device.create_buffer(&wgpu::BufferDescriptor {
+                        label: Some("energywave.field.zeros"),
+                        size: bytes,
+                        usage: wgpu::BufferUsages::COPY_SRC,
+                        mapped_at_creation: false,
+                    }));
+                }
             }
             if rebind {
                 self.resources.bind_group = Some(self.make_bind_group(device));
@@ -439,6 +441,39 @@ impl FieldRenderer {
             return true;
         }
         let w = packed.params.resolution;
+        // A listed field's texels left out hold zero, as their integral does (every integrand is zero on them).
+        if let (Some(_), Some(zeros), Some((texture, _)), 0) = (
+            self.progress.sparse,
+            &self.resources.zeros,
+            &self.resources.texture,
+            self.progress.next_band,
+        ) {
+            for layer in 0..texture.depth_or_array_layers() {
+                encoder.copy_buffer_to_texture(
+                    wgpu::TexelCopyBufferInfo {
+                        buffer: zeros,
+                        layout: wgpu::TexelCopyBufferLayout {
+                            offset: 0,
+                            bytes_per_row: Some(zero_row_bytes(w)),
+                            rows_per_image: Some(w),
+                        },
+                    },
+                    wgpu::TexelCopyTextureInfo {
+                        origin: wgpu::Origin3d {
+                            x: 0,
+                            y: 0,
+                            z: layer,
+                        },
+                        ..texture.as_image_copy()
+                    },
+                    wgpu::Extent3d {
+                        width: w,
+                        height: w,
+                        depth_or_array_layers: 1,
+                    },
+                );
+            }
+        }
         let shaders = self.pipelines.shaders.clone();
         let pipelines = self.pipelines.for_dispatch(&packed.params, &packed.chunks);
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -629,7 +664,8 @@ impl FieldRenderer {
     }
 
     /// How many texels the uploaded texture integrated exactly, once recorded and submitted (reads the GPU
-    /// back: benches and tests), or `None` where it is not refined (every texel is).
+    /// back: benches and tests), or `None` where it is not refined (every texel is); where its texels were
+    /// listed in place of the refinement (`listed_texels`), those.
     pub fn integrated_texels(
         &self,
         device: &wgpu::Device,
@@ -639,11 +675,13 @@ impl FieldRenderer {
             .progress
             .uploaded
             .as_ref()
-            .and_then(|p| p.refinement.as_ref())
-            .filter(|_| self.progress.sparse.is_none());
+            .and_then(|p| p.refinement.as_ref());
         let Some(r) = refined else {
             return Ok(None);
         };
+        if let Some([.., listed]) = self.progress.sparse {
+            return Ok(Some(listed as u64));
+        }
         let source = self.resources.refiner.arguments();
         let bytes = 4 * refine::SLOT as u64 * (r.levels.coarsest as u64 + 1);
         let read = device.create_buffer(&wgpu::BufferDescriptor {
@@ -707,4 +745,10 @@ fn sparse_texels(clips: &[f32], w: u32, refined: bool) -> Option<Vec<u32>> {
             .map(|(x, y)| x | y << 16)
             .collect()
     })
+}
+
+/// The bytes a row of zeros holds in the copy over a `w`-texel-wide layer (r32float, rows aligned as copies
+/// need).
+fn zero_row_bytes(w: u32) -> u32 {
+    (4 * w).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT)
 }

@@ -296,7 +296,11 @@ fn normal_at(object: &Object, p: DVec3, dir: DVec3) -> DVec3 {
             let o = inverse * (p - m.translation);
             let d = inverse * dir;
             // The triangle the ray meets nearest p: from a little before it.
-            match m.data.hit_triangle(o - d * 1e-6, d, 0.0, f64::INFINITY) {
+            // A little before it, by the direction's unit (the segment's length must not move it).
+            match m
+                .data
+                .hit_triangle(o - d * (1e-6 / d.length()), d, 0.0, f64::INFINITY)
+            {
                 Some((_, k)) => {
                     let t = &m.data.triangles[k];
                     let n = forward.inverse().transpose() * (t[1] - t[0]).cross(t[2] - t[0]);
@@ -309,8 +313,9 @@ fn normal_at(object: &Object, p: DVec3, dir: DVec3) -> DVec3 {
 }
 
 /// The share of light that crosses the translucent objects among `objects` along the segment `from -> to`
-/// (a texel's ray from the eye to where its glow ends): at every surface it crosses, the Fresnel transmittance
-/// at its angle there, and between, `exp(-tau)` (`Medium::optical_thickness`). 1 where it crosses none.
+/// (a texel's ray from the eye to where its glow ends, or a light's path to what it lights): at every surface it
+/// crosses, the Fresnel transmittance at its angle there, and `exp(-tau)` wherever it lies in a medium
+/// (`Medium::optical_thickness`), an end inside one included. 1 where it meets none.
 pub fn transmittance(objects: &[Object], from: DVec3, to: DVec3) -> f64 {
     let d = to - from;
     let mut t = 1.0;
@@ -330,7 +335,9 @@ pub fn transmittance(objects: &[Object], from: DVec3, to: DVec3) -> f64 {
             }
             out
         };
-        if hits.is_empty() {
+        // Crossing no surface, the segment lies wholly outside or wholly inside (an end in the medium: a light
+        // or a point lit inside it): its medium dims it there too.
+        if hits.is_empty() && !medium.holds(from + d * 0.5, 1e-9 * (1.0 + to.abs().max_element())) {
             continue;
         }
         let eta = medium.material().eta;
@@ -353,9 +360,8 @@ struct Along<'a> {
     /// Each surface crossed: its `t`, its Fresnel transmittance, in no order.
     surfaces: Vec<(f64, f64)>,
     /// Each piece of medium between two surfaces of one object: from `t`, to `t`, `sigma_t |d|` (its optical
-    /// thickness per unit of `t`), and the `t` of its object's first surface: the function counts an object's
-    /// medium only on a segment that crosses one of its surfaces.
-    pieces: Vec<[f64; 4]>,
+    /// thickness per unit of `t`).
+    pieces: Vec<[f64; 3]>,
     /// The objects whose medium varies within its pieces (a noise): each point's transmittance through them is
     /// `transmittance`'s own, the factors of the objects apart.
     sampled: Vec<&'a Object>,
@@ -385,9 +391,6 @@ impl<'a> Along<'a> {
                     break;
                 }
             }
-            let Some(first) = surfaces[from..].iter().map(|s| s.0).reduce(f64::min) else {
-                continue;
-            };
             let to = eye + d * end;
             let mut cuts = vec![0.0];
             cuts.extend(medium.crossings(eye, to).into_iter().map(|c| c * end));
@@ -400,7 +403,7 @@ impl<'a> Along<'a> {
                 let mid = eye + d * (0.5 * (a + b));
                 let reach = 1e-9 * (1.0 + mid.abs().max_element());
                 if medium.holds(mid, reach) {
-                    pieces.push([a, b, medium.inside(mid) * length, first]);
+                    pieces.push([a, b, medium.inside(mid) * length]);
                 }
             }
         }
@@ -420,7 +423,7 @@ impl<'a> Along<'a> {
             .map(|s| s.1)
             .product();
         let tau: f64 = (self.pieces.iter())
-            .filter(|p| p[0] < t && p[3] < t)
+            .filter(|p| p[0] < t)
             .map(|p| (p[1].min(t) - p[0]) * p[2])
             .sum();
         let sampled: f64 = (self.sampled.iter())
