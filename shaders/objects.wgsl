@@ -55,8 +55,10 @@ struct FragmentOut {
     // The lit color, unclamped (an HDR export keeps it; the display clamps), opaque.
     @location(0) color: vec4<f32>,
     // The bits of the fragment's depth, a copy of what the depth test keeps, for the billboard to read (a depth
-    // texture cannot be read on GL, nor r32float rendered there: gpu::formats::DEPTH_VALUE_FORMAT).
-    @location(1) depth: u32,
+    // texture cannot be read on GL, nor rg32float rendered there: gpu::formats::DEPTH_VALUE_FORMAT); twice: the
+    // pipeline of the translucent triangles, drawn after the opaque ones, writes the first alone, so that the
+    // second keeps the nearest opaque surface.
+    @location(1) depth: vec2<u32>,
 }
 
 @fragment
@@ -76,11 +78,11 @@ fn fs_main(in: VertexOut) -> FragmentOut {
         let d_eye = length(to_eye);
         let cos_view = select(1.0, abs(dot(n, to_eye / d_eye)), d_eye > 0.0 && l > 0.0);
         let t = fresnel_transmittance(in.eta, cos_view);
-        return FragmentOut(vec4<f32>(in.albedo * t * (object.ambient + in.subsurface), 1.0), depth);
+        return FragmentOut(vec4<f32>(in.albedo * t * (object.ambient + in.subsurface), 1.0), vec2<u32>(depth));
     }
     let d = direct_light(in.world, n);
     let e = object.ambient + in.shadow * d.bright + in.shadow_dark * d.dark;
-    return FragmentOut(vec4<f32>(in.albedo * e, 1.0), depth);
+    return FragmentOut(vec4<f32>(in.albedo * e, 1.0), vec2<u32>(depth));
 }
 
 // The unpolarised Fresnel transmittance of light crossing at cos_outside into or out of a medium of relative

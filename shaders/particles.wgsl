@@ -295,8 +295,8 @@ fn splat(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) 
     );
     let dir = normalize(params.forward + params.right * (ndc.x * params.tan_half * params.aspect) + params.up * (ndc.y * params.tan_half));
     let along = dot(dir, params.forward);
-    // The first object on the ray ends it: the slabs whose front lies at or past its depth are left out, the one it
-    // lies in cut there.
+    // The first opaque object on the ray ends it: the slabs whose front lies at or past its depth are left out, the
+    // one it lies in cut there.
     var until = 3.0e38;
     var glass_at = 3.0e38;
     var behind = 1.0;
@@ -305,11 +305,15 @@ fn splat(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) 
         // A translucent surface (the depth's lowest bit set, shaders/objects.wgsl) does not end the smoke: the
         // smoke past it is seen through the objects, dimmed by the light the field texel's ray keeps through them
         // (the texel the ray through the depth's pixel meets, nearest).
-        let bits = textureLoad(depth, vec2<i32>(at), 0).r;
+        let both = textureLoad(depth, vec2<i32>(at), 0);
+        let bits = both.r;
         let d = bitcast<f32>(bits);
-        if d < 1.0 && (bits & 1u) == 0u {
-            until = view_depth(d);
-        } else if d < 1.0 && params.glass_w > 0u {
+        // The nearest opaque surface, behind the translucent one where the first is that.
+        let opaque = bitcast<f32>(both.g);
+        if opaque < 1.0 {
+            until = view_depth(opaque);
+        }
+        if d < 1.0 && (bits & 1u) != 0u && params.glass_w > 0u {
             glass_at = view_depth(d);
             let p = 2.0 * (vec2<f32>(at) + 0.5) / vec2<f32>(params.frame) - 1.0;
             let ray = params.forward + params.right * (p.x * params.tan_half * params.aspect) - params.up * (p.y * params.tan_half);
@@ -322,8 +326,6 @@ fn splat(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) 
             }
         }
     }
-    // Where a particle's part in a slab ends: at the first surface, opaque or translucent.
-    let cut_at = min(until, glass_at);
     // Where the glow lies along the ray, each depth bilinear between the glow cells' corners'.
     let g = (vec2<f32>(xy) + 0.5) / f32(GLOW_CELL);
     let cells = (params.size + GLOW_CELL - 1u) / GLOW_CELL;
@@ -408,15 +410,18 @@ fn splat(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) 
         var below = erf_approx(k_erf * clamp(((near + f32(j0) * width) * per_depth - closest) / radius, -half, half));
         for (var j = j0; j <= j1; j++) {
             let slab_front = near + f32(j) * width;
-            // The first surface cuts the smoke where it lies, inside its slab: an opaque one ends it, the slabs
-            // past a translucent one are seen through it.
-            let back = select(slab_front + width, min(slab_front + width, cut_at), slab_front < cut_at);
+            // The surfaces cut the smoke where they lie, inside their slab: the first opaque one ends it (behind a
+            // translucent one too), the slabs past a translucent one are seen through it.
+            var back = min(slab_front + width, until);
+            if slab_front < glass_at {
+                back = min(back, glass_at);
+            }
             let above = erf_approx(k_erf * clamp((back * per_depth - closest) / radius, -half, half));
             let tau = weight * (above - below);
             below = above;
             // Cut at a translucent surface, the slab's part past it is left out: the next slab starts at its own
             // front (reference::particles::smoke_layers alike).
-            if back < slab_front + width && cut_at < until {
+            if back < min(slab_front + width, until) {
                 below = erf_approx(k_erf * clamp(((slab_front + width) * per_depth - closest) / radius, -half, half));
             }
             if tau > 0.0 && slab_front < until {

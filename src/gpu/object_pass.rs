@@ -107,9 +107,11 @@ impl Structure {
 pub struct ObjectPass {
     module: wgpu::ShaderModule,
     pipeline_layout: wgpu::PipelineLayout,
-    /// For each structure met so far, color and depth; depth alone (a holdout). Each writes the depth's copy
-    /// too (a translucent surface's with its lowest bit set: `shaders/objects.wgsl`).
-    pipelines: std::collections::HashMap<Structure, [wgpu::RenderPipeline; 2]>,
+    /// For each structure met so far, color and depth; depth alone (a holdout); each for the opaque triangles
+    /// and for the translucent ones. Each writes the depth's copy too (a translucent surface's with its lowest
+    /// bit set: `shaders/objects.wgsl`); the opaque ones write it to the copy's second channel as well, which
+    /// keeps the nearest opaque surface behind a translucent one.
+    pipelines: std::collections::HashMap<Structure, [[wgpu::RenderPipeline; 2]; 2]>,
     /// The structure of the scene last prepared.
     structure: Structure,
     layout: wgpu::BindGroupLayout,
@@ -119,6 +121,9 @@ pub struct ObjectPass {
     vertices: Option<wgpu::Buffer>,
     indices: Option<wgpu::Buffer>,
     count: u32,
+    /// The indices of the opaque triangles, which come first (drawn before the translucent ones, so that the
+    /// depth test leaves the nearest opaque surface in the depth copy's second channel).
+    opaque: u32,
     /// The scene's energy color Ce, its intensity applied.
     energy: [f32; 3],
     /// What the buffers were lit from (`None` while they hold a stand-in).
@@ -168,17 +173,30 @@ impl ObjectPass {
             vertices: None,
             indices: None,
             count: 0,
+            opaque: 0,
             energy: [0.0; 3],
             key: None,
             lit: None,
         }
     }
 
-    /// The pipelines for `structure`: color and depth, depth alone.
+    /// The pipelines for `structure`: color and depth, depth alone; for opaque triangles (the depth to both of
+    /// the copy's channels) and translucent ones (to the first alone).
     fn build_pipelines(
         &self,
         device: &wgpu::Device,
         structure: Structure,
+    ) -> [[wgpu::RenderPipeline; 2]; 2] {
+        [wgpu::ColorWrites::ALL, wgpu::ColorWrites::RED]
+            .map(|depth_mask| self.build_pipeline_pair(device, structure, depth_mask))
+    }
+
+    /// Color and depth, depth alone, writing `depth_mask` of the depth's copy.
+    fn build_pipeline_pair(
+        &self,
+        device: &wgpu::Device,
+        structure: Structure,
+        depth_mask: wgpu::ColorWrites,
     ) -> [wgpu::RenderPipeline; 2] {
         let constants = structure.constants();
         [wgpu::ColorWrites::ALL, wgpu::ColorWrites::empty()].map(|write_mask| {
@@ -208,7 +226,7 @@ impl ObjectPass {
                         Some(wgpu::ColorTargetState {
                             format: DEPTH_VALUE_FORMAT,
                             blend: None,
-                            write_mask: wgpu::ColorWrites::ALL,
+                            write_mask: depth_mask,
                         }),
                     ],
                     depth: Some(wgpu::DepthStencilState {
@@ -275,14 +293,25 @@ impl ObjectPass {
                 usage: wgpu::BufferUsages::VERTEX,
             }),
         );
+        // The opaque triangles first (an object's vertices share its index of refraction, 0 for an opaque one).
+        let (opaque, translucent): (Vec<&[u32]>, Vec<&[u32]>) = surface
+            .indices
+            .chunks_exact(3)
+            .partition(|t| light.eta[t[0] as usize] <= 0.0);
+        let indices: Vec<u32> = opaque
+            .iter()
+            .chain(&translucent)
+            .flat_map(|t| t.iter().copied())
+            .collect();
         self.indices = Some(
             device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("energywave.objects.indices"),
-                contents: bytemuck::cast_slice(&surface.indices),
+                contents: bytemuck::cast_slice(&indices),
                 usage: wgpu::BufferUsages::INDEX,
             }),
         );
-        self.count = surface.indices.len() as u32;
+        self.count = indices.len() as u32;
+        self.opaque = 3 * opaque.len() as u32;
         self.upload_sources(device, setup);
     }
 
@@ -355,11 +384,20 @@ impl ObjectPass {
                 pad0: 0.0,
             }),
         );
-        pass.set_pipeline(&pipelines[!color as usize]);
         pass.set_bind_group(0, bind_group, &[]);
         pass.set_vertex_buffer(0, vertices.slice(..));
         pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
-        pass.draw_indexed(0..self.count, 0, 0..1);
+        // The opaque triangles, then the translucent ones (which leave the depth copy's second channel as the
+        // opaque ones wrote it).
+        for (k, range) in [0..self.opaque, self.opaque..self.count]
+            .into_iter()
+            .enumerate()
+        {
+            if !range.is_empty() {
+                pass.set_pipeline(&pipelines[k][!color as usize]);
+                pass.draw_indexed(range, 0, 0..1);
+            }
+        }
     }
 }
 
