@@ -825,7 +825,7 @@ fn an_opaque_object_behind_a_translucent_one_ends_the_smoke_seen_through_it() {
         "the wall cuts the cloud: {to_wall} of {whole}"
     );
     let off = (walled.radiance - to_wall).abs().max_element() / whole.x;
-    // Measured: 3e-5 of the whole cloud's light.
+    // Measured: 8.4e-7 of the whole cloud's light up to the wall, 2.3e-5 without it (the slabs' convergence).
     assert!(off < 1e-3, "{} against {to_wall}: {off}", walled.radiance);
     assert!((open.radiance - whole).abs().max_element() / whole.x < 1e-3);
     // The frame: the GPU's is the twin's, the smoke seen through the sphere ending at the wall.
