@@ -107,11 +107,11 @@ impl Structure {
 pub struct ObjectPass {
     module: wgpu::ShaderModule,
     pipeline_layout: wgpu::PipelineLayout,
-    /// For each structure met so far, color and depth; depth alone (a holdout); each for the opaque triangles
-    /// and for the translucent ones. Each writes the depth's copy too (a translucent surface's with its lowest
-    /// bit set: `shaders/objects.wgsl`); the opaque ones write it to the copy's second channel as well, which
-    /// keeps the nearest opaque surface behind a translucent one.
-    pipelines: std::collections::HashMap<Structure, [[wgpu::RenderPipeline; 2]; 2]>,
+    /// For each structure met so far, for the opaque triangles and for the translucent ones (`true`), each
+    /// built when first drawn: color and depth; depth alone (a holdout). Each writes the depth's copy too (a
+    /// translucent surface's with its lowest bit set: `shaders/objects.wgsl`); the opaque ones write it to the
+    /// copy's second channel as well, which keeps the nearest opaque surface behind a translucent one.
+    pipelines: std::collections::HashMap<(Structure, bool), [wgpu::RenderPipeline; 2]>,
     /// The structure of the scene last prepared.
     structure: Structure,
     layout: wgpu::BindGroupLayout,
@@ -180,24 +180,18 @@ impl ObjectPass {
         }
     }
 
-    /// The pipelines for `structure`: color and depth, depth alone; for opaque triangles (the depth to both of
-    /// the copy's channels) and translucent ones (to the first alone).
+    /// The pipelines for `structure`'s opaque triangles (the depth to both of the copy's channels) or its
+    /// translucent ones (to the first alone): color and depth, depth alone.
     fn build_pipelines(
         &self,
         device: &wgpu::Device,
         structure: Structure,
-    ) -> [[wgpu::RenderPipeline; 2]; 2] {
-        [wgpu::ColorWrites::ALL, wgpu::ColorWrites::RED]
-            .map(|depth_mask| self.build_pipeline_pair(device, structure, depth_mask))
-    }
-
-    /// Color and depth, depth alone, writing `depth_mask` of the depth's copy.
-    fn build_pipeline_pair(
-        &self,
-        device: &wgpu::Device,
-        structure: Structure,
-        depth_mask: wgpu::ColorWrites,
+        translucent: bool,
     ) -> [wgpu::RenderPipeline; 2] {
+        let depth_mask = match translucent {
+            false => wgpu::ColorWrites::ALL,
+            true => wgpu::ColorWrites::RED,
+        };
         let constants = structure.constants();
         [wgpu::ColorWrites::ALL, wgpu::ColorWrites::empty()].map(|write_mask| {
             render_pipeline(
@@ -256,15 +250,19 @@ impl ObjectPass {
             return self.count > 0;
         }
         self.structure = Structure::of(scene);
-        if !self.pipelines.contains_key(&self.structure) {
-            let built = self.build_pipelines(device, self.structure);
-            self.pipelines.insert(self.structure, built);
-        }
         match &self.lit {
             // The light drawn already, kept while the new one is worked out: the pixels shaded by the sources
             // of now.
             Some(drawn) if Arc::ptr_eq(drawn, &objects.lit) => self.upload_sources(device, setup),
             _ => self.upload(device, setup, &objects.lit),
+        }
+        // The pipelines the triangles take (a scene without translucent objects compiles none for them).
+        for (translucent, any) in [(false, self.opaque > 0), (true, self.count > self.opaque)] {
+            let key = (self.structure, translucent);
+            if any && !self.pipelines.contains_key(&key) {
+                let built = self.build_pipelines(device, self.structure, translucent);
+                self.pipelines.insert(key, built);
+            }
         }
         self.lit = Some(objects.lit.clone());
         self.key = objects.key.clone();
@@ -362,12 +360,9 @@ impl ObjectPass {
         (view_proj, eye): ([[f32; 4]; 4], [f32; 3]),
         color: bool,
     ) {
-        let (Some(vertices), Some(indices), Some(bind_group), Some(pipelines)) = (
-            &self.vertices,
-            &self.indices,
-            &self.bind_group,
-            self.pipelines.get(&self.structure),
-        ) else {
+        let (Some(vertices), Some(indices), Some(bind_group)) =
+            (&self.vertices, &self.indices, &self.bind_group)
+        else {
             return;
         };
         if self.count == 0 {
@@ -389,12 +384,11 @@ impl ObjectPass {
         pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
         // The opaque triangles, then the translucent ones (which leave the depth copy's second channel as the
         // opaque ones wrote it).
-        for (k, range) in [0..self.opaque, self.opaque..self.count]
-            .into_iter()
-            .enumerate()
-        {
-            if !range.is_empty() {
-                pass.set_pipeline(&pipelines[k][!color as usize]);
+        for (translucent, range) in [(false, 0..self.opaque), (true, self.opaque..self.count)] {
+            if let Some(pipelines) = self.pipelines.get(&(self.structure, translucent))
+                && !range.is_empty()
+            {
+                pass.set_pipeline(&pipelines[!color as usize]);
                 pass.draw_indexed(range, 0, 0..1);
             }
         }

@@ -312,13 +312,14 @@ impl ParticlePass {
 
     /// Uploads the frame's particles (`Frame::particles`) and plans its segments for a frame of `frame` pixels
     /// over a field of `resolution` texels a side (`FrameSetup::smoke_view`), where the particles, the view or
-    /// the size changed. Returns whether there is smoke to draw.
+    /// the size changed; `objects`: whether the objects' depth was drawn this frame. Returns whether there is
+    /// smoke to draw.
     fn prepare_smoke(
         &mut self,
         gpu: Gpu<'_>,
         data: &Frame,
-        frame: [u32; 2],
-        resolution: u32,
+        (frame, resolution): ([u32; 2], u32),
+        objects: bool,
     ) -> bool {
         let (device, queue, setup) = (gpu.device, gpu.queue, data.setup);
         let Some(lit) = data.particles.clone() else {
@@ -339,7 +340,7 @@ impl ParticlePass {
             && p.key == key
             && same_glass(p)
         {
-            self.write_params(queue, setup, frame);
+            self.write_params(queue, setup, frame, objects);
             return true;
         }
         let view = setup.smoke_view(&lit.particles, frame, resolution);
@@ -468,11 +469,18 @@ impl ParticlePass {
             scissor,
             draw_group,
         });
-        self.write_params(queue, setup, frame);
+        self.write_params(queue, setup, frame, objects);
         true
     }
 
-    fn write_params(&self, queue: &wgpu::Queue, setup: &FrameSetup, frame: [u32; 2]) {
+    /// `objects`: whether the objects' depth was drawn this frame (it ends the rays).
+    fn write_params(
+        &self,
+        queue: &wgpu::Queue,
+        setup: &FrameSetup,
+        frame: [u32; 2],
+        objects: bool,
+    ) {
         let Some(p) = &self.prepared else {
             return;
         };
@@ -498,7 +506,7 @@ impl ParticlePass {
             tiles_x: p.view.tiles()[0],
             chunk: CHUNK,
             frame,
-            objects: !setup.scene.objects.is_empty() as u32,
+            objects: objects as u32,
             depth_near: depth_near as f32,
             depth_far: depth_far as f32,
             bb_center: v(b.center),
@@ -660,7 +668,7 @@ impl FramePass for ParticlePass {
     fn prepare(&mut self, stage: Stage, r: &mut Recording<'_>) -> Result<(), GpuError> {
         if stage == Stage::SmokeBehind {
             let (size, resolution) = (r.targets.size, r.brightness.resolution);
-            self.smoke = self.prepare_smoke(r.gpu, r.frame, size, resolution);
+            self.smoke = self.prepare_smoke(r.gpu, r.frame, (size, resolution), r.objects);
             let objects = r.frame.objects.as_ref().map(|o| o.lit.clone());
             let same = |seen: &Option<Arc<Lit>>| match (seen, &objects) {
                 (None, None) => true,
