@@ -305,7 +305,9 @@ fn splat(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_inde
     var glass_at = 3.0e38;
     var behind = 1.0;
     if params.objects != 0u {
-        let at = min(vec2<u32>((vec2<f32>(xy) + 0.5) * vec2<f32>(params.frame) / vec2<f32>(params.size)), params.frame - 1u);
+        // The frame pixel the smoke pixel's center falls in, floor((xy + 1/2) frame / size) exactly (in f32 a
+        // center that falls on a pixel's edge could round to the pixel before, where the twin takes the next).
+        let at = min((2u * xy + 1u) * params.frame / (2u * params.size), params.frame - 1u);
         // A translucent surface (the depth's lowest bit set, shaders/objects.wgsl) does not end the smoke: the
         // smoke past it is seen through the objects, dimmed by the light the field texel's ray keeps through them
         // (the texel the ray through the depth's pixel meets, nearest).

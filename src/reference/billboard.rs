@@ -206,6 +206,46 @@ pub fn compose_frame_unclamped(
     compose(setup, texture, size, backdrop, f64::INFINITY)
 }
 
+/// The frame's smoke as the GPU pass renders it (`reference::particles::SmokeImage`) over a field of
+/// `resolution` texels, its rays ended by `objects` (`ObjectImage::of(setup)`): each smoke pixel's ray, through
+/// the frame pixel it falls in, ends at the first opaque object, and past a translucent surface it meets first
+/// the smoke is seen through the objects, dimmed by the light its field texel's ray keeps through them (the
+/// texel the ray meets, nearest, as the GPU reads it). None without particles.
+pub fn smoke_image(
+    setup: &FrameSetup,
+    objects: Option<&ObjectImage>,
+    (width, height): (u32, u32),
+    resolution: u32,
+) -> Option<super::particles::SmokeImage> {
+    let (scene, billboard) = (setup.scene, &setup.billboard);
+    let forward = scene.camera.frame().forward;
+    let crossings = setup.crossings_at(resolution);
+    super::particles::SmokeImage::of(setup, [width, height], resolution, |x, y| {
+        let eye = scene.camera.eye;
+        let dir = (scene.camera).pixel_ray(x as f64 + 0.5, y as f64 + 0.5, width, height);
+        let depth = |t: f64| t * dir.dot(forward);
+        let until = objects
+            .and_then(|o| o.hit_opaque(eye, dir))
+            .map_or(f64::INFINITY, depth);
+        let glass = objects
+            .and_then(|o| o.hit_surface(eye, dir))
+            .filter(|h| h.2)
+            .map(|(t, _, _)| {
+                let w = resolution;
+                let behind =
+                    (crossings.as_ref().zip(billboard.hit(eye, dir))).map_or(1.0, |(c, (u, v))| {
+                        let texel = |s: f64| ((s * w as f64) as u32).min(w - 1) as usize;
+                        c[3 * (texel(v) * w as usize + texel(u)) + 2] as f64
+                    });
+                super::particles::Glass {
+                    depth: depth(t),
+                    behind,
+                }
+            });
+        (until, glass)
+    })
+}
+
 /// The frame, its opaque blends clamped to [0, `top`].
 fn compose(
     setup: &FrameSetup,
@@ -239,38 +279,7 @@ fn compose(
     );
     let drawn = backdrop != Backdrop::Holdout;
     // The particles' smoke, its rays ended by the objects; the back image under the glow, the front one over it.
-    let forward = scene.camera.frame().forward;
-    // The smoke past a translucent surface is dimmed by the light its field texel keeps through the objects
-    // (the texel its pixel's ray meets, nearest, as the GPU reads it).
-    let crossings = setup.crossings_at(texture.resolution);
-    let smoke =
-        super::particles::SmokeImage::of(setup, [width, height], texture.resolution, |x, y| {
-            let eye = scene.camera.eye;
-            let dir = (scene.camera).pixel_ray(x as f64 + 0.5, y as f64 + 0.5, width, height);
-            let depth = |t: f64| t * dir.dot(forward);
-            let o = objects.as_ref();
-            let until = o
-                .and_then(|o| o.hit_opaque(eye, dir))
-                .map_or(f64::INFINITY, depth);
-            let glass = o
-                .and_then(|o| o.hit_surface(eye, dir))
-                .filter(|h| h.2)
-                .map(|(t, _, _)| {
-                    let w = texture.resolution;
-                    let behind = (crossings.as_ref().zip(billboard.hit(eye, dir))).map_or(
-                        1.0,
-                        |(c, (u, v))| {
-                            let texel = |s: f64| ((s * w as f64) as u32).min(w - 1) as usize;
-                            c[3 * (texel(v) * w as usize + texel(u)) + 2] as f64
-                        },
-                    );
-                    super::particles::Glass {
-                        depth: depth(t),
-                        behind,
-                    }
-                });
-            (until, glass)
-        });
+    let smoke = smoke_image(setup, objects.as_ref(), (width, height), texture.resolution);
     let glared = scene.glare.map(|g| super::glare::apply(texture, &g));
     let texture = glared.as_ref().unwrap_or(texture);
     let mut pixels = vec![clear; width as usize * height as usize];
