@@ -694,6 +694,42 @@ fn particles_of_three_sizes_swept_through_equal_front_depths_do_not_pop_on_eithe
     }
 }
 
+/// The light of glowing (unlit, emitting) particles along `ray` from `t0` to `t1`, marched in 40,000 steps: each
+/// step's emission, dimmed by the smoke in front of it and by the objects' exact transmittance to it from the
+/// ray's origin (`objects::translucent::transmittance`: the Fresnel transmittance at each surface crossed,
+/// `exp(-tau)` through the media).
+fn glowing_medium_marched(
+    particles: &[Particle],
+    objects: &[energywave::objects::Object],
+    ray: &energywave::particles::Ray,
+    (t0, t1): (f64, f64),
+) -> glam::DVec3 {
+    use energywave::particles::{extinction, kernel};
+    use glam::DVec3;
+    let n = 40_000;
+    let dt = (t1 - t0) / n as f64;
+    let (mut radiance, mut through) = (DVec3::ZERO, 1.0);
+    for k in 0..n {
+        let x = ray.at(t0 + (k as f64 + 0.5) * dt);
+        let sigma = extinction(particles, x);
+        if sigma <= 0.0 {
+            continue;
+        }
+        let emitted: DVec3 = (particles.iter())
+            .map(|p| {
+                p.density
+                    * kernel((x - p.position).length() / p.radius)
+                    * DVec3::from_array(p.emission)
+            })
+            .sum::<DVec3>()
+            / sigma;
+        let object = energywave::objects::translucent::transmittance(objects, ray.origin, x);
+        radiance += through * object * emitted * -(-sigma * dt).exp_m1();
+        through *= (-sigma * dt).exp();
+    }
+    radiance
+}
+
 /// A translucent sphere in front of a glowing cloud, with particles or without.
 fn glass_and_cloud(particles: bool) -> Scene {
     glass_and_cloud_at(particles, -1.5)
@@ -763,9 +799,8 @@ color = [0.3, 0.3, 0.3]
 #[test]
 fn an_opaque_object_behind_a_translucent_one_ends_the_smoke_seen_through_it() {
     use energywave::particles::view::GLOW_DEPTHS;
-    use energywave::particles::{Ray, Slicing, extinction, kernel};
+    use energywave::particles::{Ray, Slicing};
     use energywave::reference::particles::{Glass, smoke_layers};
-    use glam::DVec3;
     let scene = glass_cloud_and_wall();
     let setup = FrameSetup::placed(&scene, 1.0);
     let lit = setup.particles().unwrap();
@@ -795,30 +830,7 @@ fn an_opaque_object_behind_a_translucent_one_ends_the_smoke_seen_through_it() {
     };
     let (walled, open) = (layers(wall), layers(f64::INFINITY));
     // The medium marched up to `to`, each step dimmed by the smoke in front and by the sphere.
-    let march = |to: f64| {
-        let (t0, n) = (7.0, 40_000);
-        let dt = (to - t0) / n as f64;
-        let (mut radiance, mut through) = (DVec3::ZERO, 1.0);
-        for k in 0..n {
-            let x = ray.at(t0 + (k as f64 + 0.5) * dt);
-            let sigma = extinction(&lit.particles, x);
-            if sigma <= 0.0 {
-                continue;
-            }
-            let emitted: DVec3 = (lit.particles.iter())
-                .map(|p| {
-                    p.density
-                        * kernel((x - p.position).length() / p.radius)
-                        * DVec3::from_array(p.emission)
-                })
-                .sum::<DVec3>()
-                / sigma;
-            let object = energywave::objects::translucent::transmittance(sphere, eye, x);
-            radiance += through * object * emitted * -(-sigma * dt).exp_m1();
-            through *= (-sigma * dt).exp();
-        }
-        radiance
-    };
+    let march = |to: f64| glowing_medium_marched(&lit.particles, sphere, &ray, (7.0, to));
     let (to_wall, whole) = (march(wall), march(12.0));
     assert!(
         to_wall.x > 0.1 * whole.x && to_wall.x < 0.9 * whole.x,
@@ -872,7 +884,7 @@ fn an_opaque_object_behind_a_translucent_one_ends_the_smoke_seen_through_it() {
 #[test]
 fn smoke_behind_a_translucent_object_shows_through_it_dimmed_by_the_light_it_lets_through() {
     use energywave::particles::view::GLOW_DEPTHS;
-    use energywave::particles::{Ray, Slicing, extinction, kernel};
+    use energywave::particles::{Ray, Slicing};
     use energywave::reference::particles::{Glass, smoke_layers};
     use glam::DVec3;
     let scene = glass_and_cloud(true);
@@ -916,27 +928,7 @@ fn smoke_behind_a_translucent_object_shows_through_it_dimmed_by_the_light_it_let
         );
         // The medium marched: each step's emission, dimmed by the smoke in front and by the object's exact
         // transmittance to it.
-        let (t0, t1, n) = (7.0, 12.0, 40_000);
-        let dt = (t1 - t0) / n as f64;
-        let (mut radiance, mut through) = (DVec3::ZERO, 1.0);
-        for k in 0..n {
-            let x = ray.at(t0 + (k as f64 + 0.5) * dt);
-            let sigma = extinction(&lit.particles, x);
-            if sigma <= 0.0 {
-                continue;
-            }
-            let emitted: DVec3 = (lit.particles.iter())
-                .map(|p| {
-                    p.density
-                        * kernel((x - p.position).length() / p.radius)
-                        * DVec3::from_array(p.emission)
-                })
-                .sum::<DVec3>()
-                / sigma;
-            let object = energywave::objects::translucent::transmittance(&scene.objects, eye, x);
-            radiance += through * object * emitted * -(-sigma * dt).exp_m1();
-            through *= (-sigma * dt).exp();
-        }
+        let radiance = glowing_medium_marched(&lit.particles, &scene.objects, &ray, (7.0, 12.0));
         assert!(
             bare.radiance.x > 0.2,
             "the cloud glows on this ray: {}",
