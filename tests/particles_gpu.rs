@@ -95,6 +95,45 @@ fn a_glowing_clouds_gpu_smoke_image_is_the_twins_pixel_by_pixel() {
 
 /// The GPU's smoke image against `smoke_pixel` pixel by pixel; the mean radiance of the whole smoke (red).
 fn smoke_image_against_the_twin(scene: &Scene) -> f64 {
+    let m = smoke_image_measures(scene);
+    // The smoke is there (a good share of the image is covered, some of it on both sides of the glow), and the
+    // f32 pass is the f64 twin's to a thousandth of the radiance's scale (about 1).
+    assert!(
+        m.covered * 10 > m.pixels,
+        "{} of {} pixels covered",
+        m.covered,
+        m.pixels
+    );
+    assert!(
+        m.both * 50 > m.pixels,
+        "{} of {} pixels on both sides",
+        m.both,
+        m.pixels
+    );
+    assert!(m.worst < 2e-3, "largest difference {}", m.worst);
+    assert!(
+        m.layers_worst < 2e-3,
+        "largest difference of the layers {}",
+        m.layers_worst
+    );
+    m.red
+}
+
+/// What `smoke_image_measures` finds of a smoke image against the twin's.
+struct SmokeMeasures {
+    /// The largest difference of the whole smoke (front over back), and of its layers, in any channel.
+    worst: f64,
+    layers_worst: f64,
+    /// The whole smoke's mean red.
+    red: f64,
+    /// Pixels the smoke covers (alpha of the light through it under 0.9), on both sides of the glow, in all.
+    covered: u32,
+    both: u32,
+    pixels: u32,
+}
+
+/// The GPU's smoke image of `scene` at 96 x 72 against `smoke_pixel`, pixel by pixel.
+fn smoke_image_measures(scene: &Scene) -> SmokeMeasures {
     let (w, h) = (96, 72);
     let mut gpu = gpu();
     gpu.render(scene, w, h, false).unwrap();
@@ -137,24 +176,58 @@ fn smoke_image_against_the_twin(scene: &Scene) -> f64 {
             both += (front[3] < 0.95 && back[3] < 0.95) as u32;
         }
     }
-    // The smoke is there (a good share of the image is covered, some of it on both sides of the glow), and the
-    // f32 pass is the f64 twin's to a thousandth of the radiance's scale (about 1).
+    SmokeMeasures {
+        worst,
+        layers_worst,
+        red,
+        covered,
+        both,
+        pixels: sw * sh,
+    }
+}
+
+/// Motion blur: `beam_sparks.toml`'s sparks stretched over its whole-frame shutter are drawn by the GPU as by the
+/// twin, pixel by pixel, and cover more of the image than the same sparks without it.
+#[test]
+fn motion_blurred_sparks_are_the_twins_on_the_gpu() {
+    let preset =
+        Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/beam_sparks.toml"))
+            .unwrap();
+    let shutter = |s: &Scene| match &s.particles[0].origin {
+        energywave::particles::Origin::Emitter(e) => e.life.as_ref().unwrap().shutter,
+        _ => unreachable!("an emitter"),
+    };
+    assert_eq!(shutter(&preset), 1.0);
+    let mut sharp = preset.clone();
+    if let energywave::particles::Origin::Emitter(e) = &mut sharp.particles[0].origin {
+        e.life.as_mut().unwrap().shutter = 0.0;
+    }
+    let (blurred, sharp) = (preset.at_frame(40.0), sharp.at_frame(40.0));
+    let count = |s: &Scene| s.particles[0].particles(&s.sources).len();
     assert!(
-        covered * 10 > sw * sh,
-        "{covered} of {} pixels covered",
-        sw * sh
+        count(&blurred) > 2 * count(&sharp),
+        "{} {}",
+        count(&blurred),
+        count(&sharp)
+    );
+    let m = smoke_image_measures(&blurred);
+    assert!(m.worst < 2e-3, "largest difference {}", m.worst);
+    assert!(
+        m.layers_worst < 2e-3,
+        "largest difference of the layers {}",
+        m.layers_worst
+    );
+    let plain = smoke_image_measures(&sharp);
+    eprintln!(
+        "blurred sparks: {} pixels covered against {} sharp; largest difference from the twin {:.1e}",
+        m.covered, plain.covered, m.worst
     );
     assert!(
-        both * 50 > sw * sh,
-        "{both} of {} pixels on both sides",
-        sw * sh
+        m.covered > plain.covered && plain.covered > 20,
+        "{} {}",
+        m.covered,
+        plain.covered
     );
-    assert!(worst < 2e-3, "largest difference {worst}");
-    assert!(
-        layers_worst < 2e-3,
-        "largest difference of the layers {layers_worst}"
-    );
-    red
 }
 
 #[test]

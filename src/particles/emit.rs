@@ -219,6 +219,10 @@ pub struct Life {
     /// Its emission's color over its life (each channel in 0..=1), times the set's emission color: white to red
     /// for a spark that cools. None: white throughout.
     pub emission_colors: ColorCurve,
+    /// Motion blur: the share of a frame the shutter is open, centred on the frame, in 0..=1 (0.5 is a
+    /// 180-degree shutter; 0 draws each particle where it is at the frame). A particle is drawn as copies along
+    /// its path over it (`live::State::particles`).
+    pub shutter: f64,
 }
 
 impl Default for Life {
@@ -240,6 +244,7 @@ impl Default for Life {
             colors: ColorCurve::default(),
             emission: LifeCurve::constant(1.0),
             emission_colors: ColorCurve::default(),
+            shutter: 0.0,
         }
     }
 }

@@ -324,6 +324,8 @@ pub(crate) struct LifeFile {
     pub emission_colors: Option<Vec<[f64; 4]>>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub turbulence: Option<TurbulenceFile>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shutter: Option<f64>,
 }
 
 /// `[particles.life.turbulence]`: curl noise.

@@ -127,6 +127,18 @@ pub(super) fn check_life(
         .turbulence
         .as_ref()
         .map(|t| turbulence(c, &path.key("turbulence"), t));
+    let shutter = f.shutter.map_or(d.shutter, |x| {
+        let p = path.key("shutter");
+        if c.finite(&p, x) && !(0.0..=1.0).contains(&x) {
+            c.fail(
+                &p,
+                format!(
+                    "{x} is out of range: the shutter is the share of a frame it stays open, 0 to 1 (0.5 is a 180-degree shutter)"
+                ),
+            );
+        }
+        x
+    });
     let life = Life {
         rate,
         bursts,
@@ -144,6 +156,7 @@ pub(super) fn check_life(
         colors,
         emission,
         emission_colors,
+        shutter,
     };
     (c.problems.len() == before).then(|| Box::new(life))
 }
@@ -299,6 +312,7 @@ pub(super) fn write_life(life: &Life) -> LifeFile {
             strength: Some(t.strength),
             speed: Some(t.speed),
         }),
+        shutter: (life.shutter > 0.0).then_some(life.shutter),
     }
 }
 

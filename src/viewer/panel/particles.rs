@@ -548,6 +548,12 @@ fn life_editor(
             0.0,
         );
     }
+    ui.horizontal(|ui| {
+        labelled(ui, "shutter", Slider::new(&mut life.shutter, 0.0..=1.0)).on_hover_text(
+            "Motion blur: the share of a frame the shutter stays open (0.5 is a 180\u{b0} shutter); each particle \
+             is stretched along its path over it. 0: none",
+        );
+    });
     life_curve(ui, "size over life", &mut life.size);
     life_curve(ui, "density over life", &mut life.opacity);
     color_curve(
