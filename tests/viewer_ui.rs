@@ -929,6 +929,18 @@ fn a_live_set_is_added_edited_keyed_and_played_in_the_viewer() {
     let expected = h.state().scene().at_frame(20.0);
     assert_eq!(shown.particles, expected.particles);
     assert!(shown.particles[0].live.as_ref().unwrap().len() > 100);
+    // Motion blur: the shutter opened in the panel draws each moving particle as copies along its path.
+    let sharp = shown.particles[0].live.as_ref().unwrap().len();
+    h.get_by_role_and_label(Role::Slider, "shutter")
+        .set_value_accesskit(1.0);
+    h.run();
+    assert_eq!(h.state().scene().particles[0].life().unwrap().shutter, 1.0);
+    let blurred = h.state().frame_scene().particles[0]
+        .live
+        .as_ref()
+        .unwrap()
+        .len();
+    assert!(blurred > sharp, "{blurred} copies of {sharp} particles");
     // Turbulence switched on; saved and read back whole.
     click(&mut h, "turbulence");
     assert!(
