@@ -677,6 +677,69 @@ fn motion_blur_draws_a_particle_along_its_path_over_the_shutter() {
     let mass: f64 = born.iter().map(|p| p.density).sum();
     let sharp_mass = particles(&sharp, 0)[0].density;
     assert!((mass - sharp_mass * 11.0 / 21.0).abs() < 1e-12 * sharp_mass);
+    // The shutter only draws the particles: a shutter edited keeps the states the simulation reached.
+    let reached = live_state_at(&blurred, 0, 30);
+    assert!(std::sync::Arc::ptr_eq(
+        &reached,
+        &live_state_at(&spark(0.8), 0, 30)
+    ));
+}
+
+/// Motion blur with drag and gravity, a size curve and a life that ends while the shutter is open: each copy at
+/// the closed form of its instant (backwards too), of the size its own age gives, none past the end, no two
+/// farther apart than a quarter of the smallest radius on the path (to 1 %: the copies are even in time, the
+/// path's longest eighth sets their number).
+#[test]
+fn motion_blur_follows_the_drag_the_curves_and_the_end_of_a_life() {
+    use energywave::particles::live::COPY_SPACING;
+    let spark = |shutter: f64| {
+        live_scene(
+            "emitter = \"sphere\"\ncenter = [0.0, 0.0, 0.0]\nradius = 1e-15\nparticle_radius = 0.1",
+            &format!(
+                "rate = 0.0\nbursts = [[0.0, 1.0]]\nlifetime = 0.47\nspeed = 31.0\ndirection = [1.0, 0.0, 0.0]\n\
+                 cone = 0.0\nacceleration = [0.0, -9.81, 0.0]\ndrag = 1.5\nopacity = [[0.0, 1.0]]\n\
+                 size = [[0.0, 1.0], [1.0, 0.5]]\nshutter = {shutter}"
+            ),
+            "",
+        )
+    };
+    let (k, g, v0) = (1.5, DVec3::new(0.0, -9.81, 0.0), DVec3::new(31.0, 0.0, 0.0));
+    let terminal = g / k;
+    let at = |t: f64| terminal * t + (v0 - terminal) * (1.0 - (-k * t).exp()) / k;
+    // Frame 14 is t = 0.4667 s; the shutter, open a half frame, covers 0.4583 to 0.4750 s; the life ends at 0.47.
+    let (frame, open) = (14u32, 0.5 / 30.0);
+    let t = frame as f64 / 30.0;
+    let sharp = particles(&spark(0.0), frame);
+    assert_eq!(sharp.len(), 1);
+    let copies = particles(&spark(0.5), frame);
+    let n = (sharp[0].density / copies[0].density).round() as usize;
+    assert!(n > 10, "{n} copies");
+    let shown: Vec<usize> = (0..n)
+        .filter(|&i| t + open * ((i as f64 + 0.5) / n as f64 - 0.5) <= 0.47)
+        .collect();
+    assert!(shown.len() < n, "the shutter passes the life's end");
+    assert_eq!(copies.len(), shown.len());
+    for (p, &i) in copies.iter().zip(&shown) {
+        let when = t + open * ((i as f64 + 0.5) / n as f64 - 0.5);
+        let want = at(when);
+        assert!(
+            (p.position - want).length() < 1e-9 * (1.0 + want.length()),
+            "copy {i}: {:?} against {want:?}",
+            p.position
+        );
+        let age = when / 0.47;
+        assert!(
+            (p.radius - 0.1 * (1.0 - 0.5 * age)).abs() < 1e-12,
+            "copy {i}: radius {}",
+            p.radius
+        );
+        assert!((p.density * n as f64 - sharp[0].density).abs() < 1e-9 * sharp[0].density);
+    }
+    // The smallest radius on the path is at the life's end, half the drawn one.
+    for w in copies.windows(2) {
+        let d = (w[1].position - w[0].position).length();
+        assert!(d <= COPY_SPACING * 0.05 * 1.01, "{d} apart, {n} copies");
+    }
 }
 
 #[test]

@@ -278,9 +278,10 @@ impl State {
     }
 
     /// The particles as the renderers draw them at this state's frame: radius, density and color at each one's
-    /// age by its curves (the ones of no size or density left out). With a shutter (`Life::shutter`), each one
-    /// is drawn as copies along its path over it (`blurred`).
-    pub fn particles(&self, timeline: &dyn Timeline) -> Vec<Particle> {
+    /// age by its curves (the ones of no size or density left out). With a `shutter` (`Life::shutter`; the
+    /// simulation's timeline reads none), each one is drawn as copies along its path over it, as many as
+    /// `blur_copies` gives with at most `room` copies more than particles in all.
+    pub fn particles(&self, timeline: &dyn Timeline, shutter: f64, room: usize) -> Vec<Particle> {
         let now = timeline.world(self.frame as f64);
         let Some(life) = now.emitter.life.as_deref() else {
             return Vec::new();
@@ -298,7 +299,7 @@ impl State {
                     .map(|c| c * life.emission.at(age)),
             })
         };
-        let open = life.shutter / timeline.frame_rate();
+        let open = shutter / timeline.frame_rate();
         if !(open > 0.0) {
             return (self.particles.iter())
                 .filter_map(|p| {
@@ -308,7 +309,7 @@ impl State {
                 .collect();
         }
         let motion = Motion::of(life, now.emitter.seed);
-        let copies = blur_copies(&self.particles, life, &motion, t, open);
+        let copies = blur_copies(&self.particles, life, &motion, t, open, room);
         // A copy outside the particle's life (born or gone while the shutter is open) is not drawn: its share of
         // the shutter shows nothing there.
         let mut out = Vec::new();
@@ -316,8 +317,9 @@ impl State {
             for i in 0..k {
                 let tau = open * ((i as f64 + 0.5) / k as f64 - 0.5);
                 let age = (t + tau - p.born) / p.lifetime;
-                if (0.0..=1.0).contains(&age) {
-                    out.extend(drawn(p, motion.path(p, t, tau), age, 1.0 / k as f64));
+                let position = motion.path(p, t, tau, open);
+                if (0.0..=1.0).contains(&age) && position.is_finite() {
+                    out.extend(drawn(p, position, age, 1.0 / k as f64));
                 }
             }
         }
@@ -333,27 +335,40 @@ pub const MAX_COPIES: u32 = 32;
 /// at half a radius, 0.36 % at an eighth: the kernel's cut at the ball's edge makes the sum converge slowly).
 pub const COPY_SPACING: f64 = 0.25;
 
+/// The chords a particle's path over the shutter is measured along (`blur_copies`).
+const PATH_CHORDS: u32 = 8;
+
 /// How many copies each of `particles` is drawn as over a shutter `open` seconds long centred on time `t`: its
-/// path's length over it in `COPY_SPACING` of its smallest radius there, at least 1 and at most `MAX_COPIES`;
-/// fewer for all where the copies of a set would pass `MAX_ALIVE` (its size on the GPU bounded as a still
-/// set's).
+/// path's length over it (`PATH_CHORDS` times the longest of as many chords) in `COPY_SPACING` of its smallest
+/// radius there (the size
+/// curve is linear between its keys: at the shutter's ends or a key within it), at least 1 and at most
+/// `MAX_COPIES`; fewer for all, evenly, where they would add more than `room` copies to the particles.
 fn blur_copies(
     particles: &[LiveParticle],
     life: &Life,
     motion: &Motion,
     t: f64,
     open: f64,
+    room: usize,
 ) -> Vec<u32> {
     let wanted: Vec<u32> = (particles.iter())
         .map(|p| {
-            let ends = [-0.5, 0.0, 0.5].map(|s| s * open);
-            let smallest = (ends.iter())
-                .map(|&tau| (t + tau - p.born) / p.lifetime)
-                .filter(|age| (0.0..=1.0).contains(age))
-                .map(|age| p.radius * life.size.at(age))
+            let age = |tau: f64| (t + tau - p.born) / p.lifetime;
+            let (first, last) = (age(-0.5 * open), age(0.5 * open));
+            let keys = life.size.keys.iter().map(|k| k.0);
+            let smallest = ([first, last].into_iter().chain(keys))
+                .filter(|a| (first..=last).contains(a) && (0.0..=1.0).contains(a))
+                .chain([first.clamp(0.0, 1.0), last.clamp(0.0, 1.0)])
+                .map(|a| p.radius * life.size.at(a))
                 .filter(|&r| r > 1e-9)
                 .fold(f64::INFINITY, f64::min);
-            let length = (motion.path(p, t, ends[2]) - motion.path(p, t, ends[0])).length();
+            let at = |i: u32| motion.path(p, t, open * (i as f64 / PATH_CHORDS as f64 - 0.5), open);
+            // The longest chord sets the spacing: a path slowed by a drag or bent by gravity is not walked
+            // evenly in time, and the copies are even in time.
+            let longest = (0..PATH_CHORDS)
+                .map(|i| (at(i + 1) - at(i)).length())
+                .fold(0.0, f64::max);
+            let length = longest * PATH_CHORDS as f64;
             let k = (length / (COPY_SPACING * smallest)).ceil();
             if k.is_finite() {
                 k.clamp(1.0, MAX_COPIES as f64) as u32
@@ -362,13 +377,13 @@ fn blur_copies(
             }
         })
         .collect();
-    let total: u64 = wanted.iter().map(|&k| k as u64).sum();
-    if total <= MAX_ALIVE as u64 {
+    let extra: u64 = wanted.iter().map(|&k| k as u64 - 1).sum();
+    if extra <= room as u64 {
         return wanted;
     }
-    let scale = MAX_ALIVE as f64 / total as f64;
+    let scale = room as f64 / extra as f64;
     (wanted.into_iter())
-        .map(|k| ((k as f64 * scale).floor() as u32).max(1))
+        .map(|k| 1 + ((k - 1) as f64 * scale).floor() as u32)
         .collect()
 }
 
@@ -390,11 +405,18 @@ impl Motion {
         }
     }
 
-    /// Where `p`, at time `t`, is at `t + tau` (`tau` of either sign) by its own velocity, the acceleration and
-    /// the drag exactly, and the turbulence's velocity where it is now (the straight path the shutter stretches
-    /// it along).
-    fn path(&self, p: &LiveParticle, t: f64, tau: f64) -> DVec3 {
-        let (x, _) = ballistic(p.position, p.velocity, self.acceleration, self.drag, tau);
+    /// Where `p`, at time `t`, is at `t + tau` (`tau` of either sign, within a shutter `open` seconds long) by
+    /// its own velocity, the acceleration and the drag exactly, and the turbulence's velocity where it is now
+    /// (the path the shutter stretches it along). Backwards a drag is taken at most `2 / open`: the exact form
+    /// multiplies the velocity's departure from `acceleration / drag` by `e^(drag |tau|)`, and for a particle
+    /// at its terminal velocity that departure is rounding, which a strong drag would carry anywhere.
+    fn path(&self, p: &LiveParticle, t: f64, tau: f64, open: f64) -> DVec3 {
+        let drag = if tau < 0.0 {
+            self.drag.min(2.0 / open)
+        } else {
+            self.drag
+        };
+        let (x, _) = ballistic(p.position, p.velocity, self.acceleration, drag, tau);
         match &self.turbulence {
             Some(turbulence) => x + turbulence.velocity(p.position, t, self.seed) * tau,
             None => x,

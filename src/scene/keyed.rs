@@ -439,15 +439,13 @@ impl Scene {
         if let Some(a) = &self.animation {
             a.apply(&mut s, frame);
         }
-        for (i, set) in s.particles.iter_mut().enumerate() {
-            if set.life().is_some() {
-                let whole = if frame.is_finite() {
-                    frame.floor().clamp(0.0, u32::MAX as f64)
-                } else {
-                    0.0
-                };
-                set.live = Some(simulations.particles_at(self, i, whole as u32, cancel)?);
-            }
+        let whole = if frame.is_finite() {
+            frame.floor().clamp(0.0, u32::MAX as f64)
+        } else {
+            0.0
+        };
+        for (i, particles) in simulations.particles_at(self, whole as u32, cancel)? {
+            s.particles[i].live = Some(particles);
         }
         Some(s)
     }

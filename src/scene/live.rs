@@ -11,6 +11,7 @@ use super::Scene;
 use crate::animation::Animation;
 use crate::field::Sources;
 use crate::particles::live::{self, State, Timeline, World};
+use crate::particles::ply::MAX_PARTICLES;
 use crate::particles::{Origin, Particle, ParticleSet};
 
 /// A live set's scene, as far as its simulation reads it: its sources, the sets (for their keyed settings) and
@@ -24,11 +25,22 @@ struct Key {
 }
 
 impl Key {
+    /// The sets as the simulation reads them: without their particles of a frame, and without their shutters
+    /// (which only draw the particles, `particles_at`: a shutter edited keeps the states).
     fn of(scene: &Scene, index: usize) -> Key {
+        let unshuttered = |set: &ParticleSet| {
+            let mut set = set.unframed();
+            if let Origin::Emitter(e) = &mut set.origin
+                && let Some(life) = &mut e.life
+            {
+                life.shutter = 0.0;
+            }
+            set
+        };
         Key {
             index,
             sources: scene.sources.clone(),
-            sets: scene.particles.iter().map(ParticleSet::unframed).collect(),
+            sets: scene.particles.iter().map(unshuttered).collect(),
             animation: scene.animation.clone(),
         }
     }
@@ -115,17 +127,43 @@ impl Simulations {
         Self::default()
     }
 
-    /// The particles of live set `index` of `scene` at `frame`, as the renderers draw them; `None` once
-    /// `cancel` is raised (the states reached so far are kept).
+    /// The particles of every live set of `scene` at `frame` as the renderers draw them, by the set's index;
+    /// `None` once `cancel` is raised (the states reached so far are kept). The copies the sets' shutters add
+    /// (`live::State::particles`) share the room the scene has left under `MAX_PARTICLES` evenly, so that a
+    /// frame never holds more particles than a loaded scene may.
     pub fn particles_at(
         &self,
         scene: &Scene,
-        index: usize,
         frame: u32,
         cancel: &crate::background::Cancel,
-    ) -> Option<Arc<Vec<Particle>>> {
-        let (state, timeline) = self.reached(scene, index, frame, cancel);
-        (state.frame == frame).then(|| Arc::new(state.particles(&timeline)))
+    ) -> Option<Vec<(usize, Arc<Vec<Particle>>)>> {
+        let mut reached = Vec::new();
+        for (i, set) in scene.particles.iter().enumerate() {
+            if let Some(life) = set.life() {
+                let (state, timeline) = self.reached(scene, i, frame, cancel);
+                if state.frame != frame {
+                    return None;
+                }
+                reached.push((i, life.shutter, state, timeline));
+            }
+        }
+        let still: usize = (scene.particles.iter())
+            .map(|set| match &set.origin {
+                Origin::File { particles, .. } => particles.len(),
+                Origin::Emitter(e) if e.life.is_none() => e.count as usize,
+                Origin::Emitter(_) => 0,
+            })
+            .sum();
+        let alive: usize = reached.iter().map(|r| r.2.particles.len()).sum();
+        let blurred = reached.iter().filter(|r| r.1 > 0.0).count().max(1);
+        let room = MAX_PARTICLES.saturating_sub(still + alive) / blurred;
+        Some(
+            (reached.into_iter())
+                .map(|(i, shutter, state, timeline)| {
+                    (i, Arc::new(state.particles(&timeline, shutter, room)))
+                })
+                .collect(),
+        )
     }
 
     /// The state of live set `index` of `scene` at `frame`: from the nearest kept state at or before it.
