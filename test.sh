@@ -30,9 +30,9 @@ tools="slurm openjd blender glslang"
 # The GPU tests run a second time on GL (the rest need no GPU, or are named in gl_left_out with the reason).
 gl_tests="gpu_render objects colors decay degenerate_sources degenerate_curves glare specialised integrators robustness
   camera_reach w_form cli progressive viewer_workflow viewer_ui viewer_faults particles_gpu live_particles farm
-  first_picture shipped_frames export chain_jumps"
-# tests/translucent.rs runs on GL only for its GPU tests (the rest of that file needs no GPU).
-gl_filtered="translucent:gpu refine:gpu"
+  first_picture export chain_jumps"
+# These files run on GL only for their GPU tests (the rest of each needs no GPU): file:filter.
+gl_filtered="translucent:gpu refine:gpu shipped_frames:on_the_gpu"
 # The GPU test files not run on GL, and why.
 declare -A gl_left_out=(
   [soak]="3 minutes on GL (it passes there)"

@@ -11,7 +11,9 @@
 
 mod common;
 
+use std::collections::HashMap;
 use std::path::Path;
+use std::sync::{Arc, Mutex, OnceLock};
 
 use common::{Lcg, degenerate_chains, shipped, shipped_scene};
 use energywave::frame::{FrameSetup, Refine};
@@ -49,14 +51,35 @@ fn texels(t: &reference::BrightnessTexture) -> Vec<[f64; 4]> {
         .collect()
 }
 
+/// The f64 twin's field of scene `name` integrated at every texel, worked out once for every test that holds a
+/// field to it (the CPU's and the GPU's tests run side by side over the same scenes: the first to reach one works
+/// it out while the other waits for it). `name` without ".toml" and the resolution name it.
+fn every_texel(name: &str, scene: &Scene) -> Arc<Vec<[f64; 4]>> {
+    type Cells = Mutex<HashMap<(String, u32), Arc<OnceLock<Arc<Vec<[f64; 4]>>>>>>;
+    static CELLS: OnceLock<Cells> = OnceLock::new();
+    let key = (
+        name.trim_end_matches(".toml").to_owned(),
+        scene.billboard.resolution,
+    );
+    let cell = (CELLS.get_or_init(Default::default).lock())
+        .unwrap_or_else(|e| e.into_inner())
+        .entry(key)
+        .or_default()
+        .clone();
+    cell.get_or_init(|| {
+        let mut every = FrameSetup::new(scene, scene.place_billboard(1.0));
+        every.refine = Refine::EveryTexel;
+        Arc::new(texels(&reference::render_brightness(&every)))
+    })
+    .clone()
+}
+
 /// The CPU twin's refined field against its field integrated at every texel.
-fn cpu(scene: &Scene) -> Found {
+fn cpu(name: &str, scene: &Scene) -> Found {
     let bb = scene.place_billboard(1.0);
-    let mut every = FrameSetup::new(scene, bb);
-    every.refine = Refine::EveryTexel;
     let refined = FrameSetup::new(scene, bb);
     let w = scene.billboard.resolution;
-    let e = texels(&reference::render_brightness(&every));
+    let e = every_texel(name, scene);
     let r = texels(&reference::render_brightness(&refined));
     let (worst, at) = worst(w, &e, &r);
     // The share the twin integrates: its plan replayed over the exact field (the same levels and decisions).
@@ -77,7 +100,7 @@ fn cpu(scene: &Scene) -> Found {
 /// integrated at every texel: how much further the refined texel lies from it than the texel integrated (the
 /// f32 integrator's own error, a few texels of it an outlier the prediction smooths over, is not counted
 /// against the refinement).
-fn gpu(renderer: &mut HeadlessRenderer, scene: &Scene) -> Found {
+fn gpu(renderer: &mut HeadlessRenderer, name: &str, scene: &Scene) -> Found {
     let bb = scene.place_billboard(1.0);
     let w = scene.billboard.resolution;
     let mut read = |setup: &FrameSetup| {
@@ -95,9 +118,9 @@ fn gpu(renderer: &mut HeadlessRenderer, scene: &Scene) -> Found {
     let n = (field.integrated_texels(&ctx.device, &ctx.queue))
         .expect("a count read back")
         .expect("a refined field");
-    let reference = texels(&reference::render_brightness(&every));
+    let reference = every_texel(name, scene);
     let mut found = (0.0f64, (0, 0));
-    for (k, ((e, r), c)) in e.iter().zip(&r).zip(&reference).enumerate() {
+    for (k, ((e, r), c)) in e.iter().zip(&r).zip(reference.iter()).enumerate() {
         let off = |v: &[f64; 4]| (0..4).map(|i| (v[i] - c[i]).abs()).fold(0.0, f64::max);
         assert!(off(r).is_finite(), "texel {k} is not finite");
         let d = off(r) - off(e);
@@ -184,13 +207,13 @@ fn random_scenes() -> Vec<(String, Scene)> {
 fn the_cpu_twin_refined_holds_every_shipped_scene_within_its_share_of_the_tolerance() {
     for (name, mut scene) in shipped() {
         scene.billboard.resolution = 256;
-        let found = cpu(&scene);
+        let found = cpu(&name, &scene);
         check(&name, &scene, found, "CPU");
     }
     for name in LARGE {
         let mut scene = shipped_scene(name);
         scene.billboard.resolution = 1024;
-        let found = cpu(&scene);
+        let found = cpu(&name, &scene);
         check(name, &scene, found, "CPU");
     }
 }
@@ -199,7 +222,7 @@ fn the_cpu_twin_refined_holds_every_shipped_scene_within_its_share_of_the_tolera
 fn the_cpu_twin_refined_holds_random_scenes_with_objects_and_degenerate_curves() {
     for (name, mut scene) in random_scenes() {
         scene.billboard.resolution = 256;
-        let found = cpu(&scene);
+        let found = cpu(&name, &scene);
         check(&name, &scene, found, "CPU");
     }
 }
@@ -209,13 +232,13 @@ fn the_gpu_refined_holds_every_shipped_scene_within_its_share_of_the_tolerance()
     let mut renderer = HeadlessRenderer::new().expect("a GPU adapter (lavapipe in CI)");
     for (name, mut scene) in shipped() {
         scene.billboard.resolution = 256;
-        let found = gpu(&mut renderer, &scene);
+        let found = gpu(&mut renderer, &name, &scene);
         check(&name, &scene, found, "GPU");
     }
     for name in LARGE {
         let mut scene = shipped_scene(name);
         scene.billboard.resolution = 1024;
-        let found = gpu(&mut renderer, &scene);
+        let found = gpu(&mut renderer, &name, &scene);
         check(name, &scene, found, "GPU");
     }
 }
@@ -225,7 +248,7 @@ fn the_gpu_refined_holds_random_scenes_with_objects_and_degenerate_curves() {
     let mut renderer = HeadlessRenderer::new().expect("a GPU adapter (lavapipe in CI)");
     for (name, mut scene) in random_scenes() {
         scene.billboard.resolution = 256;
-        let found = gpu(&mut renderer, &scene);
+        let found = gpu(&mut renderer, &name, &scene);
         check(&name, &scene, found, "GPU");
     }
 }
@@ -238,7 +261,7 @@ fn the_gpu_and_the_cpu_twin_integrate_the_same_texels() {
     for name in ["default.toml", "floor.toml", "mixed.toml"] {
         let mut scene = shipped_scene(name);
         scene.billboard.resolution = 256;
-        let (c, g) = (cpu(&scene), gpu(&mut renderer, &scene));
+        let (c, g) = (cpu(name, &scene), gpu(&mut renderer, name, &scene));
         assert!(
             (c.share - g.share).abs() < 0.01,
             "{name}: {:.2} % integrated on the CPU, {:.2} % on the GPU",
