@@ -309,15 +309,18 @@ impl State {
                 .collect();
         }
         let motion = Motion::of(life, now.emitter.seed);
-        let copies = blur_copies(&self.particles, life, &motion, t, open, room);
+        let drifts: Vec<DVec3> = (self.particles.iter())
+            .map(|p| motion.drift(p.position, t))
+            .collect();
+        let copies = blur_copies(&self.particles, &drifts, life, &motion, t, open, room);
         // A copy outside the particle's life (born or gone while the shutter is open) is not drawn: its share of
         // the shutter shows nothing there.
         let mut out = Vec::new();
-        for (p, k) in self.particles.iter().zip(copies) {
+        for ((p, k), &drift) in self.particles.iter().zip(copies).zip(&drifts) {
             for i in 0..k {
                 let tau = open * ((i as f64 + 0.5) / k as f64 - 0.5);
                 let age = (t + tau - p.born) / p.lifetime;
-                let position = motion.path(p, t, tau, open);
+                let position = motion.path(p, drift, tau, open);
                 if (0.0..=1.0).contains(&age) && position.is_finite() {
                     out.extend(drawn(p, position, age, 1.0 / k as f64));
                 }
@@ -340,29 +343,32 @@ const PATH_CHORDS: u32 = 8;
 
 /// How many copies each of `particles` is drawn as over a shutter `open` seconds long centred on time `t`: its
 /// path's length over it (`PATH_CHORDS` times the longest of as many chords) in `COPY_SPACING` of its smallest
-/// radius there (the size
-/// curve is linear between its keys: at the shutter's ends or a key within it), at least 1 and at most
-/// `MAX_COPIES`; fewer for all, evenly, where they would add more than `room` copies to the particles.
+/// radius there (the size curve is linear between its keys: its least at the shutter's ends or a key within it),
+/// at least 1 and at most `MAX_COPIES`; fewer for all, evenly, where they would add more than `room` copies to
+/// the particles. `drifts`: the turbulence's velocity at each particle (`Motion::drift`).
 fn blur_copies(
     particles: &[LiveParticle],
+    drifts: &[DVec3],
     life: &Life,
     motion: &Motion,
     t: f64,
     open: f64,
     room: usize,
 ) -> Vec<u32> {
-    let wanted: Vec<u32> = (particles.iter())
-        .map(|p| {
-            let age = |tau: f64| (t + tau - p.born) / p.lifetime;
+    let wanted: Vec<u32> = (particles.iter().zip(drifts))
+        .map(|(p, &drift)| {
+            let age = |tau: f64| ((t + tau - p.born) / p.lifetime).clamp(0.0, 1.0);
             let (first, last) = (age(-0.5 * open), age(0.5 * open));
-            let keys = life.size.keys.iter().map(|k| k.0);
-            let smallest = ([first, last].into_iter().chain(keys))
-                .filter(|a| (first..=last).contains(a) && (0.0..=1.0).contains(a))
-                .chain([first.clamp(0.0, 1.0), last.clamp(0.0, 1.0)])
+            let keys = (life.size.keys.iter()).map(|k| k.0);
+            let smallest = ([first, last].into_iter())
+                .chain(keys.filter(|a| (first..=last).contains(a)))
                 .map(|a| p.radius * life.size.at(a))
                 .filter(|&r| r > 1e-9)
                 .fold(f64::INFINITY, f64::min);
-            let at = |i: u32| motion.path(p, t, open * (i as f64 / PATH_CHORDS as f64 - 0.5), open);
+            let at = |i: u32| {
+                let tau = open * (i as f64 / PATH_CHORDS as f64 - 0.5);
+                motion.path(p, drift, tau, open)
+            };
             // The longest chord sets the spacing: a path slowed by a drag or bent by gravity is not walked
             // evenly in time, and the copies are even in time.
             let longest = (0..PATH_CHORDS)
@@ -405,22 +411,24 @@ impl Motion {
         }
     }
 
-    /// Where `p`, at time `t`, is at `t + tau` (`tau` of either sign, within a shutter `open` seconds long) by
-    /// its own velocity, the acceleration and the drag exactly, and the turbulence's velocity where it is now
-    /// (the path the shutter stretches it along). Backwards a drag is taken at most `2 / open`: the exact form
+    /// The turbulence's velocity at `x` at time `t` (none without one).
+    fn drift(&self, x: DVec3, t: f64) -> DVec3 {
+        (self.turbulence.as_ref()).map_or(DVec3::ZERO, |u| u.velocity(x, t, self.seed))
+    }
+
+    /// Where `p` is `tau` after now (of either sign, within a shutter `open` seconds long) by its own velocity,
+    /// the acceleration and the drag exactly, and `drift`, the turbulence's velocity where it is now
+    /// (`Motion::drift`: the path the shutter stretches it along). Backwards a drag is taken at most `2 / open`: the exact form
     /// multiplies the velocity's departure from `acceleration / drag` by `e^(drag |tau|)`, and for a particle
     /// at its terminal velocity that departure is rounding, which a strong drag would carry anywhere.
-    fn path(&self, p: &LiveParticle, t: f64, tau: f64, open: f64) -> DVec3 {
+    fn path(&self, p: &LiveParticle, drift: DVec3, tau: f64, open: f64) -> DVec3 {
         let drag = if tau < 0.0 {
             self.drag.min(2.0 / open)
         } else {
             self.drag
         };
         let (x, _) = ballistic(p.position, p.velocity, self.acceleration, drag, tau);
-        match &self.turbulence {
-            Some(turbulence) => x + turbulence.velocity(p.position, t, self.seed) * tau,
-            None => x,
-        }
+        x + drift * tau
     }
 
     /// `p` moved from time `t` by `dt`.
