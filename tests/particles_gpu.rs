@@ -193,11 +193,7 @@ fn motion_blurred_sparks_are_the_twins_on_the_gpu() {
     let preset =
         Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/beam_sparks.toml"))
             .unwrap();
-    let shutter = |s: &Scene| match &s.particles[0].origin {
-        energywave::particles::Origin::Emitter(e) => e.life.as_ref().unwrap().shutter,
-        _ => unreachable!("an emitter"),
-    };
-    assert_eq!(shutter(&preset), 1.0);
+    assert_eq!(preset.particles[0].life().unwrap().shutter, 1.0);
     let mut sharp = preset.clone();
     if let energywave::particles::Origin::Emitter(e) = &mut sharp.particles[0].origin {
         e.life.as_mut().unwrap().shutter = 0.0;
